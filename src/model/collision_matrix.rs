@@ -1,0 +1,189 @@
+//! The collision matrix `K` of the general form and the solves built on it.
+//!
+//! An impulse `P` applied at the contact point changes the contact point's velocity by
+//! `du = K P` with
+//!
+//! ```text
+//! K = (1/m) E - [r]x I_w^-1 [r]x,        x.K y = x.y/m + (r × x).I_w^-1 (r × y)
+//! ```
+//!
+//! (MODEL-NOTES, "General form"; the document's (4)-(9) substituted into (1)-(3)).
+//! `K` is symmetric positive definite for any `m > 0` and PSD `I_w^-1`. It is never
+//! formed as one 3x3 matrix and inverted: for small `I/m` that loses the `1/m` part
+//! along `r` (MODEL-NOTES erratum 4). Instead every product is the bilinear form above,
+//! a sum of non-negative terms on the diagonal, and the sticking solve splits `K`
+//! along `r`, where it is exactly block diagonal.
+
+use super::types::Body;
+use nalgebra::{Matrix2, Vector2, Vector3};
+
+/// The bilinear form `x.K y` (1/kg).
+#[inline]
+pub(crate) fn k_form(body: &Body, r: &Vector3<f64>, x: &Vector3<f64>, y: &Vector3<f64>) -> f64 {
+    x.dot(y) / body.mass + r.cross(x).dot(&(body.inv_inertia * r.cross(y)))
+}
+
+/// `K x`: the contact-point velocity change from impulse `x`.
+#[inline]
+pub(crate) fn k_apply(body: &Body, r: &Vector3<f64>, x: &Vector3<f64>) -> Vector3<f64> {
+    // du = dv + dw × r with dv = x/m, dw = I^-1 (r × x).
+    x / body.mass + (body.inv_inertia * r.cross(x)).cross(r)
+}
+
+/// Two unit vectors completing `a` (unit) to a right-handed orthonormal basis
+/// `(t1, t2, a)`, branch-free except for the sign (Duff et al. 2017, "Building an
+/// orthonormal basis, revisited").
+#[inline]
+pub(crate) fn orthonormal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let sign = 1.0f64.copysign(a.z);
+    let p = -1.0 / (sign + a.z);
+    let q = a.x * a.y * p;
+    let t1 = Vector3::new(1.0 + sign * a.x * a.x * p, sign * q, -sign * a.x);
+    let t2 = Vector3::new(q, sign + a.y * a.y * p, -a.y);
+    (t1, t2)
+}
+
+/// Solves `K P = d` for the impulse `P` accurately at any `I/m`.
+///
+/// In the basis `(r̂, t1, t2)` the rotational part of `K` vanishes along `r̂`
+/// (`r × r̂ = 0`), so `K` is block diagonal: `K_rr = 1/m` and a 2x2 block
+/// `E/m + |r|^2 adj(A)` where `A = [t_i . I_w^-1 t_j]`. For an isotropic body this is
+/// the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` of MODEL-NOTES erratum 4.
+pub(crate) fn solve_k(body: &Body, r: &Vector3<f64>, d: &Vector3<f64>) -> Vector3<f64> {
+    let r2 = r.norm_squared();
+    if r2 == 0.0 {
+        return d * body.mass;
+    }
+    let rn = r.norm();
+    let r_hat = r / rn;
+    let (t1, t2) = orthonormal_basis(&r_hat);
+    let it1 = body.inv_inertia * t1;
+    let it2 = body.inv_inertia * t2;
+    let a11 = t1.dot(&it1);
+    let a22 = t2.dot(&it2);
+    let a12 = 0.5 * (t1.dot(&it2) + t2.dot(&it1));
+    let inv_m = 1.0 / body.mass;
+    // r × t1 = |r| t2 and r × t2 = -|r| t1, hence the adjugate.
+    let k11 = inv_m + r2 * a22;
+    let k22 = inv_m + r2 * a11;
+    let k12 = -r2 * a12;
+    let rhs = Vector2::new(d.dot(&t1), d.dot(&t2));
+    let p_plane = solve_spd2(k11, k12, k22, &rhs);
+    r_hat * (d.dot(&r_hat) * body.mass) + t1 * p_plane.x + t2 * p_plane.y
+}
+
+/// Solves the symmetric positive definite 2x2 system `[[a, b], [b, c]] x = y`.
+#[inline]
+pub(crate) fn solve_spd2(a: f64, b: f64, c: f64, y: &Vector2<f64>) -> Vector2<f64> {
+    let det = a * c - b * b;
+    Vector2::new((c * y.x - b * y.y) / det, (a * y.y - b * y.x) / det)
+}
+
+/// `K` written in the contact basis `(t1, t2, n)`, with its tangential block, its
+/// tangential-normal column and its normal-normal entry.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ContactK {
+    /// Tangent basis vectors (unit, orthogonal to `n` and to each other).
+    pub t1: Vector3<f64>,
+    pub t2: Vector3<f64>,
+    /// Tangential block `K_tt` (2x2, SPD).
+    pub ktt: Matrix2<f64>,
+    /// Tangential-normal coupling `K_tn`: how a normal impulse moves the contact sideways.
+    pub ktn: Vector2<f64>,
+    /// Normal-normal entry `K_nn = n.K n > 0`.
+    pub knn: f64,
+}
+
+impl ContactK {
+    pub(crate) fn new(body: &Body, r: &Vector3<f64>, n: &Vector3<f64>) -> Self {
+        let (t1, t2) = orthonormal_basis(n);
+        let inv_m = 1.0 / body.mass;
+        let rn = r.cross(n);
+        let r1 = r.cross(&t1);
+        let r2 = r.cross(&t2);
+        let ii = &body.inv_inertia;
+        let i_rn = ii * rn;
+        let i_r1 = ii * r1;
+        let k11 = inv_m + r1.dot(&i_r1);
+        let k22 = inv_m + r2.dot(&(ii * r2));
+        let k12 = r1.dot(&(ii * r2));
+        let k1n = r1.dot(&i_rn);
+        let k2n = r2.dot(&i_rn);
+        let knn = inv_m + rn.dot(&i_rn);
+        Self {
+            t1,
+            t2,
+            ktt: Matrix2::new(k11, k12, k12, k22),
+            ktn: Vector2::new(k1n, k2n),
+            knn,
+        }
+    }
+
+    /// Tangential components `(v.t1, v.t2)` of a world vector.
+    #[inline]
+    pub(crate) fn tangential(&self, v: &Vector3<f64>) -> Vector2<f64> {
+        Vector2::new(v.dot(&self.t1), v.dot(&self.t2))
+    }
+
+    /// The world vector with tangential components `t`.
+    #[inline]
+    pub(crate) fn world(&self, t: &Vector2<f64>) -> Vector3<f64> {
+        self.t1 * t.x + self.t2 * t.y
+    }
+
+    /// Tangential friction per unit normal impulse that keeps the slip at zero:
+    /// `f = -K_tt^-1 K_tn` (the tangential part of the sticking impulse `K^-1 n`,
+    /// scaled to unit normal component).
+    #[inline]
+    pub(crate) fn sticking_friction_ratio(&self) -> Vector2<f64> {
+        -solve_spd2(self.ktt.m11, self.ktt.m12, self.ktt.m22, &self.ktn)
+    }
+
+    /// Rate of change of the contact velocity per unit normal impulse while the
+    /// friction impulse per unit normal impulse is `f` (tangential, 2-D):
+    /// `du/dp = K (n + f)`, returned as (tangential, normal) parts.
+    #[inline]
+    pub(crate) fn rate(&self, f: &Vector2<f64>) -> (Vector2<f64>, f64) {
+        (self.ktn + self.ktt * f, self.knn + self.ktn.dot(f))
+    }
+
+    /// The slip direction `s` that stays invariant while slipping from zero slip:
+    /// `K_tn - mu K_tt s = lambda s` with `lambda > 0`, `|s| = 1`. It exists whenever
+    /// sticking is impossible, `|K_tt^-1 K_tn| > mu` (then `|s(lambda)|` falls from
+    /// above 1 at `lambda = 0` to 0 as `lambda -> inf`). Found by bracketing and
+    /// bisection on `lambda`; for an isotropic body it is the sticking impulse's
+    /// tangential direction (MODEL-NOTES erratum 2).
+    pub(crate) fn invariant_slip_direction(&self, mu: f64) -> Vector2<f64> {
+        let s_of = |lambda: f64| {
+            solve_spd2(
+                lambda + mu * self.ktt.m11,
+                mu * self.ktt.m12,
+                lambda + mu * self.ktt.m22,
+                &self.ktn,
+            )
+        };
+        let at_zero = s_of(0.0);
+        if !at_zero.iter().all(|c| c.is_finite()) || self.ktn.norm_squared() == 0.0 {
+            let n = self.ktn.norm();
+            return if n > 0.0 { self.ktn / n } else { Vector2::new(1.0, 0.0) };
+        }
+        let mut lo = 0.0;
+        let mut hi = self.ktn.norm().max(f64::MIN_POSITIVE);
+        while s_of(hi).norm() > 1.0 {
+            hi *= 2.0;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if s_of(mid).norm() > 1.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let s = s_of(0.5 * (lo + hi));
+        s / s.norm()
+    }
+}

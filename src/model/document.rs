@@ -1,0 +1,70 @@
+//! The document's law in the general form: any inertia tensor, any ground normal,
+//! a moving ground (MODEL-NOTES, "General form").
+//!
+//! With the relative contact velocity `u1 = v + w × r - u_ground` and `u_n = n.u1 < 0`:
+//!
+//! - sticking (eqs. 10-12): `P = K^-1 (-e u_n n - u1)`, accepted when `P.n >= 0` and
+//!   `|P_t| <= mu P.n` (erratum 3);
+//! - slipping (eqs. 13-19): `P = p (n - mu s)` with `s` the unit initial slip and
+//!   `p = -(1+e) u_n / (n.K (n - mu s))` (eq. 19 corrected, erratum 1). With zero initial
+//!   slip, `s` is the invariant slip direction (erratum 2), which for an isotropic body
+//!   is the sticking impulse's tangential direction.
+//!
+//! With `I_w^-1 = E/I` and `n = +z` this is [`super::seed::solve`] exactly.
+
+use super::collision_matrix::{ContactK, k_form, solve_k};
+use super::error::ModelError;
+use super::types::{Body, Contact, Material, Regime};
+use nalgebra::{Vector2, Vector3};
+
+/// The document's impulse on the body (world frame) and its regime, for an
+/// approaching contact. `u1` is the relative contact velocity.
+pub(crate) fn document_impulse(
+    body: &Body,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> Result<(Vector3<f64>, Regime, Vector3<f64>), ModelError> {
+    let n = &contact.normal;
+    let r = &contact.offset;
+    let (e, mu) = (material.restitution, material.friction);
+    let un = n.dot(u1);
+    let ut = u1 - n * un;
+
+    // Sticking, eqs. (10)-(12): target contact velocity -e u_n n.
+    let stick = solve_k(body, r, &(-(n * ((1.0 + e) * un)) - ut));
+    let stick_n = stick.dot(n);
+    let stick_t = stick - n * stick_n;
+    if stick_n >= 0.0 && stick_t.norm() <= mu * stick_n {
+        return Ok((stick, Regime::Stick, Vector3::zeros()));
+    }
+
+    // Slipping, eqs. (13)-(19). A frictionless contact needs no direction.
+    let s = if mu == 0.0 {
+        Vector3::zeros()
+    } else {
+        slip_direction(body, contact, &ut, mu)
+    };
+    let along = n - s * mu;
+    let denominator = k_form(body, r, n, &along);
+    if denominator <= 0.0 || !denominator.is_finite() {
+        return Err(ModelError::Jam { denominator });
+    }
+    let p = -(1.0 + e) * un / denominator;
+    Ok((along * p, Regime::Slip, s))
+}
+
+/// The unit slip direction at the start of the impact: the initial tangential contact
+/// velocity (eqs. 13-15 as atan2), or, when it is exactly zero, the direction in which
+/// slip grows from rest (erratum 2).
+pub(crate) fn slip_direction(body: &Body, contact: &Contact, ut: &Vector3<f64>, mu: f64) -> Vector3<f64> {
+    let len = ut.norm();
+    if len > 0.0 && len.is_finite() {
+        // Rescale before normalising so subnormal slips keep their direction.
+        let scaled = ut / ut.amax();
+        return scaled / scaled.norm();
+    }
+    let ck = ContactK::new(body, &contact.offset, &contact.normal);
+    let s: Vector2<f64> = ck.invariant_slip_direction(mu);
+    ck.world(&s)
+}

@@ -1,0 +1,103 @@
+//! The one error type of the model: which input value is wrong, and why.
+
+use core::fmt;
+
+/// An input the impact model refuses, naming the value that is wrong.
+///
+/// Every public entry point of [`crate::model`] validates its input before any
+/// arithmetic, so a bad value is reported at the call that supplied it and never
+/// turns into a NaN further down.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelError {
+    /// A value that must be finite is NaN or infinite. `what` names the field.
+    NotFinite {
+        /// The field, e.g. `"u1.x"` or `"contact.offset"`.
+        what: &'static str,
+    },
+    /// The mass is zero or negative (kg). The model needs `mass > 0`.
+    NonPositiveMass(f64),
+    /// The scalar moment of inertia is zero or negative (kg m^2). The model needs `inertia > 0`.
+    NonPositiveInertia(f64),
+    /// The inverse inertia tensor is not symmetric (relative asymmetry given).
+    AsymmetricInertia(f64),
+    /// The inverse inertia tensor is not positive semi-definite: a principal minor is negative.
+    NotPositiveSemiDefiniteInertia,
+    /// The coefficient of restitution is negative. The model needs `e >= 0`.
+    NegativeRestitution(f64),
+    /// The coefficient of friction is negative. The model needs `mu >= 0`.
+    NegativeFriction(f64),
+    /// The contact normal is not of unit length (its length is given).
+    NonUnitNormal(f64),
+    /// The document's slip law has no solution: its denominator (eq. 19, corrected)
+    /// `D = n.K(n - mu s)` is zero or negative, so the normal impulse would pull or be
+    /// infinite. This is the Painleve-like jam of MODEL-NOTES; the `Consistent` and
+    /// `Guarded` laws resolve it, the `Document` law reports it.
+    Jam {
+        /// The slip denominator in the model's units (1/kg).
+        denominator: f64,
+    },
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NotFinite { what } => write!(f, "{what} is not finite (NaN or infinite)"),
+            Self::NonPositiveMass(m) => write!(f, "mass must be > 0 kg, got {m}"),
+            Self::NonPositiveInertia(i) => {
+                write!(f, "moment of inertia must be > 0 kg m^2, got {i}")
+            }
+            Self::AsymmetricInertia(a) => {
+                write!(f, "inverse inertia tensor is not symmetric (relative asymmetry {a:e})")
+            }
+            Self::NotPositiveSemiDefiniteInertia => {
+                write!(f, "inverse inertia tensor is not positive semi-definite")
+            }
+            Self::NegativeRestitution(e) => {
+                write!(f, "coefficient of restitution must be >= 0, got {e}")
+            }
+            Self::NegativeFriction(mu) => {
+                write!(f, "coefficient of friction must be >= 0, got {mu}")
+            }
+            Self::NonUnitNormal(len) => {
+                write!(f, "contact normal must have unit length, got length {len}")
+            }
+            Self::Jam { denominator } => write!(
+                f,
+                "the document's slip law jams: denominator n.K(n - mu s) = {denominator:e} <= 0"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// `Ok(())` if `x` is finite, else [`ModelError::NotFinite`] naming `what`.
+pub(crate) fn finite(x: f64, what: &'static str) -> Result<(), ModelError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(ModelError::NotFinite { what })
+    }
+}
+
+/// Checks every component of a vector is finite.
+pub(crate) fn finite3(v: &nalgebra::Vector3<f64>, what: &'static str) -> Result<(), ModelError> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(ModelError::NotFinite { what })
+    }
+}
+
+/// Checks a restitution and a friction coefficient.
+pub(crate) fn check_coefficients(restitution: f64, friction: f64) -> Result<(), ModelError> {
+    finite(restitution, "restitution")?;
+    finite(friction, "friction")?;
+    if restitution < 0.0 {
+        return Err(ModelError::NegativeRestitution(restitution));
+    }
+    if friction < 0.0 {
+        return Err(ModelError::NegativeFriction(friction));
+    }
+    Ok(())
+}

@@ -1,0 +1,249 @@
+//! The general form's inputs and outputs: a body, its velocity, the contact, the
+//! material, the chosen law, and the resolved impact. All vectors are in one
+//! world frame of the caller's choosing; nothing here assumes an "up" axis.
+
+use super::error::{ModelError, check_coefficients, finite, finite3};
+use nalgebra::{Matrix3, Vector3};
+
+/// The inertial properties of the impacting body, in the world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Body {
+    /// Mass `m` (kg), finite and `> 0`.
+    pub mass: f64,
+    /// World-frame inverse inertia tensor `I_w^-1` about the centre of mass (1/(kg m^2)):
+    /// symmetric positive semi-definite. A zero row/column means the body cannot rotate
+    /// about that axis (infinite inertia, a locked rotation); the zero matrix is a body
+    /// that does not rotate at all.
+    pub inv_inertia: Matrix3<f64>,
+}
+
+impl Body {
+    /// A body with an isotropic inertia `inertia` (kg m^2), such as a sphere or a cube.
+    pub fn isotropic(mass: f64, inertia: f64) -> Self {
+        Self {
+            mass,
+            inv_inertia: Matrix3::from_diagonal_element(1.0 / inertia),
+        }
+    }
+
+    /// A body from a world-frame inertia tensor (kg m^2), which must be symmetric
+    /// positive definite; it is inverted here, once.
+    pub fn from_inertia(mass: f64, inertia: Matrix3<f64>) -> Result<Self, ModelError> {
+        if !inertia.iter().all(|c| c.is_finite()) {
+            return Err(ModelError::NotFinite { what: "inertia" });
+        }
+        let chol = nalgebra::Cholesky::new(inertia)
+            .ok_or(ModelError::NotPositiveSemiDefiniteInertia)?;
+        let body = Self {
+            mass,
+            inv_inertia: chol.inverse(),
+        };
+        body.validate()?;
+        Ok(body)
+    }
+
+    /// Checks the mass and the inverse inertia tensor (finite, symmetric, PSD).
+    pub fn validate(&self) -> Result<(), ModelError> {
+        finite(self.mass, "body.mass")?;
+        if self.mass <= 0.0 {
+            return Err(ModelError::NonPositiveMass(self.mass));
+        }
+        let a = &self.inv_inertia;
+        if !a.iter().all(|c| c.is_finite()) {
+            return Err(ModelError::NotFinite {
+                what: "body.inv_inertia",
+            });
+        }
+        let scale = a.amax();
+        let asym = (a.m12 - a.m21)
+            .abs()
+            .max((a.m13 - a.m31).abs())
+            .max((a.m23 - a.m32).abs());
+        if asym > 1e-9 * scale {
+            return Err(ModelError::AsymmetricInertia(asym / scale));
+        }
+        // Positive semi-definite iff every principal minor is >= 0 (for a symmetric
+        // matrix). Rounding makes a singular PSD tensor's minors slightly negative,
+        // so each minor is compared with the size of its terms.
+        let eps = 1e-12;
+        let diag_ok = a.m11 >= 0.0 && a.m22 >= 0.0 && a.m33 >= 0.0;
+        let m2 = |x: f64, y: f64, xy: f64| x * y - xy * xy >= -eps * (x * y + xy * xy);
+        let minors2 = m2(a.m11, a.m22, a.m12) && m2(a.m11, a.m33, a.m13) && m2(a.m22, a.m33, a.m23);
+        let det = a.determinant();
+        let det_ok = det >= -eps * scale * scale * scale;
+        if !(diag_ok && minors2 && det_ok) {
+            return Err(ModelError::NotPositiveSemiDefiniteInertia);
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy `1/2 m |v|^2 + 1/2 w . I_w w` (J). The rotational term is computed
+    /// by solving with the inverse inertia on the axes where the body can rotate.
+    pub fn kinetic_energy(&self, velocity: &BodyVelocity) -> f64 {
+        0.5 * self.mass * velocity.linear.norm_squared()
+            + 0.5 * rotational_energy(&self.inv_inertia, &velocity.angular)
+    }
+}
+
+/// `1/2 w . I w` given `I^-1`: w = I^-1 L, so the energy is `1/2 L . I^-1 L` with
+/// `L = I w`. With a singular `I^-1`, only the rotatable part of `w` carries energy;
+/// a pseudo-inverse on the symmetric eigen-decomposition gives it.
+fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
+    if w.norm_squared() == 0.0 {
+        return 0.0;
+    }
+    // Fast path: diagonal inverse inertia (isotropic bodies, principal frames).
+    let a = inv_inertia;
+    if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
+        let term = |ai: f64, wi: f64| if ai > 0.0 { wi * wi / ai } else { 0.0 };
+        return term(a.m11, w.x) + term(a.m22, w.y) + term(a.m33, w.z);
+    }
+    if let Some(chol) = nalgebra::Cholesky::new(*a) {
+        // w . I w = w . (I^-1)^-1 w
+        let iw = chol.solve(w);
+        return w.dot(&iw);
+    }
+    let eig = a.symmetric_eigen();
+    let mut sum = 0.0;
+    for k in 0..3 {
+        let lambda = eig.eigenvalues[k];
+        if lambda > 1e-300 {
+            let c = eig.eigenvectors.column(k).dot(w);
+            sum += c * c / lambda;
+        }
+    }
+    sum
+}
+
+/// Linear and angular velocity of a body's centre of mass, world frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyVelocity {
+    /// Velocity of the centre of mass (m/s).
+    pub linear: Vector3<f64>,
+    /// Angular velocity (rad/s).
+    pub angular: Vector3<f64>,
+}
+
+/// The contact between the body and the ground, world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact {
+    /// Unit normal `n`, pointing from the ground into the body. `u.n < 0` approaches.
+    pub normal: Vector3<f64>,
+    /// Offset `r = A - B` from the body's centre of mass `B` to the contact point `A` (m).
+    pub offset: Vector3<f64>,
+    /// Velocity of the ground's material point at `A` (m/s): zero for fixed ground,
+    /// the platform's point velocity for a moving (kinematic) ground.
+    pub ground_velocity: Vector3<f64>,
+}
+
+impl Contact {
+    /// A contact on a fixed ground.
+    pub fn fixed(normal: Vector3<f64>, offset: Vector3<f64>) -> Self {
+        Self {
+            normal,
+            offset,
+            ground_velocity: Vector3::zeros(),
+        }
+    }
+
+    /// Checks the vectors are finite and the normal has unit length (to 1e-6).
+    pub fn validate(&self) -> Result<(), ModelError> {
+        finite3(&self.normal, "contact.normal")?;
+        finite3(&self.offset, "contact.offset")?;
+        finite3(&self.ground_velocity, "contact.ground_velocity")?;
+        let len = self.normal.norm();
+        if (len - 1.0).abs() > 1e-6 {
+            return Err(ModelError::NonUnitNormal(len));
+        }
+        Ok(())
+    }
+}
+
+/// The contact's material: Newton's coefficient of restitution and Coulomb's friction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Coefficient of restitution `e >= 0` (1 = elastic; above 1 adds energy on purpose).
+    pub restitution: f64,
+    /// Coefficient of friction `mu >= 0`.
+    pub friction: f64,
+}
+
+impl Material {
+    /// Checks `e >= 0`, `mu >= 0`, both finite.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        check_coefficients(self.restitution, self.friction)
+    }
+}
+
+/// Which impact law resolves a contact. Accuracy costs time; the user chooses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Law {
+    /// The document's law, corrected and generalised: Newton restitution, stick if the
+    /// sticking impulse is inside the friction cone, else slip along the initial slip
+    /// direction (eqs. 10-19). Closed form, fastest. Can gain energy (MODEL-NOTES) and
+    /// reports it in [`Impact::ke_after`]; a jam is [`ModelError::Jam`].
+    Document,
+    /// Impulse-space integration (Routh) with Stronge's energetic restitution: slip may
+    /// stop, stick, reverse and swerve. Never gains energy for `e <= 1`.
+    Consistent,
+    /// `Document`, falling back to `Consistent` exactly where the document's result is
+    /// unphysical (see [`Fallback`]).
+    #[default]
+    Guarded,
+}
+
+/// What the contact did during the impact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Regime {
+    /// Case A of the document: the contact point does not slip at the end.
+    Stick,
+    /// Case B of the document: the contact point slips throughout.
+    Slip,
+    /// (`Consistent`) slip that stopped during the impact, after which the contact stuck.
+    SlipThenStick,
+    /// The contact is separating or resting (`u.n >= 0`): no impulse.
+    Separating,
+}
+
+/// Why the `Guarded` law left the document's result for the consistent one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Fallback {
+    /// The document's normal impulse would pull the body into the ground.
+    PullingNormalImpulse,
+    /// The slip denominator is `<= 0` (Painleve-like jam).
+    Jam,
+    /// Friction along the initial slip direction overshot: the slip reversed.
+    SlipReversal,
+    /// The document's result gained kinetic energy with `e <= 1`.
+    EnergyGain,
+}
+
+/// A resolved impact: the impulse, the velocities after, and what happened.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Impact {
+    /// Impulse on the body at the contact point, world frame (N s).
+    pub impulse: Vector3<f64>,
+    /// Normal impulse `P.n >= 0` (N s).
+    pub normal_impulse: f64,
+    /// Tangential (friction) impulse `P - (P.n) n` (N s).
+    pub tangent_impulse: Vector3<f64>,
+    /// Velocity of the body after the impact.
+    pub velocity: BodyVelocity,
+    /// Stick, slip, or the sequence of the two.
+    pub regime: Regime,
+    /// The law that produced this result (`Document` or `Consistent`; never `Guarded`).
+    pub law: Law,
+    /// Set when `Guarded` fell back to `Consistent`, with the reason.
+    pub fallback: Option<Fallback>,
+    /// Kinetic energy before the impact (J).
+    pub ke_before: f64,
+    /// Kinetic energy after the impact (J).
+    pub ke_after: f64,
+}
+
+impl Impact {
+    /// `ke_after - ke_before` (J): negative when the impact dissipates energy.
+    pub fn energy_change(&self) -> f64 {
+        self.ke_after - self.ke_before
+    }
+}
