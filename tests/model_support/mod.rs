@@ -420,3 +420,28 @@ pub fn assert_vec_close(
         "{what}: measured {measured:?}, expected {expected:?} (|error| {err:.3e} > {tol:e} x scale {scale:.3e})"
     );
 }
+
+/// A random approaching impact in the general form: anisotropic body (see
+/// [`random_body`]), random unit normal, contact offset with `r.n < 0` and `|r_i| <= 1`
+/// m, `|v_i| <= 5` m/s, `|w_i| <= 5` rad/s, the normal approach speed in `[1e-3, 5]`
+/// m/s, `e` in `[0, 1]`, `mu` in `[0, 1.5]`.
+pub fn random_general(rng: &mut Rng) -> (Body, Matrix3<f64>, BodyVelocity, Contact, Material) {
+    let (body, inertia) = random_body(rng, 0.5);
+    let n = rng.unit_vector();
+    let mut r = rng.vector(1.0);
+    if r.dot(&n) > 0.0 {
+        r -= n * (2.0 * r.dot(&n));
+    }
+    let contact = Contact::fixed(n, r);
+    let mut v = BodyVelocity {
+        linear: rng.vector(5.0),
+        angular: rng.vector(5.0),
+    };
+    let un = n.dot(&contact_velocity(&v, &contact));
+    v.linear -= n * (un + rng.uniform(1e-3, 5.0));
+    let material = Material {
+        restitution: rng.unit(),
+        friction: rng.uniform(0.0, 1.5),
+    };
+    (body, inertia, v, contact, material)
+}
