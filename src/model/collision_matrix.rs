@@ -23,13 +23,6 @@ pub(crate) fn k_form(body: &Body, r: &Vector3<f64>, x: &Vector3<f64>, y: &Vector
     x.dot(y) / body.mass + r.cross(x).dot(&(body.inv_inertia * r.cross(y)))
 }
 
-/// `K x`: the contact-point velocity change from impulse `x`.
-#[inline]
-pub(crate) fn k_apply(body: &Body, r: &Vector3<f64>, x: &Vector3<f64>) -> Vector3<f64> {
-    // du = dv + dw × r with dv = x/m, dw = I^-1 (r × x).
-    x / body.mass + (body.inv_inertia * r.cross(x)).cross(r)
-}
-
 /// Two unit vectors completing `a` (unit) to a right-handed orthonormal basis
 /// `(t1, t2, a)`, branch-free except for the sign (Duff et al. 2017, "Building an
 /// orthonormal basis, revisited").
@@ -165,7 +158,11 @@ impl ContactK {
         let at_zero = s_of(0.0);
         if !at_zero.iter().all(|c| c.is_finite()) || self.ktn.norm_squared() == 0.0 {
             let n = self.ktn.norm();
-            return if n > 0.0 { self.ktn / n } else { Vector2::new(1.0, 0.0) };
+            return if n > 0.0 {
+                self.ktn / n
+            } else {
+                Vector2::new(1.0, 0.0)
+            };
         }
         let mut lo = 0.0;
         let mut hi = self.ktn.norm().max(f64::MIN_POSITIVE);

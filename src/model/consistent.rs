@@ -27,14 +27,16 @@ use nalgebra::{Vector2, Vector3};
 
 /// Local error tolerance of the swerve integration, relative to the initial contact
 /// speed. The end state is accurate to about 1e-10 of it.
-pub const SWERVE_TOLERANCE: f64 = 1e-12;
+pub const SWERVE_TOLERANCE: f64 = 1e-10;
 
 /// Which way the impact is going.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Phase {
     Compression,
     /// Restitution until `W` reaches the stored target.
-    Restitution { target_work: f64 },
+    Restitution {
+        target_work: f64,
+    },
 }
 
 /// Integration state, in the contact basis `(t1, t2, n)`.
@@ -56,6 +58,8 @@ struct State {
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Event {
     SlipStopped,
+    /// (swerve only) The slip direction stopped turning: continue in closed form.
+    DirectionSettled,
     CompressionEnded,
     Finished,
 }
@@ -113,7 +117,7 @@ pub(crate) fn consistent_impulse(
         let (gt, gn) = ck.rate(&friction);
         let direction_kept = match mode {
             Mode::Stick(_) => true,
-            Mode::Slip(s) => s == Vector2::zeros() || keeps_direction(&gt, &s),
+            Mode::Slip(s) => s == Vector2::zeros() || keeps_direction(&gt, &state.ut, speed),
         };
         let event = if direction_kept {
             match linear_segment(&mut state, phase, gt, gn, friction, mode) {
@@ -128,6 +132,7 @@ pub(crate) fn consistent_impulse(
         };
         match event {
             Event::SlipStopped => state.ut = Vector2::zeros(),
+            Event::DirectionSettled => {}
             Event::CompressionEnded => {
                 state.un = 0.0;
                 if e == 0.0 {
@@ -160,11 +165,13 @@ enum Mode {
     Slip(Vector2<f64>),
 }
 
-/// True when the slip rate `gt` is parallel to the slip `s`, so that the slip keeps its
-/// direction and `u` is linear in `p` until the next event.
-fn keeps_direction(gt: &Vector2<f64>, s: &Vector2<f64>) -> bool {
-    let cross = gt.x * s.y - gt.y * s.x;
-    cross.abs() <= 1e-14 * gt.norm()
+/// True when the slip rate `gt` is parallel to the slip `ut` closely enough that
+/// treating the slip direction as fixed moves the end state by less than
+/// [`SWERVE_TOLERANCE`] times the initial contact speed `speed`: then `u` is linear in
+/// `p` until the next event.
+fn keeps_direction(gt: &Vector2<f64>, ut: &Vector2<f64>, speed: f64) -> bool {
+    let cross = gt.x * ut.y - gt.y * ut.x;
+    cross.abs() <= SWERVE_TOLERANCE * speed * gt.norm()
 }
 
 /// Advances a segment over which `du/dp = (gt, gn)` is constant, to its first event.
@@ -217,7 +224,11 @@ fn linear_segment(
     }
     let event = event?;
     state.work += state.un * dp + 0.5 * gn * dp * dp;
-    state.ut += gt * dp;
+    // While stuck the slip is zero by definition; adding the rate (zero up to rounding)
+    // would leave a slip of 1e-17 whose direction is noise.
+    if let Mode::Slip(_) = mode {
+        state.ut += gt * dp;
+    }
     state.un += gn * dp;
     state.p += dp;
     state.ft += friction * dp;
@@ -226,39 +237,71 @@ fn linear_segment(
 
 /// Integrates a swerving slip numerically to its first event. `None` on a jam that
 /// does not end (the normal impulse grows without bound).
-fn swerve_segment(ck: &ContactK, mu: f64, state: &mut State, phase: Phase, speed: f64) -> Option<Event> {
+///
+/// The independent variable is not `p` but `tau` with `dp = |u_t| dtau`. In `p` the slip
+/// turns at a rate `~1/|u_t|` that grows without bound as the slip dies out; in `tau`
+/// the direction obeys an autonomous, smooth flow that settles exponentially onto the
+/// invariant direction, and every rate below is Lipschitz:
+///
+/// ```text
+/// du_t/dtau = |u_t| K_tn - mu K_tt u_t      du_n/dtau = |u_t| K_nn - mu K_tn . u_t
+/// dW/dtau   = u_n |u_t|                     dF_t/dtau = -mu u_t       dp/dtau = |u_t|
+/// ```
+fn swerve_segment(
+    ck: &ContactK,
+    mu: f64,
+    state: &mut State,
+    phase: Phase,
+    speed: f64,
+) -> Option<Event> {
     let scale = speed.max(f64::MIN_POSITIVE);
+    let (ktt, ktn, knn) = (ck.ktt, ck.ktn, ck.knn);
     let rate = |y: &Y| -> Y {
-        let len = y.ut.norm();
-        let s = if len > 0.0 { y.ut / len } else { Vector2::zeros() };
-        let f = -s * mu;
-        let (gt, gn) = ck.rate(&f);
-        Y {
-            ut: gt,
-            un: gn,
-            work: y.un,
-            ft: f,
-        }
+        let ut = Vector2::new(y[UT1], y[UT2]);
+        let rho = ut.norm();
+        let dut = ktn * rho - ktt * ut * mu;
+        [
+            dut.x,
+            dut.y,
+            rho * knn - mu * ktn.dot(&ut),
+            y[UN] * rho,
+            -mu * ut.x,
+            -mu * ut.y,
+            rho,
+        ]
     };
-    let p_scale = scale / ck.knn;
-    let mut h = 0.05 * p_scale;
-    let p_cap = 1e8 * p_scale;
-    let stop_speed = 1e-13 * scale;
-    let mut y = Y::from(state);
+    let p_cap = 1e8 * scale / knn;
+    let stop_speed = 1e-3 * SWERVE_TOLERANCE * scale;
+    let mut y: Y = [
+        state.ut.x, state.ut.y, state.un, state.work, state.ft.x, state.ft.y, state.p,
+    ];
     let mut k1 = rate(&y);
-    for _ in 0..100_000 {
-        if state.p > p_cap {
+    // A first step that turns the slip by a fraction of a radian.
+    let mut h = 0.05
+        / (Vector2::new(k1[UT1], k1[UT2]).norm() / Vector2::new(y[UT1], y[UT2]).norm()).max(1e-300);
+    let store = |y: &Y, state: &mut State| {
+        state.ut = Vector2::new(y[UT1], y[UT2]);
+        state.un = y[UN];
+        state.work = y[WORK];
+        state.ft = Vector2::new(y[FT1], y[FT2]);
+        state.p = y[P];
+    };
+    for _iter in 0..10_000 {
+        let ut = Vector2::new(y[UT1], y[UT2]);
+        let gt = Vector2::new(k1[UT1], k1[UT2]);
+        // Once the slip has turned onto a direction it keeps (the invariant direction
+        // of K), the rest of the segment is linear: hand it back to the closed form.
+        if keeps_direction(&gt, &ut, scale) {
+            return Some(Event::DirectionSettled);
+        }
+        if ut.norm() <= stop_speed {
+            return Some(Event::SlipStopped);
+        }
+        if y[P] > p_cap {
             return None;
         }
-        // Do not step past the point where the slip would stop at its current rate:
-        // the rate is discontinuous there.
-        let slip = y.ut.norm();
-        let decel = -k1.ut.dot(&(y.ut / slip));
-        if decel > 0.0 {
-            h = h.min(0.9 * slip / decel);
-        }
         let (y_new, err, k7) = dormand_prince_step(&rate, &y, &k1, h);
-        let err_norm = (err.ut.norm().max(err.un.abs())) / scale;
+        let err_norm = err[UT1].hypot(err[UT2]).max(err[UN].abs()) / scale;
         if !(err_norm <= SWERVE_TOLERANCE) {
             let factor = if err_norm.is_finite() {
                 (0.9 * (SWERVE_TOLERANCE / err_norm).powf(0.2)).clamp(0.1, 0.9)
@@ -270,27 +313,45 @@ fn swerve_segment(ck: &ContactK, mu: f64, state: &mut State, phase: Phase, speed
         }
         // Events inside the accepted step, located on the cubic Hermite interpolant.
         let crossing = match phase {
-            Phase::Compression if y_new.un >= 0.0 => Some((
-                hermite_root(y.un, k1.un, y_new.un, k7.un, h, 0.0),
+            Phase::Compression if y_new[UN] >= 0.0 => Some((
+                hermite_root(y[UN], k1[UN], y_new[UN], k7[UN], h, 0.0),
                 Event::CompressionEnded,
             )),
-            Phase::Restitution { target_work } if y_new.work >= target_work => Some((
-                hermite_root(y.work, k1.work, y_new.work, k7.work, h, target_work),
+            Phase::Restitution { target_work } if y_new[WORK] >= target_work => Some((
+                hermite_root(y[WORK], k1[WORK], y_new[WORK], k7[WORK], h, target_work),
                 Event::Finished,
             )),
             _ => None,
         };
-        if let Some((dh, event)) = crossing {
-            let (y_event, _, _) = dormand_prince_step(&rate, &y, &k1, dh);
-            y_event.store(state, state.p + dh);
+        if let Some((guess, event)) = crossing {
+            // The cubic interpolant is only third-order accurate: polish the location
+            // by Newton's method on the integrated value itself (each iterate is one
+            // step from the start of the accepted step, which is well inside its
+            // error control).
+            let (index, level) = match phase {
+                Phase::Compression => (UN, 0.0),
+                Phase::Restitution { target_work } => (WORK, target_work),
+            };
+            let mut dh = guess;
+            let mut y_event = dormand_prince_step(&rate, &y, &k1, dh).0;
+            for _ in 0..4 {
+                let slope = rate(&y_event)[index];
+                if !(slope > 0.0) {
+                    break;
+                }
+                let next = (dh - (y_event[index] - level) / slope).clamp(0.0, h);
+                if next == dh {
+                    break;
+                }
+                dh = next;
+                y_event = dormand_prince_step(&rate, &y, &k1, dh).0;
+            }
+            store(&y_event, state);
             return Some(event);
         }
-        y_new.store(state, state.p + h);
+        store(&y_new, state);
         y = y_new;
         k1 = k7;
-        if y.ut.norm() <= stop_speed {
-            return Some(Event::SlipStopped);
-        }
         let grow = if err_norm > 0.0 {
             (0.9 * (SWERVE_TOLERANCE / err_norm).powf(0.2)).clamp(0.2, 5.0)
         } else {
@@ -301,56 +362,43 @@ fn swerve_segment(ck: &ContactK, mu: f64, state: &mut State, phase: Phase, speed
     None
 }
 
-/// The integrated quantities of the swerve ODE.
-#[derive(Clone, Copy, Debug)]
-struct Y {
-    ut: Vector2<f64>,
-    un: f64,
-    work: f64,
-    ft: Vector2<f64>,
+/// The swerve state: tangential slip (2), normal velocity, normal work, friction
+/// impulse (2), normal impulse.
+type Y = [f64; 7];
+const UT1: usize = 0;
+const UT2: usize = 1;
+const UN: usize = 2;
+const WORK: usize = 3;
+const FT1: usize = 4;
+const FT2: usize = 5;
+const P: usize = 6;
+
+/// `y + h * sum(c_i k_i)`.
+#[inline]
+fn combine(y: &Y, h: f64, ks: &[(&Y, f64)]) -> Y {
+    let mut out = *y;
+    for (k, c) in ks {
+        let hc = h * c;
+        for (o, ki) in out.iter_mut().zip(k.iter()) {
+            *o += hc * ki;
+        }
+    }
+    out
 }
 
-impl Y {
-    fn from(s: &State) -> Self {
-        Self {
-            ut: s.ut,
-            un: s.un,
-            work: s.work,
-            ft: s.ft,
-        }
-    }
-    fn store(&self, s: &mut State, p: f64) {
-        s.ut = self.ut;
-        s.un = self.un;
-        s.work = self.work;
-        s.ft = self.ft;
-        s.p = p;
-    }
-    fn axpy(&self, a: f64, k: &Y) -> Y {
-        Y {
-            ut: self.ut + k.ut * a,
-            un: self.un + k.un * a,
-            work: self.work + k.work * a,
-            ft: self.ft + k.ft * a,
-        }
-    }
-    fn combine(&self, h: f64, ks: &[(&Y, f64)]) -> Y {
-        let mut out = *self;
-        for (k, c) in ks {
-            out = out.axpy(h * c, k);
-        }
-        out
-    }
-}
-
-/// One Dormand-Prince 5(4) step (Dormand & Prince 1980, Hairer-Norsett-Wanner table
-/// II.5.5): the 5th-order solution, the error estimate, and the rate at the new point
-/// (first-same-as-last).
+/// One Dormand-Prince 5(4) step (Dormand & Prince 1980; Hairer, Norsett & Wanner,
+/// "Solving ODEs I", table II.5.5): the 5th-order solution, the error estimate, and
+/// the rate at the new point (first-same-as-last).
 fn dormand_prince_step(rate: &impl Fn(&Y) -> Y, y: &Y, k1: &Y, h: f64) -> (Y, Y, Y) {
-    let k2 = rate(&y.combine(h, &[(k1, 1.0 / 5.0)]));
-    let k3 = rate(&y.combine(h, &[(k1, 3.0 / 40.0), (&k2, 9.0 / 40.0)]));
-    let k4 = rate(&y.combine(h, &[(k1, 44.0 / 45.0), (&k2, -56.0 / 15.0), (&k3, 32.0 / 9.0)]));
-    let k5 = rate(&y.combine(
+    let k2 = rate(&combine(y, h, &[(k1, 1.0 / 5.0)]));
+    let k3 = rate(&combine(y, h, &[(k1, 3.0 / 40.0), (&k2, 9.0 / 40.0)]));
+    let k4 = rate(&combine(
+        y,
+        h,
+        &[(k1, 44.0 / 45.0), (&k2, -56.0 / 15.0), (&k3, 32.0 / 9.0)],
+    ));
+    let k5 = rate(&combine(
+        y,
         h,
         &[
             (k1, 19372.0 / 6561.0),
@@ -359,7 +407,8 @@ fn dormand_prince_step(rate: &impl Fn(&Y) -> Y, y: &Y, k1: &Y, h: f64) -> (Y, Y,
             (&k4, -212.0 / 729.0),
         ],
     ));
-    let k6 = rate(&y.combine(
+    let k6 = rate(&combine(
+        y,
         h,
         &[
             (k1, 9017.0 / 3168.0),
@@ -369,7 +418,8 @@ fn dormand_prince_step(rate: &impl Fn(&Y) -> Y, y: &Y, k1: &Y, h: f64) -> (Y, Y,
             (&k5, -5103.0 / 18656.0),
         ],
     ));
-    let y5 = y.combine(
+    let y5 = combine(
+        y,
         h,
         &[
             (k1, 35.0 / 384.0),
@@ -381,13 +431,8 @@ fn dormand_prince_step(rate: &impl Fn(&Y) -> Y, y: &Y, k1: &Y, h: f64) -> (Y, Y,
     );
     let k7 = rate(&y5);
     // Difference between the 5th- and 4th-order weights.
-    let zero = Y {
-        ut: Vector2::zeros(),
-        un: 0.0,
-        work: 0.0,
-        ft: Vector2::zeros(),
-    };
-    let err = zero.combine(
+    let err = combine(
+        &[0.0; 7],
         h,
         &[
             (k1, 71.0 / 57600.0),
@@ -430,7 +475,12 @@ fn hermite_root(a: f64, da: f64, b: f64, db: f64, h: f64, level: f64) -> f64 {
 /// sticks at once: the sticking impulse with the restitution lowered, if needed, so the
 /// impact does not gain energy (Genot & Brogliato 1999 show a dynamic jam ends in
 /// sticking).
-fn jam_resolution(body: &Body, contact: &Contact, material: &Material, u1: &Vector3<f64>) -> (Vector3<f64>, Regime) {
+fn jam_resolution(
+    body: &Body,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> (Vector3<f64>, Regime) {
     let n = contact.normal;
     let r = contact.offset;
     let un = n.dot(u1);

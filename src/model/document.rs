@@ -57,7 +57,12 @@ pub(crate) fn document_impulse(
 /// The unit slip direction at the start of the impact: the initial tangential contact
 /// velocity (eqs. 13-15 as atan2), or, when it is exactly zero, the direction in which
 /// slip grows from rest (erratum 2).
-pub(crate) fn slip_direction(body: &Body, contact: &Contact, ut: &Vector3<f64>, mu: f64) -> Vector3<f64> {
+pub(crate) fn slip_direction(
+    body: &Body,
+    contact: &Contact,
+    ut: &Vector3<f64>,
+    mu: f64,
+) -> Vector3<f64> {
     let len = ut.norm();
     if len > 0.0 && len.is_finite() {
         // Rescale before normalising so subnormal slips keep their direction.

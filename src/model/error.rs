@@ -47,7 +47,10 @@ impl fmt::Display for ModelError {
                 write!(f, "moment of inertia must be > 0 kg m^2, got {i}")
             }
             Self::AsymmetricInertia(a) => {
-                write!(f, "inverse inertia tensor is not symmetric (relative asymmetry {a:e})")
+                write!(
+                    f,
+                    "inverse inertia tensor is not symmetric (relative asymmetry {a:e})"
+                )
             }
             Self::NotPositiveSemiDefiniteInertia => {
                 write!(f, "inverse inertia tensor is not positive semi-definite")

@@ -20,7 +20,9 @@ pub use types::{Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, Re
 
 use nalgebra::Vector3;
 
-/// Relative size of an energy gain that `Guarded` treats as real rather than rounding.
+/// Size of an energy gain, relative to the impulse times the contact speed
+/// (`|P| |u1|`, the scale of the energy exchanged), that `Guarded` treats as real
+/// rather than rounding.
 pub const ENERGY_GAIN_TOLERANCE: f64 = 1e-12;
 
 /// Resolves one impact of `body`, moving at `velocity`, against the ground at `contact`.
@@ -80,7 +82,11 @@ pub fn resolve_unchecked(
             tangent_impulse: Vector3::zeros(),
             velocity: *velocity,
             regime: Regime::Separating,
-            law: if law == Law::Consistent { Law::Consistent } else { Law::Document },
+            law: if law == Law::Consistent {
+                Law::Consistent
+            } else {
+                Law::Document
+            },
             fallback: None,
             ke_before: ke,
             ke_after: ke,
@@ -89,32 +95,63 @@ pub fn resolve_unchecked(
     match law {
         Law::Document => {
             let (impulse, regime, _) = document::document_impulse(body, contact, material, &u1)?;
-            Ok(finish(body, velocity, contact, impulse, regime, Law::Document, None))
+            Ok(finish(
+                body,
+                velocity,
+                contact,
+                impulse,
+                regime,
+                Law::Document,
+                None,
+            ))
         }
         Law::Consistent => {
             let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            Ok(finish(body, velocity, contact, impulse, regime, Law::Consistent, None))
+            Ok(finish(
+                body,
+                velocity,
+                contact,
+                impulse,
+                regime,
+                Law::Consistent,
+                None,
+            ))
         }
         Law::Guarded => {
             let reason = match document::document_impulse(body, contact, material, &u1) {
                 Err(_) => Fallback::Jam,
                 Ok((impulse, regime, s)) => {
-                    let impact = finish(body, velocity, contact, impulse, regime, Law::Document, None);
-                    match unphysical(body, velocity, contact, material, &impact, &s) {
+                    let impact = finish(
+                        body,
+                        velocity,
+                        contact,
+                        impulse,
+                        regime,
+                        Law::Document,
+                        None,
+                    );
+                    match unphysical(velocity, contact, material, &impact, &s) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }
                 }
             };
             let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            Ok(finish(body, velocity, contact, impulse, regime, Law::Consistent, Some(reason)))
+            Ok(finish(
+                body,
+                velocity,
+                contact,
+                impulse,
+                regime,
+                Law::Consistent,
+                Some(reason),
+            ))
         }
     }
 }
 
 /// Why the document's result is unphysical, if it is (the `Guarded` law's test).
 fn unphysical(
-    body: &Body,
     before: &BodyVelocity,
     contact: &Contact,
     material: &Material,
@@ -136,15 +173,14 @@ fn unphysical(
         }
     }
     if material.restitution <= 1.0 {
-        // Energy in the frame moving with the ground's contact point, where a fixed
-        // ground's work-energy balance holds for a translating platform too.
-        let shift = |v: &BodyVelocity| BodyVelocity {
-            linear: v.linear - contact.ground_velocity,
-            angular: v.angular,
-        };
-        let ke1 = body.kinetic_energy(&shift(before));
-        let ke2 = body.kinetic_energy(&shift(&impact.velocity));
-        if ke2 - ke1 > ENERGY_GAIN_TOLERANCE * ke1 {
+        // The work of the impulse in the frame moving with the ground's contact point,
+        // where a fixed ground's work-energy balance holds for a translating platform
+        // too: dKE = P . (u1 + u2) / 2 with u the relative contact velocities.
+        let u1 = before.linear + before.angular.cross(r) - contact.ground_velocity;
+        let after = &impact.velocity;
+        let u2 = after.linear + after.angular.cross(r) - contact.ground_velocity;
+        let gain = 0.5 * impact.impulse.dot(&(u1 + u2));
+        if gain > ENERGY_GAIN_TOLERANCE * impact.impulse.norm() * u1.norm() {
             return Some(Fallback::EnergyGain);
         }
     }
@@ -166,6 +202,12 @@ fn finish(
         angular: velocity.angular + body.inv_inertia * contact.offset.cross(&impulse),
     };
     let normal_impulse = impulse.dot(&contact.normal);
+    // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
+    // one impulse at r, and free of the cancellation of subtracting two energies.
+    let r = &contact.offset;
+    let point_velocities =
+        velocity.linear + velocity.angular.cross(r) + after.linear + after.angular.cross(r);
+    let ke_before = body.kinetic_energy(velocity);
     Impact {
         impulse,
         normal_impulse,
@@ -174,7 +216,7 @@ fn finish(
         regime,
         law,
         fallback,
-        ke_before: body.kinetic_energy(velocity),
-        ke_after: body.kinetic_energy(&after),
+        ke_before,
+        ke_after: ke_before + 0.5 * impulse.dot(&point_velocities),
     }
 }

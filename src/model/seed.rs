@@ -136,12 +136,8 @@ pub fn apply_impulse(input: &SeedInput, j: &Vector3<f64>) -> (Vector3<f64>, Vect
     let (m, i) = (input.mass, input.inertia);
     let (lx, ly, h) = (input.lx, input.ly, input.h);
     let u2 = input.u1 + Vector3::new(-j.x, -j.y, j.z) / m;
-    let w2 = input.w1
-        + Vector3::new(
-            j.z * ly - j.y * h,
-            -j.z * lx + j.x * h,
-            j.x * ly - j.y * lx,
-        ) / i;
+    let w2 =
+        input.w1 + Vector3::new(j.z * ly - j.y * h, -j.z * lx + j.x * h, j.x * ly - j.y * lx) / i;
     (u2, w2)
 }
 
@@ -178,7 +174,11 @@ pub fn slip_angle(u1t: &Vector3<f64>) -> Option<f64> {
 /// The document's (19) has a stray `J_z` in the denominator (MODEL-NOTES erratum 1).
 ///
 /// Returns [`ModelError::Jam`] when the denominator is `<= 0`.
-pub fn slip_impulse(input: &SeedInput, u1t: &Vector3<f64>, theta: f64) -> Result<Vector3<f64>, ModelError> {
+pub fn slip_impulse(
+    input: &SeedInput,
+    u1t: &Vector3<f64>,
+    theta: f64,
+) -> Result<Vector3<f64>, ModelError> {
     let (m, i, mu) = (input.mass, input.inertia, input.friction);
     let (lx, ly, h) = (input.lx, input.ly, input.h);
     let (sin, cos) = theta.sin_cos();

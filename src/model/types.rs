@@ -32,8 +32,8 @@ impl Body {
         if !inertia.iter().all(|c| c.is_finite()) {
             return Err(ModelError::NotFinite { what: "inertia" });
         }
-        let chol = nalgebra::Cholesky::new(inertia)
-            .ok_or(ModelError::NotPositiveSemiDefiniteInertia)?;
+        let chol =
+            nalgebra::Cholesky::new(inertia).ok_or(ModelError::NotPositiveSemiDefiniteInertia)?;
         let body = Self {
             mass,
             inv_inertia: chol.inverse(),
@@ -85,29 +85,40 @@ impl Body {
     }
 }
 
-/// `1/2 w . I w` given `I^-1`: w = I^-1 L, so the energy is `1/2 L . I^-1 L` with
-/// `L = I w`. With a singular `I^-1`, only the rotatable part of `w` carries energy;
-/// a pseudo-inverse on the symmetric eigen-decomposition gives it.
+/// `1/2 w . I w` given `I^-1` (J, without the 1/2): `w . I w = w . (I^-1)^-1 w`.
+/// With a singular `I^-1` (locked rotations) only the rotatable part of `w` carries
+/// energy; a pseudo-inverse on the symmetric eigen-decomposition gives it.
 fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
     if w.norm_squared() == 0.0 {
         return 0.0;
     }
-    // Fast path: diagonal inverse inertia (isotropic bodies, principal frames).
     let a = inv_inertia;
     if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
+        // Diagonal: isotropic bodies and bodies in their principal frame.
         let term = |ai: f64, wi: f64| if ai > 0.0 { wi * wi / ai } else { 0.0 };
         return term(a.m11, w.x) + term(a.m22, w.y) + term(a.m33, w.z);
     }
-    if let Some(chol) = nalgebra::Cholesky::new(*a) {
-        // w . I w = w . (I^-1)^-1 w
-        let iw = chol.solve(w);
-        return w.dot(&iw);
+    // Symmetric 3x3 solve by the adjugate: w . adj(A) w / det(A).
+    let c11 = a.m22 * a.m33 - a.m23 * a.m23;
+    let c22 = a.m11 * a.m33 - a.m13 * a.m13;
+    let c33 = a.m11 * a.m22 - a.m12 * a.m12;
+    let c12 = a.m13 * a.m23 - a.m12 * a.m33;
+    let c13 = a.m12 * a.m23 - a.m13 * a.m22;
+    let c23 = a.m12 * a.m13 - a.m11 * a.m23;
+    let det = a.m11 * c11 + a.m12 * c12 + a.m13 * c13;
+    let scale = a.m11.max(a.m22).max(a.m33);
+    if det > 1e-9 * scale * scale * scale {
+        let quad = c11 * w.x * w.x
+            + c22 * w.y * w.y
+            + c33 * w.z * w.z
+            + 2.0 * (c12 * w.x * w.y + c13 * w.x * w.z + c23 * w.y * w.z);
+        return quad / det;
     }
     let eig = a.symmetric_eigen();
     let mut sum = 0.0;
     for k in 0..3 {
         let lambda = eig.eigenvalues[k];
-        if lambda > 1e-300 {
+        if lambda > 1e-12 * scale {
             let c = eig.eigenvectors.column(k).dot(w);
             sum += c * c / lambda;
         }
