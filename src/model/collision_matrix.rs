@@ -47,6 +47,18 @@ pub(crate) fn solve_k(body: &Body, r: &Vector3<f64>, d: &Vector3<f64>) -> Vector
     if r2 == 0.0 {
         return d * body.mass;
     }
+    let a = &body.inv_inertia;
+    if a.m12 == 0.0
+        && a.m13 == 0.0
+        && a.m23 == 0.0
+        && a.m11 == a.m22
+        && a.m22 == a.m33
+        && a.m11 > 0.0
+    {
+        // Isotropic: K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4).
+        let (m, i) = (body.mass, 1.0 / a.m11);
+        return (d * i + r * (m * r.dot(d))) * (m / (i + m * r2));
+    }
     let rn = r.norm();
     let r_hat = r / rn;
     let (t1, t2) = orthonormal_basis(&r_hat);

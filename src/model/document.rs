@@ -35,7 +35,7 @@ pub(crate) fn document_impulse(
     let stick = solve_k(body, r, &(-(n * ((1.0 + e) * un)) - ut));
     let stick_n = stick.dot(n);
     let stick_t = stick - n * stick_n;
-    if stick_n >= 0.0 && stick_t.norm() <= mu * stick_n {
+    if stick_n >= 0.0 && stick_t.norm_squared() <= (mu * stick_n) * (mu * stick_n) {
         return Ok((stick, Regime::Stick, Vector3::zeros()));
     }
 

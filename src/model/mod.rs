@@ -53,11 +53,19 @@ pub fn resolve(
     contact: &Contact,
     material: &Material,
 ) -> Result<Impact, ModelError> {
+    // One sum of every input is finite iff all of them are; only when it is not are the
+    // fields checked one by one, to name the culprit.
+    let sum = velocity.linear.sum()
+        + velocity.angular.sum()
+        + contact.ground_velocity.sum()
+        + contact.offset.sum();
+    if !sum.is_finite() {
+        error::finite3(&velocity.linear, "velocity.linear")?;
+        error::finite3(&velocity.angular, "velocity.angular")?;
+    }
     body.validate()?;
     contact.validate()?;
     material.validate()?;
-    error::finite3(&velocity.linear, "velocity.linear")?;
-    error::finite3(&velocity.angular, "velocity.angular")?;
     resolve_unchecked(law, body, velocity, contact, material)
 }
 
@@ -98,6 +106,7 @@ pub fn resolve_unchecked(
             Ok(finish(
                 body,
                 velocity,
+                &u1,
                 contact,
                 impulse,
                 regime,
@@ -110,6 +119,7 @@ pub fn resolve_unchecked(
             Ok(finish(
                 body,
                 velocity,
+                &u1,
                 contact,
                 impulse,
                 regime,
@@ -124,6 +134,7 @@ pub fn resolve_unchecked(
                     let impact = finish(
                         body,
                         velocity,
+                        &u1,
                         contact,
                         impulse,
                         regime,
@@ -140,6 +151,7 @@ pub fn resolve_unchecked(
             Ok(finish(
                 body,
                 velocity,
+                &u1,
                 contact,
                 impulse,
                 regime,
@@ -188,9 +200,11 @@ fn unphysical(
 }
 
 /// Applies the impulse: `v2 = v1 + P/m`, `w2 = w1 + I_w^-1 (r × P)` (eqs. 4-9).
+/// `u1` is the relative contact velocity before the impact.
 fn finish(
     body: &Body,
     velocity: &BodyVelocity,
+    u1: &Vector3<f64>,
     contact: &Contact,
     impulse: Vector3<f64>,
     regime: Regime,
@@ -205,8 +219,7 @@ fn finish(
     // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
     // one impulse at r, and free of the cancellation of subtracting two energies.
     let r = &contact.offset;
-    let point_velocities =
-        velocity.linear + velocity.angular.cross(r) + after.linear + after.angular.cross(r);
+    let point_velocities = u1 + contact.ground_velocity + after.linear + after.angular.cross(r);
     let ke_before = body.kinetic_energy(velocity);
     Impact {
         impulse,

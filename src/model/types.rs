@@ -49,12 +49,28 @@ impl Body {
             return Err(ModelError::NonPositiveMass(self.mass));
         }
         let a = &self.inv_inertia;
-        if !a.iter().all(|c| c.is_finite()) {
+        // One sum is finite iff every entry is (a NaN or an infinity propagates).
+        if !a.iter().sum::<f64>().is_finite() {
             return Err(ModelError::NotFinite {
                 what: "body.inv_inertia",
             });
         }
-        let scale = a.amax();
+        let diag_ok = a.m11 >= 0.0 && a.m22 >= 0.0 && a.m33 >= 0.0;
+        if a.m12 == 0.0
+            && a.m13 == 0.0
+            && a.m23 == 0.0
+            && a.m21 == 0.0
+            && a.m31 == 0.0
+            && a.m32 == 0.0
+        {
+            // Diagonal (isotropic, principal frame): PSD iff the diagonal is >= 0.
+            return if diag_ok {
+                Ok(())
+            } else {
+                Err(ModelError::NotPositiveSemiDefiniteInertia)
+            };
+        }
+        let scale = a.m11.abs().max(a.m22.abs()).max(a.m33.abs()).max(a.amax());
         let asym = (a.m12 - a.m21)
             .abs()
             .max((a.m13 - a.m31).abs())
@@ -66,7 +82,6 @@ impl Body {
         // matrix). Rounding makes a singular PSD tensor's minors slightly negative,
         // so each minor is compared with the size of its terms.
         let eps = 1e-12;
-        let diag_ok = a.m11 >= 0.0 && a.m22 >= 0.0 && a.m33 >= 0.0;
         let m2 = |x: f64, y: f64, xy: f64| x * y - xy * xy >= -eps * (x * y + xy * xy);
         let minors2 = m2(a.m11, a.m22, a.m12) && m2(a.m11, a.m33, a.m13) && m2(a.m22, a.m33, a.m23);
         let det = a.determinant();
@@ -159,11 +174,15 @@ impl Contact {
 
     /// Checks the vectors are finite and the normal has unit length (to 1e-6).
     pub fn validate(&self) -> Result<(), ModelError> {
-        finite3(&self.normal, "contact.normal")?;
-        finite3(&self.offset, "contact.offset")?;
-        finite3(&self.ground_velocity, "contact.ground_velocity")?;
-        let len = self.normal.norm();
-        if (len - 1.0).abs() > 1e-6 {
+        if !(self.normal.sum() + self.offset.sum() + self.ground_velocity.sum()).is_finite() {
+            finite3(&self.normal, "contact.normal")?;
+            finite3(&self.offset, "contact.offset")?;
+            finite3(&self.ground_velocity, "contact.ground_velocity")?;
+        }
+        let len2 = self.normal.norm_squared();
+        // |len - 1| <= 1e-6, compared on the square to avoid the root.
+        if (len2 - 1.0).abs() > 2e-6 {
+            let len = len2.sqrt();
             return Err(ModelError::NonUnitNormal(len));
         }
         Ok(())
