@@ -208,7 +208,13 @@ fn linear_segment(
             // W(p0 + x) = W0 + u_n x + gn x^2 / 2 = target, smallest x >= 0.
             let rest = (target_work - state.work).max(0.0);
             let disc = state.un * state.un + 2.0 * gn * rest;
-            let to_end = if disc >= 0.0 {
+            let to_end = if state.un < 0.0 && gn <= 0.0 {
+                // A swerve re-compressed the contact (u_n < 0) and u_n is not rising:
+                // the impact cannot end in this segment. (The branches below would end
+                // it while still approaching, or at x = u_n / -gn < 0, stepping the
+                // normal impulse back.) Another event (slip stop, jam) ends the segment.
+                f64::INFINITY
+            } else if disc >= 0.0 {
                 let root = state.un + disc.sqrt();
                 if root > 0.0 { 2.0 * rest / root } else { 0.0 }
             } else {
