@@ -1,0 +1,232 @@
+//! A ball dropped on a ground, headless: bounce apexes and impact times, measured against
+//! the closed forms `apex_n = e^(2n) h0`, `t_(k+1) = t1 + 2 t1 e (1 - e^k)/(1 - e)`.
+//!
+//! ```text
+//! cargo run --release --example drop -- --mode exact --dt 0.0166667 --csv drop.csv
+//! ```
+//!
+//! Flags (each has a default): `--height H` (gap from the ball's bottom to the ground, m,
+//! 1), `--radius R` (m, 0.1), `--restitution E` (0.8), `--friction MU` (0.5), `--dt DT` (s,
+//! 1/60), `--duration T` (s, 5), `--mode rapier|step|toi|exact` (exact; `rapier` is rapier
+//! alone), `--f64` (needs a build with `--features f64`), `--csv PATH` (trace
+//! `t,x,y,z,vx,vy,vz,wx,wy,wz` of the ball's centre of mass, one row per step and one at
+//! t = 0; ground surface at y = 0, y up).
+
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+use std::io::Write;
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Mode {
+    Rapier,
+    Plugin(TimingMode),
+}
+
+struct Args {
+    height: f64,
+    radius: f64,
+    restitution: f64,
+    friction: f64,
+    dt: f64,
+    duration: f64,
+    mode: Mode,
+    f64: bool,
+    csv: Option<String>,
+}
+
+const USAGE: &str = "usage: drop [--height H] [--radius R] [--restitution E] [--friction MU] \
+[--dt DT] [--duration T] [--mode rapier|step|toi|exact] [--f64] [--csv PATH]";
+
+fn parse() -> Result<Args, String> {
+    let mut a = Args {
+        height: 1.0,
+        radius: 0.1,
+        restitution: 0.8,
+        friction: 0.5,
+        dt: 1.0 / 60.0,
+        duration: 5.0,
+        mode: Mode::Plugin(TimingMode::Exact),
+        f64: false,
+        csv: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value\n{USAGE}"));
+        let mut number = |name: &str| -> Result<f64, String> {
+            let v = value(name)?;
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or(format!("{name}: not a number: {v}"))
+        };
+        match flag.as_str() {
+            "--height" => a.height = number("--height")?,
+            "--radius" => a.radius = number("--radius")?,
+            "--restitution" => a.restitution = number("--restitution")?,
+            "--friction" => a.friction = number("--friction")?,
+            "--dt" => a.dt = number("--dt")?,
+            "--duration" => a.duration = number("--duration")?,
+            "--mode" => {
+                a.mode = match value("--mode")?.as_str() {
+                    "rapier" => Mode::Rapier,
+                    "step" => Mode::Plugin(TimingMode::Step),
+                    "toi" => Mode::Plugin(TimingMode::TimeOfImpact),
+                    "exact" => Mode::Plugin(TimingMode::Exact),
+                    m => return Err(format!("--mode: unknown mode {m} (rapier|step|toi|exact)")),
+                }
+            }
+            "--f64" => a.f64 = true,
+            "--csv" => a.csv = Some(value("--csv")?),
+            "-h" | "--help" => return Err(USAGE.to_string()),
+            f => return Err(format!("unknown flag {f}\n{USAGE}")),
+        }
+    }
+    if a.f64 && !cfg!(feature = "f64") {
+        return Err(
+            "--f64 needs the f64 build: cargo run --release --features f64 --example drop -- --f64"
+                .into(),
+        );
+    }
+    if !(a.height > 0.0 && a.radius > 0.0 && a.dt > 0.0 && a.duration > 0.0) {
+        return Err("--height, --radius, --dt and --duration must be > 0".into());
+    }
+    if !(a.restitution >= 0.0 && a.friction >= 0.0) {
+        return Err("--restitution and --friction must be >= 0".into());
+    }
+    Ok(a)
+}
+
+fn main() {
+    let args = match parse() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(2);
+        }
+    };
+    let g = 9.81;
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = args.dt as Real;
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+            .restitution(args.restitution as Real)
+            .friction(args.friction as Real),
+    );
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(
+            0.0,
+            (args.radius + args.height) as Real,
+            0.0,
+        )),
+        ColliderBuilder::ball(args.radius as Real)
+            .restitution(args.restitution as Real)
+            .friction(args.friction as Real),
+    );
+    let mut plugin = match args.mode {
+        Mode::Rapier => None,
+        Mode::Plugin(timing) => {
+            let config = ImpactConfig {
+                timing,
+                ..Default::default()
+            };
+            let mut p = ImpactPlugin::new(config).expect("valid config");
+            p.add_ground(&world.bodies, &mut world.colliders, ground)
+                .expect("the ground collider exists");
+            Some(p)
+        }
+    };
+    let dt = f64::from(world.integration_parameters.dt);
+    let steps = (args.duration / dt).ceil() as usize;
+    let mut csv = args.csv.as_ref().map(|path| {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("create CSV"));
+        writeln!(f, "t,x,y,z,vx,vy,vz,wx,wy,wz").unwrap();
+        f
+    });
+    let mut impacts: Vec<f64> = Vec::new();
+    let mut apexes: Vec<f64> = Vec::new();
+    let mut top: Option<(f64, f64)> = None; // (y, vy) of the highest sample of this flight
+    let mut prev_vy = 0.0;
+    let radius = args.radius;
+    for k in 0..=steps {
+        let t = k as f64 * dt;
+        if k > 0 {
+            match plugin.as_mut() {
+                Some(p) => {
+                    p.step(&mut world);
+                    for e in p.events() {
+                        if !e.settled {
+                            impacts.push(t - dt + e.time);
+                        }
+                    }
+                }
+                None => world.step(),
+            }
+        }
+        let rb = &world.bodies[ball];
+        let (p, v, w) = (rb.center_of_mass(), rb.linvel(), rb.angvel());
+        if let Some(f) = csv.as_mut() {
+            writeln!(
+                f,
+                "{t:.9},{},{},{},{},{},{},{},{},{}",
+                p.x, p.y, p.z, v.x, v.y, v.z, w.x, w.y, w.z
+            )
+            .unwrap();
+        }
+        let (y, vy) = (f64::from(p.y), f64::from(v.y));
+        if plugin.is_none() && prev_vy < 0.0 && vy > 0.0 {
+            impacts.push(t);
+        }
+        // A flight ends when the ball starts rising again after falling.
+        if prev_vy < 0.0 && vy > 0.0 {
+            if let Some((ty, tvy)) = top.take() {
+                apexes.push(ty - radius + tvy * tvy / (2.0 * g));
+            }
+        }
+        if vy.abs() > 1e-9 && top.is_none_or(|(ty, _)| y > ty) {
+            top = Some((y, vy));
+        }
+        prev_vy = vy;
+    }
+    if let Some(mut f) = csv {
+        f.flush().unwrap();
+    }
+    // The first "apex" is the release height: skip it.
+    let apexes: Vec<f64> = apexes.into_iter().skip(1).collect();
+    let (h0, e) = (args.height, args.restitution);
+    let t1 = (2.0 * h0 / g).sqrt();
+    println!(
+        "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {:?}, precision = {}",
+        args.friction,
+        args.mode,
+        if cfg!(feature = "f64") { "f64" } else { "f32" }
+    );
+    println!(
+        "{:>3} {:>12} {:>12} {:>10} {:>12} {:>12} {:>10}",
+        "n", "t_impact", "analytic", "error s", "apex", "analytic", "rel err"
+    );
+    for n in 0..impacts.len().max(apexes.len()).min(12) {
+        let t_exp = if n == 0 {
+            t1
+        } else {
+            t1 + 2.0 * t1 * e * (1.0 - e.powi(n as i32)) / (1.0 - e)
+        };
+        let apex_exp = e.powi(2 * (n as i32 + 1)) * h0;
+        let ti = impacts
+            .get(n)
+            .map_or(String::from("-"), |t| format!("{t:.7}"));
+        let te = impacts
+            .get(n)
+            .map_or(String::from("-"), |t| format!("{:+.2e}", t - t_exp));
+        let ap = apexes
+            .get(n)
+            .map_or(String::from("-"), |a| format!("{a:.7}"));
+        let ae = apexes.get(n).map_or(String::from("-"), |a| {
+            format!("{:+.2e}", a / apex_exp - 1.0)
+        });
+        println!(
+            "{:>3} {ti:>12} {t_exp:>12.7} {te:>10} {ap:>12} {apex_exp:>12.7} {ae:>10}",
+            n + 1
+        );
+    }
+}

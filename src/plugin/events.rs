@@ -1,0 +1,67 @@
+//! What the plugin reports after each step: one [`ImpactEvent`] per resolved impact.
+
+use crate::model::{Fallback, Law, Regime};
+use crate::rapier::math::Vector;
+use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
+
+/// When in the step an impact was applied (see [`crate::TimingMode`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ImpactTiming {
+    /// At its exact time inside the step (`TimeOfImpact` and `Exact` modes).
+    InStep,
+    /// At the start of the step, to the start-of-step velocity (`Step` mode).
+    StepStart,
+    /// At the end of the step, on rapier's end-of-step state, the body pushed out of the
+    /// ground along the normal: the fallback for a body that also touched something else
+    /// (another body, a non-ground collider through rapier's CCD), had a joint or a torque in
+    /// the step, so that its flight could not be re-integrated alone.
+    StepEnd,
+}
+
+/// One ground impact resolved by the model in the last step. World frame, y-up or not: the
+/// frame is rapier's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImpactEvent {
+    /// The body that hit the ground.
+    pub body: RigidBodyHandle,
+    /// The body's collider that touched.
+    pub collider: ColliderHandle,
+    /// The ground collider.
+    pub ground: ColliderHandle,
+    /// Time of the impact after the start of the step (s), in `[0, dt]`.
+    pub time: f64,
+    /// How the time was found.
+    pub timing: ImpactTiming,
+    /// Contact point on the body (m): the single deepest point, or the centroid of the
+    /// simultaneous contact points of a flat or edge landing.
+    pub point: Vector,
+    /// Unit contact normal, from the ground into the body.
+    pub normal: Vector,
+    /// Number of contact points resolved as one simultaneous impact (1 for a single point).
+    pub contact_points: usize,
+    /// Approach speed `-u.n > 0` of the contact point relative to the ground (m/s).
+    pub approach_speed: f64,
+    /// Impulse on the body at `point` (N s).
+    pub impulse: Vector,
+    /// Normal impulse `P.n >= 0` (N s).
+    pub normal_impulse: f64,
+    /// Tangential (friction) impulse (N s).
+    pub tangent_impulse: Vector,
+    /// Stick, slip, or slip then stick.
+    pub regime: Regime,
+    /// The law that produced the impulse (`Document` or `Consistent`).
+    pub law: Law,
+    /// Why `Guarded` fell back to `Consistent`, if it did.
+    pub fallback: Option<Fallback>,
+    /// `true` when the approach was below the resting speed and the impact was resolved with
+    /// `e = 0`: the body came to rest on the ground.
+    pub settled: bool,
+    /// Restitution coefficient used (after combining or override; 0 when `settled`).
+    pub restitution: f64,
+    /// Friction coefficient used.
+    pub friction: f64,
+    /// Kinetic energy of the body before the impact (J).
+    pub ke_before: f64,
+    /// Kinetic energy of the body after the impact (J).
+    pub ke_after: f64,
+}

@@ -1,0 +1,111 @@
+//! The plugin as rapier's `PhysicsHooks`.
+//!
+//! Called by rapier's narrow phase (every step, for every pair with a hook flag: the plugin
+//! sets `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on each ground collider) and by its
+//! CCD. It reads the roles [`ImpactPlugin::before_step`] assigned:
+//! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
+//!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its
+//!   collision events, but neither its solver nor its restitution pass sees the pair;
+//! - role `Resting` (or a pair the plugin did not see coming): rapier's solver keeps it, and
+//!   `modify_solver_contacts` sets its restitution to 0 (and the ground's friction override,
+//!   if any): the plugin owns every bounce off a ground;
+//! - every other pair goes to the user's hook unchanged, exactly when the colliders' own
+//!   hook flags (those the user set, before the plugin added its own) ask for it; otherwise
+//!   rapier's default applies.
+
+use super::impact_plugin::{ImpactPlugin, Role};
+use super::resolve::PairKey;
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderHandle, ColliderSet, ContactModificationContext, PairFilterContext,
+    PhysicsHooks, RigidBodySet, SolverFlags,
+};
+
+impl<H> ImpactPlugin<H> {
+    /// `Some((body collider, ground collider))` when the pair is a managed body against a
+    /// ground.
+    fn managed_pair(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<PairKey> {
+        let (body, ground) = match (
+            self.grounds.contains_key(&c1),
+            self.grounds.contains_key(&c2),
+        ) {
+            (true, false) => (c2, c1),
+            (false, true) => (c1, c2),
+            _ => return None,
+        };
+        if let Some(parent) = colliders.get(ground)?.parent() {
+            if bodies.get(parent).is_none_or(|rb| rb.is_dynamic()) {
+                return None;
+            }
+        }
+        let parent = colliders.get(body)?.parent()?;
+        let rb = bodies.get(parent)?;
+        self.manages(parent, rb).then_some((body, ground))
+    }
+
+    /// The hook flags the user asked for on a collider.
+    fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
+        match self.grounds.get(&c) {
+            Some(entry) => entry.user_hooks,
+            None => colliders
+                .get(c)
+                .map_or(ActiveHooks::empty(), |co| co.active_hooks()),
+        }
+    }
+}
+
+impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
+    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
+        let (bodies, colliders) = (context.bodies, context.colliders);
+        match self.managed_pair(bodies, colliders, context.collider1, context.collider2) {
+            Some(key) => match self.role(&key) {
+                Role::Impact => Some(SolverFlags::empty()),
+                Role::Resting => Some(SolverFlags::COMPUTE_RIGID_IMPULSES),
+            },
+            None => {
+                let flags = self.user_flags(colliders, context.collider1)
+                    | self.user_flags(colliders, context.collider2);
+                if flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
+                    self.user_hooks.filter_contact_pair(context)
+                } else {
+                    Some(SolverFlags::default())
+                }
+            }
+        }
+    }
+
+    fn filter_intersection_pair(&self, context: &PairFilterContext) -> bool {
+        // The plugin never sets FILTER_INTERSECTION_PAIR: rapier only calls this for the
+        // user's flags.
+        self.user_hooks.filter_intersection_pair(context)
+    }
+
+    fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
+        let (bodies, colliders) = (context.bodies, context.colliders);
+        let (c1, c2) = (context.collider1, context.collider2);
+        match self.managed_pair(bodies, colliders, c1, c2) {
+            Some(key) => {
+                if self.role(&key) == Role::Resting {
+                    let over = self.grounds.get(&key.1).and_then(|g| g.material);
+                    if let Some(rigid) = context.rigid_mut() {
+                        *rigid.restitution = 0.0;
+                        if let Some(m) = over {
+                            *rigid.friction = super::convert::to_real(m.friction);
+                        }
+                    }
+                }
+            }
+            None => {
+                let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
+                    self.user_hooks.modify_solver_contacts(context);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,962 @@
+//! [`ImpactPlugin`]: the per-step driver around rapier's step.
+//!
+//! Contract, per step:
+//! - [`ImpactPlugin::before_step`] reads every awake managed dynamic body (state, and which
+//!   grounds its swept bounding sphere can reach), assigns each body-ground collider pair a
+//!   role (`Impact`: taken from rapier's solver; `Resting`: rapier's, with `e = 0`), and in
+//!   `Step` mode applies the impulses of the contacts that close in this step.
+//! - During rapier's step, the plugin is the `&dyn PhysicsHooks`: it applies the roles and
+//!   hands every other pair to the user's hook unchanged.
+//! - [`ImpactPlugin::after_step`] resolves the impacts at their time in the step from the
+//!   start-of-step state (or at the step end as a fallback), integrates free flight exactly
+//!   in `Exact` mode, writes poses and velocities back (woken up) and moves the colliders.
+
+use super::config::{ConfigError, ImpactConfig, TimingMode};
+use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
+use super::events::{ImpactEvent, ImpactTiming};
+use super::flight::{Flight, State};
+use super::geometry::{
+    BodyGeom, BodyPart, GroundGeom, closest, contact, first_impact, landing_point, supported,
+};
+use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
+use crate::model::Material;
+use crate::rapier::math::{Pose, Vector};
+use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
+    LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsWorld, RigidBody, RigidBodyHandle,
+    RigidBodySet, RigidBodyType, SolverFlags,
+};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use std::collections::{HashMap, HashSet};
+
+/// What the plugin does with a body-ground collider pair during the step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Role {
+    /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
+    Impact,
+    /// In rapier's solver with zero restitution: a resting, rolling or sliding contact.
+    Resting,
+}
+
+/// A registered ground collider.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GroundEntry {
+    /// Material override.
+    pub material: Option<Material>,
+    /// The collider's hook flags before the plugin added its own: what the user's hook
+    /// asked for.
+    pub user_hooks: ActiveHooks,
+    /// Marked by the all-fixed-colliders mode rather than by the user.
+    pub automatic: bool,
+}
+
+/// The hook flags the plugin needs on every ground collider.
+pub(crate) const PLUGIN_HOOKS: ActiveHooks =
+    ActiveHooks::FILTER_CONTACT_PAIRS.union(ActiveHooks::MODIFY_SOLVER_CONTACTS);
+
+/// A ground's motion over the step: start pose of its centre-of-mass frame, velocities.
+#[derive(Clone, Copy, Debug)]
+struct GroundMotion {
+    handle: ColliderHandle,
+    body: Option<RigidBodyHandle>,
+    com0: Vector3<f64>,
+    rot0: UnitQuaternion<f64>,
+    local: Isometry3<f64>,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    /// World AABB over the step (start and predicted end).
+    aabb: Aabb,
+}
+
+/// A managed body's start-of-step snapshot.
+struct Candidate {
+    body: RigidBodyHandle,
+    start: State,
+    flight: Flight,
+    local_com: Vector3<f64>,
+    /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
+    impact_grounds: Vec<usize>,
+    /// Step mode: impulses were applied at the start.
+    touched: bool,
+}
+
+/// Exact-mode `f64` state of a body as last written, so the next step continues from it
+/// rather than from its rounding.
+#[derive(Clone, Copy, Debug)]
+struct Shadow {
+    com: Vector3<f64>,
+    v: Vector3<f64>,
+    written_translation: Vector,
+    written_linvel: Vector,
+}
+
+#[derive(Default)]
+struct StepData {
+    active: bool,
+    dt: f64,
+    resting_speed: f64,
+    resting_gap: f64,
+    prediction: f64,
+    roles: HashMap<PairKey, Role>,
+    grounds: Vec<GroundMotion>,
+    candidates: Vec<Candidate>,
+}
+
+/// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
+/// and the per-step driver.
+///
+/// Mark colliders as ground, then either call [`ImpactPlugin::step`] on a [`PhysicsWorld`],
+/// or call [`ImpactPlugin::before_step`], rapier's `PhysicsPipeline::step` with the plugin as
+/// its hooks argument, and [`ImpactPlugin::after_step`]. A hook you already use is given at
+/// construction ([`ImpactPlugin::with_hooks`]) and receives every pair that is not a managed
+/// ground contact unchanged.
+///
+/// # Stepping a `PhysicsWorld`
+/// ```
+/// use rapier_impact::rapier::prelude::*;
+/// use rapier_impact::{ImpactConfig, ImpactPlugin};
+///
+/// let mut world = PhysicsWorld::default();
+/// let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y)));
+/// let (ball, _) = world.insert(
+///     RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.1, 0.0)),
+///     ColliderBuilder::ball(0.1).restitution(0.8),
+/// );
+/// world.colliders[ground].set_restitution(0.8);
+///
+/// let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+/// plugin.add_ground(&world.bodies, &mut world.colliders, ground).unwrap();
+/// let mut bounced = false;
+/// for _ in 0..30 {
+///     // Half a second: the ball hits the ground at 0.45 s and rises.
+///     plugin.step(&mut world);
+///     bounced |= !plugin.events().is_empty();
+/// }
+/// assert!(bounced && world.bodies[ball].linvel().y > 0.0);
+/// ```
+///
+/// # Around your own `PhysicsPipeline::step`
+/// ```
+/// use rapier_impact::rapier::prelude::*;
+/// use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+///
+/// let mut bodies = RigidBodySet::new();
+/// let mut colliders = ColliderSet::new();
+/// let ground = colliders.insert(ColliderBuilder::cuboid(10.0, 0.5, 10.0).translation(Vector::new(0.0, -0.5, 0.0)));
+/// let ball = bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.1, 0.0)));
+/// colliders.insert_with_parent(ColliderBuilder::ball(0.1).restitution(0.8), ball, &mut bodies);
+///
+/// let config = ImpactConfig { timing: TimingMode::TimeOfImpact, ..Default::default() };
+/// // `()` stands for the hook the simulation already had.
+/// let mut plugin = ImpactPlugin::with_hooks(config, ()).unwrap();
+/// plugin.add_ground(&bodies, &mut colliders, ground).unwrap();
+///
+/// let (mut pipeline, mut islands, mut broad_phase, mut narrow_phase) =
+///     (PhysicsPipeline::new(), IslandManager::new(), BroadPhaseBvh::new(), NarrowPhase::new());
+/// let (mut impulse_joints, mut multibody_joints, mut soft_bodies, mut ccd) =
+///     (ImpulseJointSet::new(), MultibodyJointSet::new(), SoftBodySet::new(), CCDSolver::new());
+/// let params = IntegrationParameters::default();
+/// let gravity = Vector::new(0.0, -9.81, 0.0);
+/// for _ in 0..60 {
+///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders);
+///     pipeline.step(
+///         gravity, &params, &mut islands, &mut broad_phase, &mut narrow_phase,
+///         &mut bodies, &mut colliders, &mut impulse_joints, &mut multibody_joints,
+///         &mut soft_bodies, &mut ccd, &plugin, &(),
+///     );
+///     plugin.after_step(&mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
+///     for event in plugin.events() {
+///         assert!(event.normal_impulse > 0.0);
+///     }
+/// }
+/// assert!(bodies[ball].translation().y > 0.1);
+/// ```
+pub struct ImpactPlugin<H = ()> {
+    pub(crate) config: ImpactConfig,
+    pub(crate) grounds: HashMap<ColliderHandle, GroundEntry>,
+    pub(crate) all_fixed: bool,
+    pub(crate) excluded: HashSet<RigidBodyHandle>,
+    pub(crate) user_hooks: H,
+    step: StepData,
+    shadows: HashMap<RigidBodyHandle, Shadow>,
+    events: Vec<ImpactEvent>,
+}
+
+impl ImpactPlugin<()> {
+    /// A plugin with no user hook.
+    pub fn new(config: ImpactConfig) -> Result<Self, ConfigError> {
+        Self::with_hooks(config, ())
+    }
+}
+
+impl<H> ImpactPlugin<H> {
+    /// A plugin wrapping the simulation's existing hook `user_hooks`: every contact pair that
+    /// is not a managed ground contact is handed to it unchanged (when its colliders' hook
+    /// flags ask for it, as rapier would).
+    pub fn with_hooks(config: ImpactConfig, user_hooks: H) -> Result<Self, ConfigError> {
+        config.validate()?;
+        Ok(Self {
+            config,
+            grounds: HashMap::new(),
+            all_fixed: false,
+            excluded: HashSet::new(),
+            user_hooks,
+            step: StepData::default(),
+            shadows: HashMap::new(),
+            events: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ImpactConfig {
+        &self.config
+    }
+
+    /// Replaces the configuration, after validating it.
+    pub fn set_config(&mut self, config: ImpactConfig) -> Result<(), ConfigError> {
+        config.validate()?;
+        self.config = config;
+        Ok(())
+    }
+
+    /// The wrapped user hook.
+    pub fn user_hooks(&self) -> &H {
+        &self.user_hooks
+    }
+
+    /// The wrapped user hook, mutably.
+    pub fn user_hooks_mut(&mut self) -> &mut H {
+        &mut self.user_hooks
+    }
+
+    /// The impacts resolved in the last step (cleared by the next [`Self::before_step`]).
+    pub fn events(&self) -> &[ImpactEvent] {
+        &self.events
+    }
+
+    /// Leaves `body` to rapier entirely: its ground contacts are rapier's, bounce included.
+    pub fn exclude_body(&mut self, body: RigidBodyHandle) {
+        self.excluded.insert(body);
+    }
+
+    /// Undoes [`Self::exclude_body`].
+    pub fn include_body(&mut self, body: RigidBodyHandle) {
+        self.excluded.remove(&body);
+    }
+
+    /// Is the body's ground contact resolved by the plugin? Dynamic, enabled, with a
+    /// positive finite mass, no locked translation, not a soft-body frame, not excluded.
+    pub(crate) fn manages(&self, handle: RigidBodyHandle, rb: &RigidBody) -> bool {
+        let mass = to_f64(rb.mass());
+        rb.is_dynamic()
+            && rb.is_enabled()
+            && !rb.is_soft_frame()
+            && mass > 0.0
+            && mass.is_finite()
+            && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
+            && !self.excluded.contains(&handle)
+    }
+
+    /// The role of a managed pair in the current step (`Resting` when unknown: a pair the
+    /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
+    /// solver without bounce).
+    pub(crate) fn role(&self, key: &PairKey) -> Role {
+        self.step.roles.get(key).copied().unwrap_or(Role::Resting)
+    }
+
+    /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
+    /// plugin as hooks, [`Self::after_step`].
+    pub fn step(&mut self, world: &mut PhysicsWorld)
+    where
+        H: crate::rapier::pipeline::PhysicsHooks,
+    {
+        self.step_with_events(world, &());
+    }
+
+    /// [`Self::step`] with rapier's event handler `events`.
+    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler)
+    where
+        H: crate::rapier::pipeline::PhysicsHooks,
+    {
+        self.before_step(
+            world.gravity,
+            &world.integration_parameters,
+            &mut world.bodies,
+            &mut world.colliders,
+        );
+        world.step_with_events(&*self, events);
+        self.after_step(
+            &mut world.bodies,
+            &mut world.colliders,
+            &world.narrow_phase,
+            &world.impulse_joints,
+            &world.multibody_joints,
+        );
+    }
+
+    /// Prepares a step: call it right before rapier's `PhysicsPipeline::step` with the same
+    /// gravity and parameters. Clears the events, reads the managed bodies near a ground, and
+    /// in `Step` mode applies the impulses of the contacts that close in this step.
+    pub fn before_step(
+        &mut self,
+        gravity: Vector,
+        params: &IntegrationParameters,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+    ) {
+        self.events.clear();
+        self.sync_grounds(bodies, colliders);
+        let dt = to_f64(params.dt);
+        let g = vec_to_na(gravity);
+        let mut step = StepData {
+            active: dt > 0.0,
+            dt,
+            resting_speed: self
+                .config
+                .resting_speed
+                .unwrap_or((0.5 * g.norm() * dt).max(1e-3)),
+            resting_gap: self
+                .config
+                .resting_gap
+                .unwrap_or(to_f64(params.allowed_linear_error())),
+            prediction: to_f64(params.prediction_distance()),
+            ..Default::default()
+        };
+        if !step.active {
+            self.step = step;
+            return;
+        }
+        step.grounds = self.ground_motions(bodies, colliders, dt, step.resting_gap);
+        let shadows = std::mem::take(&mut self.shadows);
+        let handles: Vec<RigidBodyHandle> = bodies
+            .iter()
+            .filter(|(h, rb)| self.manages(*h, rb) && !rb.is_sleeping())
+            .map(|(h, _)| h)
+            .collect();
+        for handle in handles {
+            let rb = &bodies[handle];
+            let (start, flight, local_com) = snapshot(rb, g, shadows.get(&handle));
+            let inertia = Inertia::of(rb);
+            let geom = body_geom(rb, colliders, &local_com);
+            if geom.parts.is_empty() {
+                continue;
+            }
+            // The cheap test: the bounding sphere swept over the step against ground AABBs.
+            let speed = flight.max_speed(&start, dt) + start.w.norm() * geom.radius;
+            let reach = speed * dt + step.resting_gap.max(step.prediction);
+            let sphere = Aabb::from_half_extents(
+                vec_from_na(&start.com),
+                Vector::splat(super::convert::to_real(geom.radius + reach)),
+            );
+            let near: Vec<usize> = step
+                .grounds
+                .iter()
+                .enumerate()
+                .filter(|(_, g)| g.aabb.intersects(&sphere))
+                .map(|(i, _)| i)
+                .collect();
+            if near.is_empty() {
+                if self.config.timing == TimingMode::Exact {
+                    step.candidates.push(Candidate {
+                        body: handle,
+                        start,
+                        flight,
+                        local_com,
+                        impact_grounds: Vec::new(),
+                        touched: false,
+                    });
+                }
+                continue;
+            }
+            let ground_geoms: Vec<GroundGeom> = near
+                .iter()
+                .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
+                .collect();
+            let mut state = start;
+            let mut touched = false;
+            let mut impact_grounds = Vec::new();
+            for (gi, gg) in near.iter().zip(&ground_geoms) {
+                let mut any_impact = false;
+                for part in &geom.parts {
+                    let key = (part.handle, gg.handle);
+                    if !supported(part.shape, gg.shape) {
+                        // parry cannot query this pair: rapier keeps it, restitution included.
+                        continue;
+                    }
+                    let role = match contact(part, gg, &state, 0.0, reach) {
+                        None => Role::Impact,
+                        Some((dist, n, p)) => {
+                            let u = super::geometry::body_velocity_at(&state, &p)
+                                - gg.velocity_at(&p, 0.0);
+                            let un = n.dot(&u);
+                            // The normal speed the contact will have on reaching the ground
+                            // (gravity, or any acceleration towards it, included).
+                            let an = n.dot(&flight.accel);
+                            let arrival = (un * un + 2.0 * (-an).max(0.0) * dist.max(0.0)).sqrt();
+                            if dist <= step.resting_gap && arrival <= step.resting_speed {
+                                Role::Resting
+                            } else if self.config.timing == TimingMode::Step
+                                && closes_within(dist, un, n.dot(&(flight.accel)), dt)
+                                && un < 0.0
+                            {
+                                // Step mode: the impulse at the start of the step.
+                                let hit = super::geometry::Hit {
+                                    part: 0,
+                                    ground: 0,
+                                    dist,
+                                    normal: n,
+                                    point: p,
+                                    un,
+                                };
+                                let (point, count) = landing_point(
+                                    part,
+                                    gg,
+                                    &state,
+                                    0.0,
+                                    &hit,
+                                    self.config.flat_tolerance,
+                                );
+                                let single = BodyGeom {
+                                    parts: vec![BodyPart { ..*part }],
+                                    radius: geom.radius,
+                                };
+                                let input = ImpactInput {
+                                    body: handle,
+                                    inertia: &inertia,
+                                    law: self.config.law,
+                                    material: self.material_of(colliders, part.handle, gg.handle),
+                                    resting_speed: step.resting_speed,
+                                    force_settle: false,
+                                    timing: ImpactTiming::StepStart,
+                                };
+                                match resolve(&input, &single, gg, &state, 0.0, &hit, point, count)
+                                {
+                                    Some((after, event)) => {
+                                        state = after;
+                                        touched = true;
+                                        self.events.push(event);
+                                        let un2 = n.dot(
+                                            &(super::geometry::body_velocity_at(&state, &point)
+                                                - gg.velocity_at(&point, 0.0)),
+                                        );
+                                        if un2 <= step.resting_speed {
+                                            Role::Resting
+                                        } else {
+                                            Role::Impact
+                                        }
+                                    }
+                                    None => Role::Resting,
+                                }
+                            } else {
+                                Role::Impact
+                            }
+                        }
+                    };
+                    any_impact |= role == Role::Impact;
+                    step.roles.insert(key, role);
+                }
+                if any_impact {
+                    impact_grounds.push(*gi);
+                }
+            }
+            if touched {
+                write_state(&mut bodies[handle], &state, &local_com, true);
+            }
+            if !impact_grounds.is_empty() || self.config.timing == TimingMode::Exact {
+                step.candidates.push(Candidate {
+                    body: handle,
+                    start: state,
+                    flight,
+                    local_com,
+                    impact_grounds,
+                    touched,
+                });
+            }
+        }
+        self.step = step;
+    }
+
+    /// Finishes a step: call it right after rapier's `PhysicsPipeline::step`. Resolves the
+    /// managed impacts, writes poses and velocities back (bodies woken up), moves their
+    /// colliders, and records the [`ImpactEvent`]s.
+    pub fn after_step(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        narrow_phase: &NarrowPhase,
+        impulse_joints: &ImpulseJointSet,
+        multibody_joints: &MultibodyJointSet,
+    ) {
+        let mut step = std::mem::take(&mut self.step);
+        if !step.active {
+            return;
+        }
+        step.active = false;
+        // The grounds' actual motion over the step.
+        for gm in &mut step.grounds {
+            if let Some(bh) = gm.body {
+                if let Some(rb) = bodies.get(bh) {
+                    if !rb.is_fixed() {
+                        let end = pose_to_na(rb.position());
+                        let com1 =
+                            end * nalgebra::Point3::from(vec_to_na(rb.local_center_of_mass()));
+                        let rot1 = end.rotation;
+                        gm.v = (com1.coords - gm.com0) / step.dt;
+                        gm.w = (rot1 * gm.rot0.inverse()).scaled_axis() / step.dt;
+                    }
+                }
+            }
+        }
+        let mode = self.config.timing;
+        for cand in &step.candidates {
+            let Some(rb) = bodies.get(cand.body) else {
+                continue;
+            };
+            if !self.manages(cand.body, rb) {
+                continue;
+            }
+            let free = !touches_other(rb, narrow_phase)
+                && impulse_joints.attached_joints(cand.body).next().is_none()
+                && multibody_joints.rigid_body_link(cand.body).is_none()
+                && rb.user_torque() == Vector::ZERO
+                && !cand.touched;
+            let geom = body_geom(rb, colliders, &cand.local_com);
+            let grounds: Vec<GroundGeom> = cand
+                .impact_grounds
+                .iter()
+                .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
+                .collect();
+            let inertia = Inertia::of(rb);
+            if mode == TimingMode::Step || !free || grounds.is_empty() {
+                if grounds.is_empty() {
+                    if mode == TimingMode::Exact
+                        && free
+                        && self.ccd_consistent(rb, cand, step.dt, step.dt, &step)
+                    {
+                        let end = cand.flight.advance(&cand.start, step.dt);
+                        let rot = rot_to_na(*rb.rotation());
+                        let s = State {
+                            rot,
+                            w: vec_to_na(rb.angvel()),
+                            ..end
+                        };
+                        let rb = &mut bodies[cand.body];
+                        write_state(rb, &s, &cand.local_com, false);
+                        self.remember(cand.body, rb, &s);
+                    }
+                    continue;
+                }
+                self.step_end(bodies, colliders, cand, &geom, &grounds, &inertia, &step);
+                continue;
+            }
+            // In-step resolution from the start-of-step state.
+            let first = first_impact(
+                &geom,
+                &grounds,
+                &cand.flight,
+                &cand.start,
+                0.0,
+                0.0,
+                step.dt,
+            );
+            let t_first = first.as_ref().map_or(step.dt, |f| f.0);
+            if !self.ccd_consistent(rb, cand, t_first, step.dt, &step) {
+                self.step_end(bodies, colliders, cand, &geom, &grounds, &inertia, &step);
+                continue;
+            }
+            let Some(mut next) = first else {
+                if mode == TimingMode::Exact {
+                    let end = cand.flight.advance(&cand.start, step.dt);
+                    let rot = rot_to_na(*rb.rotation());
+                    let s = State {
+                        rot,
+                        w: vec_to_na(rb.angvel()),
+                        ..end
+                    };
+                    let rb = &mut bodies[cand.body];
+                    write_state(rb, &s, &cand.local_com, false);
+                    self.remember(cand.body, rb, &s);
+                }
+                continue;
+            };
+            let mut flight = cand.flight;
+            let mut seg;
+            let mut seg_t0;
+            let mut count = 0usize;
+            loop {
+                let (t, s, hit) = next;
+                let part = &geom.parts[hit.part];
+                let gg = &grounds[hit.ground];
+                let (point, points) =
+                    landing_point(part, gg, &s, t, &hit, self.config.flat_tolerance);
+                let input = ImpactInput {
+                    body: cand.body,
+                    inertia: &inertia,
+                    law: self.config.law,
+                    material: self.material_of(colliders, part.handle, gg.handle),
+                    resting_speed: step.resting_speed,
+                    force_settle: count + 1 >= self.config.max_impacts_per_step,
+                    timing: ImpactTiming::InStep,
+                };
+                count += 1;
+                seg = s;
+                seg_t0 = t;
+                let Some((after, event)) = resolve(&input, &geom, gg, &s, t, &hit, point, points)
+                else {
+                    break;
+                };
+                seg = after;
+                let settled = event.settled;
+                self.events.push(event);
+                if settled {
+                    // Resting from here: gravity into the ground is held by the contact.
+                    let an = hit.normal.dot(&flight.accel);
+                    if an < 0.0 {
+                        flight.accel -= hit.normal * an;
+                    }
+                    let vn = hit.normal.dot(&seg.v);
+                    if vn < 0.0 {
+                        seg.v -= hit.normal * vn;
+                    }
+                    break;
+                }
+                match first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt) {
+                    Some(n) => next = n,
+                    None => break,
+                }
+            }
+            let mut end = flight.advance(&seg, step.dt - seg_t0);
+            // Safety net: never leave the body inside a ground.
+            if let Some(h) = closest(&geom, &grounds, &end, step.dt, 0.0) {
+                if h.dist < 0.0 {
+                    end.com -= h.normal * h.dist;
+                }
+            }
+            let rb = &mut bodies[cand.body];
+            write_state(rb, &end, &cand.local_com, true);
+            if mode == TimingMode::Exact {
+                self.remember(cand.body, rb, &end);
+            }
+        }
+        bodies.propagate_modified_body_positions_to_colliders(colliders);
+    }
+
+    /// Keeps the `f64` state of a body just written in `Exact` mode.
+    fn remember(&mut self, handle: RigidBodyHandle, rb: &RigidBody, s: &State) {
+        self.shadows.insert(
+            handle,
+            Shadow {
+                com: s.com,
+                v: s.v,
+                written_translation: rb.translation(),
+                written_linvel: rb.linvel(),
+            },
+        );
+    }
+
+    /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
+    /// first ground impact at `t_first`? If rapier clamped it earlier, something other than
+    /// a ground stopped it, and re-integrating its flight would undo that.
+    fn ccd_consistent(
+        &self,
+        rb: &RigidBody,
+        cand: &Candidate,
+        t_first: f64,
+        dt: f64,
+        step: &StepData,
+    ) -> bool {
+        if !rb.is_ccd_active() {
+            return true;
+        }
+        let free_end = cand.flight.advance(&cand.start, dt).com;
+        let exact = free_end - cand.start.com;
+        let len2 = exact.norm_squared();
+        if len2 < 1e-24 {
+            return true;
+        }
+        let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
+        let fraction = actual.dot(&exact) / len2;
+        let slack = 0.05 + (step.prediction + step.resting_gap) / len2.sqrt();
+        fraction >= t_first / dt - slack
+    }
+
+    /// The `StepEnd` fallback on rapier's end-of-step state: each ground contact still
+    /// touching and approaching gets its impulse, and the body is moved out of the ground.
+    #[allow(clippy::too_many_arguments)]
+    fn step_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        inertia: &Inertia,
+        step: &StepData,
+    ) {
+        let Some(rb) = bodies.get(cand.body) else {
+            return;
+        };
+        let mut s = State {
+            com: vec_to_na(rb.center_of_mass()),
+            rot: rot_to_na(*rb.rotation()),
+            v: vec_to_na(rb.linvel()),
+            w: vec_to_na(rb.angvel()),
+        };
+        let t = step.dt;
+        let mut changed = false;
+        for k in 0..self.config.max_impacts_per_step {
+            let Some(hit) = closest(geom, grounds, &s, t, 0.0) else {
+                break;
+            };
+            if hit.dist > 0.0 || hit.un >= 0.0 {
+                break;
+            }
+            let part = &geom.parts[hit.part];
+            let gg = &grounds[hit.ground];
+            let (point, points) = landing_point(part, gg, &s, t, &hit, self.config.flat_tolerance);
+            let input = ImpactInput {
+                body: cand.body,
+                inertia,
+                law: self.config.law,
+                material: self.material_of(colliders, part.handle, gg.handle),
+                resting_speed: step.resting_speed,
+                force_settle: k + 1 >= self.config.max_impacts_per_step,
+                timing: ImpactTiming::StepEnd,
+            };
+            let Some((after, event)) = resolve(&input, geom, gg, &s, t, &hit, point, points) else {
+                break;
+            };
+            s = after;
+            s.com -= hit.normal * hit.dist;
+            self.events.push(event);
+            changed = true;
+        }
+        if changed {
+            write_state(&mut bodies[cand.body], &s, &cand.local_com, true);
+        }
+    }
+
+    /// The material of a body collider against a ground collider.
+    fn material_of(
+        &self,
+        colliders: &ColliderSet,
+        body: ColliderHandle,
+        ground: ColliderHandle,
+    ) -> Material {
+        let over = self.grounds.get(&ground).and_then(|g| g.material);
+        match (colliders.get(body), colliders.get(ground)) {
+            (Some(b), Some(g)) => material(b, g, over),
+            _ => over.unwrap_or(Material {
+                restitution: 0.0,
+                friction: 0.0,
+            }),
+        }
+    }
+
+    /// The grounds' start-of-step poses, predicted velocities and swept AABBs.
+    fn ground_motions(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        dt: f64,
+        gap: f64,
+    ) -> Vec<GroundMotion> {
+        let mut out = Vec::with_capacity(self.grounds.len());
+        for handle in self.grounds.keys() {
+            let Some(co) = colliders.get(*handle) else {
+                continue;
+            };
+            if !co.is_enabled() || co.is_sensor() {
+                continue;
+            }
+            let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
+            let loosen = super::convert::to_real(gap + to_f64(co.contact_skin()));
+            let mut aabb = co.compute_aabb().loosened(loosen);
+            let motion = match parent {
+                Some((_, rb)) if rb.is_dynamic() => continue,
+                Some((bh, rb)) if !rb.is_fixed() => {
+                    let frame0 = pose_to_na(rb.position());
+                    let local_com = vec_to_na(rb.local_center_of_mass());
+                    let com0 = (frame0 * nalgebra::Point3::from(local_com)).coords;
+                    let (v, w) = if rb.body_type() == RigidBodyType::KinematicPositionBased {
+                        let frame1 = pose_to_na(rb.next_position());
+                        let com1 = (frame1 * nalgebra::Point3::from(local_com)).coords;
+                        (
+                            (com1 - com0) / dt,
+                            (frame1.rotation * frame0.rotation.inverse()).scaled_axis() / dt,
+                        )
+                    } else {
+                        (vec_to_na(rb.linvel()), vec_to_na(rb.angvel()))
+                    };
+                    let local_frame = Isometry3::from_parts(
+                        Translation3::from(-local_com),
+                        UnitQuaternion::identity(),
+                    ) * co
+                        .position_wrt_parent()
+                        .map_or(Isometry3::identity(), pose_to_na);
+                    let end = Isometry3::from_parts(
+                        Translation3::from(com0 + v * dt),
+                        UnitQuaternion::from_scaled_axis(w * dt) * frame0.rotation,
+                    ) * local_frame;
+                    aabb.merge(
+                        &co.shape()
+                            .compute_aabb(&super::convert::pose_from_na(&end))
+                            .loosened(loosen),
+                    );
+                    GroundMotion {
+                        handle: *handle,
+                        body: Some(bh),
+                        com0,
+                        rot0: frame0.rotation,
+                        local: local_frame,
+                        v,
+                        w,
+                        aabb,
+                    }
+                }
+                _ => {
+                    let pose = pose_to_na(co.position());
+                    GroundMotion {
+                        handle: *handle,
+                        body: None,
+                        com0: pose.translation.vector,
+                        rot0: pose.rotation,
+                        local: Isometry3::identity(),
+                        v: Vector3::zeros(),
+                        w: Vector3::zeros(),
+                        aabb,
+                    }
+                }
+            };
+            out.push(motion);
+        }
+        // Deterministic order, whatever the hash map's.
+        out.sort_by_key(|g| g.handle.into_raw_parts());
+        out
+    }
+}
+
+/// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
+/// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
+fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
+    let at = |t: f64| dist + un * t + 0.5 * an * t * t;
+    if at(0.0) <= 0.0 || at(dt) <= 0.0 {
+        return true;
+    }
+    if an > 0.0 {
+        let t = -un / an;
+        return t > 0.0 && t < dt && at(t) <= 0.0;
+    }
+    false
+}
+
+/// The start-of-step state of a body: its `f64` shadow if rapier still holds exactly what
+/// the plugin wrote, else rapier's values.
+fn snapshot(
+    rb: &RigidBody,
+    gravity: Vector3<f64>,
+    shadow: Option<&Shadow>,
+) -> (State, Flight, Vector3<f64>) {
+    let local_com = vec_to_na(rb.local_center_of_mass());
+    let mut state = State {
+        com: vec_to_na(rb.center_of_mass()),
+        rot: rot_to_na(*rb.rotation()),
+        v: vec_to_na(rb.linvel()),
+        w: vec_to_na(rb.angvel()),
+    };
+    if let Some(sh) = shadow {
+        if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
+            state.com = sh.com;
+            state.v = sh.v;
+        }
+    }
+    let mass = to_f64(rb.mass());
+    let flight = Flight {
+        accel: gravity * to_f64(rb.gravity_scale()) + vec_to_na(rb.user_force()) / mass,
+        linear_damping: to_f64(rb.linear_damping()).max(0.0),
+        angular_damping: to_f64(rb.angular_damping()).max(0.0),
+    };
+    (state, flight, local_com)
+}
+
+/// The body's enabled, non-sensor colliders in its centre-of-mass frame.
+fn body_geom<'a>(
+    rb: &RigidBody,
+    colliders: &'a ColliderSet,
+    local_com: &Vector3<f64>,
+) -> BodyGeom<'a> {
+    let mut parts = Vec::new();
+    let mut radius: f64 = 0.0;
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        if !co.is_enabled() || co.is_sensor() {
+            continue;
+        }
+        let local =
+            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
+                * co.position_wrt_parent()
+                    .map_or(Isometry3::identity(), pose_to_na);
+        let bs = co.shape().compute_local_bounding_sphere();
+        let center = local * nalgebra::Point3::from(vec_to_na(bs.center));
+        let skin = to_f64(co.contact_skin());
+        radius = radius.max(center.coords.norm() + to_f64(bs.radius) + skin);
+        parts.push(BodyPart {
+            handle: *ch,
+            shape: co.shape(),
+            local,
+            skin,
+        });
+    }
+    BodyGeom { parts, radius }
+}
+
+/// A ground's geometry for the queries, if its collider still exists.
+fn ground_geom<'a>(gm: &GroundMotion, colliders: &'a ColliderSet) -> Option<GroundGeom<'a>> {
+    let co = colliders.get(gm.handle)?;
+    Some(GroundGeom {
+        handle: gm.handle,
+        shape: co.shape(),
+        skin: to_f64(co.contact_skin()),
+        com0: gm.com0,
+        rot0: gm.rot0,
+        local: gm.local,
+        v: gm.v,
+        w: gm.w,
+    })
+}
+
+/// Does the body have a contact in rapier's solver this step (other than the pairs taken
+/// from it)?
+fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
+    rb.colliders().iter().any(|ch| {
+        narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            pair.solver_manifolds().iter().any(|m| {
+                m.data
+                    .solver_flags
+                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                    && !m.data.solver_contacts.is_empty()
+            })
+        })
+    })
+}
+
+/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
+/// the translation and linear velocity only, keeping rapier's rotation.
+fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
+    if full {
+        let translation = s.com - s.rot * local_com;
+        rb.set_position(
+            Pose::from_parts(vec_from_na(&translation), rot_from_na(&s.rot)),
+            true,
+        );
+        rb.set_angvel(vec_from_na(&s.w), true);
+    } else {
+        let rot = rot_to_na(*rb.rotation());
+        let translation = s.com - rot * local_com;
+        rb.set_translation(vec_from_na(&translation), true);
+    }
+    rb.set_linvel(vec_from_na(&s.v), true);
+}

@@ -1,0 +1,18 @@
+//! The rapier adapter: ground registry and materials, the `PhysicsHooks` implementation, the
+//! per-step driver (snapshot, step, time of impact, impulse, write back) and the impact
+//! events. The only module that touches rapier types; the impulses come from
+//! [`crate::model`]. See [`crate::docs::integration`].
+
+mod config;
+mod convert;
+mod events;
+mod flight;
+mod geometry;
+mod grounds;
+mod hooks;
+mod impact_plugin;
+mod resolve;
+
+pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
+pub use events::{ImpactEvent, ImpactTiming};
+pub use impact_plugin::ImpactPlugin;

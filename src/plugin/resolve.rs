@@ -1,0 +1,176 @@
+//! The hand-over to the model: a rapier body, a contact and a material become the model's
+//! `Body`, `BodyVelocity`, `Contact` and `Material`; the model's `Impact` becomes a new
+//! state and an [`ImpactEvent`]. No impulse algebra here: the model does it.
+
+use super::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
+use super::events::{ImpactEvent, ImpactTiming};
+use super::flight::State;
+use super::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
+use crate::model::{self, Body, BodyVelocity, Contact, Law, Material};
+use crate::rapier::prelude::{
+    CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
+};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// The inertial data the model needs, read once per step from rapier.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Inertia {
+    pub mass: f64,
+    /// Inverse principal inertia (1/(kg m^2)).
+    inv_principal: Matrix3<f64>,
+    /// Principal axes in the body frame.
+    principal_frame: UnitQuaternion<f64>,
+    /// Locked rotation axes (world x, y, z), as rapier locks them.
+    locked: [bool; 3],
+}
+
+impl Inertia {
+    pub fn of(rb: &RigidBody) -> Self {
+        let mp = &rb.mass_properties().local_mprops;
+        let flags = rb.locked_axes();
+        Self {
+            mass: to_f64(rb.mass()),
+            inv_principal: diag_to_na(mp.inv_principal_inertia),
+            principal_frame: rot_to_na(mp.principal_inertia_local_frame),
+            locked: [
+                flags.contains(LockedAxes::ROTATION_LOCKED_X),
+                flags.contains(LockedAxes::ROTATION_LOCKED_Y),
+                flags.contains(LockedAxes::ROTATION_LOCKED_Z),
+            ],
+        }
+    }
+
+    /// The model's body at orientation `rot`: `I_w^-1 = R diag(1/I) R^T`, with the rows and
+    /// columns of locked axes zeroed (what rapier's solver uses).
+    pub fn body_at(&self, rot: &UnitQuaternion<f64>) -> Body {
+        let r = (rot * self.principal_frame)
+            .to_rotation_matrix()
+            .into_inner();
+        let mut inv = r * self.inv_principal * r.transpose();
+        for (axis, locked) in self.locked.iter().enumerate() {
+            if *locked {
+                inv.row_mut(axis).fill(0.0);
+                inv.column_mut(axis).fill(0.0);
+            }
+        }
+        // Symmetrise away rounding so the model's symmetry check never trips.
+        let inv = 0.5 * (inv + inv.transpose());
+        Body {
+            mass: self.mass,
+            inv_inertia: inv,
+        }
+    }
+}
+
+/// Restitution and friction of a body collider against a ground: the ground's override, or
+/// rapier's combination of the two colliders' coefficients (their combine rules). Negative or
+/// NaN values that rapier tolerates become 0.
+pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material>) -> Material {
+    if let Some(m) = over {
+        return m;
+    }
+    let clean = |x: f64| if x.is_finite() && x > 0.0 { x } else { 0.0 };
+    let e = CoefficientCombineRule::combine(
+        body.restitution(),
+        ground.restitution(),
+        body.restitution_combine_rule(),
+        ground.restitution_combine_rule(),
+    );
+    let mu = CoefficientCombineRule::combine(
+        body.friction(),
+        ground.friction(),
+        body.friction_combine_rule(),
+        ground.friction_combine_rule(),
+    );
+    Material {
+        restitution: clean(to_f64(e)),
+        friction: clean(to_f64(mu)),
+    }
+}
+
+/// Everything about one impact that is not geometry.
+pub(crate) struct ImpactInput<'a> {
+    pub body: RigidBodyHandle,
+    pub inertia: &'a Inertia,
+    pub law: Law,
+    pub material: Material,
+    /// Approach speeds below this (m/s) are resolved with `e = 0`.
+    pub resting_speed: f64,
+    /// Resolve with `e = 0` whatever the speed (last impact allowed in the step).
+    pub force_settle: bool,
+    pub timing: ImpactTiming,
+}
+
+/// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the
+/// contact `point` (a landing point, see [`super::geometry::landing_point`]) with the
+/// hit's normal. Returns the state after and the event, or `None` when the point does not
+/// approach the ground or the model refuses the input.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn resolve(
+    input: &ImpactInput,
+    geom: &BodyGeom,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    hit: &Hit,
+    point: Vector3<f64>,
+    points: usize,
+) -> Option<(State, ImpactEvent)> {
+    let n = hit.normal;
+    let ground_velocity = ground.velocity_at(&point, t);
+    let un = n.dot(&(body_velocity_at(s, &point) - ground_velocity));
+    if un.is_nan() || un >= 0.0 {
+        return None;
+    }
+    let settled = input.force_settle || -un < input.resting_speed;
+    let material = Material {
+        restitution: if settled {
+            0.0
+        } else {
+            input.material.restitution
+        },
+        friction: input.material.friction,
+    };
+    let body = input.inertia.body_at(&s.rot);
+    let contact = Contact {
+        normal: n,
+        offset: point - s.com,
+        ground_velocity,
+    };
+    let velocity = BodyVelocity {
+        linear: s.v,
+        angular: s.w,
+    };
+    let impact = model::resolve(input.law, &body, &velocity, &contact, &material).ok()?;
+    let after = State {
+        v: impact.velocity.linear,
+        w: impact.velocity.angular,
+        ..*s
+    };
+    let event = ImpactEvent {
+        body: input.body,
+        collider: geom.parts[hit.part].handle,
+        ground: ground.handle,
+        time: t,
+        timing: input.timing,
+        point: vec_from_na(&point),
+        normal: vec_from_na(&n),
+        contact_points: points,
+        approach_speed: -un,
+        impulse: vec_from_na(&impact.impulse),
+        normal_impulse: impact.normal_impulse,
+        tangent_impulse: vec_from_na(&impact.tangent_impulse),
+        regime: impact.regime,
+        law: impact.law,
+        fallback: impact.fallback,
+        settled,
+        restitution: material.restitution,
+        friction: material.friction,
+        ke_before: impact.ke_before,
+        ke_after: impact.ke_after,
+    };
+    Some((after, event))
+}
+
+/// The collider handle pair key of a body collider and a ground collider.
+pub(crate) type PairKey = (ColliderHandle, ColliderHandle);

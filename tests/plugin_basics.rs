@@ -1,0 +1,757 @@
+//! The adapter's contract with rapier, scene by scene: a wrapped user hook still sees the
+//! pairs that are not managed ground contacts; bodies the plugin does not manage move
+//! bitwise as in rapier alone; bad settings are refused where they are set; moving ground,
+//! sloped ground and every ground shape bounce by the closed form; flat landings do not spin;
+//! resting bodies rest and sleep.
+
+use rapier_impact::model::Regime;
+use rapier_impact::rapier::na::Unit;
+use rapier_impact::rapier::parry::utils::Array2;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{
+    ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode,
+};
+use std::sync::Mutex;
+
+const G: f64 = 9.81;
+const F64: bool = cfg!(feature = "f64");
+
+fn up() -> Unit<Vector> {
+    Unit::new_unchecked(Vector::Y)
+}
+
+fn plugin(timing: TimingMode) -> ImpactPlugin {
+    ImpactPlugin::new(ImpactConfig {
+        timing,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A user hook recording the pairs it is asked about, and refusing the pairs of one
+/// "ghost" collider.
+#[derive(Default)]
+struct Recorder {
+    seen: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
+    ghost: Mutex<Option<ColliderHandle>>,
+}
+
+impl PhysicsHooks for Recorder {
+    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
+        self.seen
+            .lock()
+            .unwrap()
+            .push((context.collider1, context.collider2));
+        let ghost = *self.ghost.lock().unwrap();
+        if ghost == Some(context.collider1) || ghost == Some(context.collider2) {
+            None
+        } else {
+            Some(SolverFlags::COMPUTE_RIGID_IMPULSES)
+        }
+    }
+}
+
+#[test]
+fn wrapped_user_hook_still_sees_every_non_ground_pair() {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    // A platform that is not ground, and a box and a ghost ball above it, both asking for the
+    // user's filter; a ball above the ground asking for it too.
+    let (_, platform) = world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(5.0, 0.5, 0.0)),
+        ColliderBuilder::cuboid(1.0, 0.1, 1.0),
+    );
+    let hooks = ActiveHooks::FILTER_CONTACT_PAIRS;
+    let (boxed, box_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(5.0, 1.0, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1).active_hooks(hooks),
+    );
+    let (ghost, ghost_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(5.5, 1.0, 0.0)),
+        ColliderBuilder::ball(0.1).active_hooks(hooks),
+    );
+    let (_, ball_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.5, 0.0)),
+        ColliderBuilder::ball(0.1)
+            .restitution(0.5)
+            .active_hooks(hooks),
+    );
+    let recorder = Recorder::default();
+    *recorder.ghost.lock().unwrap() = Some(ghost_co);
+    let mut p = ImpactPlugin::with_hooks(ImpactConfig::default(), recorder).unwrap();
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    let mut ground_events = 0;
+    for _ in 0..90 {
+        p.step(&mut world);
+        ground_events += p.events().len();
+    }
+    let seen = p.user_hooks().seen.lock().unwrap().clone();
+    let saw = |a: ColliderHandle, b: ColliderHandle| {
+        seen.iter()
+            .any(|&(x, y)| (x, y) == (a, b) || (x, y) == (b, a))
+    };
+    println!("pairs the user hook saw: {}", seen.len());
+    assert!(
+        saw(box_co, platform),
+        "the user hook never saw box-platform"
+    );
+    assert!(
+        saw(ghost_co, platform),
+        "the user hook never saw ghost-platform"
+    );
+    assert!(
+        !saw(ball_co, ground),
+        "the user hook saw a managed ground pair"
+    );
+    assert!(ground_events > 0, "the ball never hit the ground");
+    // The user's decisions still apply: the box rests on the platform, the ghost fell through
+    // (onto the ground, where the plugin caught it).
+    let (by, gy) = (
+        world.bodies[boxed].translation().y,
+        world.bodies[ghost].translation().y,
+    );
+    println!("box y = {by}, ghost y = {gy}");
+    assert!(by > 0.65, "box fell through the platform: y = {by}");
+    assert!(
+        gy < 0.4,
+        "ghost did not fall through the platform: y = {gy}"
+    );
+}
+
+/// The scene of the bitwise test: a managed ball bouncing on the ground, and bodies the
+/// plugin does not manage (excluded, or kinematic) doing rapier things beside it.
+fn unmanaged_scene(world: &mut PhysicsWorld) -> (ColliderHandle, Vec<RigidBodyHandle>) {
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up()).restitution(0.7),
+    );
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(5.0, 0.5, 0.0)),
+        ColliderBuilder::cuboid(1.0, 0.1, 1.0),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.7),
+    );
+    let mut others = Vec::new();
+    // A stack of two boxes landing on the (non-ground) platform.
+    for k in 0..2 {
+        let (b, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(5.0, 0.8 + 0.25 * k as Real, 0.0))
+                .rotation(Vector::new(0.0, 0.3 * k as Real, 0.1)),
+            ColliderBuilder::cuboid(0.1, 0.1, 0.1).restitution(0.3),
+        );
+        others.push(b);
+    }
+    // A ball bouncing on the ground, left to rapier.
+    let (b, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(-3.0, 1.0, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.7),
+    );
+    others.push(b);
+    // A projectile, and a kinematic body sweeping through.
+    let (b, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(-10.0, 3.0, 0.0))
+            .linvel(Vector::new(4.0, 3.0, 1.0))
+            .angvel(Vector::new(1.0, 2.0, 3.0)),
+        ColliderBuilder::cuboid(0.2, 0.1, 0.05),
+    );
+    others.push(b);
+    let (b, _) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based()
+            .translation(Vector::new(-3.0, 0.3, 3.0))
+            .linvel(Vector::new(0.0, 0.0, -1.0)),
+        ColliderBuilder::cuboid(0.3, 0.3, 0.3),
+    );
+    others.push(b);
+    (ground, others)
+}
+
+fn trace(world: &PhysicsWorld, bodies: &[RigidBodyHandle]) -> Vec<[Real; 13]> {
+    bodies
+        .iter()
+        .map(|h| {
+            let rb = &world.bodies[*h];
+            let (p, q, v, w) = (rb.translation(), rb.rotation(), rb.linvel(), rb.angvel());
+            [
+                p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z,
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn unmanaged_bodies_move_bitwise_as_in_rapier_alone() {
+    for timing in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        for recycling in [false, true] {
+            let mut alone = PhysicsWorld::default();
+            alone.integration_parameters.contact_recycling = recycling;
+            let (_, others) = unmanaged_scene(&mut alone);
+            let mut with = PhysicsWorld::default();
+            with.integration_parameters.contact_recycling = recycling;
+            let (ground, others2) = unmanaged_scene(&mut with);
+            assert_eq!(others, others2);
+            let mut p = plugin(timing);
+            p.add_ground(&with.bodies, &mut with.colliders, ground)
+                .unwrap();
+            for b in &others[..4] {
+                p.exclude_body(*b);
+            }
+            let mut first_difference = None;
+            for step in 0..180 {
+                alone.step();
+                p.step(&mut with);
+                let (a, b) = (trace(&alone, &others), trace(&with, &others));
+                if a != b && first_difference.is_none() {
+                    first_difference = Some((step, a, b));
+                }
+            }
+            if let Some((step, a, b)) = first_difference {
+                // Contact recycling (a rapier optimisation) is off for the pairs of a collider
+                // with hook flags: only the excluded ball touching the ground may differ then.
+                let differs: Vec<usize> = (0..a.len()).filter(|i| a[*i] != b[*i]).collect();
+                println!(
+                    "{timing:?}, recycling {recycling}: first difference at step {step} in bodies {differs:?}"
+                );
+                assert!(
+                    recycling && differs == vec![2],
+                    "{timing:?}, recycling {recycling}: step {step}: bodies {differs:?} differ\nrapier: {a:?}\nplugin: {b:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn invalid_settings_are_refused_where_they_are_set() {
+    let bad = |config: ImpactConfig| ImpactPlugin::new(config).err();
+    assert!(matches!(
+        bad(ImpactConfig {
+            resting_speed: Some(-1.0),
+            ..Default::default()
+        }),
+        Some(ConfigError::InvalidConfig {
+            field: "resting_speed",
+            ..
+        })
+    ));
+    assert!(matches!(
+        bad(ImpactConfig {
+            flat_tolerance: f64::NAN,
+            ..Default::default()
+        }),
+        Some(ConfigError::InvalidConfig {
+            field: "flat_tolerance",
+            ..
+        })
+    ));
+    assert!(matches!(
+        bad(ImpactConfig {
+            max_impacts_per_step: 0,
+            ..Default::default()
+        }),
+        Some(ConfigError::InvalidConfig { .. })
+    ));
+    assert!(matches!(
+        bad(ImpactConfig {
+            resting_gap: Some(f64::INFINITY),
+            ..Default::default()
+        }),
+        Some(ConfigError::InvalidConfig { .. })
+    ));
+    let mut p = plugin(TimingMode::Exact);
+    assert!(
+        p.set_config(ImpactConfig {
+            resting_speed: Some(f64::NAN),
+            ..Default::default()
+        })
+        .is_err()
+    );
+    assert_eq!(p.config(), &ImpactConfig::default());
+
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let (_, dyn_co) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
+    let empty = world.insert_body(RigidBodyBuilder::fixed());
+    let (gone_body, gone) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::ball(1.0));
+    world.remove_body(gone_body);
+
+    let material = |restitution, friction| GroundMaterial {
+        restitution,
+        friction,
+    };
+    let e = p
+        .add_ground_with_material(
+            &world.bodies,
+            &mut world.colliders,
+            ground,
+            material(-0.1, 0.5),
+        )
+        .unwrap_err();
+    println!("{e}");
+    assert!(matches!(e, ConfigError::Material(_)));
+    assert!(matches!(
+        p.add_ground_with_material(
+            &world.bodies,
+            &mut world.colliders,
+            ground,
+            material(0.5, f64::NAN)
+        ),
+        Err(ConfigError::Material(_))
+    ));
+    assert!(
+        !p.is_ground(ground),
+        "a refused ground must not be registered"
+    );
+    assert_eq!(
+        p.add_ground(&world.bodies, &mut world.colliders, gone),
+        Err(ConfigError::NotACollider(gone))
+    );
+    assert_eq!(
+        p.add_ground_body(&world.bodies, &mut world.colliders, empty),
+        Err(ConfigError::GroundWithoutCollider(empty))
+    );
+    assert_eq!(
+        p.add_ground_body(&world.bodies, &mut world.colliders, gone_body),
+        Err(ConfigError::NotABody(gone_body))
+    );
+    assert_eq!(
+        p.add_ground(&world.bodies, &mut world.colliders, dyn_co),
+        Err(ConfigError::DynamicGround(dyn_co))
+    );
+    assert_eq!(
+        p.set_ground_material(ground, Some(material(0.5, 0.5))),
+        Err(ConfigError::NotAGround(ground))
+    );
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    assert!(
+        p.set_ground_material(ground, Some(material(0.5, -1.0)))
+            .is_err()
+    );
+    assert!(
+        p.set_ground_material(ground, Some(material(0.5, 0.2)))
+            .is_ok()
+    );
+    // Every error displays a message naming the problem.
+    for e in [
+        ConfigError::NotACollider(gone),
+        ConfigError::GroundWithoutCollider(empty),
+        ConfigError::DynamicGround(dyn_co),
+    ] {
+        assert!(!e.to_string().is_empty());
+    }
+}
+
+/// Velocity of the ball right after the impact of `event`, from its state at the end of
+/// the step (exact flight after the impact).
+fn velocity_after(world: &PhysicsWorld, ball: RigidBodyHandle, time: f64, dt: f64) -> [f64; 3] {
+    let v = world.bodies[ball].linvel();
+    let rest = dt - time;
+    [f64::from(v.x), f64::from(v.y) + G * rest, f64::from(v.z)]
+}
+
+#[test]
+fn a_rising_kinematic_platform_enters_the_model() {
+    // Platform top at y = 0 at t = 0, rising at V; ball bottom 0.5 m above, at rest.
+    let (v_up, e, h) = (1.0, 0.6, 0.5);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based()
+            .translation(Vector::new(0.0, -0.5, 0.0))
+            .linvel(Vector::new(0.0, v_up as Real, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0).friction(0.0),
+    );
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, (0.1 + h) as Real, 0.0)),
+        ColliderBuilder::ball(0.1).friction(0.0),
+    );
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: 0.0,
+        },
+    )
+    .unwrap();
+    let dt = f64::from(world.integration_parameters.dt);
+    // Contact when h - g t^2 / 2 = V t.
+    let t_hit = (-v_up + (v_up * v_up + 2.0 * G * h).sqrt()) / G;
+    let v_ball = -G * t_hit;
+    let expected = v_up - e * (v_ball - v_up);
+    for k in 0..120 {
+        p.step(&mut world);
+        if let Some(ev) = p.events().first() {
+            let t = k as f64 * dt + ev.time;
+            let v = velocity_after(&world, ball, ev.time, dt);
+            println!(
+                "impact at {t:.7} s (expected {t_hit:.7}), ball vy after {:.6} (expected {expected:.6}), approach {:.6} (expected {:.6})",
+                v[1],
+                ev.approach_speed,
+                v_up - v_ball
+            );
+            let tol = if F64 { 1e-9 } else { 2e-5 };
+            assert!((t - t_hit).abs() < tol, "impact time {t} vs {t_hit}");
+            assert!(
+                (v[1] - expected).abs() < 10.0 * tol,
+                "vy after {} vs {expected}",
+                v[1]
+            );
+            assert!((ev.approach_speed - (v_up - v_ball)).abs() < 10.0 * tol);
+            return;
+        }
+    }
+    panic!("the ball never met the platform");
+}
+
+/// Drops a frictionless ball vertically onto a plane through the origin with unit normal
+/// `n` (a half-space, or a cuboid's top face), and checks `v' = v - (1 + e)(v.n) n` at the
+/// impact time.
+fn check_slope(ground_collider: ColliderBuilder, n: [f64; 3], label: &str) {
+    let (e, h) = (0.7, 1.0);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ground_collider);
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, h as Real, 0.0)),
+        ColliderBuilder::ball(0.1),
+    );
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: 0.0,
+        },
+    )
+    .unwrap();
+    let dt = f64::from(world.integration_parameters.dt);
+    // Centre at (0, y, 0) touches when n_y y = R.
+    let t_hit = (2.0 * (h - 0.1 / n[1]) / G).sqrt();
+    let v = [0.0, -G * t_hit, 0.0];
+    let vn = v[1] * n[1];
+    let expected = [
+        v[0] - (1.0 + e) * vn * n[0],
+        v[1] - (1.0 + e) * vn * n[1],
+        v[2] - (1.0 + e) * vn * n[2],
+    ];
+    for k in 0..120 {
+        p.step(&mut world);
+        if let Some(ev) = p.events().first() {
+            let t = k as f64 * dt + ev.time;
+            let after = velocity_after(&world, ball, ev.time, dt);
+            let err = (0..3)
+                .map(|i| (after[i] - expected[i]).abs())
+                .fold(0.0, f64::max);
+            println!(
+                "{label}: impact {t:.7} s (expected {t_hit:.7}), v' = {after:.6?} (expected {expected:.6?}), normal {:?}",
+                ev.normal
+            );
+            let tol = if F64 { 1e-8 } else { 2e-5 };
+            assert!(
+                (t - t_hit).abs() < tol,
+                "{label}: impact time {t} vs {t_hit}"
+            );
+            assert!(err < 10.0 * tol, "{label}: v' {after:?} vs {expected:?}");
+            return;
+        }
+    }
+    panic!("{label}: the ball never hit");
+}
+
+#[test]
+fn sloped_ground_reflects_by_its_normal() {
+    let angle: f64 = 30f64.to_radians();
+    let n = [-angle.sin(), angle.cos(), 0.0];
+    check_slope(
+        ColliderBuilder::halfspace(Unit::new_unchecked(
+            Vector::new(n[0] as Real, n[1] as Real, 0.0).normalize(),
+        )),
+        n,
+        "half-space at 30 deg",
+    );
+    // A cuboid whose top face passes through the origin, tilted by 30 degrees about z.
+    let half = 0.5;
+    check_slope(
+        ColliderBuilder::cuboid(5.0, half as Real, 5.0)
+            .rotation(Vector::new(0.0, 0.0, angle as Real))
+            .translation(Vector::new(
+                (-n[0] * half) as Real,
+                (-n[1] * half) as Real,
+                0.0,
+            )),
+        n,
+        "cuboid at 30 deg",
+    );
+}
+
+fn ground_shapes() -> Vec<(&'static str, ColliderBuilder)> {
+    let flat_heights = Array2::new(5, 5, vec![Real::default(); 25]);
+    let vertices = vec![
+        Vector::new(-5.0, 0.0, -5.0),
+        Vector::new(5.0, 0.0, -5.0),
+        Vector::new(5.0, 0.0, 5.0),
+        Vector::new(-5.0, 0.0, 5.0),
+    ];
+    vec![
+        ("half-space", ColliderBuilder::halfspace(up())),
+        (
+            "cuboid",
+            ColliderBuilder::cuboid(5.0, 0.5, 5.0).translation(Vector::new(0.0, -0.5, 0.0)),
+        ),
+        (
+            "heightfield",
+            ColliderBuilder::heightfield(flat_heights, Vector::new(10.0, 1.0, 10.0)),
+        ),
+        (
+            "trimesh",
+            ColliderBuilder::trimesh(vertices, vec![[0, 2, 1], [0, 3, 2]]).unwrap(),
+        ),
+    ]
+}
+
+#[test]
+fn every_ground_shape_bounces_by_the_closed_form() {
+    let (e, h0) = (0.8, 1.0);
+    for (label, shape) in ground_shapes() {
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(RigidBodyBuilder::fixed(), shape.restitution(e as Real));
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.3, (0.1 + h0) as Real, 0.2)),
+            ColliderBuilder::ball(0.1).restitution(e as Real),
+        );
+        let mut p = plugin(TimingMode::Exact);
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        let dt = f64::from(world.integration_parameters.dt);
+        let mut impacts = Vec::new();
+        let mut apex: f64 = 0.0;
+        for k in 0..90 {
+            p.step(&mut world);
+            impacts.extend(p.events().iter().map(|ev| k as f64 * dt + ev.time));
+            let rb = &world.bodies[ball];
+            let (y, vy) = (f64::from(rb.translation().y), f64::from(rb.linvel().y));
+            if !impacts.is_empty() && vy > 0.0 {
+                apex = apex.max(y - 0.1 + vy * vy / (2.0 * G));
+            }
+        }
+        let t1 = (2.0 * h0 / G).sqrt();
+        let apex_err = apex / (e * e * h0) - 1.0;
+        println!(
+            "{label}: impact {:.7} s (expected {t1:.7}), apex {apex:.7} (expected {:.7}, {apex_err:+.2e})",
+            impacts[0],
+            e * e * h0
+        );
+        let tol = if F64 { 1e-9 } else { 1e-5 };
+        assert!(
+            (impacts[0] - t1).abs() < tol,
+            "{label}: impact {} vs {t1}",
+            impacts[0]
+        );
+        assert!(
+            apex_err.abs() < tol,
+            "{label}: apex {apex} vs {}",
+            e * e * h0
+        );
+    }
+}
+
+#[test]
+fn a_box_landing_flat_does_not_spin() {
+    for (label, shape) in ground_shapes() {
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            shape.restitution(0.5).friction(0.6),
+        );
+        let (cube, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.3, 1.2, -0.4)),
+            ColliderBuilder::cuboid(0.2, 0.2, 0.2)
+                .restitution(0.5)
+                .friction(0.6),
+        );
+        let mut p = plugin(TimingMode::Exact);
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        let mut first = None;
+        for _ in 0..60 {
+            p.step(&mut world);
+            if first.is_none() {
+                first = p.events().first().copied();
+            }
+        }
+        let ev = first.unwrap_or_else(|| panic!("{label}: the cube never landed"));
+        let w = world.bodies[cube].angvel().length();
+        println!(
+            "{label}: {} contact points, impulse {:?}, spin after {w:.3e} rad/s",
+            ev.contact_points, ev.impulse
+        );
+        assert_eq!(
+            ev.contact_points, 4,
+            "{label}: flat landing resolved at one corner"
+        );
+        assert_eq!(ev.timing, ImpactTiming::InStep);
+        assert!(
+            w < 1e-4,
+            "{label}: the cube spins after a flat landing: {w} rad/s"
+        );
+    }
+}
+
+#[test]
+fn a_box_on_an_edge_or_a_corner_lands_there() {
+    // Edge: rotated 45 degrees about z. Corner: rotated so that a diagonal points down.
+    let edge = Vector::new(0.0, 0.0, std::f64::consts::FRAC_PI_4 as Real);
+    let corner_axis = Vector::new(1.0, 0.0, -1.0).normalize();
+    let corner = corner_axis * (1.0 / 2f64.sqrt()).atan() as Real;
+    for (label, rotation, points) in [("edge", edge, 2), ("corner", corner, 1)] {
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+        world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, 1.0, 0.0))
+                .rotation(rotation),
+            ColliderBuilder::cuboid(0.2, 0.2, 0.2).restitution(0.5),
+        );
+        let mut p = plugin(TimingMode::Exact);
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        let mut first = None;
+        for _ in 0..60 {
+            p.step(&mut world);
+            if first.is_none() {
+                first = p.events().first().copied();
+            }
+        }
+        let ev = first.unwrap();
+        println!(
+            "{label}: {} points at {:?}, regime {:?}, KE {:.4} -> {:.4}",
+            ev.contact_points, ev.point, ev.regime, ev.ke_before, ev.ke_after
+        );
+        assert_eq!(ev.contact_points, points, "{label}");
+        assert!(ev.ke_after <= ev.ke_before, "{label}: energy gained");
+        assert!(ev.normal_impulse > 0.0);
+        assert_ne!(ev.regime, Regime::Separating);
+    }
+}
+
+/// A scene with a ball or a box landing slowly on the ground, stepped with or without the
+/// plugin; returns the body's trace of (y, vy, vx) and whether it sleeps at the end, and the
+/// number of impacts the plugin resolved.
+fn settle(
+    with_plugin: bool,
+    body: ColliderBuilder,
+    start: Vector,
+    vx: Real,
+    steps: usize,
+) -> (Vec<(Real, Real, Real)>, bool, usize) {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.5)
+            .friction(0.5),
+    );
+    let (h, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(start)
+            .linvel(Vector::new(vx, 0.0, 0.0)),
+        body.restitution(0.5).friction(0.5),
+    );
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    let mut out = Vec::new();
+    let mut impacts = 0;
+    for _ in 0..steps {
+        if with_plugin {
+            p.step(&mut world);
+            impacts += p.events().len();
+        } else {
+            world.step();
+        }
+        let rb = &world.bodies[h];
+        out.push((rb.translation().y, rb.linvel().y, rb.linvel().x));
+    }
+    (out, world.bodies[h].is_sleeping(), impacts)
+}
+
+#[test]
+fn slow_landings_rest_and_sleep_like_rapier_bodies_without_sinking() {
+    let ball = || ColliderBuilder::ball(0.1);
+    let cube = || ColliderBuilder::cuboid(0.1, 0.1, 0.1);
+    let start_ball = Vector::new(0.0, 0.13, 0.0);
+    let start_cube = Vector::new(0.0, 0.13, 0.0);
+    for (label, body, start, vx) in [
+        ("ball dropped 3 cm", ball(), start_ball, 0.0),
+        ("cube dropped 3 cm", cube(), start_cube, 0.0),
+        ("cube sliding at 1 m/s", cube(), start_cube, 1.0),
+    ] {
+        let (with, sleeps, impacts) = settle(true, body.clone(), start, vx, 600);
+        let (alone, alone_sleeps, _) = settle(false, body, start, vx, 600);
+        let rest = |t: &[(Real, Real, Real)]| t.last().unwrap().0;
+        let lowest = with.iter().map(|s| s.0).fold(Real::MAX, Real::min);
+        let tail = &with[with.len() - 60..];
+        let spread = tail.iter().map(|s| s.0).fold(Real::MIN, Real::max)
+            - tail.iter().map(|s| s.0).fold(Real::MAX, Real::min);
+        println!(
+            "{label}: impacts {impacts}, rest height {} (rapier alone {}), lowest {lowest}, last-second spread {spread:e}, sleeps {sleeps} (rapier alone {alone_sleeps})",
+            rest(&with),
+            rest(&alone)
+        );
+        assert!(impacts < 10, "{label}: micro-bounces, {impacts} impacts");
+        assert!(
+            lowest >= rest(&alone) - 1e-4,
+            "{label}: sank to {lowest}, rapier rests at {}",
+            rest(&alone)
+        );
+        assert!(spread < 1e-5, "{label}: jitters by {spread} m at rest");
+        assert!(
+            sleeps,
+            "{label}: not asleep after 10 s (rapier alone: {alone_sleeps})"
+        );
+    }
+}
+
+#[test]
+fn a_rolling_ball_rolls_at_the_model_speed_without_jitter() {
+    // Landing with 1 m/s sideways and sticking: vx' = vx / (1 + 2/5) (MODEL-NOTES), then
+    // rolling in rapier's resting contact (rapier has no rolling resistance: it rolls on).
+    let (with, _, impacts) = settle(
+        true,
+        ColliderBuilder::ball(0.1),
+        Vector::new(0.0, 0.15, 0.0),
+        1.0,
+        600,
+    );
+    let (alone, _, _) = settle(
+        false,
+        ColliderBuilder::ball(0.1),
+        Vector::new(0.0, 0.15, 0.0),
+        1.0,
+        600,
+    );
+    let tail = &with[with.len() - 120..];
+    let spread = tail.iter().map(|s| s.0).fold(Real::MIN, Real::max)
+        - tail.iter().map(|s| s.0).fold(Real::MAX, Real::min);
+    let vx = f64::from(with.last().unwrap().2);
+    println!(
+        "rolling: impacts {impacts}, vx {vx:.6} (model {:.6}, rapier alone {}), height spread {spread:e}",
+        1.0 / 1.4,
+        alone.last().unwrap().2
+    );
+    assert!(impacts < 10, "micro-bounces: {impacts} impacts");
+    assert!((vx - 1.0 / 1.4).abs() < 1e-3, "rolling speed {vx}");
+    assert!(spread < 1e-5, "rolling ball jitters by {spread} m");
+}
