@@ -755,3 +755,155 @@ fn a_rolling_ball_rolls_at_the_model_speed_without_jitter() {
     assert!((vx - 1.0 / 1.4).abs() < 1e-3, "rolling speed {vx}");
     assert!(spread < 1e-5, "rolling ball jitters by {spread} m");
 }
+
+#[test]
+fn a_falling_rod_gets_the_closed_form_impulse_and_spin() {
+    // MODEL-NOTES: rod of length L at angle phi, falling at v, frictionless:
+    // J = (1 + e) v m / (1 + 3 cos^2 phi), w' = 6 (1 + e) v cos phi / (L (1 + 3 cos^2 phi)).
+    // A thin cuboid (cross-section 2 mm) lands on its lower end's edge: two simultaneous
+    // points, whose centroid is the rod's end.
+    let (len, a, e, h) = (1.0f64, 1e-3f64, 0.5, 0.5);
+    for phi_deg in [20.0f64, 45.0, 70.0] {
+        let phi = phi_deg.to_radians();
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+        // The lower end (x = -L/2 cos phi) starts h above the ground.
+        let y0 = h + 0.5 * len * phi.sin() + a * phi.cos();
+        let (rod, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, y0 as Real, 0.0))
+                .rotation(Vector::new(0.0, 0.0, phi as Real)),
+            ColliderBuilder::cuboid((0.5 * len) as Real, a as Real, a as Real),
+        );
+        let mut p = plugin(TimingMode::Exact);
+        p.add_ground_with_material(
+            &world.bodies,
+            &mut world.colliders,
+            ground,
+            GroundMaterial {
+                restitution: e,
+                friction: 0.0,
+            },
+        )
+        .unwrap();
+        let mass = f64::from(world.bodies[rod].mass());
+        let mut event = None;
+        for _ in 0..60 {
+            p.step(&mut world);
+            if let Some(ev) = p.events().first() {
+                event = Some(*ev);
+                break;
+            }
+        }
+        let ev = event.expect("the rod never landed");
+        let v = (2.0 * G * h).sqrt();
+        let c = phi.cos();
+        let j = (1.0 + e) * v * mass / (1.0 + 3.0 * c * c);
+        let w = 6.0 * (1.0 + e) * v * c / (len * (1.0 + 3.0 * c * c));
+        let w_after = -f64::from(world.bodies[rod].angvel().z);
+        // The same law for the 2 mm thick cuboid: contact at the lower edge, lever arm
+        // r = L/2 cos phi - a sin phi, I = m (L^2 + 4 a^2)/12.
+        let r = 0.5 * len * c - a * phi.sin();
+        let inertia = mass * (len * len + 4.0 * a * a) / 12.0;
+        let j_box = (1.0 + e) * v / (1.0 / mass + r * r / inertia);
+        let w_box = j_box * r / inertia;
+        println!(
+            "rod at {phi_deg} deg: {} points, J/m = {:.6} (line rod {:.6}, thick rod {:.6}), w' = {w_after:.5} (line rod {w:.5}, thick rod {w_box:.5})",
+            ev.contact_points,
+            ev.normal_impulse / mass,
+            j / mass,
+            j_box / mass
+        );
+        assert_eq!(ev.contact_points, 2, "rod end edge");
+        let tol = if F64 { 1e-9 } else { 2e-5 };
+        let j_err = ev.normal_impulse / j_box - 1.0;
+        assert!(j_err.abs() < tol, "J {} vs {j_box}", ev.normal_impulse);
+        assert!(
+            (w_after / w_box - 1.0).abs() < tol,
+            "w' {w_after} vs {w_box}"
+        );
+        // The line-rod closed form holds to the thickness effect, ~ 2 a tan(phi) / L.
+        let thickness = 4.0 * a * phi.tan() / len;
+        assert!((ev.normal_impulse / j - 1.0).abs() < thickness + tol);
+    }
+}
+
+#[test]
+fn a_cube_corner_landing_is_the_models_single_point_impact() {
+    use rapier_impact::model::{Body, BodyVelocity, Contact, Law, Material, resolve};
+    use rapier_impact::na::Vector3;
+    let (e, mu, h, side) = (0.6, 0.5, 0.4, 0.4);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let (cube, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, (h + side) as Real, 0.0))
+            .rotation(Vector::new(0.35, 0.2, 0.5)),
+        ColliderBuilder::cuboid(
+            (side / 2.0) as Real,
+            (side / 2.0) as Real,
+            (side / 2.0) as Real,
+        ),
+    );
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: mu,
+        },
+    )
+    .unwrap();
+    let dt = f64::from(world.integration_parameters.dt);
+    let mass = f64::from(world.bodies[cube].mass());
+    let start = world.bodies[cube].translation();
+    for k in 0..60 {
+        p.step(&mut world);
+        if let Some(ev) = p.events().first().copied() {
+            // Free fall without rotation until the impact.
+            let t = k as f64 * dt + ev.time;
+            let com = Vector3::new(
+                f64::from(start.x),
+                f64::from(start.y) - 0.5 * G * t * t,
+                f64::from(start.z),
+            );
+            let point = Vector3::new(
+                f64::from(ev.point.x),
+                f64::from(ev.point.y),
+                f64::from(ev.point.z),
+            );
+            let body = Body::isotropic(mass, mass * side * side / 6.0);
+            let velocity = BodyVelocity {
+                linear: Vector3::new(0.0, -G * t, 0.0),
+                angular: Vector3::zeros(),
+            };
+            let contact = Contact::fixed(Vector3::y(), point - com);
+            let material = Material {
+                restitution: e,
+                friction: mu,
+            };
+            let model = resolve(Law::Guarded, &body, &velocity, &contact, &material).unwrap();
+            let got = Vector3::new(
+                f64::from(ev.impulse.x),
+                f64::from(ev.impulse.y),
+                f64::from(ev.impulse.z),
+            );
+            let err = (got - model.impulse).norm() / model.impulse.norm();
+            println!(
+                "corner: {} point, impulse {got:?}, model {:?}, relative difference {err:.2e}, regime {:?}",
+                ev.contact_points, model.impulse, ev.regime
+            );
+            assert_eq!(ev.contact_points, 1);
+            assert_eq!(ev.regime, model.regime);
+            let tol = if F64 { 1e-9 } else { 1e-4 };
+            assert!(
+                err < tol,
+                "corner impulse differs from the model by {err:e}"
+            );
+            return;
+        }
+    }
+    panic!("the cube never landed");
+}

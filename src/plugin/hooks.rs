@@ -62,12 +62,13 @@ impl<H> ImpactPlugin<H> {
 impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
         let (bodies, colliders) = (context.bodies, context.colliders);
-        match self.managed_pair(bodies, colliders, context.collider1, context.collider2) {
-            Some(key) => match self.role(&key) {
-                Role::Impact => Some(SolverFlags::empty()),
-                Role::Resting => Some(SolverFlags::COMPUTE_RIGID_IMPULSES),
-            },
-            None => {
+        let managed = self
+            .managed_pair(bodies, colliders, context.collider1, context.collider2)
+            .map(|key| self.role(&key));
+        match managed {
+            Some(Role::Impact) => Some(SolverFlags::empty()),
+            Some(Role::Resting) => Some(SolverFlags::COMPUTE_RIGID_IMPULSES),
+            Some(Role::Rapier) | None => {
                 let flags = self.user_flags(colliders, context.collider1)
                     | self.user_flags(colliders, context.collider2);
                 if flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
@@ -88,19 +89,21 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         let (bodies, colliders) = (context.bodies, context.colliders);
         let (c1, c2) = (context.collider1, context.collider2);
-        match self.managed_pair(bodies, colliders, c1, c2) {
-            Some(key) => {
-                if self.role(&key) == Role::Resting {
-                    let over = self.grounds.get(&key.1).and_then(|g| g.material);
-                    if let Some(rigid) = context.rigid_mut() {
-                        *rigid.restitution = 0.0;
-                        if let Some(m) = over {
-                            *rigid.friction = super::convert::to_real(m.friction);
-                        }
+        let managed = self
+            .managed_pair(bodies, colliders, c1, c2)
+            .map(|key| (key, self.role(&key)));
+        match managed {
+            Some((_, Role::Impact)) => {}
+            Some((key, Role::Resting)) => {
+                let over = self.grounds.get(&key.1).and_then(|g| g.material);
+                if let Some(rigid) = context.rigid_mut() {
+                    *rigid.restitution = 0.0;
+                    if let Some(m) = over {
+                        *rigid.friction = super::convert::to_real(m.friction);
                     }
                 }
             }
-            None => {
+            Some((_, Role::Rapier)) | None => {
                 let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);

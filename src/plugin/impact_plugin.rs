@@ -37,6 +37,8 @@ pub(crate) enum Role {
     Impact,
     /// In rapier's solver with zero restitution: a resting, rolling or sliding contact.
     Resting,
+    /// Left to rapier unchanged, bounce included: parry cannot query the pair.
+    Rapier,
 }
 
 /// A registered ground collider.
@@ -382,6 +384,7 @@ impl<H> ImpactPlugin<H> {
                     let key = (part.handle, gg.handle);
                     if !supported(part.shape, gg.shape) {
                         // parry cannot query this pair: rapier keeps it, restitution included.
+                        step.roles.insert(key, Role::Rapier);
                         continue;
                     }
                     let role = match contact(part, gg, &state, 0.0, reach) {
