@@ -82,6 +82,13 @@ pub(crate) fn consistent_impulse(
         ft: Vector2::zeros(),
     };
     let speed = u1.norm();
+    // A slip below the swerve's own stop speed has stopped. This is the rounding that
+    // u1 - n (n.u1) leaves for an exactly normal approach when n is not a coordinate
+    // axis (~1e-16 |u1|); kept, keeps_direction (absolute in |u_t|) would accept its
+    // random direction and friction would act along it for the whole impact.
+    if state.ut.norm() <= 1e-3 * SWERVE_TOLERANCE * speed {
+        state.ut = Vector2::zeros();
+    }
     let mut phase = Phase::Compression;
     let started_slipping = state.ut.norm_squared() > 0.0;
     let mut stuck = false;
