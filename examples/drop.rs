@@ -12,6 +12,10 @@
 //! `t,x,y,z,vx,vy,vz,wx,wy,wz` of the ball's centre of mass, one row per step and one at
 //! t = 0; ground surface at y = 0, y up).
 
+// Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
+// widening in one build are identities in the other.
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
 use std::io::Write;

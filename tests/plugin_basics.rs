@@ -4,6 +4,10 @@
 //! sloped ground and every ground shape bounce by the closed form; flat landings do not spin;
 //! resting bodies rest and sleep.
 
+// Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
+// widening in one build are identities in the other.
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
 use rapier_impact::model::Regime;
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::parry::utils::Array2;
@@ -906,4 +910,93 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
         }
     }
     panic!("the cube never landed");
+}
+
+#[test]
+fn a_fast_ball_neither_tunnels_nor_bounces_twice() {
+    // 40 m/s onto a 2 cm thick slab: 0.67 m per step at 60 Hz, far more than the slab.
+    let (e, v0) = (0.5, 40.0);
+    for timing in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        for bullet in [false, true] {
+            let mut world = PhysicsWorld::default();
+            let (_, ground) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::cuboid(5.0, 0.01, 5.0).translation(Vector::new(0.0, -0.01, 0.0)),
+            );
+            let (ball, _) = world.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.0, 1.0, 0.0))
+                    .linvel(Vector::new(0.0, -v0 as Real, 0.0))
+                    .ccd_enabled(bullet),
+                ColliderBuilder::ball(0.05),
+            );
+            let mut p = plugin(timing);
+            p.add_ground_with_material(
+                &world.bodies,
+                &mut world.colliders,
+                ground,
+                GroundMaterial {
+                    restitution: e,
+                    friction: 0.0,
+                },
+            )
+            .unwrap();
+            let mut impacts = Vec::new();
+            let mut lowest = Real::MAX;
+            for k in 0..12 {
+                p.step(&mut world);
+                impacts.extend(p.events().iter().map(|ev| (k, ev.approach_speed)));
+                lowest = lowest.min(world.bodies[ball].translation().y);
+            }
+            let vy = f64::from(world.bodies[ball].linvel().y);
+            println!(
+                "{timing:?}, ccd_enabled {bullet}: impacts {impacts:?}, lowest centre {lowest}, vy after {vy:.4}"
+            );
+            assert!(lowest > 0.0, "{timing:?}: tunnelled to {lowest}");
+            assert_eq!(impacts.len(), 1, "{timing:?}: {impacts:?}");
+            // One bounce at e v (v ~ 40.1 m/s at the impact), rapier adding nothing:
+            // after it, only gravity acts.
+            let up = vy + G * 11.0 / 60.0;
+            assert!(
+                (up - e * impacts[0].1).abs() < 0.2,
+                "{timing:?}: rebound {up:.4} m/s vs e v = {:.4}",
+                e * impacts[0].1
+            );
+        }
+    }
+}
+
+#[test]
+fn a_fast_body_stopped_by_a_non_ground_wall_is_not_pulled_through_it() {
+    // Exact mode re-integrates free flight; a body rapier's CCD stopped at a wall that is
+    // not ground must keep rapier's result.
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(3.0, 1.0, 0.0)),
+        ColliderBuilder::cuboid(0.01, 1.0, 1.0),
+    );
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 1.0, 0.0))
+            .linvel(Vector::new(60.0, 0.0, 0.0)),
+        ColliderBuilder::ball(0.05),
+    );
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    let mut furthest = Real::MIN;
+    for _ in 0..10 {
+        p.step(&mut world);
+        furthest = furthest.max(world.bodies[ball].translation().x);
+    }
+    println!("furthest x {furthest}");
+    assert!(
+        furthest < 3.0,
+        "the ball went through the wall: x = {furthest}"
+    );
 }

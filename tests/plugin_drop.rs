@@ -7,6 +7,10 @@
 //! rapier's own error on the same scene beside them; the assertions are the tolerances each
 //! mode reaches, per precision.
 
+// Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
+// widening in one build are identities in the other.
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
 
