@@ -36,14 +36,21 @@ pub use plugin::{
     ConfigError, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode,
 };
 
-/// Long-form documentation.
+/// Long-form documentation: the model's derivation and the integration guide.
 pub mod docs {
-    #![doc = include_str!("../docs/model.md")]
-    /// The model's derivation.
-    pub mod model {}
+    /// The impact model: the document's equations, the errata, the general form and the
+    /// three laws.
+    pub mod model {
+        #![doc = include_str!("../docs/model.md")]
+    }
     /// Adding the plugin to a rapier simulation: what happens in a step, the modes, the
     /// guarantees.
     pub mod integration {
         #![doc = include_str!("../docs/integration.md")]
     }
 }
+
+// The README's code blocks run as doctests, so its quick start cannot rot.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
