@@ -260,7 +260,8 @@ impl Dd {
 }
 
 /// Solves the 3x3 system `a x = b` in double-double by Gaussian elimination with
-/// partial pivoting.
+/// partial pivoting. (Indexed loops: the textbook form reads best here.)
+#[allow(clippy::needless_range_loop)]
 pub fn dd_solve3(a: [[Dd; 3]; 3], b: [Dd; 3]) -> [Dd; 3] {
     let mut m = a;
     let mut y = b;
