@@ -296,7 +296,7 @@ fn run_law(
 
 fn per_regime(c: &mut Criterion) {
     let mut rng = Rng(0x5EED);
-    let batches = vec![
+    let batches = [
         ("stick", stick_batch(&mut rng)),
         ("slip", slip_batch(&mut rng)),
         ("swerve", swerve_batch(&mut rng)),
@@ -308,7 +308,7 @@ fn per_regime(c: &mut Criterion) {
 
 fn per_effect_set(c: &mut Criterion) {
     let mut rng = Rng(0xEFFEC7);
-    let batches = vec![
+    let batches = [
         ("frictionless", effect_batch(&mut rng, false, true)),
         ("no_spin", effect_batch(&mut rng, true, false)),
         ("full", effect_batch(&mut rng, true, true)),

@@ -315,7 +315,7 @@ fn swerve_segment(
         }
         let (y_new, err, k7) = dormand_prince_step(&rate, &y, &k1, h);
         let err_norm = err[UT1].hypot(err[UT2]).max(err[UN].abs()) / scale;
-        if !(err_norm <= SWERVE_TOLERANCE) {
+        if err_norm > SWERVE_TOLERANCE || err_norm.is_nan() {
             let factor = if err_norm.is_finite() {
                 (0.9 * (SWERVE_TOLERANCE / err_norm).powf(0.2)).clamp(0.1, 0.9)
             } else {
@@ -349,7 +349,7 @@ fn swerve_segment(
             let mut y_event = dormand_prince_step(&rate, &y, &k1, dh).0;
             for _ in 0..4 {
                 let slope = rate(&y_event)[index];
-                if !(slope > 0.0) {
+                if slope <= 0.0 || slope.is_nan() {
                     break;
                 }
                 let next = (dh - (y_event[index] - level) / slope).clamp(0.0, h);

@@ -17,10 +17,14 @@ use super::error::ModelError;
 use super::types::{Body, Contact, Material, Regime};
 use nalgebra::{Vector2, Vector3};
 
-/// The document's impulse on the body (world frame) and its regime, for an
-/// approaching contact. `u1` is the relative contact velocity.
+/// The document's impulse on the body (world frame), its regime and the unit slip
+/// direction it used (zero when sticking or frictionless), for an approaching contact.
+/// `u1` is the relative contact velocity; `iso` is `Some(a)` when the inverse inertia
+/// is `a E`, which has cheaper closed forms.
+#[inline(always)]
 pub(crate) fn document_impulse(
     body: &Body,
+    iso: Option<f64>,
     contact: &Contact,
     material: &Material,
     u1: &Vector3<f64>,
@@ -32,21 +36,38 @@ pub(crate) fn document_impulse(
     let ut = u1 - n * un;
 
     // Sticking, eqs. (10)-(12): target contact velocity -e u_n n.
-    let stick = solve_k(body, r, &(-(n * ((1.0 + e) * un)) - ut));
+    let d = -(n * ((1.0 + e) * un)) - ut;
+    let stick = match iso {
+        // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4), I = 1/a.
+        Some(a) => {
+            let (m, i) = (body.mass, 1.0 / a);
+            (d * i + r * (m * r.dot(&d))) * (m / (i + m * r.norm_squared()))
+        }
+        None => solve_k(body, r, &d),
+    };
     let stick_n = stick.dot(n);
     let stick_t = stick - n * stick_n;
     if stick_n >= 0.0 && stick_t.norm_squared() <= (mu * stick_n) * (mu * stick_n) {
         return Ok((stick, Regime::Stick, Vector3::zeros()));
     }
 
-    // Slipping, eqs. (13)-(19). A frictionless contact needs no direction.
-    let s = if mu == 0.0 {
-        Vector3::zeros()
+    // Slipping, eqs. (13)-(19). A frictionless contact needs no direction: P = p n.
+    let (s, along, denominator) = if mu == 0.0 {
+        let rn = r.cross(n);
+        let rot = match iso {
+            Some(a) => a * rn.norm_squared(),
+            None => rn.dot(&(body.inv_inertia * rn)),
+        };
+        (Vector3::zeros(), *n, n.norm_squared() / body.mass + rot)
     } else {
-        slip_direction(body, contact, &ut, mu)
+        let s = slip_direction(body, contact, &ut, mu);
+        let along = n - s * mu;
+        let denominator = match iso {
+            Some(a) => n.dot(&along) / body.mass + a * r.cross(n).dot(&r.cross(&along)),
+            None => k_form(body, r, n, &along),
+        };
+        (s, along, denominator)
     };
-    let along = n - s * mu;
-    let denominator = k_form(body, r, n, &along);
     if denominator <= 0.0 || !denominator.is_finite() {
         return Err(ModelError::Jam { denominator });
     }
@@ -63,6 +84,10 @@ pub(crate) fn slip_direction(
     ut: &Vector3<f64>,
     mu: f64,
 ) -> Vector3<f64> {
+    let len2 = ut.norm_squared();
+    if len2 > 1e-200 && len2.is_finite() {
+        return ut * (1.0 / len2.sqrt());
+    }
     let len = ut.norm();
     if len > 0.0 && len.is_finite() {
         // Rescale before normalising so subnormal slips keep their direction.

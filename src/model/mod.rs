@@ -18,7 +18,7 @@ pub use consistent::SWERVE_TOLERANCE;
 pub use error::ModelError;
 pub use types::{Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, Regime};
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Size of an energy gain, relative to the impulse times the contact speed
 /// (`|P| |u1|`, the scale of the energy exchanged), that `Guarded` treats as real
@@ -53,20 +53,54 @@ pub fn resolve(
     contact: &Contact,
     material: &Material,
 ) -> Result<Impact, ModelError> {
-    // One sum of every input is finite iff all of them are; only when it is not are the
-    // fields checked one by one, to name the culprit.
-    let sum = velocity.linear.sum()
-        + velocity.angular.sum()
-        + contact.ground_velocity.sum()
-        + contact.offset.sum();
-    if !sum.is_finite() {
-        error::finite3(&velocity.linear, "velocity.linear")?;
-        error::finite3(&velocity.angular, "velocity.angular")?;
+    if !inputs_plainly_valid(body, velocity, contact, material) {
+        // Some check may fail: run them one by one, in order, to name the culprit.
+        // One sum of the velocities is finite iff all of them are.
+        let sum = velocity.linear.sum()
+            + velocity.angular.sum()
+            + contact.ground_velocity.sum()
+            + contact.offset.sum();
+        if !sum.is_finite() {
+            error::finite3(&velocity.linear, "velocity.linear")?;
+            error::finite3(&velocity.angular, "velocity.angular")?;
+        }
+        body.validate()?;
+        contact.validate()?;
+        material.validate()?;
     }
-    body.validate()?;
-    contact.validate()?;
-    material.validate()?;
     resolve_unchecked(law, body, velocity, contact, material)
+}
+
+/// A sufficient condition for every check of [`resolve`] to pass, cheap enough to run
+/// on every impact: every input is finite (one sum of all of them is finite iff each
+/// is), `m > 0`, `e, mu >= 0`, a unit normal, and a valid inverse inertia (a diagonal
+/// one with a non-negative diagonal, else the full check of [`Body::validate`]).
+#[inline]
+fn inputs_plainly_valid(
+    body: &Body,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+) -> bool {
+    let a = &body.inv_inertia;
+    let sum = (velocity.linear.sum() + velocity.angular.sum())
+        + (contact.ground_velocity.sum() + contact.offset.sum())
+        + (contact.normal.sum() + a.sum())
+        + (body.mass + material.restitution + material.friction);
+    let (e, mu) = (material.restitution, material.friction);
+    if !(sum.is_finite()
+        && body.mass > 0.0
+        && e >= 0.0
+        && mu >= 0.0
+        && (contact.normal.norm_squared() - 1.0).abs() <= 2e-6)
+    {
+        return false;
+    }
+    if off_diagonal_is_zero(a) {
+        a.m11 >= 0.0 && a.m22 >= 0.0 && a.m33 >= 0.0
+    } else {
+        body.validate().is_ok()
+    }
 }
 
 /// [`resolve`] without validation, for callers that validated the body, contact and
@@ -82,7 +116,7 @@ pub fn resolve_unchecked(
     let r = &contact.offset;
     let u1 = velocity.linear + velocity.angular.cross(r) - contact.ground_velocity;
     let un = n.dot(&u1);
-    if !(un < 0.0) {
+    if un >= 0.0 || un.is_nan() {
         let ke = body.kinetic_energy(velocity);
         return Ok(Impact {
             impulse: Vector3::zeros(),
@@ -100,11 +134,14 @@ pub fn resolve_unchecked(
             ke_after: ke,
         });
     }
+    let iso = isotropic_inverse_inertia(body);
     match law {
         Law::Document => {
-            let (impulse, regime, _) = document::document_impulse(body, contact, material, &u1)?;
-            Ok(finish(
+            let (impulse, regime, _) =
+                document::document_impulse(body, iso, contact, material, &u1)?;
+            let (impact, _) = finish(
                 body,
+                iso,
                 velocity,
                 &u1,
                 contact,
@@ -112,12 +149,14 @@ pub fn resolve_unchecked(
                 regime,
                 Law::Document,
                 None,
-            ))
+            );
+            Ok(impact)
         }
         Law::Consistent => {
             let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            Ok(finish(
+            let (impact, _) = finish(
                 body,
+                iso,
                 velocity,
                 &u1,
                 contact,
@@ -125,14 +164,16 @@ pub fn resolve_unchecked(
                 regime,
                 Law::Consistent,
                 None,
-            ))
+            );
+            Ok(impact)
         }
         Law::Guarded => {
-            let reason = match document::document_impulse(body, contact, material, &u1) {
+            let reason = match document::document_impulse(body, iso, contact, material, &u1) {
                 Err(_) => Fallback::Jam,
                 Ok((impulse, regime, s)) => {
-                    let impact = finish(
+                    let (impact, u2) = finish(
                         body,
+                        iso,
                         velocity,
                         &u1,
                         contact,
@@ -141,15 +182,16 @@ pub fn resolve_unchecked(
                         Law::Document,
                         None,
                     );
-                    match unphysical(velocity, contact, material, &impact, &s) {
+                    match unphysical(contact, material, &impact, &u1, &u2, &s) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }
                 }
             };
             let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            Ok(finish(
+            let (impact, _) = finish(
                 body,
+                iso,
                 velocity,
                 &u1,
                 contact,
@@ -157,29 +199,50 @@ pub fn resolve_unchecked(
                 regime,
                 Law::Consistent,
                 Some(reason),
-            ))
+            );
+            Ok(impact)
         }
     }
 }
 
+/// `a` when the inverse inertia tensor is `a E` with `a > 0` (spheres, cubes), the
+/// case every step below has a cheaper closed form for.
+#[inline]
+fn isotropic_inverse_inertia(body: &Body) -> Option<f64> {
+    let a = &body.inv_inertia;
+    let isotropic = a.m11 == a.m22 && a.m22 == a.m33 && a.m11 > 0.0 && off_diagonal_is_zero(a);
+    isotropic.then_some(a.m11)
+}
+
+/// True when all six off-diagonal entries are `+0.0` or `-0.0`: their bits, without
+/// the sign, are all zero (one test instead of six).
+#[inline]
+fn off_diagonal_is_zero(a: &Matrix3<f64>) -> bool {
+    let bits = a.m12.to_bits()
+        | a.m13.to_bits()
+        | a.m23.to_bits()
+        | a.m21.to_bits()
+        | a.m31.to_bits()
+        | a.m32.to_bits();
+    bits << 1 == 0
+}
+
 /// Why the document's result is unphysical, if it is (the `Guarded` law's test).
+/// `u1`, `u2` are the relative contact velocities before and after.
 fn unphysical(
-    before: &BodyVelocity,
     contact: &Contact,
     material: &Material,
     impact: &Impact,
+    u1: &Vector3<f64>,
+    u2: &Vector3<f64>,
     slip: &Vector3<f64>,
 ) -> Option<Fallback> {
     if impact.normal_impulse < 0.0 {
         return Some(Fallback::PullingNormalImpulse);
     }
     let n = &contact.normal;
-    let r = &contact.offset;
     if impact.regime == Regime::Slip && material.friction > 0.0 {
-        let after = &impact.velocity;
-        let u2 = after.linear + after.angular.cross(r) - contact.ground_velocity;
-        let u1 = before.linear + before.angular.cross(r) - contact.ground_velocity;
-        let along_after = (u2 - n * n.dot(&u2)).dot(slip);
+        let along_after = (u2 - n * n.dot(u2)).dot(slip);
         if along_after < -1e-12 * u1.norm() {
             return Some(Fallback::SlipReversal);
         }
@@ -188,9 +251,6 @@ fn unphysical(
         // The work of the impulse in the frame moving with the ground's contact point,
         // where a fixed ground's work-energy balance holds for a translating platform
         // too: dKE = P . (u1 + u2) / 2 with u the relative contact velocities.
-        let u1 = before.linear + before.angular.cross(r) - contact.ground_velocity;
-        let after = &impact.velocity;
-        let u2 = after.linear + after.angular.cross(r) - contact.ground_velocity;
         let gain = 0.5 * impact.impulse.dot(&(u1 + u2));
         if gain > ENERGY_GAIN_TOLERANCE * impact.impulse.norm() * u1.norm() {
             return Some(Fallback::EnergyGain);
@@ -200,9 +260,14 @@ fn unphysical(
 }
 
 /// Applies the impulse: `v2 = v1 + P/m`, `w2 = w1 + I_w^-1 (r × P)` (eqs. 4-9).
-/// `u1` is the relative contact velocity before the impact.
+/// `u1` is the relative contact velocity before the impact, `iso` the isotropic
+/// inverse inertia if the body has one. Returns the impact and the relative contact
+/// velocity after it.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn finish(
     body: &Body,
+    iso: Option<f64>,
     velocity: &BodyVelocity,
     u1: &Vector3<f64>,
     contact: &Contact,
@@ -210,18 +275,31 @@ fn finish(
     regime: Regime,
     law: Law,
     fallback: Option<Fallback>,
-) -> Impact {
+) -> (Impact, Vector3<f64>) {
+    let r = &contact.offset;
+    let inv_m = 1.0 / body.mass;
+    let (angular, ke_before) = match iso {
+        Some(a) => (
+            velocity.angular + r.cross(&impulse) * a,
+            0.5 * (body.mass * velocity.linear.norm_squared()
+                + velocity.angular.norm_squared() / a),
+        ),
+        None => (
+            velocity.angular + body.inv_inertia * r.cross(&impulse),
+            body.kinetic_energy(velocity),
+        ),
+    };
     let after = BodyVelocity {
-        linear: velocity.linear + impulse / body.mass,
-        angular: velocity.angular + body.inv_inertia * contact.offset.cross(&impulse),
+        linear: velocity.linear + impulse * inv_m,
+        angular,
     };
     let normal_impulse = impulse.dot(&contact.normal);
     // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
     // one impulse at r, and free of the cancellation of subtracting two energies.
-    let r = &contact.offset;
-    let point_velocities = u1 + contact.ground_velocity + after.linear + after.angular.cross(r);
-    let ke_before = body.kinetic_energy(velocity);
-    Impact {
+    let point_after = after.linear + after.angular.cross(r);
+    let point_velocities = u1 + contact.ground_velocity + point_after;
+    let u2 = point_after - contact.ground_velocity;
+    let impact = Impact {
         impulse,
         normal_impulse,
         tangent_impulse: impulse - contact.normal * normal_impulse,
@@ -231,5 +309,6 @@ fn finish(
         fallback,
         ke_before,
         ke_after: ke_before + 0.5 * impulse.dot(&point_velocities),
-    }
+    };
+    (impact, u2)
 }
