@@ -1,0 +1,585 @@
+//! Non-spherical bodies landing on a half-space, in each timing mode, against the model:
+//! - a rod (a capsule landing on one end, and a thin cuboid landing on one corner) and a cube
+//!   landing on a corner are single-point impacts: the plugin's event (impulse, regime) and
+//!   the body's velocities after the impact step must be `model::resolve` on the same
+//!   pre-impact state (released without spin, so the orientation is constant until the impact
+//!   and the pre-impact velocity is `v0 + g t`; the contact offset is the lowest vertex or end);
+//! - a cube landing flat must not rotate, and must bounce to `e^2 h`.
+//!
+//! What goes wrong without the plugin: rapier alone resolves these contacts over one or more
+//! steps with its solver; its post-bounce velocities are printed beside the plugin's, measured
+//! once the body is clear of the ground (so including any second contact on the way, as a rod's
+//! other end) against the model at the analytic impact time: 30-300 % off here, and a cube
+//! landing flat leaves rapier alone spinning at 3 rad/s.
+//!
+//! Tolerances reached (relative, impulse / velocity after / angular momentum after): `f64`
+//! 1e-14 in every mode; `f32` `Exact` 7e-8 / 9e-7 / 3.4e-7, `Step` and `TimeOfImpact` 1.4e-6 /
+//! 1.5e-6 / 4.1e-7 (they start from rapier's `f32` velocity). Finding: the angular momentum
+//! after the impact step of a spin that is not about a principal axis is 18-20 % off in
+//! `TimeOfImpact` and `Exact` (see the ignored test at the end).
+//!
+//! The expected inertia is computed here from the shapes (cuboid `m (b^2 + c^2)/12`; capsule
+//! as a cylinder and two hemispheres at density 1), not read from rapier.
+
+use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material, Regime};
+use rapier_impact::na::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, TimingMode};
+
+const F64: bool = cfg!(feature = "f64");
+const MODES: [TimingMode; 3] = [
+    TimingMode::Step,
+    TimingMode::TimeOfImpact,
+    TimingMode::Exact,
+];
+
+#[allow(clippy::unnecessary_cast)]
+fn real(x: f64) -> Real {
+    x as Real
+}
+
+#[allow(clippy::unnecessary_cast)]
+fn wide(x: Real) -> f64 {
+    x as f64
+}
+
+fn na(v: Vector) -> Vector3<f64> {
+    Vector3::new(wide(v.x), wide(v.y), wide(v.z))
+}
+
+/// The shapes thrown, in their local frame (centre of mass at the origin).
+#[derive(Clone, Copy, Debug)]
+enum Shape {
+    /// Half extents (m).
+    Cuboid([f64; 3]),
+    /// Half height of the segment along local y, radius (m).
+    Capsule(f64, f64),
+}
+
+impl Shape {
+    fn collider(&self) -> ColliderBuilder {
+        match *self {
+            Shape::Cuboid([x, y, z]) => ColliderBuilder::cuboid(real(x), real(y), real(z)),
+            Shape::Capsule(h, r) => ColliderBuilder::capsule_y(real(h), real(r)),
+        }
+    }
+
+    /// Mass and local principal inertia at density 1 (rapier's default).
+    fn mass_inertia(&self) -> (f64, Vector3<f64>) {
+        match *self {
+            Shape::Cuboid([x, y, z]) => {
+                let (a, b, c) = (2.0 * x, 2.0 * y, 2.0 * z);
+                let m = a * b * c;
+                let i = Vector3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (m / 12.0);
+                (m, i)
+            }
+            Shape::Capsule(hh, r) => {
+                let pi = std::f64::consts::PI;
+                let h = 2.0 * hh;
+                let mc = pi * r * r * h;
+                let ms = 4.0 / 3.0 * pi * r * r * r;
+                let axial = mc * r * r / 2.0 + ms * 2.0 * r * r / 5.0;
+                let perp = mc * (h * h / 12.0 + r * r / 4.0)
+                    + ms * (2.0 * r * r / 5.0 + h * h / 4.0 + 3.0 * h * r / 8.0);
+                (mc + ms, Vector3::new(perp, axial, perp))
+            }
+        }
+    }
+
+    /// The candidate contact offsets (world frame, from the centre of mass) at orientation
+    /// `q`: the cuboid's corners, the capsule's end spheres' lowest points.
+    fn low_points(&self, q: &UnitQuaternion<f64>) -> Vec<Vector3<f64>> {
+        match *self {
+            Shape::Cuboid([x, y, z]) => (0..8)
+                .map(|i| {
+                    let s = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+                    q * Vector3::new(s(1) * x, s(2) * y, s(4) * z)
+                })
+                .collect(),
+            Shape::Capsule(hh, r) => [-hh, hh]
+                .iter()
+                .map(|y| q * Vector3::new(0.0, *y, 0.0) - Vector3::new(0.0, r, 0.0))
+                .collect(),
+        }
+    }
+
+    /// The lowest point's offset and the gap (m) between it and the next lowest.
+    fn lowest(&self, q: &UnitQuaternion<f64>) -> (Vector3<f64>, f64) {
+        let mut p = self.low_points(q);
+        p.sort_by(|a, b| a.y.total_cmp(&b.y));
+        (p[0], p[1].y - p[0].y)
+    }
+}
+
+/// A single-point landing scene.
+#[derive(Clone, Copy, Debug)]
+struct Throw {
+    name: &'static str,
+    shape: Shape,
+    /// Orientation as rotations about x then z (applied z first): `q = Rx(ax) Rz(az)` (rad).
+    tilt: [f64; 2],
+    /// Gap from the lowest point to the ground at release (m).
+    gap: f64,
+    /// Release velocity (m/s).
+    v0: [f64; 3],
+    e: f64,
+    mu: f64,
+    /// Is the spin after the impact about a principal axis (or the body isotropic)? Then the
+    /// plugin's constant-axis spin over the rest of the impact step is exact.
+    principal_spin: bool,
+}
+
+/// One scene built: the world, the ground, the body, and the release state read back from
+/// rapier (rounded to its precision).
+struct Built {
+    world: PhysicsWorld,
+    ground: ColliderHandle,
+    body: RigidBodyHandle,
+    q: UnitQuaternion<f64>,
+    v0: Vector3<f64>,
+    g: Vector3<f64>,
+}
+
+fn build(t: &Throw) -> Built {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+            .restitution(real(t.e))
+            .friction(real(t.mu)),
+    );
+    let q = UnitQuaternion::from_euler_angles(t.tilt[0], 0.0, 0.0)
+        * UnitQuaternion::from_euler_angles(0.0, 0.0, t.tilt[1]);
+    let (low, _) = t.shape.lowest(&q);
+    let qc = q.quaternion();
+    let (body, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .pose(Pose::from_parts(
+                Vector::new(0.0, real(t.gap - low.y), 0.0),
+                Rotation::from_xyzw(real(qc.i), real(qc.j), real(qc.k), real(qc.w)),
+            ))
+            .linvel(Vector::new(real(t.v0[0]), real(t.v0[1]), real(t.v0[2]))),
+        t.shape
+            .collider()
+            .restitution(real(t.e))
+            .friction(real(t.mu)),
+    );
+    let rb = &world.bodies[body];
+    let q = rotation(rb);
+    let (v0, g) = (na(rb.linvel()), na(world.gravity));
+    Built {
+        world,
+        ground,
+        body,
+        q,
+        v0,
+        g,
+    }
+}
+
+/// The world inertia tensor of a shape at orientation `q`, from the analytic inertia.
+fn inertia_world(shape: &Shape, q: &UnitQuaternion<f64>) -> Matrix3<f64> {
+    let (_, i) = shape.mass_inertia();
+    let r = q.to_rotation_matrix().into_inner();
+    r * Matrix3::from_diagonal(&i) * r.transpose()
+}
+
+/// The model's body for a shape at orientation `q`.
+fn model_body(shape: &Shape, q: &UnitQuaternion<f64>) -> Body {
+    Body::from_inertia(shape.mass_inertia().0, inertia_world(shape, q)).unwrap()
+}
+
+/// A body's orientation in `f64`.
+fn rotation(rb: &RigidBody) -> UnitQuaternion<f64> {
+    let r = rb.rotation();
+    UnitQuaternion::from_quaternion(Quaternion::new(wide(r.w), wide(r.x), wide(r.y), wide(r.z)))
+}
+
+/// The model's impact for the throw's pre-impact state at time `t` after release.
+fn model_impact(t: &Throw, b: &Built, time: f64) -> model::Impact {
+    let (offset, _) = t.shape.lowest(&b.q);
+    model::resolve(
+        Law::Guarded,
+        &model_body(&t.shape, &b.q),
+        &BodyVelocity {
+            linear: b.v0 + b.g * time,
+            angular: Vector3::zeros(),
+        },
+        &Contact::fixed(Vector3::y(), offset),
+        &Material {
+            restitution: t.e,
+            friction: t.mu,
+        },
+    )
+    .unwrap()
+}
+
+/// What one mode did at the first impact: relative differences from the model.
+struct Compared {
+    /// `|P - P_model| / |P_model|`.
+    impulse: f64,
+    /// `|v - v_model| / |v_model|` at the end of the impact step.
+    linear: f64,
+    /// `|L - L_model| / |L_model|` at the end of the impact step, `L = I_w w` the angular
+    /// momentum about the centre of mass (conserved in free flight; for a spin about a
+    /// principal axis, the same as comparing `w`).
+    angular: f64,
+    regime: (Regime, Regime),
+    points: usize,
+}
+
+fn with_plugin(t: &Throw, mode: TimingMode) -> Compared {
+    let mut b = build(t);
+    let mut p = ImpactPlugin::new(ImpactConfig {
+        timing: mode,
+        ..Default::default()
+    })
+    .unwrap();
+    p.add_ground_with_material(
+        &b.world.bodies,
+        &mut b.world.colliders,
+        b.ground,
+        GroundMaterial {
+            restitution: t.e,
+            friction: t.mu,
+        },
+    )
+    .unwrap();
+    let dt = wide(b.world.integration_parameters.dt);
+    for k in 0..240 {
+        p.step(&mut b.world);
+        let Some(ev) = p.events().first().copied() else {
+            continue;
+        };
+        assert_eq!(
+            p.events().len(),
+            1,
+            "{} ({mode:?}): several impacts in the first impact step: {:?}",
+            t.name,
+            p.events()
+        );
+        let time = k as f64 * dt + ev.time;
+        let m = model_impact(t, &b, time);
+        let rb = &b.world.bodies[b.body];
+        let v_end = m.velocity.linear + b.g * (dt - ev.time);
+        let rel = |a: Vector3<f64>, x: Vector3<f64>| (a - x).norm() / x.norm();
+        let l_model = inertia_world(&t.shape, &b.q) * m.velocity.angular;
+        let l_end = inertia_world(&t.shape, &rotation(rb)) * na(rb.angvel());
+        return Compared {
+            impulse: rel(na(ev.impulse), m.impulse),
+            linear: rel(na(rb.linvel()), v_end),
+            angular: rel(l_end, l_model),
+            regime: (ev.regime, m.regime),
+            points: ev.contact_points,
+        };
+    }
+    panic!("{} ({mode:?}): no impact in 4 s", t.name);
+}
+
+/// Rapier alone on the same throw: its velocities once the body is clear of the ground (lowest
+/// point 5 mm up and rising), against the model at the analytic impact time (the vertical
+/// velocity carried back to that time under gravity). `(linear, angular)` relative errors.
+fn rapier_alone(t: &Throw) -> (f64, f64) {
+    let mut b = build(t);
+    let g = -b.g.y;
+    // Lowest point: gap + v0y t - g t^2 / 2 = 0.
+    let t_hit = (b.v0.y + (b.v0.y * b.v0.y + 2.0 * g * t.gap).sqrt()) / g;
+    let m = model_impact(t, &b, t_hit);
+    let dt = wide(b.world.integration_parameters.dt);
+    let mut touched = false;
+    for k in 1..=240 {
+        b.world.step();
+        let rb = &b.world.bodies[b.body];
+        let q = rotation(rb);
+        let (low, _) = t.shape.lowest(&q);
+        let height = wide(rb.center_of_mass().y) + low.y;
+        touched |= height < 1e-3;
+        let v = na(rb.linvel());
+        if touched && height > 5e-3 && v.y > 0.0 {
+            let v_back = v - b.g * (k as f64 * dt - t_hit);
+            let l = inertia_world(&t.shape, &q) * na(rb.angvel());
+            let l_model = inertia_world(&t.shape, &b.q) * m.velocity.angular;
+            return (
+                (v_back - m.velocity.linear).norm() / m.velocity.linear.norm(),
+                (l - l_model).norm() / l_model.norm(),
+            );
+        }
+    }
+    (f64::NAN, f64::NAN)
+}
+
+/// Tolerances `(impulse, linear, angular)` per mode, relative: what each mode reaches.
+///
+/// In `f64` the model's result to rounding. In `f32`: `Exact` keeps the pre-impact velocity in
+/// `f64` (its shadow state), so the impulse is off by the rounding of the pose only; `Step` and
+/// `TimeOfImpact` start from rapier's `f32` velocity, summed over the substeps of the flight.
+/// The velocities after are what rapier stores, rounded to `f32`.
+fn tolerance(mode: TimingMode) -> (f64, f64, f64) {
+    match (F64, mode) {
+        (true, _) => (1e-12, 1e-12, 1e-12),
+        (false, TimingMode::Exact) => (2e-7, 2e-6, 1e-6),
+        (false, _) => (3e-6, 3e-6, 1e-6),
+    }
+}
+
+/// The angular momentum tolerance after the impact step of a spin that is not about a
+/// principal axis. `Step`: the impulse is applied at the step start and rapier's gyroscopic
+/// integrator carries the body through the step (measured 2.8e-3 for the thin rod, rapier's own
+/// error). `TimeOfImpact` and `Exact`: the plugin's constant-axis spin over the rest of the
+/// step should conserve the angular momentum as well as rapier does; it does not (see
+/// `non_principal_spin_keeps_its_angular_momentum_through_the_impact_step`).
+fn non_principal_tolerance() -> f64 {
+    5e-3
+}
+
+/// Runs the throw in every mode: the event and the velocities after the impact step against
+/// `model::resolve`, rapier alone printed beside. Returns the failures; with
+/// `angular_only_non_principal`, only the angular momentum check of a non-principal spin.
+fn single_point(t: &Throw, angular_only_non_principal: bool) -> Vec<String> {
+    let (_, margin) = t.shape.lowest(&build(t).q);
+    assert!(
+        margin > 1e-3,
+        "{}: the lowest point is not alone ({margin} m)",
+        t.name
+    );
+    let (rl, ra) = rapier_alone(t);
+    let precision = if F64 { "f64" } else { "f32" };
+    println!(
+        "{} ({precision}): relative difference from model::resolve, impulse / v after / L after",
+        t.name
+    );
+    let mut failed = Vec::new();
+    for mode in MODES {
+        let c = with_plugin(t, mode);
+        let (ti, tl, mut ta) = tolerance(mode);
+        println!(
+            "  {:<13} {:>9.2e} {:>9.2e} {:>9.2e}  regime {:?} (model {:?}), {} point(s) | rapier alone: v {rl:.2e}, L {ra:.2e}",
+            format!("{mode:?}"),
+            c.impulse,
+            c.linear,
+            c.angular,
+            c.regime.0,
+            c.regime.1,
+            c.points
+        );
+        let mut checks = vec![
+            ("impulse", c.impulse, ti),
+            ("linear velocity after", c.linear, tl),
+        ];
+        if !t.principal_spin {
+            ta = ta.max(non_principal_tolerance());
+            if angular_only_non_principal {
+                checks.clear();
+            } else if mode != TimingMode::Step {
+                // Known: checked by the ignored test below.
+                ta = f64::INFINITY;
+            }
+        } else if angular_only_non_principal {
+            continue;
+        }
+        checks.push(("angular momentum after", c.angular, ta));
+        if !angular_only_non_principal && (c.points != 1 || c.regime.0 != c.regime.1) {
+            failed.push(format!(
+                "{mode:?}: {} contact points, regime {:?}, expected 1 and {:?}",
+                c.points, c.regime.0, c.regime.1
+            ));
+        }
+        for (what, got, tol) in checks {
+            if got.is_nan() || got > tol {
+                failed.push(format!(
+                    "{mode:?}: {what} differs from the model by {got:.3e} (relative), tolerance {tol:.0e}; rapier alone: v {rl:.2e}, L {ra:.2e}"
+                ));
+            }
+        }
+    }
+    failed
+}
+
+fn check_single_point(t: &Throw) {
+    let failed = single_point(t, false);
+    assert!(failed.is_empty(), "{}:\n{}", t.name, failed.join("\n"));
+}
+
+const CAPSULE_ROD: Throw = Throw {
+    name: "capsule rod, one end, sliding",
+    shape: Shape::Capsule(0.4, 0.03),
+    tilt: [0.0, 0.5],
+    gap: 0.3,
+    v0: [1.0, 0.0, 0.0],
+    e: 0.5,
+    mu: 0.3,
+    // Tilted about z, sliding along x: the impulse's moment is along z, a principal axis.
+    principal_spin: true,
+};
+
+const THIN_ROD: Throw = Throw {
+    name: "thin cuboid rod, one corner, sliding",
+    shape: Shape::Cuboid([0.5, 0.01, 0.01]),
+    tilt: [0.3, 0.6],
+    gap: 0.4,
+    v0: [-0.5, 0.0, 0.3],
+    e: 0.5,
+    mu: 0.4,
+    principal_spin: false,
+};
+
+const CUBE_CORNER: Throw = Throw {
+    name: "cube, one corner, thrown sideways",
+    shape: Shape::Cuboid([0.1, 0.1, 0.1]),
+    tilt: [0.6, 0.45],
+    gap: 0.5,
+    v0: [1.5, 0.0, 0.5],
+    e: 0.6,
+    mu: 0.5,
+    // Isotropic inertia: every axis is principal.
+    principal_spin: true,
+};
+
+#[test]
+fn a_capsule_rod_landing_on_one_end_is_the_models_single_point_impact() {
+    check_single_point(&CAPSULE_ROD);
+}
+
+#[test]
+fn a_thin_cuboid_rod_landing_on_a_corner_is_the_models_single_point_impact() {
+    check_single_point(&THIN_ROD);
+}
+
+#[test]
+fn a_cube_corner_landing_is_the_models_single_point_impact_in_every_mode() {
+    check_single_point(&CUBE_CORNER);
+}
+
+/// Finding: after an impact inside a step (`TimeOfImpact`, `Exact`), the plugin flies the body
+/// for the rest of the step with a constant angular velocity about a fixed axis and writes
+/// that angular velocity back. For a spin that is not about a principal axis the body's world
+/// inertia turns under it, so the angular momentum it leaves with is wrong at first order in
+/// `|w| (dt - t)`: 18-20 % for this thin rod at 60 Hz (|w| = 14 rad/s, 0.11 rad turned),
+/// against 0.3 % for rapier's own gyroscopic integration over the same step (`Step` mode).
+/// Writing `w = I_w(q_end)^-1 L'` would keep it.
+#[test]
+#[ignore = "plugin finding: constant-axis spin in the impact step does not conserve angular momentum"]
+fn non_principal_spin_keeps_its_angular_momentum_through_the_impact_step() {
+    let failed = single_point(&THIN_ROD, true);
+    assert!(
+        failed.is_empty(),
+        "{}:\n{}",
+        THIN_ROD.name,
+        failed.join("\n")
+    );
+}
+
+/// A cube (edge 0.2 m) dropped flat from 0.5 m: `(max |w| over the first flight after the
+/// bounce (rad/s), relative error of that flight's apex (the bottom face's height, from the
+/// highest sample as `y + vy^2/(2g)`) against `e^2 h`, contact points of the first event)`;
+/// `None` is rapier alone.
+fn flat_landing(mode: Option<TimingMode>, vx: f64, mu: f64) -> (f64, f64, usize) {
+    let (half, h, e) = (0.1, 0.5, 0.5);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+            .restitution(real(e))
+            .friction(real(mu)),
+    );
+    let (cube, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, real(h + half), 0.0))
+            .linvel(Vector::new(real(vx), 0.0, 0.0)),
+        ColliderBuilder::cuboid(real(half), real(half), real(half))
+            .restitution(real(e))
+            .friction(real(mu)),
+    );
+    let mut plugin = mode.map(|timing| {
+        let mut p = ImpactPlugin::new(ImpactConfig {
+            timing,
+            ..Default::default()
+        })
+        .unwrap();
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        p
+    });
+    let g = -wide(world.gravity.y);
+    let (mut points, mut bounced, mut w_max, mut apex) = (0, false, 0.0f64, f64::NAN);
+    for _ in 0..120 {
+        match plugin.as_mut() {
+            Some(p) => {
+                p.step(&mut world);
+                if points == 0 {
+                    points = p.events().first().map_or(0, |ev| ev.contact_points);
+                }
+            }
+            None => world.step(),
+        }
+        let rb = &world.bodies[cube];
+        let vy = wide(rb.linvel().y);
+        if vy > 0.0 {
+            bounced = true;
+        }
+        if bounced {
+            w_max = w_max.max(wide(rb.angvel().length()));
+            let top = wide(rb.center_of_mass().y) - half + vy * vy / (2.0 * g);
+            if apex.is_nan() || vy > 0.0 {
+                apex = top;
+            }
+            if vy < 0.0 {
+                break;
+            }
+        }
+    }
+    (w_max, apex / (e * e * h) - 1.0, points)
+}
+
+/// A flat landing is one simultaneous impact of the four bottom corners at their centroid,
+/// under the centre of mass: no rotation, whatever the friction when the cube does not slide,
+/// and none when it slides without friction; the bounce reaches `e^2 h` (h = 0.5 m, e = 0.5,
+/// dt = 1/60).
+///
+/// Tolerances reached: no rotation at all in every mode (|w| = 0 exactly, rapier alone: 3 rad/s);
+/// apex `Exact` 1.1e-7 (`f32`) and 2e-16 (`f64`) relative; `TimeOfImpact` -3.5 % and `Step`
+/// -2.8 %, the error of rapier's symplectic flight, which they keep (rapier alone: -8 to -11 %).
+#[test]
+fn a_cube_landing_flat_does_not_rotate_and_bounces_to_e_squared() {
+    let precision = if F64 { "f64" } else { "f32" };
+    println!(
+        "cube landing flat ({precision}): max |w| after the bounce (rad/s), apex relative error"
+    );
+    let mut failed: Vec<String> = Vec::new();
+    for (label, vx, mu) in [
+        ("dropped, mu 0.6", 0.0, 0.6),
+        ("sliding 1 m/s, mu 0", 1.0, 0.0),
+    ] {
+        let (rw, ra, _) = flat_landing(None, vx, mu);
+        for mode in MODES {
+            let (w, apex, points) = flat_landing(Some(mode), vx, mu);
+            println!(
+                "  {label:<20} {:<13} |w| {w:.2e}, apex {apex:+.2e}, {points} points | rapier alone: |w| {rw:.2e}, apex {ra:+.2e}",
+                format!("{mode:?}")
+            );
+            let apex_tol = match (mode, F64) {
+                (TimingMode::Exact, true) => 1e-12,
+                (TimingMode::Exact, false) => 1e-6,
+                _ => 5e-2,
+            };
+            if points != 4 {
+                failed.push(format!(
+                    "{label}, {mode:?}: landed on {points} points, expected 4"
+                ));
+            }
+            if w.is_nan() || w > 1e-9 {
+                failed.push(format!(
+                    "{label}, {mode:?}: rotates after a flat landing, |w| = {w:.3e} rad/s, expected 0 \
+                     (rapier alone {rw:.2e})"
+                ));
+            }
+            if apex.is_nan() || apex.abs() > apex_tol {
+                failed.push(format!(
+                    "{label}, {mode:?}: apex relative error {apex:+.3e}, tolerance {apex_tol:.0e} \
+                     (rapier alone {ra:+.2e})"
+                ));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
