@@ -13,6 +13,7 @@
 //! With `I_w^-1 = E/I` and `n = +z` this is [`super::seed::solve`] exactly.
 
 use super::collision_matrix::{ContactK, k_form, solve_k};
+use super::consistent::SWERVE_TOLERANCE;
 use super::error::ModelError;
 use super::types::{Body, Contact, Material, Regime};
 use nalgebra::{Vector2, Vector3};
@@ -60,6 +61,16 @@ pub(crate) fn document_impulse(
         };
         (Vector3::zeros(), *n, n.norm_squared() / body.mass + rot)
     } else {
+        // Zero slip (erratum 2) includes a slip at rounding level: u1 - n (n.u1) leaves
+        // ~1e-16 |u1| in a random direction for an exactly normal approach when n is
+        // not a coordinate axis, and eqs. (13)-(15) would take that noise as the slip
+        // direction. The level is the consistent law's, where its slip stops.
+        let zero = 1e-3 * SWERVE_TOLERANCE;
+        let ut = if ut.norm_squared() <= zero * zero * u1.norm_squared() {
+            Vector3::zeros()
+        } else {
+            ut
+        };
         let s = slip_direction(body, contact, &ut, mu);
         let along = n - s * mu;
         let denominator = match iso {
