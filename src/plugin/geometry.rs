@@ -97,40 +97,53 @@ pub(crate) fn body_velocity_at(s: &State, p: &Vector3<f64>) -> Vector3<f64> {
     s.v + s.w.cross(&(p - s.com))
 }
 
-/// Contact of one body part and one ground at time `t`, if within `prediction` (m).
+/// Signed distance (m, skins deducted), unit normal from the ground into the body, and the
+/// contact point on the body (m).
+pub(crate) type PairContact = (f64, Vector3<f64>, Vector3<f64>);
+
+/// Contact of one body part and one ground at time `t`, if within `prediction` (m):
+/// signed distance (skins deducted), normal from the ground into the body, point on the body.
 pub(crate) fn contact(
     part: &BodyPart,
     ground: &GroundGeom,
     s: &State,
     t: f64,
     prediction: f64,
-) -> Option<(f64, Vector3<f64>, Vector3<f64>)> {
+) -> Option<PairContact> {
+    contact_checked(part, ground, s, t, prediction)
+        .ok()
+        .flatten()
+}
+
+/// [`contact`], telling apart a pair parry cannot query (`Err`).
+pub(crate) fn contact_checked(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    prediction: f64,
+) -> Result<Option<PairContact>, query::Unsupported> {
     let skins = part.skin + ground.skin;
     let pose_g = pose_from_na(&ground.pose_at(t));
     let pose_b = pose_from_na(&part_pose(part, s));
-    let c = query::contact(
+    let Some(c) = query::contact(
         &pose_g,
         ground.shape,
         &pose_b,
         part.shape,
         super::convert::to_real(prediction + skins),
-    )
-    .ok()??;
+    )?
+    else {
+        return Ok(None);
+    };
     let n = vec_to_na(c.normal1);
     let norm = n.norm();
     if norm.is_nan() || norm <= 0.5 {
-        return None;
+        return Ok(None);
     }
     let n = n / norm;
     let point = vec_to_na(c.point2) - n * part.skin;
-    Some((to_f64(c.dist) - skins, n, point))
-}
-
-/// Does parry answer contact queries between these two shapes?
-pub(crate) fn supported(body_shape: &dyn Shape, ground_shape: &dyn Shape) -> bool {
-    let id = Isometry3::identity();
-    let p = pose_from_na(&id);
-    query::contact(&p, ground_shape, &p, body_shape, 0.0).is_ok()
+    Ok(Some((to_f64(c.dist) - skins, n, point)))
 }
 
 /// The closest contact over every body part and ground (indices in `grounds`), at `t`.

@@ -16,7 +16,7 @@ use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, ve
 use super::events::{ImpactEvent, ImpactTiming};
 use super::flight::{Flight, State};
 use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, closest, contact, first_impact, landing_point, supported,
+    BodyGeom, BodyPart, GroundGeom, closest, contact_checked, first_impact, landing_point,
 };
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
 use crate::model::Material;
@@ -29,6 +29,41 @@ use crate::rapier::prelude::{
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher for handle keys (looked up in every hook call): the
+/// default SipHash is several times slower and its DoS resistance is not needed here.
+#[derive(Default)]
+pub(crate) struct HandleHasher(u64);
+
+impl Hasher for HandleHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(u64::from(*b));
+        }
+    }
+
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(u64::from(i));
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+/// Hash map keyed by rapier handles.
+pub(crate) type HandleMap<K, V> = HashMap<K, V, BuildHasherDefault<HandleHasher>>;
+/// Hash set of rapier handles.
+pub(crate) type HandleSet<K> = HashSet<K, BuildHasherDefault<HandleHasher>>;
 
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,7 +135,7 @@ struct StepData {
     resting_speed: f64,
     resting_gap: f64,
     prediction: f64,
-    roles: HashMap<PairKey, Role>,
+    roles: HandleMap<PairKey, Role>,
     grounds: Vec<GroundMotion>,
     candidates: Vec<Candidate>,
 }
@@ -176,12 +211,12 @@ struct StepData {
 /// ```
 pub struct ImpactPlugin<H = ()> {
     pub(crate) config: ImpactConfig,
-    pub(crate) grounds: HashMap<ColliderHandle, GroundEntry>,
+    pub(crate) grounds: HandleMap<ColliderHandle, GroundEntry>,
     pub(crate) all_fixed: bool,
-    pub(crate) excluded: HashSet<RigidBodyHandle>,
+    pub(crate) excluded: HandleSet<RigidBodyHandle>,
     pub(crate) user_hooks: H,
     step: StepData,
-    shadows: HashMap<RigidBodyHandle, Shadow>,
+    shadows: HandleMap<RigidBodyHandle, Shadow>,
     events: Vec<ImpactEvent>,
 }
 
@@ -200,12 +235,12 @@ impl<H> ImpactPlugin<H> {
         config.validate()?;
         Ok(Self {
             config,
-            grounds: HashMap::new(),
+            grounds: HandleMap::default(),
             all_fixed: false,
-            excluded: HashSet::new(),
+            excluded: HandleSet::default(),
             user_hooks,
             step: StepData::default(),
-            shadows: HashMap::new(),
+            shadows: HandleMap::default(),
             events: Vec::new(),
         })
     }
@@ -371,25 +406,26 @@ impl<H> ImpactPlugin<H> {
                 }
                 continue;
             }
-            let ground_geoms: Vec<GroundGeom> = near
+            let ground_geoms: Vec<(usize, GroundGeom)> = near
                 .iter()
-                .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
+                .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], colliders)?)))
                 .collect();
             let mut state = start;
             let mut touched = false;
             let mut impact_grounds = Vec::new();
-            for (gi, gg) in near.iter().zip(&ground_geoms) {
+            for (gi, gg) in &ground_geoms {
                 let mut any_impact = false;
                 for part in &geom.parts {
                     let key = (part.handle, gg.handle);
-                    if !supported(part.shape, gg.shape) {
+                    let found = contact_checked(part, gg, &state, 0.0, reach);
+                    // A pair beyond reach cannot touch in this step: out of the solver, and
+                    // no search after the step.
+                    let reachable = matches!(found, Ok(Some(_)));
+                    let role = match found {
                         // parry cannot query this pair: rapier keeps it, restitution included.
-                        step.roles.insert(key, Role::Rapier);
-                        continue;
-                    }
-                    let role = match contact(part, gg, &state, 0.0, reach) {
-                        None => Role::Impact,
-                        Some((dist, n, p)) => {
+                        Err(_) => Role::Rapier,
+                        Ok(None) => Role::Impact,
+                        Ok(Some((dist, n, p))) => {
                             let u = super::geometry::body_velocity_at(&state, &p)
                                 - gg.velocity_at(&p, 0.0);
                             let un = n.dot(&u);
@@ -456,7 +492,7 @@ impl<H> ImpactPlugin<H> {
                             }
                         }
                     };
-                    any_impact |= role == Role::Impact;
+                    any_impact |= role == Role::Impact && reachable;
                     step.roles.insert(key, role);
                 }
                 if any_impact {
