@@ -123,9 +123,12 @@ fn document_law_equals_seed_under_a_random_rotation_of_the_whole_problem() {
         let q = rng.rotation();
         compare(k, &random_seed_input(&mut rng), &q, &mut worst);
     }
-    // Zero initial slip is not kept exactly by a rotation (rounding leaves a ~1e-16 slip
-    // whose direction the document's law follows), so those states are checked upright
-    // only; planar states rotate fine.
+    // Zero initial slip is not kept exactly by a rotation: rounding leaves a slip of
+    // order 1e-16 (|v| + |w| |r|), which the model treats as zero below 1e-13 |u1| but
+    // which can exceed that when |u1| is a small difference of large terms (1 of 5000
+    // spinning zero-slip states). The document's law is discontinuous at zero slip, so
+    // those states are checked upright; pure normal approaches in every frame are in
+    // model_hard_cases; planar states rotate fine.
     for k in 0..STATES / 4 {
         let q = rng.rotation();
         compare(k, &planar_seed(&mut rng), &q, &mut worst);
