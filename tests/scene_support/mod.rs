@@ -1,0 +1,293 @@
+//! Shared checks of the scene tests (issue 5): after every step, every body is finite, no
+//! dynamic body is below the ground by more than rapier's allowed linear error, and no impact
+//! event with `e <= 1` gains kinetic energy. Ground surfaces are at `y = GROUND_Y` unless a
+//! scene says otherwise.
+
+// Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
+// widening in one build are identities in the other.
+#![allow(
+    clippy::useless_conversion,
+    clippy::unnecessary_cast,
+    dead_code,
+    unused_imports
+)]
+
+use rapier_impact::rapier::na::Unit;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
+use std::hash::{DefaultHasher, Hash, Hasher};
+
+pub const G: f64 = 9.81;
+pub const F64: bool = cfg!(feature = "f64");
+
+/// Relative tolerance on an impact's kinetic-energy change with `e <= 1`: the model works in
+/// `f64` in both builds, so this is rounding of a few dozen flops.
+pub const ENERGY_REL_TOL: f64 = 1e-9;
+/// Absolute floor of that tolerance (J), for impacts of near-zero energy.
+pub const ENERGY_ABS_TOL: f64 = 1e-15;
+/// Rounding allowed on top of rapier's allowed linear error when checking penetration (m):
+/// positions are `Real`, so a few ulps of the coordinates at hand.
+pub fn penetration_rounding(scale: f64) -> f64 {
+    if F64 {
+        1e-12 * scale.max(1.0)
+    } else {
+        1e-6 * scale.max(1.0)
+    }
+}
+
+#[allow(clippy::unnecessary_cast)]
+pub fn real(x: f64) -> Real {
+    x as Real
+}
+
+#[allow(clippy::unnecessary_cast)]
+pub fn wide(x: Real) -> f64 {
+    x as f64
+}
+
+pub fn up() -> Unit<Vector> {
+    Unit::new_unchecked(Vector::Y)
+}
+
+pub fn plugin(timing: TimingMode) -> ImpactPlugin {
+    ImpactPlugin::new(ImpactConfig {
+        timing,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// What the checks measured over a run.
+#[derive(Clone, Debug, Default)]
+pub struct Stats {
+    pub steps: usize,
+    /// Deepest any dynamic body went below its ground surface (m; 0 if never).
+    pub max_penetration: f64,
+    /// Largest relative kinetic-energy change `(ke_after - ke_before) / ke_before` over the
+    /// impacts with `e <= 1` (negative: every impact lost energy).
+    pub worst_energy_change: f64,
+    /// Impact events, and those not `settled` (bounces).
+    pub events: usize,
+    pub bounces: usize,
+    /// Largest `|P_t| / (mu P_n)` over the events with friction (<= 1 inside the cone).
+    pub worst_cone_ratio: f64,
+}
+
+impl Stats {
+    pub fn new() -> Self {
+        Self {
+            worst_energy_change: f64::NEG_INFINITY,
+            ..Default::default()
+        }
+    }
+
+    pub fn summary(&self) -> String {
+        format!(
+            "steps {}, max penetration {:.3e} m, worst impact KE change {:+.3e} (relative), events {} (bounces {}), worst |Pt|/(mu Pn) {:.6}",
+            self.steps,
+            self.max_penetration,
+            self.worst_energy_change,
+            self.events,
+            self.bounces,
+            self.worst_cone_ratio
+        )
+    }
+}
+
+/// Every body's pose and velocities are finite.
+pub fn assert_finite(world: &PhysicsWorld, label: &str) {
+    for (h, rb) in world.bodies.iter() {
+        let t = rb.translation();
+        let r = rb.rotation();
+        let v = rb.linvel();
+        let w = rb.angvel();
+        let ok = [
+            t.x, t.y, t.z, r.x, r.y, r.z, r.w, v.x, v.y, v.z, w.x, w.y, w.z,
+        ]
+        .iter()
+        .all(|x| x.is_finite());
+        assert!(
+            ok,
+            "{label}: body {h:?} is not finite: t {t:?} r {r:?} v {v:?} w {w:?}"
+        );
+    }
+}
+
+/// Deepest point of any dynamic body's collider below `ground_y` (m; <= 0 when above):
+/// the collider's world AABB bottom, exact for balls, capsules and boxes.
+pub fn penetration(world: &PhysicsWorld, ground_y: f64) -> f64 {
+    let mut deepest = f64::NEG_INFINITY;
+    for (_, co) in world.colliders.iter() {
+        let Some(parent) = co.parent() else { continue };
+        let Some(rb) = world.bodies.get(parent) else {
+            continue;
+        };
+        if !rb.is_dynamic() || !co.is_enabled() || co.is_sensor() {
+            continue;
+        }
+        let bottom = wide(co.compute_aabb().mins.y);
+        deepest = deepest.max(ground_y - bottom);
+    }
+    deepest
+}
+
+/// Checks one impact event: finite, a pushing normal impulse, friction inside the cone, and
+/// no kinetic-energy gain when `e <= 1` (on a fixed ground).
+pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {
+    let nums = [
+        ev.time,
+        ev.approach_speed,
+        ev.normal_impulse,
+        ev.ke_before,
+        ev.ke_after,
+        wide(ev.impulse.x),
+        wide(ev.impulse.y),
+        wide(ev.impulse.z),
+    ];
+    assert!(
+        nums.iter().all(|x| x.is_finite()),
+        "{label}: non-finite event {ev:?}"
+    );
+    assert!(
+        ev.normal_impulse >= 0.0,
+        "{label}: pulling normal impulse {ev:?}"
+    );
+    stats.events += 1;
+    if !ev.settled {
+        stats.bounces += 1;
+    }
+    if ev.friction > 0.0 && ev.normal_impulse > 0.0 {
+        let jt = wide(ev.tangent_impulse.length());
+        let ratio = jt / (ev.friction * ev.normal_impulse);
+        stats.worst_cone_ratio = stats.worst_cone_ratio.max(ratio);
+        assert!(
+            ratio <= 1.0 + 1e-6,
+            "{label}: friction impulse outside the cone: |Pt| = {jt:e}, mu Pn = {:e}",
+            ev.friction * ev.normal_impulse
+        );
+    }
+    if ev.restitution <= 1.0 {
+        let gain = ev.ke_after - ev.ke_before;
+        let rel = if ev.ke_before > 0.0 {
+            gain / ev.ke_before
+        } else {
+            0.0
+        };
+        stats.worst_energy_change = stats.worst_energy_change.max(rel);
+        assert!(
+            gain <= ENERGY_REL_TOL * ev.ke_before + ENERGY_ABS_TOL,
+            "{label}: impact gained energy: KE {:e} -> {:e} J ({rel:+e} relative, tolerance {ENERGY_REL_TOL:e}), e = {}, mu = {}, regime {:?}, law {:?}",
+            ev.ke_before,
+            ev.ke_after,
+            ev.restitution,
+            ev.friction,
+            ev.regime,
+            ev.law
+        );
+    }
+}
+
+/// The per-step checks: finite state, penetration within rapier's allowed linear error (plus
+/// rounding), and every event of the step.
+pub fn check_step(
+    world: &PhysicsWorld,
+    events: &[ImpactEvent],
+    ground_y: f64,
+    stats: &mut Stats,
+    label: &str,
+) {
+    stats.steps += 1;
+    assert_finite(world, label);
+    let allowed = wide(world.integration_parameters.allowed_linear_error());
+    let depth = penetration(world, ground_y);
+    stats.max_penetration = stats.max_penetration.max(depth);
+    assert!(
+        depth <= allowed + penetration_rounding(ground_y.abs()),
+        "{label}: step {}: a body is {depth:e} m below the ground (allowed linear error {allowed:e} m)",
+        stats.steps
+    );
+    for ev in events {
+        check_event(ev, stats, label);
+    }
+}
+
+/// One step with the plugin and the checks.
+pub fn step_checked(
+    world: &mut PhysicsWorld,
+    plugin: &mut ImpactPlugin,
+    ground_y: f64,
+    stats: &mut Stats,
+    label: &str,
+) {
+    plugin.step(world);
+    check_step(world, plugin.events(), ground_y, stats, label);
+}
+
+/// A hash of every body's pose and velocities, bit for bit.
+pub fn state_hash(world: &PhysicsWorld) -> u64 {
+    let mut h = DefaultHasher::new();
+    for (handle, rb) in world.bodies.iter() {
+        handle.into_raw_parts().hash(&mut h);
+        let t = rb.translation();
+        let r = rb.rotation();
+        let v = rb.linvel();
+        let w = rb.angvel();
+        for x in [
+            t.x, t.y, t.z, r.x, r.y, r.z, r.w, v.x, v.y, v.z, w.x, w.y, w.z,
+        ] {
+            x.to_bits().hash(&mut h);
+        }
+        rb.is_sleeping().hash(&mut h);
+    }
+    h.finish()
+}
+
+/// A hash of the events of a step, bit for bit.
+pub fn events_hash(events: &[ImpactEvent]) -> u64 {
+    let mut h = DefaultHasher::new();
+    for ev in events {
+        ev.body.into_raw_parts().hash(&mut h);
+        ev.collider.into_raw_parts().hash(&mut h);
+        for x in [
+            ev.time,
+            ev.normal_impulse,
+            ev.ke_before,
+            ev.ke_after,
+            ev.approach_speed,
+        ] {
+            x.to_bits().hash(&mut h);
+        }
+    }
+    h.finish()
+}
+
+/// Kinetic energy of every dynamic body (J), in `f64`.
+pub fn kinetic_energy(world: &PhysicsWorld) -> f64 {
+    world
+        .bodies
+        .iter()
+        .filter(|(_, rb)| rb.is_dynamic())
+        .map(|(_, rb)| wide(rb.kinetic_energy()))
+        .sum()
+}
+
+/// A flat square trimesh of half size `half` at `y = 0`, normals up.
+pub fn trimesh_ground(half: f64) -> ColliderBuilder {
+    let l = real(half);
+    let vertices = vec![
+        Vector::new(-l, 0.0, -l),
+        Vector::new(l, 0.0, -l),
+        Vector::new(l, 0.0, l),
+        Vector::new(-l, 0.0, l),
+    ];
+    ColliderBuilder::trimesh(vertices, vec![[0, 3, 2], [0, 2, 1]]).unwrap()
+}
+
+/// A thin cuboid slab of half size `half`, half thickness `thick`, top at `y = 0`.
+pub fn slab_ground(half: f64, thick: f64) -> ColliderBuilder {
+    ColliderBuilder::cuboid(real(half), real(thick), real(half)).translation(Vector::new(
+        0.0,
+        real(-thick),
+        0.0,
+    ))
+}
