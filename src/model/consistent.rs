@@ -21,7 +21,7 @@
 //! numerically, by Dormand-Prince 5(4) with a relative tolerance of [`SWERVE_TOLERANCE`]
 //! on the contact velocity.
 
-use super::collision_matrix::{ContactK, solve_k};
+use super::collision_matrix::{ContactK, k_form, solve_k};
 use super::types::{Body, Contact, Material, Regime};
 use nalgebra::{Vector2, Vector3};
 
@@ -485,9 +485,12 @@ fn hermite_root(a: f64, da: f64, b: f64, db: f64, h: f64, level: f64) -> f64 {
 
 /// A jam that impulse-space integration cannot end (Painleve's paradox: the normal
 /// impulse would grow without bound). Resolved as an impulsive tangential impact that
-/// sticks at once: the sticking impulse with the restitution lowered, if needed, so the
-/// impact does not gain energy (Genot & Brogliato 1999 show a dynamic jam ends in
-/// sticking).
+/// sticks at once (Genot & Brogliato 1999 show a dynamic jam ends in sticking): the
+/// sticking impulse with the restitution lowered, if needed, so that the impact does not
+/// gain energy. Where that impulse lies outside the friction cone, friction takes its
+/// limit along the sticking impulse's tangential direction (the slip law); where that
+/// would jam or gain energy too, the impact is frictionless. Every branch stays in the
+/// cone and, for `e <= 1`, dissipates.
 fn jam_resolution(
     body: &Body,
     contact: &Contact,
@@ -496,6 +499,7 @@ fn jam_resolution(
 ) -> (Vector3<f64>, Regime) {
     let n = contact.normal;
     let r = contact.offset;
+    let mu = material.friction;
     let un = n.dot(u1);
     let ut = u1 - n * un;
     // Energy of the contact-velocity change: dKE = 1/2 (u2.M u2 - u1.M u1), M = K^-1.
@@ -503,6 +507,29 @@ fn jam_resolution(
     let m_n = solve_k(body, &r, &n);
     let budget = u1.dot(&m_u1) / (n.dot(&m_n) * un * un);
     let e = material.restitution.min(budget.max(0.0).sqrt());
-    let impulse = solve_k(body, &r, &(-(n * ((1.0 + e) * un)) - ut));
-    (impulse, Regime::Stick)
+    let stick = solve_k(body, &r, &(-(n * ((1.0 + e) * un)) - ut));
+    let stick_n = stick.dot(&n);
+    let stick_t = stick - n * stick_n;
+    if stick_n >= 0.0 && stick_t.norm() <= mu * stick_n {
+        return (stick, Regime::Stick);
+    }
+    // The work of an impulse P at the contact: P.(u1 + u2)/2 with u2 = u1 + K P.
+    let gains = |p: &Vector3<f64>| {
+        let u2 = u1 + p / body.mass + (body.inv_inertia * r.cross(p)).cross(&r);
+        p.dot(&(u1 + u2)) > 0.0 && material.restitution <= 1.0
+    };
+    let e = material.restitution;
+    let len = stick_t.norm();
+    if len > 0.0 && mu > 0.0 {
+        let along = n + stick_t * (mu / len);
+        let denominator = k_form(body, &r, &n, &along);
+        if denominator > 0.0 {
+            let slip = along * (-(1.0 + e) * un / denominator);
+            if !gains(&slip) {
+                return (slip, Regime::Slip);
+            }
+        }
+    }
+    let frictionless = n * (-(1.0 + e) * un / k_form(body, &r, &n, &n));
+    (frictionless, Regime::Slip)
 }

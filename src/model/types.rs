@@ -50,7 +50,7 @@ impl Body {
         }
         let a = &self.inv_inertia;
         // One sum is finite iff every entry is (a NaN or an infinity propagates).
-        if !a.iter().sum::<f64>().is_finite() {
+        if !a.iter().sum::<f64>().is_finite() && !a.iter().all(|c| c.is_finite()) {
             return Err(ModelError::NotFinite {
                 what: "body.inv_inertia",
             });
