@@ -116,7 +116,12 @@ pub fn assert_finite(world: &PhysicsWorld, label: &str) {
 /// Deepest point of any dynamic body's collider below `ground_y` (m; <= 0 when above):
 /// the collider's world AABB bottom, exact for balls, capsules and boxes.
 pub fn penetration(world: &PhysicsWorld, ground_y: f64) -> f64 {
-    let mut deepest = f64::NEG_INFINITY;
+    deepest_body(world, ground_y).0
+}
+
+/// [`penetration`] and the body it belongs to.
+pub fn deepest_body(world: &PhysicsWorld, ground_y: f64) -> (f64, Option<RigidBodyHandle>) {
+    let mut deepest = (f64::NEG_INFINITY, None);
     for (_, co) in world.colliders.iter() {
         let Some(parent) = co.parent() else { continue };
         let Some(rb) = world.bodies.get(parent) else {
@@ -126,7 +131,9 @@ pub fn penetration(world: &PhysicsWorld, ground_y: f64) -> f64 {
             continue;
         }
         let bottom = wide(co.compute_aabb().mins.y);
-        deepest = deepest.max(ground_y - bottom);
+        if ground_y - bottom > deepest.0 {
+            deepest = (ground_y - bottom, Some(parent));
+        }
     }
     deepest
 }
@@ -199,15 +206,21 @@ pub fn check_step(
     stats.steps += 1;
     assert_finite(world, label);
     let allowed = wide(world.integration_parameters.allowed_linear_error());
-    let depth = penetration(world, ground_y);
-    stats.max_penetration = stats.max_penetration.max(depth);
-    assert!(
-        depth <= allowed + penetration_rounding(ground_y.abs()),
-        "{label}: step {}: a body is {depth:e} m below the ground (allowed linear error {allowed:e} m)",
-        stats.steps
-    );
     for ev in events {
         check_event(ev, stats, label);
+    }
+    let (depth, body) = deepest_body(world, ground_y);
+    stats.max_penetration = stats.max_penetration.max(depth);
+    if depth > allowed + penetration_rounding(ground_y.abs()) {
+        let rb = body.map(|h| &world.bodies[h]);
+        let mine: Vec<&ImpactEvent> = events.iter().filter(|e| Some(e.body) == body).collect();
+        panic!(
+            "{label}: step {}: body {body:?} is {depth:e} m below the ground (allowed linear error {allowed:e} m); pose {:?}, v {:?}, w {:?}; its events this step: {mine:?}",
+            stats.steps,
+            rb.map(|rb| *rb.position()),
+            rb.map(|rb| rb.linvel()),
+            rb.map(|rb| rb.angvel()),
+        );
     }
 }
 
