@@ -1000,3 +1000,81 @@ fn a_fast_body_stopped_by_a_non_ground_wall_is_not_pulled_through_it() {
         "the ball went through the wall: x = {furthest}"
     );
 }
+
+#[test]
+fn landings_on_large_flat_grounds_use_the_face_normal() {
+    // parry's GJK normal for a box or capsule touching a 100 m slab or mesh is tens of
+    // degrees off in f32 for a quarter of random orientations; the plugin uses the face's.
+    let l: Real = 50.0;
+    let heights = Array2::new(3, 3, vec![Real::default(); 9]);
+    let grounds = [
+        (
+            "slab",
+            ColliderBuilder::cuboid(l, 0.005, l).translation(Vector::new(0.0, -0.005, 0.0)),
+        ),
+        (
+            "trimesh",
+            ColliderBuilder::trimesh(
+                vec![
+                    Vector::new(-l, 0.0, -l),
+                    Vector::new(l, 0.0, -l),
+                    Vector::new(l, 0.0, l),
+                    Vector::new(-l, 0.0, l),
+                ],
+                vec![[0, 3, 2], [0, 2, 1]],
+            )
+            .unwrap(),
+        ),
+        (
+            "heightfield",
+            ColliderBuilder::heightfield(heights, Vector::new(2.0 * l, 1.0, 2.0 * l)),
+        ),
+    ];
+    let mut seed = 7u64;
+    let mut rnd = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) as Real - 0.5
+    };
+    for (label, ground_shape) in grounds {
+        let (mut worst_normal, mut lowest, mut count): (f64, Real, usize) = (0.0, 0.0, 0);
+        for k in 0..40 {
+            let mut world = PhysicsWorld::default();
+            let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ground_shape.clone());
+            let body = if k % 2 == 0 {
+                ColliderBuilder::cuboid(0.1, 0.1, 0.1)
+            } else {
+                ColliderBuilder::capsule_y(0.1, 0.05)
+            };
+            let (h, co) = world.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(rnd(), 0.6, rnd()))
+                    .rotation(Vector::new(rnd(), rnd(), rnd()) * 6.0)
+                    .angvel(Vector::new(rnd(), rnd(), rnd()) * 10.0),
+                body.restitution(0.5).friction(0.4),
+            );
+            let mut p = plugin(TimingMode::Exact);
+            p.add_ground(&world.bodies, &mut world.colliders, ground)
+                .unwrap();
+            for _ in 0..40 {
+                p.step(&mut world);
+                for ev in p.events() {
+                    worst_normal = worst_normal.max(1.0 - f64::from(ev.normal.y));
+                    count += 1;
+                }
+                let _ = h;
+                lowest = lowest.min(world.colliders[co].compute_aabb().mins.y);
+            }
+        }
+        println!(
+            "{label}: {count} impacts, worst 1 - n.y = {worst_normal:.2e}, lowest point {lowest:.2e} m"
+        );
+        assert!(count >= 40, "{label}: only {count} impacts");
+        assert!(
+            worst_normal < 1e-6,
+            "{label}: a normal is off by 1 - n.y = {worst_normal}"
+        );
+        assert!(lowest > -2e-3, "{label}: a body sank to {lowest} m");
+    }
+}

@@ -6,7 +6,7 @@
 use super::convert::{pose_from_na, to_f64, vec_to_na};
 use super::flight::{Flight, State};
 use crate::parry::query;
-use crate::parry::shape::{PolygonalFeature, Shape};
+use crate::parry::shape::{PolygonalFeature, Shape, Triangle};
 use crate::rapier::prelude::ColliderHandle;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -136,6 +136,9 @@ pub(crate) fn contact_checked(
     else {
         return Ok(None);
     };
+    if let Some(plane) = plane_contact(part, ground, s, t, &c) {
+        return Ok((plane.0 <= prediction).then_some(plane));
+    }
     let n = vec_to_na(c.normal1);
     let norm = n.norm();
     if norm.is_nan() || norm <= 0.5 {
@@ -144,6 +147,159 @@ pub(crate) fn contact_checked(
     let n = n / norm;
     let point = vec_to_na(c.point2) - n * part.skin;
     Ok(Some((to_f64(c.dist) - skins, n, point)))
+}
+
+/// The contact of a convex body with a flat piece of ground, in `f64`: a half-space, the
+/// face of a ground cuboid, or the triangle of a mesh or heightfield that parry's contact
+/// `c` found. parry's own normal, from GJK/EPA in rapier's precision, is unreliable for
+/// touching shapes against large flat grounds (tens of degrees off for a box exactly on a
+/// 100 m slab or mesh in `f32`); the plane's normal is exact. The body's support point
+/// towards the plane must lie over the face, else `None` (parry's answer stands).
+fn plane_contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    c: &query::Contact,
+) -> Option<PairContact> {
+    use crate::parry::shape::TypedShape;
+    let first = match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) if (c.subshape1 as usize) < m.indices().len() => {
+            Some(m.triangle(c.subshape1))
+        }
+        TypedShape::HeightField(hf) => Some(hf.triangle_at_id(c.subshape1)?),
+        TypedShape::TriMesh(_) => return None,
+        _ => None,
+    };
+    match plane_contact_on(part, ground, s, t, c, first) {
+        Ok(found) => Some(found),
+        // Over another triangle of the mesh (a body across a diagonal): that one's plane.
+        Err(Some(over)) => triangles_under(ground, t, &over)
+            .into_iter()
+            .find_map(|tri| plane_contact_on(part, ground, s, t, c, Some(tri)).ok()),
+        Err(None) => None,
+    }
+}
+
+/// The mesh or heightfield triangles under the world point `p` at time `t`: the closest
+/// triangle of a mesh, the two of a heightfield cell.
+fn triangles_under(ground: &GroundGeom, t: f64, p: &Vector3<f64>) -> Vec<Triangle> {
+    use crate::parry::query::PointQueryWithLocation;
+    use crate::parry::shape::TypedShape;
+    let pose_g = ground.pose_at(t);
+    let local = pose_g
+        .inverse_transform_point(&nalgebra::Point3::from(*p))
+        .coords;
+    let local = super::convert::vec_from_na(&local);
+    match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) => {
+            let id = m.project_local_point_and_get_location(local, false).1.0;
+            vec![m.triangle(id)]
+        }
+        TypedShape::HeightField(hf) => match hf.cell_at_point(local) {
+            Some((i, j)) => {
+                let (a, b) = hf.triangles_at(i, j);
+                a.into_iter().chain(b).collect()
+            }
+            None => Vec::new(),
+        },
+        _ => Vec::new(),
+    }
+}
+
+/// [`plane_contact`] on one face (`triangle` for meshes and heightfields). `Err(Some(p))`:
+/// the body's support point projects to `p`, outside that face; `Err(None)`: no flat face.
+fn plane_contact_on(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    c: &query::Contact,
+    triangle: Option<Triangle>,
+) -> Result<PairContact, Option<Vector3<f64>>> {
+    use crate::parry::shape::TypedShape;
+    let pose_g = ground.pose_at(t);
+    let local = |v: Vector3<f64>| pose_g.rotation * v;
+    let at = |v: Vector3<f64>| (pose_g * nalgebra::Point3::from(v)).coords;
+    let body_point = vec_to_na(c.point2);
+    // The plane (world normal, world point) and the face's bounds.
+    enum Face {
+        Unbounded,
+        Rect { axis: usize, half: Vector3<f64> },
+        Tri([Vector3<f64>; 3]),
+    }
+    let (n, q, face) = match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => (
+            local(vec_to_na(hs.normal)),
+            at(Vector3::zeros()),
+            Face::Unbounded,
+        ),
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(body_point))
+                .coords;
+            let axis = (0..3)
+                .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
+                .ok_or(None)?;
+            let mut nl = Vector3::zeros();
+            nl[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
+            (local(nl), at(nl * half[axis]), Face::Rect { axis, half })
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            let tri = triangle.ok_or(None)?;
+            let v = [
+                at(vec_to_na(tri.a)),
+                at(vec_to_na(tri.b)),
+                at(vec_to_na(tri.c)),
+            ];
+            ((v[1] - v[0]).cross(&(v[2] - v[0])), v[0], Face::Tri(v))
+        }
+        _ => return Err(None),
+    };
+    let len = n.norm();
+    if !(len > 0.0) {
+        return Err(None);
+    }
+    let mut n = n / len;
+    let pose_b = part_pose(part, s);
+    if matches!(face, Face::Tri(_)) && n.dot(&(pose_b.translation.vector - q)) < 0.0 {
+        // A mesh triangle has no outside: the body's side is.
+        n = -n;
+    }
+    let sm = part.shape.as_support_map().ok_or(None)?;
+    let dir_local = pose_b.rotation.inverse() * (-n);
+    let support_local = vec_to_na(sm.local_support_point(super::convert::vec_from_na(&dir_local)));
+    let support = (pose_b * nalgebra::Point3::from(support_local)).coords;
+    let height = n.dot(&(support - q));
+    let over = support - n * height;
+    let tol = 1e-6 * (1.0 + body_point.norm());
+    let inside = match face {
+        Face::Unbounded => true,
+        Face::Rect { axis, half } => {
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(over))
+                .coords;
+            (0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol)
+        }
+        Face::Tri(v) => {
+            let inside_edge = |a: &Vector3<f64>, b: &Vector3<f64>| {
+                n.dot(&(b - a).cross(&(over - a))) >= -tol * (b - a).norm()
+            };
+            let ccw = n.dot(&(v[1] - v[0]).cross(&(v[2] - v[0]))) > 0.0;
+            let (a, b, c3) = if ccw {
+                (v[0], v[1], v[2])
+            } else {
+                (v[0], v[2], v[1])
+            };
+            inside_edge(&a, &b) && inside_edge(&b, &c3) && inside_edge(&c3, &a)
+        }
+    };
+    if !inside {
+        return Err(Some(over).filter(|_| matches!(face, Face::Tri(_))));
+    }
+    let skins = part.skin + ground.skin;
+    Ok((height - skins, n, support - n * part.skin))
 }
 
 /// The closest contact over every body part and ground (indices in `grounds`), at `t`.
@@ -245,8 +401,12 @@ pub(crate) fn first_impact(
     None
 }
 
-/// Newton's method on the signed distance from `(t, h)`, within `range`; returns the iterate
-/// with the smallest `|dist|`.
+/// The contact time to rounding, from `(t, h)` at most `close` from the ground, within
+/// `range`: Newton's method on the signed distance (its time derivative is `un`) until an
+/// iterate penetrates, then regula falsi (Illinois) on the bracket. Returns the last iterate
+/// on the outside (`dist >= 0`): there the normal is the closest-point direction, well
+/// defined even against a single triangle of a mesh, where a penetration normal may point
+/// sideways through the triangle's edge.
 #[allow(clippy::too_many_arguments)]
 fn polish(
     body: &BodyGeom,
@@ -255,32 +415,59 @@ fn polish(
     s0: &State,
     t0: f64,
     range: (f64, f64),
-    mut t: f64,
-    mut s: State,
-    mut h: Hit,
+    t: f64,
+    s: State,
+    h: Hit,
 ) -> (f64, State, Hit) {
-    let mut best = (t, s, h);
-    for _ in 0..16 {
-        if h.un >= 0.0 {
+    if h.dist < 0.0 {
+        // Already inside at the start of the search: the impact is now.
+        return (t, s, h);
+    }
+    let mut out = (t, s, h);
+    // Bracket ends for regula falsi: distances as used (Illinois halves a stale one), and the
+    // penetrating end once found.
+    let mut d_a = h.dist;
+    let mut inside: Option<(f64, f64)> = None;
+    let mut last_side = 0i8; // +1: the last iterate was outside, -1: inside
+    let reach = 4.0 * h.dist + 1e-3 * body.radius + 1e-9;
+    for _ in 0..48 {
+        let t_a = out.0;
+        if out.2.dist == 0.0 {
             break;
         }
-        let t_new = (t + h.dist / -h.un).clamp(range.0, range.1);
-        if (t_new - t).abs() <= 1e-15 * (1.0 + t.abs()) {
+        let t_new = match inside {
+            None if out.2.un < 0.0 => (t_a + out.2.dist / -out.2.un).min(range.1),
+            None => break,
+            Some((t_b, d_b)) => t_a + d_a * (t_b - t_a) / (d_a - d_b),
+        };
+        if !(t_new > t_a) || (t_new - t_a) <= 1e-15 * (1.0 + t_a.abs()) {
             break;
         }
         let s_new = flight.advance(s0, t_new - t0);
-        let reach = 2.0 * h.dist.abs() + 1e-3 * body.radius + 1e-9;
         let Some(h_new) = closest(body, grounds, &s_new, t_new, reach) else {
             break;
         };
-        t = t_new;
-        s = s_new;
-        h = h_new;
-        if h.dist.abs() < best.2.dist.abs() {
-            best = (t, s, h);
+        if h_new.dist >= 0.0 {
+            out = (t_new, s_new, h_new);
+            d_a = h_new.dist;
+            if let (Some((_, d_b)), 1) = (inside.as_mut(), last_side) {
+                *d_b *= 0.5;
+            }
+            last_side = 1;
+        } else {
+            if inside.is_some() && last_side == -1 {
+                d_a *= 0.5;
+            }
+            inside = Some((t_new, h_new.dist));
+            last_side = -1;
+        }
+        if let Some((t_b, _)) = inside {
+            if t_b - out.0 <= 1e-15 * (1.0 + t_b.abs()) {
+                break;
+            }
         }
     }
-    best
+    out
 }
 
 /// The contact points of a landing, resolved as one impact (see the integration guide):
