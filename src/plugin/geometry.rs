@@ -123,6 +123,11 @@ pub(crate) fn contact_checked(
     t: f64,
     prediction: f64,
 ) -> Result<Option<PairContact>, query::Unsupported> {
+    // Flat grounds first, without parry: its GJK in f32 misses contacts with very flat
+    // shapes (a box 1 mm into a 100 m x 1 cm slab reported beyond 16 cm).
+    if let Some(found) = direct_plane_contact(part, ground, s, t) {
+        return Ok((found.0 <= prediction).then_some(found));
+    }
     let skins = part.skin + ground.skin;
     let pose_g = pose_from_na(&ground.pose_at(t));
     let pose_b = pose_from_na(&part_pose(part, s));
@@ -171,13 +176,37 @@ fn plane_contact(
         TypedShape::TriMesh(_) => return None,
         _ => None,
     };
-    match plane_contact_on(part, ground, s, t, c, first) {
+    match plane_contact_on(part, ground, s, t, vec_to_na(c.point2), first) {
         Ok(found) => Some(found),
         // Over another triangle of the mesh (a body across a diagonal): that one's plane.
         Err(Some(over)) => triangles_under(ground, t, &over)
             .into_iter()
-            .find_map(|tri| plane_contact_on(part, ground, s, t, c, Some(tri)).ok()),
+            .find_map(|tri| {
+                plane_contact_on(part, ground, s, t, vec_to_na(c.point2), Some(tri)).ok()
+            }),
         Err(None) => None,
+    }
+}
+
+/// [`plane_contact`] located by the body collider's origin instead of parry's contact: the
+/// half-space, the ground cuboid's face towards the body, or the mesh or heightfield
+/// triangles under it. `None` when the body is not over a face (parry decides then).
+fn direct_plane_contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+) -> Option<PairContact> {
+    use crate::parry::shape::TypedShape;
+    let center = part_pose(part, s).translation.vector;
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
+            plane_contact_on(part, ground, s, t, center, None).ok()
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => triangles_under(ground, t, &center)
+            .into_iter()
+            .find_map(|tri| plane_contact_on(part, ground, s, t, center, Some(tri)).ok()),
+        _ => None,
     }
 }
 
@@ -214,14 +243,14 @@ fn plane_contact_on(
     ground: &GroundGeom,
     s: &State,
     t: f64,
-    c: &query::Contact,
+    locator: Vector3<f64>,
     triangle: Option<Triangle>,
 ) -> Result<PairContact, Option<Vector3<f64>>> {
     use crate::parry::shape::TypedShape;
     let pose_g = ground.pose_at(t);
     let local = |v: Vector3<f64>| pose_g.rotation * v;
     let at = |v: Vector3<f64>| (pose_g * nalgebra::Point3::from(v)).coords;
-    let body_point = vec_to_na(c.point2);
+    let body_point = locator;
     // The plane (world normal, world point) and the face's bounds.
     enum Face {
         Unbounded,
@@ -351,13 +380,24 @@ fn approach_bound(
     (body_bound + ground_bound).max(1e-9)
 }
 
+/// What the search for the next impact found.
+pub(crate) enum Search {
+    /// A contact at this time, with the state there and the contact.
+    Hit(f64, State, Hit),
+    /// No contact until the end of the interval.
+    Clear,
+    /// The search gave up at this time (a body spinning fast against the ground can need
+    /// thousands of conservative steps); the state there touches no ground.
+    Stalled(f64, State),
+}
+
 /// The earliest time in `[t_from, t_to]` at which the body, flying from `s0` (its state at
 /// `t0 <= t_from`), touches a ground while approaching it.
 ///
 /// Conservative advancement (steps of `dist / bound`, which cannot pass a contact) brings
-/// the body within `close` of the ground; Newton's method on the signed distance, whose time
-/// derivative is the normal velocity `un` at the contact point, then finds the contact time
-/// to rounding. A touching contact that separates is stepped over.
+/// the body within `close` of the ground; Newton's method and regula falsi on the signed
+/// distance, whose time derivative is the normal velocity `un` at the contact point, then
+/// find the contact time to rounding. A touching contact that separates is stepped over.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn first_impact(
     body: &BodyGeom,
@@ -367,38 +407,36 @@ pub(crate) fn first_impact(
     t0: f64,
     t_from: f64,
     t_to: f64,
-) -> Option<(f64, State, Hit)> {
-    const MAX_ADVANCE: usize = 256;
+) -> Search {
+    const MAX_ADVANCE: usize = 512;
     let bound = approach_bound(body, grounds, flight, s0, t0, t_to - t0);
     let close = (1e-3 * body.radius).clamp(1e-7, 1e-3);
     let mut t = t_from;
+    let mut last = (t, flight.advance(s0, t - t0));
     for _ in 0..MAX_ADVANCE {
         let s = flight.advance(s0, t - t0);
         let reach = bound * (t_to - t) + close;
-        let h = closest(body, grounds, &s, t, reach)?;
+        let Some(h) = closest(body, grounds, &s, t, reach) else {
+            return Search::Clear;
+        };
         if h.dist <= close {
             if h.un < 0.0 {
-                return Some(polish(
-                    body,
-                    grounds,
-                    flight,
-                    s0,
-                    t0,
-                    (t_from, t_to),
-                    t,
-                    s,
-                    h,
-                ));
+                let (t, s, h) = polish(body, grounds, flight, s0, t0, (t_from, t_to), t, s, h);
+                return Search::Hit(t, s, h);
+            }
+            if h.dist >= 0.0 {
+                last = (t, s);
             }
             t += close.max(h.dist) / bound;
         } else {
+            last = (t, s);
             t += h.dist / bound;
         }
         if t > t_to {
-            return None;
+            return Search::Clear;
         }
     }
-    None
+    Search::Stalled(last.0, last.1)
 }
 
 /// The contact time to rounding, from `(t, h)` at most `close` from the ground, within

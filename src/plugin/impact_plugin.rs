@@ -16,7 +16,7 @@ use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, ve
 use super::events::{ImpactEvent, ImpactTiming};
 use super::flight::{Flight, State};
 use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, closest, contact_checked, first_impact, landing_point,
+    BodyGeom, BodyPart, GroundGeom, Search, closest, contact_checked, first_impact, landing_point,
 };
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
 use crate::model::Material;
@@ -599,12 +599,15 @@ impl<H> ImpactPlugin<H> {
                 0.0,
                 step.dt,
             );
-            let t_first = first.as_ref().map_or(step.dt, |f| f.0);
+            let t_first = match &first {
+                Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
+                Search::Clear => step.dt,
+            };
             if !self.ccd_consistent(rb, cand, t_first, step.dt, &step) {
                 self.step_end(bodies, colliders, cand, &geom, &grounds, &inertia, &step);
                 continue;
             }
-            let Some(mut next) = first else {
+            if let Search::Clear = first {
                 if mode == TimingMode::Exact {
                     let end = cand.flight.advance(&cand.start, step.dt);
                     let rot = rot_to_na(*rb.rotation());
@@ -618,13 +621,25 @@ impl<H> ImpactPlugin<H> {
                     self.remember(cand.body, rb, &s);
                 }
                 continue;
-            };
+            }
+            let mut next = first;
             let mut flight = cand.flight;
-            let mut seg;
-            let mut seg_t0;
+            let mut seg = cand.start;
+            let mut seg_t0 = 0.0;
+            // Where the flight stops short of the step's end, if it does.
+            let mut stop: Option<State> = None;
             let mut count = 0usize;
             loop {
-                let (t, s, hit) = next;
+                let (t, s, hit) = match next {
+                    Search::Clear => break,
+                    // Never fly past a contact the search could not resolve: the rest of the
+                    // step is dropped for this body (it touches no ground there).
+                    Search::Stalled(_, s) => {
+                        stop = Some(s);
+                        break;
+                    }
+                    Search::Hit(t, s, hit) => (t, s, hit),
+                };
                 let part = &geom.parts[hit.part];
                 let gg = &grounds[hit.ground];
                 let (point, points) =
@@ -641,8 +656,12 @@ impl<H> ImpactPlugin<H> {
                 count += 1;
                 seg = s;
                 seg_t0 = t;
-                let Some((after, event)) = resolve(&input, &geom, gg, &s, t, &hit, point, points)
-                else {
+                // A landing point (centroid) that does not approach falls back to the deepest
+                // point; if that does not approach either, the flight stops here.
+                let resolved = resolve(&input, &geom, gg, &s, t, &hit, point, points)
+                    .or_else(|| resolve(&input, &geom, gg, &s, t, &hit, hit.point, 1));
+                let Some((after, event)) = resolved else {
+                    stop = Some(s);
                     break;
                 };
                 seg = after;
@@ -660,12 +679,9 @@ impl<H> ImpactPlugin<H> {
                     }
                     break;
                 }
-                match first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt) {
-                    Some(n) => next = n,
-                    None => break,
-                }
+                next = first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
             }
-            let mut end = flight.advance(&seg, step.dt - seg_t0);
+            let mut end = stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0));
             // Safety net: never leave the body inside a ground.
             if let Some(h) = closest(&geom, &grounds, &end, step.dt, 0.0) {
                 if h.dist < 0.0 {
