@@ -1,0 +1,184 @@
+//! Adversarial scenes (issue 5, proptest): random scenes of one to four spheres and boxes with
+//! random sizes (2 cm to 0.5 m), densities (1e-2 to 1e3), materials (e in [0, 1], mu in
+//! [0, 2], each combine rule), positions, velocities (up to 30 m/s) and spins (up to 50 rad/s),
+//! in a random timing mode and dt (1/30 to 1/240), on a half-space ground; 90 steps each.
+//! Asserted at every step: no panic, all finite, no impact gaining kinetic energy (relative
+//! 1e-9), friction in the cone, and no body deeper below the ground than rapier's allowed
+//! linear error plus one step's travel of its fastest point (no tunnelling). The strict bound
+//! (allowed linear error alone) fails for fast-spinning boxes, a reported limitation: set
+//! `RAPIER_IMPACT_STRICT_PENETRATION=1` to see it (e.g. a 0.32 x 0.43 x 0.04 m plate
+//! spinning at (0, 6.4, 31.6) rad/s, dropped at 30 Hz in Step mode).
+//!
+//! Cases: 1 000 by default; set `RAPIER_IMPACT_PROPTEST_CASES` for more.
+
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
+mod scene_support;
+
+use proptest::prelude::*;
+use rapier_impact::TimingMode;
+use rapier_impact::rapier::prelude::*;
+use scene_support::*;
+
+#[derive(Clone, Debug)]
+struct BodySpec {
+    ball: bool,
+    size: [f64; 3],
+    density: f64,
+    e: f64,
+    mu: f64,
+    rule: u8,
+    pos: [f64; 3],
+    vel: [f64; 3],
+    spin: [f64; 3],
+}
+
+fn body() -> impl Strategy<Value = BodySpec> {
+    (
+        any::<bool>(),
+        prop::array::uniform3(0.02f64..0.5),
+        -2.0f64..3.0,
+        0.0f64..=1.0,
+        0.0f64..2.0,
+        0u8..4,
+        (-3.0f64..3.0, 0.0f64..3.0, -3.0f64..3.0),
+        prop::array::uniform3(-30.0f64..30.0),
+        prop::array::uniform3(-50.0f64..50.0),
+    )
+        .prop_map(
+            |(ball, size, logd, e, mu, rule, (x, y, z), vel, spin)| BodySpec {
+                ball,
+                size,
+                density: 10f64.powf(logd),
+                e,
+                mu,
+                rule,
+                pos: [x, y, z],
+                vel,
+                spin,
+            },
+        )
+}
+
+fn rule(k: u8) -> CoefficientCombineRule {
+    match k {
+        0 => CoefficientCombineRule::Average,
+        1 => CoefficientCombineRule::Min,
+        2 => CoefficientCombineRule::Multiply,
+        _ => CoefficientCombineRule::Max,
+    }
+}
+
+fn cases() -> u32 {
+    std::env::var("RAPIER_IMPACT_PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000)
+}
+
+fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_mu: f64) {
+    let label = format!("{timing:?} at {hz:.0} Hz, ground e {ground_e:.3} mu {ground_mu:.3}");
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(1.0 / hz);
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(real(ground_e))
+            .friction(real(ground_mu)),
+    );
+    for (i, b) in bodies.iter().enumerate() {
+        let collider = if b.ball {
+            ColliderBuilder::ball(real(b.size[0]))
+        } else {
+            ColliderBuilder::cuboid(real(b.size[0]), real(b.size[1]), real(b.size[2]))
+        };
+        let lift = b.size.iter().cloned().fold(0.0, f64::max) * 1.8;
+        // Spread horizontally so that the bodies start apart.
+        let x = b.pos[0] + 7.0 * i as f64;
+        world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(real(x), real(b.pos[1] + lift), real(b.pos[2])))
+                .linvel(Vector::new(real(b.vel[0]), real(b.vel[1]), real(b.vel[2])))
+                .angvel(Vector::new(
+                    real(b.spin[0]),
+                    real(b.spin[1]),
+                    real(b.spin[2]),
+                )),
+            collider
+                .density(real(b.density))
+                .restitution(real(b.e))
+                .friction(real(b.mu))
+                .restitution_combine_rule(rule(b.rule))
+                .friction_combine_rule(rule(b.rule)),
+        );
+    }
+    let mut p = plugin(timing);
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    let mut stats = Stats::new();
+    let strict = std::env::var("RAPIER_IMPACT_STRICT_PENETRATION").is_ok();
+    let allowed = wide(world.integration_parameters.allowed_linear_error());
+    let dt = 1.0 / hz;
+    for k in 0..90 {
+        // The fastest material point of any body at the start of the step (m/s).
+        let fastest = world
+            .bodies
+            .iter()
+            .filter(|(_, rb)| rb.is_dynamic())
+            .map(|(_, rb)| {
+                let r = b_radius(&world, rb);
+                wide(rb.linvel().length()) + wide(rb.angvel().length()) * r
+            })
+            .fold(0.0, f64::max);
+        if strict {
+            step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
+            continue;
+        }
+        p.step(&mut world);
+        assert_finite(&world, &label);
+        for ev in p.events() {
+            check_event(ev, &mut stats, &label);
+        }
+        // Known limit (reported): a fast-rotating box can end a step deeper than rapier's
+        // allowed error; it never goes deeper than one step's travel of its fastest point.
+        let depth = penetration(&world, 0.0);
+        prop_assert_le(depth, allowed + fastest * dt + 1e-6, &label, k);
+    }
+}
+
+fn b_radius(world: &PhysicsWorld, rb: &RigidBody) -> f64 {
+    rb.colliders()
+        .iter()
+        .map(|c| {
+            wide(
+                world.colliders[*c]
+                    .shape()
+                    .compute_local_bounding_sphere()
+                    .radius,
+            )
+        })
+        .fold(0.0, f64::max)
+}
+
+fn prop_assert_le(depth: f64, bound: f64, label: &str, k: usize) {
+    assert!(
+        depth <= bound,
+        "{label}: step {k}: {depth:e} m below the ground, more than a step's travel ({bound:e} m)"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_scenes_stay_finite_above_ground_and_never_gain_energy_at_impacts(
+        bodies in prop::collection::vec(body(), 1..=4),
+        mode in 0usize..3,
+        hz in prop::sample::select(vec![30.0, 60.0, 120.0, 240.0]),
+        ground_e in 0.0f64..=1.0,
+        ground_mu in 0.0f64..2.0,
+    ) {
+        let timing = [TimingMode::Step, TimingMode::TimeOfImpact, TimingMode::Exact][mode];
+        run(&bodies, timing, hz, ground_e, ground_mu);
+    }
+}
