@@ -217,6 +217,8 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) user_hooks: H,
     step: StepData,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
+    /// The roles of the last step (for the resting hysteresis).
+    prev_roles: HandleMap<PairKey, Role>,
     events: Vec<ImpactEvent>,
 }
 
@@ -241,6 +243,7 @@ impl<H> ImpactPlugin<H> {
             user_hooks,
             step: StepData::default(),
             shadows: HandleMap::default(),
+            prev_roles: HandleMap::default(),
             events: Vec::new(),
         })
     }
@@ -366,6 +369,7 @@ impl<H> ImpactPlugin<H> {
         }
         step.grounds = self.ground_motions(bodies, colliders, dt, step.resting_gap);
         let shadows = std::mem::take(&mut self.shadows);
+        let prev_roles = std::mem::take(&mut self.prev_roles);
         let handles: Vec<RigidBodyHandle> = bodies
             .iter()
             .filter(|(h, rb)| self.manages(*h, rb) && !rb.is_sleeping())
@@ -433,7 +437,16 @@ impl<H> ImpactPlugin<H> {
                             // (gravity, or any acceleration towards it, included).
                             let an = n.dot(&flight.accel);
                             let arrival = (un * un + 2.0 * (-an).max(0.0) * dist.max(0.0)).sqrt();
-                            if dist <= step.resting_gap && arrival <= step.resting_speed {
+                            // Hysteresis: a pair rapier held at rest last step shows the
+                            // normal speed rapier's solver leaves at rest (up to g dt and more
+                            // for a fast-rolling ball): it stays resting unless clearly hit.
+                            let was_resting = prev_roles.get(&key) == Some(&Role::Resting);
+                            let limit = if was_resting {
+                                (4.0 * step.resting_speed).max(2.0 * g.norm() * dt)
+                            } else {
+                                step.resting_speed
+                            };
+                            if dist <= step.resting_gap && arrival <= limit {
                                 Role::Resting
                             } else if self.config.timing == TimingMode::Step
                                 && closes_within(dist, un, n.dot(&(flight.accel)), dt)
@@ -532,6 +545,7 @@ impl<H> ImpactPlugin<H> {
             return;
         }
         step.active = false;
+        self.prev_roles = std::mem::take(&mut step.roles);
         // The grounds' actual motion over the step.
         for gm in &mut step.grounds {
             if let Some(bh) = gm.body {
