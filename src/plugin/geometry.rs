@@ -287,7 +287,7 @@ fn plane_contact_on(
         _ => return Err(None),
     };
     let len = n.norm();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return Err(None);
     }
     let mut n = n / len;
@@ -478,7 +478,7 @@ fn polish(
             None => break,
             Some((t_b, d_b)) => t_a + d_a * (t_b - t_a) / (d_a - d_b),
         };
-        if !(t_new > t_a) || (t_new - t_a) <= 1e-15 * (1.0 + t_a.abs()) {
+        if t_new.is_nan() || t_new <= t_a || (t_new - t_a) <= 1e-15 * (1.0 + t_a.abs()) {
             break;
         }
         let s_new = flight.advance(s0, t_new - t0);
