@@ -1,0 +1,271 @@
+//! Milliseconds per step of whole scenes, rapier alone against the plugin in each timing mode
+//! (issue 4, "Scene"). `cargo bench --bench scene`; a filter picks groups, e.g.
+//! `cargo bench --bench scene -- bouncing/1000`.
+//!
+//! Groups, each at N = 100, 1 000 and 10 000 balls (radius 5 cm, e = 0.8, mu = 0.5, dt = 1/60,
+//! rapier's default parameters) on a fixed cuboid ground, with the benchmark named
+//! `GROUP/N/MODE`, `MODE` = `rapier` (rapier alone, no plugin), `step`, `toi` or `exact`:
+//!
+//! - `bouncing`: one layer of balls 15 cm apart (they never touch each other), released
+//!   5-45 cm above the ground (seeded jitter), so every ball bounces on the ground several
+//!   times in the window.
+//! - `idle`: the same layout 100 m above the ground: every body falls freely and is never
+//!   near the ground in the window. What the plugin costs when it has nothing to do.
+//! - `pile`: balls dropped into a walled box (walls are not ground) and settled for 3 s, about
+//!   five layers deep, sleeping disabled so the pile stays awake: most contacts are rapier's
+//!   (ball on ball, ball on wall); the bottom layer rests on the ground (the plugin hands those
+//!   contacts to rapier with `e = 0`).
+//!
+//! `bouncing` and `idle` time a window of `WINDOW` steps from the release and start again from
+//! a freshly built scene (not timed) when it is used up, so every sample averages the same
+//! motion. `pile` is built and settled once per benchmark (not timed) and then stepped on:
+//! its state barely changes. Each iteration is one `step`, timed alone.
+
+// Precision-generic: `Real` is f32 or f64 (feature `f64`).
+#![allow(clippy::unnecessary_cast)]
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+const SIZES: [usize; 3] = [100, 1_000, 10_000];
+const RADIUS: f64 = 0.05;
+const SPACING: f64 = 0.15;
+const RESTITUTION: f64 = 0.8;
+const FRICTION: f64 = 0.5;
+const DT: f64 = 1.0 / 60.0;
+/// Steps timed from one release (1.5 s).
+const WINDOW: usize = 90;
+const SEED: u64 = 4;
+
+/// Rapier alone, or the plugin in one timing mode.
+#[derive(Clone, Copy)]
+enum Mode {
+    Rapier,
+    Plugin(TimingMode),
+}
+
+const MODES: [(Mode, &str); 4] = [
+    (Mode::Rapier, "rapier"),
+    (Mode::Plugin(TimingMode::Step), "step"),
+    (Mode::Plugin(TimingMode::TimeOfImpact), "toi"),
+    (Mode::Plugin(TimingMode::Exact), "exact"),
+];
+
+fn real(x: f64) -> Real {
+    x as Real
+}
+
+/// SplitMix64, so each scene is the same on every run.
+struct Rng(u64);
+
+impl Rng {
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// A world, its plugin (none for rapier alone), and the steps taken since it was built.
+struct Scene {
+    world: PhysicsWorld,
+    plugin: Option<ImpactPlugin>,
+    steps: usize,
+}
+
+impl Scene {
+    fn step(&mut self) {
+        match self.plugin.as_mut() {
+            Some(p) => p.step(&mut self.world),
+            None => self.world.step(),
+        }
+        self.steps += 1;
+    }
+}
+
+/// A world with a fixed cuboid ground (top face at y = 0) `half` m wide each way from the origin.
+fn world_with_ground(half: f64) -> (PhysicsWorld, ColliderHandle) {
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(DT);
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(real(half), 0.5, real(half))
+            .translation(Vector::new(0.0, -0.5, 0.0))
+            .restitution(real(RESTITUTION))
+            .friction(real(FRICTION)),
+    );
+    (world, ground)
+}
+
+fn ball(world: &mut PhysicsWorld, p: [f64; 3], sleep: bool) {
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(real(p[0]), real(p[1]), real(p[2])))
+            .can_sleep(sleep),
+        ColliderBuilder::ball(real(RADIUS))
+            .restitution(real(RESTITUTION))
+            .friction(real(FRICTION)),
+    );
+}
+
+fn with_plugin(mut world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> Scene {
+    let plugin = match mode {
+        Mode::Rapier => None,
+        Mode::Plugin(timing) => {
+            let mut p = ImpactPlugin::new(ImpactConfig {
+                timing,
+                ..Default::default()
+            })
+            .expect("valid configuration");
+            p.add_ground(&world.bodies, &mut world.colliders, ground)
+                .expect("the ground exists");
+            Some(p)
+        }
+    };
+    Scene {
+        world,
+        plugin,
+        steps: 0,
+    }
+}
+
+/// One layer of `n` balls on a square grid, the balls' bottoms `lift` plus 5-45 cm above the
+/// ground.
+fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
+    let side = (n as f64).sqrt().ceil() as usize;
+    let centre = 0.5 * (side - 1) as f64 * SPACING;
+    let (mut world, ground) = world_with_ground(centre + 1.0);
+    let mut rng = Rng(SEED);
+    for i in 0..n {
+        let (row, col) = (i / side, i % side);
+        let gap = rng.range(0.05, 0.45);
+        let p = [
+            col as f64 * SPACING - centre + rng.range(-0.02, 0.02),
+            lift + gap + RADIUS,
+            row as f64 * SPACING - centre + rng.range(-0.02, 0.02),
+        ];
+        ball(&mut world, p, true);
+    }
+    let mut scene = with_plugin(world, ground, mode);
+    // The first step builds rapier's broad phase: not part of the window.
+    scene.step();
+    scene
+}
+
+/// `n` balls dropped into a walled box about five layers deep, settled for 3 s, never asleep.
+fn pile(n: usize, mode: Mode) -> Scene {
+    let pitch = 2.0 * RADIUS + 0.01;
+    let side = ((n as f64 / 5.0).sqrt().ceil() as usize).max(2);
+    let inner = 0.5 * side as f64 * pitch; // half width of the box
+    let (mut world, ground) = world_with_ground(inner + 1.0);
+    let (h, t) = (0.5 * (6.0 * pitch + 0.5), 0.1);
+    for (x, z, hx, hz) in [
+        (inner + t, 0.0, t, inner + 2.0 * t),
+        (-inner - t, 0.0, t, inner + 2.0 * t),
+        (0.0, inner + t, inner, t),
+        (0.0, -inner - t, inner, t),
+    ] {
+        world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(real(hx), real(h), real(hz))
+                .translation(Vector::new(real(x), real(h), real(z)))
+                .friction(real(FRICTION)),
+        );
+    }
+    let mut rng = Rng(SEED);
+    let per_layer = side * side;
+    for i in 0..n {
+        let (level, cell) = (i / per_layer, i % per_layer);
+        let (row, col) = (cell / side, cell % side);
+        let p = [
+            (col as f64 + 0.5) * pitch - inner + rng.range(-0.004, 0.004),
+            RADIUS + 0.02 + level as f64 * (pitch + 0.02),
+            (row as f64 + 0.5) * pitch - inner + rng.range(-0.004, 0.004),
+        ];
+        ball(&mut world, p, false);
+    }
+    let mut scene = with_plugin(world, ground, mode);
+    for _ in 0..(3.0 / DT) as usize {
+        scene.step();
+    }
+    scene
+}
+
+/// Samples and measurement time per size: 10 000 balls take milliseconds per step.
+fn configure(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    n: usize,
+) {
+    let (samples, seconds) = match n {
+        0..=100 => (30, 2),
+        101..=1_000 => (20, 3),
+        _ => (10, 4),
+    };
+    group.sample_size(samples);
+    group.measurement_time(Duration::from_secs(seconds));
+    group.warm_up_time(Duration::from_millis(500));
+}
+
+/// `bouncing` (lift 0) and `idle` (lift 100 m): a window of steps from a fresh scene.
+fn windowed(c: &mut Criterion, name: &str, lift: f64) {
+    for n in SIZES {
+        let mut group = c.benchmark_group(format!("{name}/{n}"));
+        configure(&mut group, n);
+        for (mode, label) in MODES {
+            // Built on first use, so a filtered-out benchmark costs nothing.
+            let mut scene: Option<Scene> = None;
+            group.bench_function(BenchmarkId::from_parameter(label), |b| {
+                let scene = scene.get_or_insert_with(|| layer(n, lift, mode));
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        if scene.steps > WINDOW {
+                            *scene = layer(n, lift, mode);
+                        }
+                        let start = Instant::now();
+                        scene.step();
+                        total += start.elapsed();
+                        black_box(&scene.world.bodies);
+                    }
+                    total
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
+fn bouncing(c: &mut Criterion) {
+    windowed(c, "bouncing", 0.0);
+}
+
+fn idle(c: &mut Criterion) {
+    windowed(c, "idle", 100.0);
+}
+
+fn piled(c: &mut Criterion) {
+    for n in SIZES {
+        let mut group = c.benchmark_group(format!("pile/{n}"));
+        configure(&mut group, n);
+        for (mode, label) in MODES {
+            let mut scene: Option<Scene> = None;
+            group.bench_function(BenchmarkId::from_parameter(label), |b| {
+                let scene = scene.get_or_insert_with(|| pile(n, mode));
+                b.iter(|| {
+                    scene.step();
+                    black_box(&scene.world.bodies);
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bouncing, idle, piled);
+criterion_main!(benches);
