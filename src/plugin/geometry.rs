@@ -371,7 +371,7 @@ fn approach_bound(
     span: f64,
 ) -> f64 {
     let lin = flight.max_speed(s0, span);
-    let body_bound = lin + s0.w.norm() * body.radius;
+    let body_bound = lin + flight.max_angular_speed(s0) * body.radius;
     let travel = lin * span + body.radius;
     let ground_bound = grounds
         .iter()

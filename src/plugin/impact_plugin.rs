@@ -14,7 +14,7 @@
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{ImpactEvent, ImpactTiming};
-use super::flight::{Flight, State};
+use super::flight::{Flight, Gyro, State};
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, closest, contact_checked, first_impact, landing_point,
 };
@@ -377,14 +377,15 @@ impl<H> ImpactPlugin<H> {
             .collect();
         for handle in handles {
             let rb = &bodies[handle];
-            let (start, flight, local_com) = snapshot(rb, g, shadows.get(&handle));
+            let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
             let inertia = Inertia::of(rb);
             let geom = body_geom(rb, colliders, &local_com);
             if geom.parts.is_empty() {
                 continue;
             }
             // The cheap test: the bounding sphere swept over the step against ground AABBs.
-            let speed = flight.max_speed(&start, dt) + start.w.norm() * geom.radius;
+            let speed =
+                flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
             let reach = speed * dt + step.resting_gap.max(step.prediction);
             let sphere = Aabb::from_half_extents(
                 vec_from_na(&start.com),
@@ -927,6 +928,7 @@ fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
 fn snapshot(
     rb: &RigidBody,
     gravity: Vector3<f64>,
+    dt: f64,
     shadow: Option<&Shadow>,
 ) -> (State, Flight, Vector3<f64>) {
     let local_com = vec_to_na(rb.local_center_of_mass());
@@ -947,8 +949,25 @@ fn snapshot(
         accel: gravity * to_f64(rb.gravity_scale()) + vec_to_na(rb.user_force()) / mass,
         linear_damping: to_f64(rb.linear_damping()).max(0.0),
         angular_damping: to_f64(rb.angular_damping()).max(0.0),
+        gyro: gyro_of(rb, dt),
     };
     (state, flight, local_com)
+}
+
+/// The torque-free rotation of a body, as rapier treats it: `None` (constant-axis spin)
+/// when rapier's gyroscopic forces are off for the body (it then keeps `w` constant in
+/// flight), a rotation axis is locked, or the inertia is isotropic.
+fn gyro_of(rb: &RigidBody, dt: f64) -> Option<Gyro> {
+    if !rb.gyroscopic_forces_enabled() || rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED) {
+        return None;
+    }
+    let mp = &rb.mass_properties().local_mprops;
+    let inv = vec_to_na(mp.inv_principal_inertia);
+    Gyro::new(
+        inv.map(|x| 1.0 / x),
+        rot_to_na(mp.principal_inertia_local_frame),
+        dt,
+    )
 }
 
 /// The body's enabled, non-sensor colliders in its centre-of-mass frame.
