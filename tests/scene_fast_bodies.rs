@@ -156,13 +156,7 @@ fn fast_bodies_neither_tunnel_nor_bounce_twice() {
     let mut worst_rebound: f64 = 0.0;
     let mut worst_box_cascade = 0;
     for ground in [Ground::Slab, Ground::Trimesh] {
-        // A box on the trimesh is left out: parry's `query::contact` gives wrong normals for
-        // flat triangles (see docs/guarantees.md); the box on the slab is kept.
-        let shapes: &[Body] = match ground {
-            Ground::Slab => &[Body::Ball, Body::TumblingBox],
-            Ground::Trimesh => &[Body::Ball],
-        };
-        for &body in shapes {
+        for body in [Body::Ball, Body::TumblingBox] {
             for speed in [50.0, 200.0] {
                 for dt in [1.0 / 60.0, 1.0 / 30.0] {
                     for timing in [TimingMode::TimeOfImpact, TimingMode::Exact] {
