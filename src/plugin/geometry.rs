@@ -45,6 +45,9 @@ pub(crate) struct GroundGeom<'a> {
     pub v: Vector3<f64>,
     /// Ground angular velocity (rad/s).
     pub w: Vector3<f64>,
+    /// Body colliders that have no contact with this ground for the plugin (the user's
+    /// filter refused the pair).
+    pub skip: Vec<ColliderHandle>,
 }
 
 impl GroundGeom<'_> {
@@ -342,6 +345,9 @@ pub(crate) fn closest(
     let mut best: Option<Hit> = None;
     for (i, part) in body.parts.iter().enumerate() {
         for (j, ground) in grounds.iter().enumerate() {
+            if ground.skip.contains(&part.handle) {
+                continue;
+            }
             if let Some((dist, normal, point)) = contact(part, ground, s, t, prediction) {
                 if best.is_none_or(|b| dist < b.dist) {
                     let u = body_velocity_at(s, &point) - ground.velocity_at(&point, t);

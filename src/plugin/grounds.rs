@@ -72,8 +72,16 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Makes a ground an ordinary collider again (its hook flags back to the user's).
-    /// Returns whether it was a ground.
+    /// Returns whether it was a ground. The all-fixed mode
+    /// ([`Self::set_all_fixed_colliders_ground`]) does not mark it again; [`Self::add_ground`]
+    /// does.
     pub fn remove_ground(&mut self, colliders: &mut ColliderSet, collider: ColliderHandle) -> bool {
+        self.unmarked.insert(collider);
+        self.unmark(colliders, collider)
+    }
+
+    /// Unmarks a ground, its hook flags back to the user's.
+    fn unmark(&mut self, colliders: &mut ColliderSet, collider: ColliderHandle) -> bool {
         match self.grounds.remove(&collider) {
             Some(entry) => {
                 if let Some(co) = colliders.get_mut(collider) {
@@ -98,7 +106,7 @@ impl<H> ImpactPlugin<H> {
                 .map(|(h, _)| *h)
                 .collect();
             for h in auto {
-                self.remove_ground(colliders, h);
+                self.unmark(colliders, h);
             }
         }
     }
@@ -118,6 +126,7 @@ impl<H> ImpactPlugin<H> {
         let co = colliders
             .get(collider)
             .ok_or(ConfigError::NotACollider(collider))?;
+        self.unmarked.remove(&collider);
         if let Some(parent) = co.parent() {
             if bodies.get(parent).is_none_or(|rb| rb.is_dynamic()) {
                 return Err(ConfigError::DynamicGround(collider));
@@ -145,11 +154,13 @@ impl<H> ImpactPlugin<H> {
     /// colliders in all-fixed mode, restores the plugin's hook flags if they were overwritten.
     pub(crate) fn sync_grounds(&mut self, bodies: &RigidBodySet, colliders: &mut ColliderSet) {
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
+        self.unmarked.retain(|h| colliders.get(*h).is_some());
         if self.all_fixed {
             let new: Vec<ColliderHandle> = colliders
                 .iter()
                 .filter(|(h, co)| {
                     !self.grounds.contains_key(h)
+                        && !self.unmarked.contains(h)
                         && co
                             .parent()
                             .is_none_or(|p| bodies.get(p).is_some_and(|rb| rb.is_fixed()))

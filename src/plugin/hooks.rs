@@ -6,9 +6,13 @@
 //! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
 //!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its
 //!   collision events, but neither its solver nor its restitution pass sees the pair;
-//! - role `Resting` (or a pair the plugin did not see coming): rapier's solver keeps it, and
-//!   `modify_solver_contacts` sets its restitution to 0 (and the ground's friction override,
-//!   if any): the plugin owns every bounce off a ground;
+//! - role `Resting` (or a pair the plugin did not see coming): rapier's solver keeps it (the
+//!   user's filter still decides, when the colliders ask for it), and
+//!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
+//!   platform), then sets its restitution to 0 (and the ground's friction override, if any):
+//!   the plugin owns every bounce off a ground;
+//! - role `User` (the user's filter refused the pair in `before_step`): the user's hook and
+//!   rapier have it, unchanged, and the plugin resolves no impact for it;
 //! - every other pair goes to the user's hook unchanged, exactly when the colliders' own
 //!   hook flags (those the user set, before the plugin added its own) ask for it; otherwise
 //!   rapier's default applies.
@@ -49,7 +53,7 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// The hook flags the user asked for on a collider.
-    fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
+    pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
         match self.grounds.get(&c) {
             Some(entry) => entry.user_hooks,
             None => colliders
@@ -67,8 +71,9 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
             .map(|key| self.role(&key));
         match managed {
             Some(Role::Impact) => Some(SolverFlags::empty()),
-            Some(Role::Resting) => Some(SolverFlags::COMPUTE_RIGID_IMPULSES),
-            Some(Role::Rapier) | None => {
+            // Resting (in rapier's solver), refused by the user, or not managed: the user's
+            // filter when the colliders ask for it, as rapier would.
+            _ => {
                 let flags = self.user_flags(colliders, context.collider1)
                     | self.user_flags(colliders, context.collider2);
                 if flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
@@ -95,6 +100,12 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
         match managed {
             Some((_, Role::Impact)) => {}
             Some((key, Role::Resting)) => {
+                // The user's contact modification first (a conveyor ground, a one-way
+                // platform), then the plugin's: no bounce by rapier.
+                let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
+                    self.user_hooks.modify_solver_contacts(context);
+                }
                 let over = self.grounds.get(&key.1).and_then(|g| g.material);
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
@@ -103,7 +114,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     }
                 }
             }
-            Some((_, Role::Rapier)) | None => {
+            Some((_, Role::Rapier | Role::User)) | None => {
                 let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);

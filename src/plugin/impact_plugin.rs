@@ -24,8 +24,8 @@ use crate::rapier::math::{Pose, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
-    LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsWorld, RigidBody, RigidBodyHandle,
-    RigidBodySet, RigidBodyType, SolverFlags,
+    LockedAxes, MultibodyJointSet, NarrowPhase, PairFilterContext, PhysicsHooks, PhysicsWorld,
+    RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::{HashMap, HashSet};
@@ -74,6 +74,9 @@ pub(crate) enum Role {
     Resting,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,
+    /// Refused by the user's filter (`None`, or no rigid impulses): no ground contact for
+    /// the plugin; rapier and the user's hook have the pair, unchanged.
+    User,
 }
 
 /// A registered ground collider.
@@ -213,6 +216,9 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) config: ImpactConfig,
     pub(crate) grounds: HandleMap<ColliderHandle, GroundEntry>,
     pub(crate) all_fixed: bool,
+    /// Colliders unmarked by [`Self::remove_ground`]: the all-fixed mode leaves them alone
+    /// until [`Self::add_ground`] marks them again.
+    pub(crate) unmarked: HandleSet<ColliderHandle>,
     pub(crate) excluded: HandleSet<RigidBodyHandle>,
     pub(crate) user_hooks: H,
     step: StepData,
@@ -239,6 +245,7 @@ impl<H> ImpactPlugin<H> {
             config,
             grounds: HandleMap::default(),
             all_fixed: false,
+            unmarked: HandleSet::default(),
             excluded: HandleSet::default(),
             user_hooks,
             step: StepData::default(),
@@ -305,6 +312,32 @@ impl<H> ImpactPlugin<H> {
         self.step.roles.get(key).copied().unwrap_or(Role::Resting)
     }
 
+    /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
+    /// Asked only when the colliders' own hook flags ask for the user's filter, with the
+    /// start-of-step state, so that every pair the plugin could resolve in the step is
+    /// covered (rapier asks it again during the step, for the pairs its broad phase has).
+    fn user_refuses(&self, bodies: &RigidBodySet, colliders: &ColliderSet, key: PairKey) -> bool
+    where
+        H: PhysicsHooks,
+    {
+        let flags = self.user_flags(colliders, key.0) | self.user_flags(colliders, key.1);
+        if !flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
+            return false;
+        }
+        let context = PairFilterContext {
+            bodies,
+            colliders,
+            collider1: key.0,
+            collider2: key.1,
+            rigid_body1: colliders.get(key.0).and_then(|c| c.parent()),
+            rigid_body2: colliders.get(key.1).and_then(|c| c.parent()),
+        };
+        !self
+            .user_hooks
+            .filter_contact_pair(&context)
+            .is_some_and(|f| f.contains(SolverFlags::COMPUTE_RIGID_IMPULSES))
+    }
+
     /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
     /// plugin as hooks, [`Self::after_step`].
     pub fn step(&mut self, world: &mut PhysicsWorld)
@@ -344,7 +377,9 @@ impl<H> ImpactPlugin<H> {
         params: &IntegrationParameters,
         bodies: &mut RigidBodySet,
         colliders: &mut ColliderSet,
-    ) {
+    ) where
+        H: PhysicsHooks,
+    {
         self.events.clear();
         self.sync_grounds(bodies, colliders);
         let dt = to_f64(params.dt);
@@ -422,6 +457,10 @@ impl<H> ImpactPlugin<H> {
                 let mut any_impact = false;
                 for part in &geom.parts {
                     let key = (part.handle, gg.handle);
+                    if self.user_refuses(bodies, colliders, key) {
+                        step.roles.insert(key, Role::User);
+                        continue;
+                    }
                     let found = contact_checked(part, gg, &state, 0.0, reach);
                     // A pair beyond reach cannot touch in this step: out of the solver, and
                     // no search after the step.
@@ -579,7 +618,17 @@ impl<H> ImpactPlugin<H> {
             let grounds: Vec<GroundGeom> = cand
                 .impact_grounds
                 .iter()
-                .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
+                .filter_map(|i| {
+                    let mut gg = ground_geom(&step.grounds[*i], colliders)?;
+                    // Pairs the user's filter refused are no contact for the plugin.
+                    gg.skip = geom
+                        .parts
+                        .iter()
+                        .map(|part| part.handle)
+                        .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
+                        .collect();
+                    Some(gg)
+                })
                 .collect();
             let inertia = Inertia::of(rb);
             if mode == TimingMode::Step || !free || grounds.is_empty() {
@@ -1015,6 +1064,7 @@ fn ground_geom<'a>(gm: &GroundMotion, colliders: &'a ColliderSet) -> Option<Grou
         local: gm.local,
         v: gm.v,
         w: gm.w,
+        skip: Vec::new(),
     })
 }
 

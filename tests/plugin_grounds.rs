@@ -1,0 +1,764 @@
+//! Grounds the first version of the adapter left untested, each against a closed form or the
+//! model at the contact's normal and ground velocity:
+//! - every fixed collider as ground (including one added later), a manual ground kept when
+//!   that mode is turned off, and `remove_ground` (flags restored, rapier's bounce back, and
+//!   the collider not re-marked by the all-fixed mode);
+//! - a position-based kinematic platform rising at `V`: contact time and `v' = V - e (v - V)`;
+//!   in `Step` mode, `v' = V - e (v0 - V)` from the velocity at the step boundary;
+//! - a kinematic turntable spinning about the vertical: in the platform frame the contact's
+//!   tangential velocity `u_t = v_t - w x r` is left at `5/7 u_t` (stick, solid ball) or cut
+//!   by `mu (1 + e) |u_n|` (slip), and the normal speed is reversed times `e`;
+//! - a heightfield ramp and a trimesh ramp at 20 deg: the event's normal is the slope's, and
+//!   the velocities after are `model::resolve` at that normal (friction included);
+//! - a wrapped user hook: its `filter_contact_pair` and `modify_solver_contacts` are still
+//!   called for every pair that is not a managed ground contact (a conveyor platform that
+//!   moves a box, an excluded body on a ground), and its filter decides whether a ball and a
+//!   ground touch at all (a ghost ball falls through a ground the plugin would bounce);
+//!   a conveyor ground still conveys a box resting on it.
+//!
+//! Every test prints measured against expected.
+
+// Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
+// widening in one build are identities in the other.
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
+use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material};
+use rapier_impact::na::{Matrix3, Vector3};
+use rapier_impact::rapier::na::Unit;
+use rapier_impact::rapier::parry::utils::Array2;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode};
+use std::sync::Mutex;
+
+const G: f64 = 9.81;
+const F64: bool = cfg!(feature = "f64");
+
+fn real(x: f64) -> Real {
+    x as Real
+}
+
+fn wide(x: Real) -> f64 {
+    x as f64
+}
+
+fn na(v: Vector) -> Vector3<f64> {
+    Vector3::new(wide(v.x), wide(v.y), wide(v.z))
+}
+
+fn up() -> Unit<Vector> {
+    Unit::new_unchecked(Vector::Y)
+}
+
+fn plugin(timing: TimingMode) -> ImpactPlugin {
+    ImpactPlugin::new(ImpactConfig {
+        timing,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// Tolerances `(time (s), velocity (m/s))` of an exact in-step impact.
+fn tol() -> (f64, f64) {
+    if F64 { (1e-9, 1e-8) } else { (2e-5, 2e-4) }
+}
+
+/// A ball of radius `r` at `at`, with restitution and friction `e`, `mu`.
+fn ball(world: &mut PhysicsWorld, at: [f64; 3], r: f64, e: f64, mu: f64) -> RigidBodyHandle {
+    world
+        .insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(
+                real(at[0]),
+                real(at[1]),
+                real(at[2]),
+            )),
+            ColliderBuilder::ball(real(r))
+                .restitution(real(e))
+                .friction(real(mu)),
+        )
+        .0
+}
+
+/// The first impact time of a ball whose bottom is `h` above the ground at `t0`, at rest.
+fn fall_time(h: f64) -> f64 {
+    (2.0 * h / G).sqrt()
+}
+
+// ---------------------------------------------------------------------------------------
+// Ground registration
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() {
+    let (e, h) = (0.8, 0.5);
+    let mut world = PhysicsWorld::default();
+    // A fixed body's half-space... (balls far apart so each lands on its own ground)
+    let (_, g_body) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
+            .translation(Vector::new(0.0, -0.5, 0.0))
+            .restitution(real(e)),
+    );
+    // ... a parentless collider ...
+    let g_free = world.colliders.insert(
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
+            .translation(Vector::new(20.0, -0.5, 0.0))
+            .restitution(real(e)),
+    );
+    // ... and a kinematic platform, not fixed: ground only when marked by hand.
+    let (_, g_kin) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(40.0, -0.5, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0).restitution(real(e)),
+    );
+    let balls = [0.0, 20.0, 40.0].map(|x| ball(&mut world, [x, 0.1 + h, 0.0], 0.1, e, 0.0));
+    let mut p = plugin(TimingMode::Exact);
+    p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+    p.step(&mut world);
+    println!(
+        "after one step: fixed body's collider {}, parentless {}, kinematic {}",
+        p.is_ground(g_body),
+        p.is_ground(g_free),
+        p.is_ground(g_kin)
+    );
+    assert!(p.is_ground(g_body) && p.is_ground(g_free) && !p.is_ground(g_kin));
+    assert!(balls.iter().all(|b| {
+        world.bodies[*b]
+            .colliders()
+            .iter()
+            .all(|c| !p.is_ground(*c))
+    }));
+    p.add_ground(&world.bodies, &mut world.colliders, g_kin)
+        .unwrap();
+    // A fixed ground added later, with a ball over it.
+    let (_, g_late) = world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(60.0, -0.5, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0).restitution(real(e)),
+    );
+    let late = ball(&mut world, [60.0, 0.1 + h, 0.0], 0.1, e, 0.0);
+    let dt = wide(world.integration_parameters.dt);
+    let mut first: Vec<Option<f64>> = vec![None; 4];
+    let all = [balls[0], balls[1], balls[2], late];
+    for k in 1..60 {
+        p.step(&mut world);
+        for ev in p.events() {
+            let i = all.iter().position(|b| *b == ev.body).unwrap();
+            first[i].get_or_insert(k as f64 * dt + ev.time);
+        }
+    }
+    assert!(
+        p.is_ground(g_late),
+        "a fixed collider added later is not ground"
+    );
+    let t1 = fall_time(h);
+    // The late ball was released at the end of the first step.
+    let expected = [t1, t1, t1, t1 + dt];
+    let (tt, _) = tol();
+    for (i, label) in [
+        "fixed body",
+        "parentless",
+        "kinematic (by hand)",
+        "added later",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let expected = expected[i];
+        println!(
+            "{label}: first impact {:?} s, expected {expected:.7}",
+            first[i]
+        );
+        let got = first[i].unwrap_or(f64::NAN);
+        assert!(
+            (got - expected).abs() < tt,
+            "{label}: first impact at {got}, expected {expected}"
+        );
+    }
+    // Off: the automatic grounds are ordinary colliders again, flags back to the user's; the
+    // ground marked by hand stays.
+    p.set_all_fixed_colliders_ground(&mut world.colliders, false);
+    for (label, c, ground) in [
+        ("fixed body", g_body, false),
+        ("parentless", g_free, false),
+        ("added later", g_late, false),
+        ("kinematic (by hand)", g_kin, true),
+    ] {
+        let flags = world.colliders[c].active_hooks();
+        println!(
+            "mode off: {label}: ground {}, hook flags {flags:?}",
+            p.is_ground(c)
+        );
+        assert_eq!(p.is_ground(c), ground, "{label}");
+        if !ground {
+            assert_eq!(flags, ActiveHooks::empty(), "{label}: flags not restored");
+        }
+    }
+    let mut later = Vec::new();
+    for _ in 0..120 {
+        p.step(&mut world);
+        later.extend(p.events().iter().map(|ev| ev.body));
+    }
+    println!("events after the mode is off, by body: {later:?}");
+    assert!(
+        later.iter().all(|b| *b == balls[2]),
+        "a ball on an unmarked ground still got plugin impacts"
+    );
+}
+
+#[test]
+fn remove_ground_restores_the_users_flags_and_rapiers_bounce() {
+    let (e, h) = (0.8, 0.5);
+    let mut world = PhysicsWorld::default();
+    let user = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(real(e))
+            .active_hooks(user),
+    );
+    let b = ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, e, 0.0);
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    assert!(world.colliders[ground].active_hooks().contains(user));
+    assert!(p.remove_ground(&mut world.colliders, ground));
+    assert!(!p.remove_ground(&mut world.colliders, ground));
+    let flags = world.colliders[ground].active_hooks();
+    println!(
+        "after remove_ground: ground {}, flags {flags:?}",
+        p.is_ground(ground)
+    );
+    assert_eq!(flags, user);
+    assert!(!p.is_ground(ground));
+    let (mut events, mut rose) = (0, false);
+    for _ in 0..60 {
+        p.step(&mut world);
+        events += p.events().len();
+        rose |= world.bodies[b].linvel().y > 0.0;
+    }
+    println!("plugin events after removal: {events}; the ball bounced (rapier): {rose}");
+    assert!(events == 0 && rose);
+
+    // In the all-fixed mode, a ground removed by hand stays removed; `add_ground` marks it
+    // again.
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up()).restitution(real(e)),
+    );
+    ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, e, 0.0);
+    let mut p = plugin(TimingMode::Exact);
+    p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+    p.step(&mut world);
+    assert!(p.is_ground(ground));
+    assert!(p.remove_ground(&mut world.colliders, ground));
+    let mut events = 0;
+    for _ in 0..60 {
+        p.step(&mut world);
+        events += p.events().len();
+    }
+    println!(
+        "all-fixed mode, removed by hand: ground {} after 60 steps, {events} plugin events",
+        p.is_ground(ground)
+    );
+    assert!(!p.is_ground(ground) && events == 0);
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    p.step(&mut world);
+    assert!(p.is_ground(ground));
+}
+
+// ---------------------------------------------------------------------------------------
+// Moving grounds
+// ---------------------------------------------------------------------------------------
+
+/// A position-based platform (top at y = 0 at t = 0), moved by [`move_platform`] before each
+/// step. A ball's bottom `h` above, at rest. Returns the world, the plugin, the ball and the
+/// platform body.
+fn rising_position_platform(
+    timing: TimingMode,
+    e: f64,
+    h: f64,
+) -> (PhysicsWorld, ImpactPlugin, RigidBodyHandle, RigidBodyHandle) {
+    let mut world = PhysicsWorld::default();
+    let (platform, ground) = world.insert(
+        RigidBodyBuilder::kinematic_position_based().translation(Vector::new(0.0, -0.5, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0).friction(0.0),
+    );
+    let b = ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, 0.0, 0.0);
+    let mut p = plugin(timing);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: 0.0,
+        },
+    )
+    .unwrap();
+    (world, p, b, platform)
+}
+
+fn move_platform(world: &mut PhysicsWorld, platform: RigidBodyHandle, k: usize, v_up: f64) {
+    let dt = wide(world.integration_parameters.dt);
+    let y = -0.5 + v_up * (k + 1) as f64 * dt;
+    world.bodies[platform].set_next_kinematic_translation(Vector::new(0.0, real(y), 0.0));
+}
+
+#[test]
+fn a_position_based_rising_platform_enters_the_model() {
+    let (v_up, e, h) = (1.0, 0.6, 0.5);
+    let (mut world, mut p, b, platform) = rising_position_platform(TimingMode::Exact, e, h);
+    let dt = wide(world.integration_parameters.dt);
+    // Contact when h - g t^2 / 2 = V t.
+    let t_hit = (-v_up + (v_up * v_up + 2.0 * G * h).sqrt()) / G;
+    let v_ball = -G * t_hit;
+    let expected = v_up - e * (v_ball - v_up);
+    let (tt, tv) = tol();
+    for k in 0..120 {
+        move_platform(&mut world, platform, k, v_up);
+        p.step(&mut world);
+        if let Some(ev) = p.events().first() {
+            let t = k as f64 * dt + ev.time;
+            let vy = wide(world.bodies[b].linvel().y) + G * (dt - ev.time);
+            println!(
+                "position-based platform: impact {t:.7} s (expected {t_hit:.7}), vy after {vy:.6} (expected {expected:.6}), approach {:.6} (expected {:.6})",
+                ev.approach_speed,
+                v_up - v_ball
+            );
+            assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
+            assert!((vy - expected).abs() < tv, "vy after {vy} vs {expected}");
+            assert!((ev.approach_speed - (v_up - v_ball)).abs() < tv);
+            return;
+        }
+    }
+    panic!("the ball never met the platform");
+}
+
+#[test]
+fn step_mode_on_a_rising_platform_uses_the_step_boundary_velocity() {
+    let (v_up, e, h) = (1.0, 0.6, 0.5);
+    let (mut world, mut p, b, platform) = rising_position_platform(TimingMode::Step, e, h);
+    let dt = wide(world.integration_parameters.dt);
+    let (_, tv) = tol();
+    let mut bounced_at = None;
+    for k in 0..120 {
+        let v0 = wide(world.bodies[b].linvel().y);
+        move_platform(&mut world, platform, k, v_up);
+        p.step(&mut world);
+        let events: Vec<_> = p.events().to_vec();
+        if let Some(ev) = events.first() {
+            if let Some(k0) = bounced_at {
+                panic!("a second impact {} steps after the first: {ev:?}", k - k0);
+            }
+            // The impulse at the step start, on the velocity there; rapier then adds g dt.
+            let expected = v_up - e * (v0 - v_up);
+            let vy = wide(world.bodies[b].linvel().y) + G * dt;
+            println!(
+                "Step mode, platform at {v_up} m/s: {:?}, vy after {vy:.6} (expected {expected:.6}), approach {:.6} (expected {:.6})",
+                ev.timing,
+                ev.approach_speed,
+                v_up - v0
+            );
+            assert_eq!(events.len(), 1);
+            assert_eq!(ev.timing, ImpactTiming::StepStart);
+            assert!(
+                (vy - expected).abs() < tv.max(1e-5),
+                "vy after {vy} vs {expected}"
+            );
+            assert!((ev.approach_speed - (v_up - v0)).abs() < tv.max(1e-5));
+            bounced_at = Some(k);
+        }
+        // Rising with the ball: the ball leaves it and must not be bounced by rapier on the
+        // way (its speed after is the model's, checked above) nor sink into it.
+        if let Some(k0) = bounced_at {
+            let rb = &world.bodies[b];
+            let top = -0.5 + v_up * (k + 1) as f64 * dt + 0.5;
+            let gap = wide(rb.translation().y) - 0.1 - top;
+            assert!(
+                gap > -5e-3,
+                "step {k}: the ball is {gap} m into the platform"
+            );
+            if k > k0 + 10 {
+                return;
+            }
+        }
+    }
+    panic!("the ball never met the platform");
+}
+
+/// A turntable (kinematic, velocity-based, top face at y = 0) spinning at `omega` about the
+/// vertical through the origin; a solid ball (no spin) dropped at `(r, h, 0)` meets it where
+/// the table moves at `w x r = (0, 0, -omega r)`.
+fn turntable(mu: f64) {
+    let (omega, r_pos, e, h, radius) = (2.0, 1.0, 0.6, 0.5, 0.1);
+    let table = |world: &mut PhysicsWorld| {
+        world.insert(
+            RigidBodyBuilder::kinematic_velocity_based()
+                .translation(Vector::new(0.0, -0.5, 0.0))
+                .angvel(Vector::new(0.0, real(omega), 0.0)),
+            ColliderBuilder::cuboid(3.0, 0.5, 3.0),
+        )
+    };
+    // rapier turns a velocity-based kinematic body by its substeps' linearised rotations:
+    // slightly less than `omega dt` per step (5.8e-6 relative here). The plugin takes the
+    // ground's velocity from its actual motion over the step, so the closed form does too.
+    let omega_eff = {
+        let mut world = PhysicsWorld::default();
+        let (body, _) = table(&mut world);
+        world.step();
+        let q = world.bodies[body].rotation();
+        2.0 * wide(q.y).atan2(wide(q.w)) / wide(world.integration_parameters.dt)
+    };
+    println!("turntable: nominal {omega} rad/s, rapier turns it at {omega_eff:.9} rad/s");
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = table(&mut world);
+    let b = ball(&mut world, [r_pos, radius + h, 0.0], radius, 0.0, 0.0);
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: mu,
+        },
+    )
+    .unwrap();
+    let dt = wide(world.integration_parameters.dt);
+    let t_hit = fall_time(h);
+    let un = G * t_hit;
+    // Platform frame: the contact's tangential velocity is u_t = v_t - v_ground = omega r z.
+    let ut = omega_eff * r_pos;
+    let stick = mu * (1.0 + e) * un >= 2.0 / 7.0 * ut;
+    // Stick: J_t = -2/7 m u_t; slip: |J_t| = mu (1 + e) m u_n.
+    let dvz = if stick {
+        -2.0 / 7.0 * ut
+    } else {
+        -mu * (1.0 + e) * un
+    };
+    let expected_v = Vector3::new(0.0, e * un, dvz);
+    // Spin from the tangential impulse at the offset -R y: w_x = -5/2 dvz / R.
+    let expected_w = Vector3::new(-2.5 * dvz / radius, 0.0, 0.0);
+    let (tt, tv) = tol();
+    for k in 0..120 {
+        p.step(&mut world);
+        if let Some(ev) = p.events().first() {
+            let t = k as f64 * dt + ev.time;
+            let rb = &world.bodies[b];
+            let v = na(rb.linvel()) + Vector3::new(0.0, G * (dt - ev.time), 0.0);
+            let w = na(rb.angvel());
+            let slip_after = v.z - w.x * radius + omega_eff * r_pos;
+            println!(
+                "turntable mu {mu} ({}): impact {t:.7} s (expected {t_hit:.7}), v' {v:.6?} (expected {expected_v:.6?}), w' {w:.5?} (expected {expected_w:.5?}), contact slip after (platform frame) {slip_after:.2e}, regime {:?}",
+                if stick { "stick" } else { "slip" },
+                ev.regime
+            );
+            assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
+            assert!((v - expected_v).norm() < tv, "v' {v:?} vs {expected_v:?}");
+            assert!(
+                (w - expected_w).norm() < tv / radius,
+                "w' {w:?} vs {expected_w:?}"
+            );
+            return;
+        }
+    }
+    panic!("the ball never met the turntable");
+}
+
+#[test]
+fn a_turntable_grips_a_ball_by_its_surface_velocity() {
+    turntable(0.5);
+}
+
+#[test]
+fn a_turntable_drags_a_slipping_ball_by_its_surface_velocity() {
+    turntable(0.05);
+}
+
+// ---------------------------------------------------------------------------------------
+// Sloped heightfield and trimesh
+// ---------------------------------------------------------------------------------------
+
+/// The slope: `y = -x tan(a)`, normal `(sin a, cos a, 0)`.
+const SLOPE_DEG: f64 = 20.0;
+
+fn slope_normal() -> Vector3<f64> {
+    let a = SLOPE_DEG.to_radians();
+    Vector3::new(a.sin(), a.cos(), 0.0)
+}
+
+fn ramp_heightfield() -> ColliderBuilder {
+    // 5 x 5 samples over 10 m x 10 m; rows along z, columns along x (parry's layout).
+    let tan = SLOPE_DEG.to_radians().tan();
+    let (n, size) = (5, 10.0);
+    let mut heights = vec![Real::default(); n * n];
+    for j in 0..n {
+        let x = (-0.5 + j as f64 / (n - 1) as f64) * size;
+        for i in 0..n {
+            heights[i + j * n] = real(-x * tan);
+        }
+    }
+    ColliderBuilder::heightfield(
+        Array2::new(n, n, heights),
+        Vector::new(real(size), 1.0, real(size)),
+    )
+}
+
+fn ramp_trimesh() -> ColliderBuilder {
+    let tan = SLOPE_DEG.to_radians().tan();
+    let l = 5.0;
+    let v = |x: f64, z: f64| Vector::new(real(x), real(-x * tan), real(z));
+    ColliderBuilder::trimesh(
+        vec![v(-l, -l), v(l, -l), v(l, l), v(-l, l)],
+        vec![[0, 2, 1], [0, 3, 2]],
+    )
+    .unwrap()
+}
+
+fn check_ramp(label: &str, shape: ColliderBuilder) {
+    let (e, mu, h, radius, x0) = (0.7, 0.3, 1.0, 0.1, 0.3);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), shape);
+    let b = ball(&mut world, [x0, h, 0.2], radius, 0.0, 0.0);
+    let mut p = plugin(TimingMode::Exact);
+    p.add_ground_with_material(
+        &world.bodies,
+        &mut world.colliders,
+        ground,
+        GroundMaterial {
+            restitution: e,
+            friction: mu,
+        },
+    )
+    .unwrap();
+    let n = slope_normal();
+    let dt = wide(world.integration_parameters.dt);
+    // The centre touches when n . c = R: sin(a) x0 + cos(a) y = R.
+    let y_hit = (radius - n.x * x0) / n.y;
+    let t_hit = (2.0 * (h - y_hit) / G).sqrt();
+    let m = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+    let body = Body::from_inertia(m, Matrix3::identity() * (0.4 * m * radius * radius)).unwrap();
+    let impact = model::resolve(
+        Law::Guarded,
+        &body,
+        &BodyVelocity {
+            linear: Vector3::new(0.0, -G * t_hit, 0.0),
+            angular: Vector3::zeros(),
+        },
+        &Contact::fixed(n, -n * radius),
+        &Material {
+            restitution: e,
+            friction: mu,
+        },
+    )
+    .unwrap();
+    let (tt, tv) = tol();
+    for k in 0..120 {
+        p.step(&mut world);
+        if let Some(ev) = p.events().first() {
+            let t = k as f64 * dt + ev.time;
+            let rb = &world.bodies[b];
+            let v = na(rb.linvel()) + Vector3::new(0.0, G * (dt - ev.time), 0.0);
+            let w = na(rb.angvel());
+            let normal = na(ev.normal);
+            let (dir, speed) = (v.normalize(), v.norm());
+            let (dir_m, speed_m) = (
+                impact.velocity.linear.normalize(),
+                impact.velocity.linear.norm(),
+            );
+            println!(
+                "{label} at {SLOPE_DEG} deg: impact {t:.7} s (expected {t_hit:.7}), normal {normal:.6?} (expected {n:.6?}), bounce direction {dir:.6?} (model {dir_m:.6?}), speed {speed:.6} (model {speed_m:.6}), w' {w:.4?} (model {:.4?}), regime {:?} (model {:?})",
+                impact.velocity.angular, ev.regime, impact.regime
+            );
+            assert!(
+                (t - t_hit).abs() < tt,
+                "{label}: impact time {t} vs {t_hit}"
+            );
+            assert!(
+                (normal - n).norm() < 1e-5,
+                "{label}: normal {normal:?} vs {n:?}"
+            );
+            assert!(
+                (v - impact.velocity.linear).norm() < tv,
+                "{label}: v' {v:?} vs {:?}",
+                impact.velocity.linear
+            );
+            assert!(
+                (w - impact.velocity.angular).norm() < tv / radius,
+                "{label}: w' {w:?} vs {:?}",
+                impact.velocity.angular
+            );
+            assert_eq!(ev.regime, impact.regime, "{label}");
+            return;
+        }
+    }
+    panic!("{label}: the ball never hit");
+}
+
+#[test]
+fn a_sloped_heightfield_bounces_by_the_model_at_its_normal() {
+    check_ramp("heightfield ramp", ramp_heightfield());
+}
+
+#[test]
+fn a_sloped_trimesh_bounces_by_the_model_at_its_normal() {
+    check_ramp("trimesh ramp", ramp_trimesh());
+}
+
+// ---------------------------------------------------------------------------------------
+// A wrapped user hook
+// ---------------------------------------------------------------------------------------
+
+/// A user hook: a conveyor (every contact it modifies gets a tangent velocity of 1 m/s
+/// along x) and a filter that refuses the pairs of one "ghost" collider; both record the
+/// pairs they are asked about.
+#[derive(Default)]
+struct Conveyor {
+    filtered: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
+    modified: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
+    ghost: Mutex<Option<ColliderHandle>>,
+}
+
+impl PhysicsHooks for Conveyor {
+    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
+        self.filtered
+            .lock()
+            .unwrap()
+            .push((context.collider1, context.collider2));
+        let ghost = *self.ghost.lock().unwrap();
+        if ghost == Some(context.collider1) || ghost == Some(context.collider2) {
+            None
+        } else {
+            Some(SolverFlags::COMPUTE_RIGID_IMPULSES)
+        }
+    }
+
+    fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
+        self.modified
+            .lock()
+            .unwrap()
+            .push((context.collider1, context.collider2));
+        if let Some(m) = context.rigid_mut() {
+            for c in m.solver_contacts.iter_mut() {
+                c.tangent_velocity = Vector::new(1.0, 0.0, 0.0);
+            }
+        }
+    }
+}
+
+fn saw(
+    list: &Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
+    a: ColliderHandle,
+    b: ColliderHandle,
+) -> bool {
+    list.lock()
+        .unwrap()
+        .iter()
+        .any(|&(x, y)| (x, y) == (a, b) || (x, y) == (b, a))
+}
+
+#[test]
+fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
+    let both = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    let mut world = PhysicsWorld::default();
+    // The managed ground, a conveyor ground too (its user flags ask for both hooks).
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.5)
+            .active_hooks(both),
+    );
+    // A conveyor platform that is not ground, with a box resting on it.
+    let (_, platform) = world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(10.0, 1.0, 0.0)),
+        ColliderBuilder::cuboid(3.0, 0.1, 1.0).active_hooks(both),
+    );
+    let (on_platform, on_platform_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(10.0, 1.2, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1),
+    );
+    // A box resting on the conveyor ground (a managed resting pair), a body the plugin
+    // excludes on the ground, a ball that bounces on it, and a ghost ball the user's filter
+    // lets fall through it.
+    let (on_ground, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(-10.0, 0.1, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1),
+    );
+    let (excluded, excluded_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(-20.0, 0.1, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1),
+    );
+    let (bouncer, bouncer_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.6, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.5),
+    );
+    let (ghost, ghost_co) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(5.0, 0.6, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.5),
+    );
+    let hooks = Conveyor::default();
+    *hooks.ghost.lock().unwrap() = Some(ghost_co);
+    let mut p = ImpactPlugin::with_hooks(ImpactConfig::default(), hooks).unwrap();
+    p.add_ground(&world.bodies, &mut world.colliders, ground)
+        .unwrap();
+    p.exclude_body(excluded);
+    let (mut bounces, mut modified_in_impact) = (0, false);
+    for _ in 0..60 {
+        p.step(&mut world);
+        let n = p.events().iter().filter(|e| e.body == bouncer).count();
+        bounces += n;
+        // Up to its first bounce the ball's pair is a managed impact: never the user's to
+        // modify (resting on the conveyor ground later, it is).
+        if bounces == n {
+            modified_in_impact |= saw(&p.user_hooks().modified, ground, bouncer_co);
+        }
+        assert!(
+            p.events().iter().all(|e| e.body != ghost),
+            "the ghost was bounced"
+        );
+    }
+    let h = p.user_hooks();
+    let x = |b: RigidBodyHandle| wide(world.bodies[b].translation().x);
+    let ghost_y = wide(world.bodies[ghost].translation().y);
+    println!(
+        "user hook: filter saw platform-box {}, excluded-ground {}, ghost-ground {}, bouncer-ground {}; modify saw platform-box {}, excluded-ground {}",
+        saw(&h.filtered, platform, on_platform_co),
+        saw(&h.filtered, ground, excluded_co),
+        saw(&h.filtered, ground, ghost_co),
+        saw(&h.filtered, ground, bouncer_co),
+        saw(&h.modified, platform, on_platform_co),
+        saw(&h.modified, ground, excluded_co),
+    );
+    println!(
+        "conveyed over 1 s: box on the platform {:+.3} m, box on the conveyor ground {:+.3} m, excluded box {:+.3} m (belt 1 m/s); ghost y {ghost_y:.3}; {bounces} bounce(s) of the ball",
+        x(on_platform) - 10.0,
+        x(on_ground) + 10.0,
+        x(excluded) + 20.0
+    );
+    assert!(saw(&h.filtered, platform, on_platform_co));
+    assert!(saw(&h.modified, platform, on_platform_co));
+    assert!(saw(&h.filtered, ground, excluded_co));
+    assert!(saw(&h.modified, ground, excluded_co));
+    assert!(
+        !modified_in_impact,
+        "the user's contact modification ran on a managed impact"
+    );
+    // The belts move what rests on them (rapier's friction drags a box towards 1 m/s).
+    assert!(
+        x(on_platform) - 10.0 > 0.3,
+        "the platform conveyor did not convey"
+    );
+    assert!(
+        x(excluded) + 20.0 > 0.3,
+        "the ground conveyor did not convey an excluded box"
+    );
+    assert!(
+        x(on_ground) + 10.0 > 0.3,
+        "the ground conveyor did not convey a resting managed box"
+    );
+    assert!(
+        ghost_y < -1.0,
+        "the ghost did not fall through the ground: y = {ghost_y}"
+    );
+    assert!(bounces >= 1, "the ball never bounced");
+}
