@@ -1,0 +1,295 @@
+//! Robustness of whole scenes where the plugin meets rapier's solver (issue 5): bodies whose
+//! ground contact is pressed by other bodies. Each test prints what it measured, with rapier
+//! alone beside it.
+//!
+//! - A pile of 125 balls in a walled box settles (every ball below 2 cm/s to the end), at
+//!   60, 240 and 1000 Hz and 30 Hz, as in rapier alone: a ground pair of a body touching
+//!   other bodies is not bounced below `sqrt(2 g gap)` and a resting one it had is kept in
+//!   rapier's solver (it used to be taken out and bounced at the step end, 12 balls a step).
+//! - A heavy box (mass ratio 1.25e6) dropped 0.5 m on a light box lying on the ground sinks
+//!   it no deeper than rapier alone (it used to sink 21 cm in f64 against 11.7 cm).
+
+mod scene_support;
+
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactTiming, TimingMode};
+use scene_support::*;
+
+/// The deterministic generator of `examples/common` (splitmix64), for the sweep's pile.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// What a pile run measured.
+#[derive(Debug)]
+struct Pile {
+    /// Time from which every ball stays below 2 cm/s (None: not within 4 s).
+    settle: Option<f64>,
+    /// Fastest ball's speed, averaged over the last second (m/s).
+    jitter: f64,
+    /// Bounces (not settled events) and step-end events in the last second.
+    late_bounces: usize,
+    late_step_end: usize,
+    stats: Stats,
+}
+
+const PILE_R: f64 = 0.05;
+const PILE_T: f64 = 4.0;
+
+/// The accuracy sweep's pile (`examples/accuracy_sweep.rs`): 125 balls R = 5 cm in five
+/// layers into a walled box (the walls are not ground), e = 0.5, mu = 0.5, 4 s on a
+/// half-space; with the plugin (every step checked) or rapier alone.
+fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
+    let label = format!("pile dt {dt:.5} {timing:?}");
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(dt);
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.5)
+            .friction(0.5),
+    );
+    let pitch = 2.0 * PILE_R + 0.01;
+    let side = 5usize;
+    let inner = 0.5 * side as f64 * pitch;
+    let (h, t) = (0.5, 0.1);
+    for (x, z, hx, hz) in [
+        (inner + t, 0.0, t, inner + 2.0 * t),
+        (-inner - t, 0.0, t, inner + 2.0 * t),
+        (0.0, inner + t, inner, t),
+        (0.0, -inner - t, inner, t),
+    ] {
+        world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(real(hx), real(h), real(hz))
+                .translation(Vector::new(real(x), real(h), real(z)))
+                .friction(0.5),
+        );
+    }
+    let mut rng = Rng::new(3);
+    let mut balls = Vec::new();
+    for i in 0..side * side * 5 {
+        let (level, cell) = (i / (side * side), i % (side * side));
+        let (row, col) = (cell / side, cell % side);
+        let p = [
+            (col as f64 + 0.5) * pitch - inner + rng.range(-0.01, 0.01),
+            PILE_R + 0.1 + level as f64 * (pitch + 0.03),
+            (row as f64 + 0.5) * pitch - inner + rng.range(-0.01, 0.01),
+        ];
+        let (b, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(
+                real(p[0]),
+                real(p[1]),
+                real(p[2]),
+            )),
+            ColliderBuilder::ball(real(PILE_R))
+                .restitution(0.5)
+                .friction(0.5),
+        );
+        balls.push(b);
+    }
+    let mut plugin = timing.map(|t| {
+        let mut p = plugin(t);
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        p
+    });
+    let steps = (PILE_T / dt).ceil() as usize;
+    let mut out = Pile {
+        settle: None,
+        jitter: 0.0,
+        late_bounces: 0,
+        late_step_end: 0,
+        stats: Stats::new(),
+    };
+    let mut late_steps = 0;
+    for k in 1..=steps {
+        match plugin.as_mut() {
+            Some(p) => {
+                p.step(&mut world);
+                out.stats.steps += 1;
+                for ev in p.events() {
+                    check_event(ev, &mut out.stats, &label);
+                }
+                assert_finite(&world, &label);
+                out.stats.max_penetration = out.stats.max_penetration.max(penetration(&world, 0.0));
+            }
+            None => {
+                world.step();
+                assert_finite(&world, &label);
+                out.stats.steps += 1;
+                out.stats.max_penetration = out.stats.max_penetration.max(penetration(&world, 0.0));
+            }
+        }
+        let t = k as f64 * dt;
+        let fastest = balls
+            .iter()
+            .map(|b| wide(world.bodies[*b].linvel().length()))
+            .fold(0.0, f64::max);
+        match (fastest < 0.02, out.settle) {
+            (true, None) => out.settle = Some(t),
+            (false, Some(_)) => out.settle = None,
+            _ => {}
+        }
+        if t > PILE_T - 1.0 {
+            out.jitter += fastest;
+            late_steps += 1;
+            if let Some(p) = plugin.as_ref() {
+                out.late_bounces += p.events().iter().filter(|e| !e.settled).count();
+                out.late_step_end += p
+                    .events()
+                    .iter()
+                    .filter(|e| e.timing == ImpactTiming::StepEnd)
+                    .count();
+            }
+        }
+    }
+    out.jitter /= late_steps.max(1) as f64;
+    out
+}
+
+#[test]
+fn a_pile_of_balls_settles_as_in_rapier_alone() {
+    // Before the pressed-contact roles: at 1000 Hz (f32) and 240 Hz (f64) the pile never
+    // settled in TimeOfImpact and Exact modes (2-12 cm/s to the end, about 12 step-end
+    // bounces per step at 1-10 cm/s); 6.4 mm deep at 30 Hz (rapier alone 0.9 mm).
+    let allowed = 0.005;
+    for (dt, name) in [
+        (1.0 / 30.0, "1/30"),
+        (1.0 / 60.0, "1/60"),
+        (1.0 / 240.0, "1/240"),
+        (1.0 / 1000.0, "1/1000"),
+    ] {
+        let alone = pile(dt, None);
+        println!(
+            "pile dt {name}, rapier alone: settled at {:?} s, jitter {:.2e} m/s, deepest {:.2} mm",
+            alone.settle,
+            alone.jitter,
+            alone.stats.max_penetration * 1e3
+        );
+        for timing in [
+            TimingMode::Step,
+            TimingMode::TimeOfImpact,
+            TimingMode::Exact,
+        ] {
+            let with = pile(dt, Some(timing));
+            println!(
+                "pile dt {name}, {timing:?}: settled at {:?} s, jitter {:.2e} m/s, last-second bounces {} (step-end events {}), deepest {:.2} mm; {}",
+                with.settle,
+                with.jitter,
+                with.late_bounces,
+                with.late_step_end,
+                with.stats.max_penetration * 1e3,
+                with.stats.summary()
+            );
+            let settle = with.settle.expect("the pile never settled");
+            // Measured: 1.3-3.2 s (rapier alone 1.3-2.1 s).
+            assert!(
+                settle < PILE_T - 0.5,
+                "{timing:?} {name}: settled at {settle} s"
+            );
+            assert!(with.jitter < 0.02, "jitter {}", with.jitter);
+            assert_eq!(with.late_bounces, 0);
+            assert_eq!(with.late_step_end, 0);
+            // Within rapier's allowed linear error (5 mm), except at 30 Hz: there a bottom
+            // ball held by rapier's solver (a resting pair, e = 0) under the landing layers
+            // goes 5.2 mm deep in Step mode (3.9 mm in TimeOfImpact and Exact; rapier alone
+            // 0.9 mm in this run, rapier's own limit elsewhere in the scene tests: twice the
+            // allowed error). Measured at 60-1000 Hz: 0.6-1.5 mm.
+            let bound = if dt > 1.0 / 45.0 {
+                2.0 * allowed
+            } else {
+                allowed
+            };
+            assert!(
+                with.stats.max_penetration <= bound + penetration_rounding(1.0),
+                "{timing:?} {name}: {} m deep",
+                with.stats.max_penetration
+            );
+        }
+    }
+}
+
+/// The light box's depth below the ground, worst over 10 s, with a heavy box (1.25e6 times
+/// its mass) dropped on it from `drop_height`.
+fn mass_ratio(drop_height: f64, timing: Option<TimingMode>) -> (f64, Stats) {
+    let label = format!("mass ratio, dropped {drop_height} m, {timing:?}");
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.5)
+            .friction(0.5),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.1, 0.0)),
+        ColliderBuilder::cuboid(1.0, 0.1, 1.0)
+            .density(1e-2)
+            .restitution(0.5),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(0.7 + drop_height), 0.0)),
+        ColliderBuilder::cuboid(0.5, 0.5, 0.5)
+            .density(1e4)
+            .restitution(0.5),
+    );
+    let mut p = timing.map(|t| {
+        let mut p = plugin(t);
+        p.add_ground(&world.bodies, &mut world.colliders, ground)
+            .unwrap();
+        p
+    });
+    let mut stats = Stats::new();
+    for _ in 0..600 {
+        match p.as_mut() {
+            Some(p) => {
+                p.step(&mut world);
+                for ev in p.events() {
+                    check_event(ev, &mut stats, &label);
+                }
+            }
+            None => world.step(),
+        }
+        assert_finite(&world, &label);
+        stats.steps += 1;
+        stats.max_penetration = stats.max_penetration.max(penetration(&world, 0.0));
+    }
+    (stats.max_penetration, stats)
+}
+
+#[test]
+fn a_heavy_box_dropped_on_a_light_one_sinks_it_no_deeper_than_rapier_alone() {
+    // Before: f64, TimeOfImpact, 0.211 m with 34 step-end events (rapier alone 0.117 m).
+    for drop_height in [0.0, 0.5, 1.0] {
+        let (alone, _) = mass_ratio(drop_height, None);
+        for timing in [
+            TimingMode::Step,
+            TimingMode::TimeOfImpact,
+            TimingMode::Exact,
+        ] {
+            let (with, stats) = mass_ratio(drop_height, Some(timing));
+            println!(
+                "heavy dropped {drop_height} m, {timing:?}: light box {with:.4} m deep (rapier alone {alone:.4} m); {}",
+                stats.summary()
+            );
+            // rapier's own depth (its solver's limit at this ratio), within 1 mm.
+            assert!(
+                with <= alone + 1e-3,
+                "{timing:?}: {with} m deep, rapier alone {alone} m"
+            );
+        }
+    }
+}
