@@ -39,10 +39,12 @@ pub(crate) fn document_impulse(
     // Sticking, eqs. (10)-(12): target contact velocity -e u_n n.
     let d = -(n * ((1.0 + e) * un)) - ut;
     let stick = match iso {
-        // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4), I = 1/a.
+        // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4), I = 1/a,
+        // written with a (numerator and denominator times a): one division.
         Some(a) => {
-            let (m, i) = (body.mass, 1.0 / a);
-            (d * i + r * (m * r.dot(&d))) * (m / (i + m * r.norm_squared()))
+            let m = body.mass;
+            let c = m * a;
+            (d + r * (c * r.dot(&d))) * (m / (1.0 + c * r.norm_squared()))
         }
         None => solve_k(body, r, &d),
     };

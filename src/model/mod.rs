@@ -53,50 +53,81 @@ pub fn resolve(
     contact: &Contact,
     material: &Material,
 ) -> Result<Impact, ModelError> {
-    if !inputs_plainly_valid(body, velocity, contact, material) {
-        // Some check may fail: run them one by one, in order, to name the culprit.
-        // One sum of the velocities is finite iff all of them are.
-        let sum = velocity.linear.sum()
-            + velocity.angular.sum()
-            + contact.ground_velocity.sum()
-            + contact.offset.sum();
-        if !sum.is_finite() {
-            error::finite3(&velocity.linear, "velocity.linear")?;
-            error::finite3(&velocity.angular, "velocity.angular")?;
-        }
-        body.validate()?;
-        contact.validate()?;
-        material.validate()?;
+    let diagonal = off_diagonal_is_zero(&body.inv_inertia);
+    if !inputs_plainly_valid(body, velocity, contact, material, diagonal) {
+        validate_one_by_one(body, velocity, contact, material)?;
     }
-    resolve_unchecked(law, body, velocity, contact, material)
+    resolve_classified(law, body, velocity, contact, material, diagonal)
+}
+
+/// Runs every check of [`resolve`] one by one, in order, to name the culprit (the
+/// cheap sufficient test of [`inputs_plainly_valid`] failed, so some check may fail).
+#[cold]
+#[inline(never)]
+fn validate_one_by_one(
+    body: &Body,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+) -> Result<(), ModelError> {
+    // One sum of the velocities is finite iff all of them are.
+    let sum = velocity.linear.sum()
+        + velocity.angular.sum()
+        + contact.ground_velocity.sum()
+        + contact.offset.sum();
+    if !sum.is_finite() {
+        error::finite3(&velocity.linear, "velocity.linear")?;
+        error::finite3(&velocity.angular, "velocity.angular")?;
+    }
+    body.validate()?;
+    contact.validate()?;
+    material.validate()
 }
 
 /// A sufficient condition for every check of [`resolve`] to pass, cheap enough to run
 /// on every impact: every input is finite (one sum of all of them is finite iff each
-/// is), `m > 0`, `e, mu >= 0`, a unit normal, and a valid inverse inertia (a diagonal
-/// one with a non-negative diagonal, else the full check of [`Body::validate`]).
-#[inline]
+/// is; summed as a tree of pairs, so it takes a few vector additions), `m > 0`,
+/// `e, mu >= 0`, a unit normal, and a valid inverse inertia (a diagonal one with a
+/// non-negative diagonal, else the full check of [`Body::validate`]). `diagonal` says
+/// whether the inverse inertia's off-diagonal entries are all zero.
+#[inline(always)]
 fn inputs_plainly_valid(
     body: &Body,
     velocity: &BodyVelocity,
     contact: &Contact,
     material: &Material,
+    diagonal: bool,
 ) -> bool {
+    #[inline(always)]
+    fn add2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+        [a[0] + b[0], a[1] + b[1]]
+    }
+    let (l, w) = (&velocity.linear, &velocity.angular);
+    let (n, o, g) = (&contact.normal, &contact.offset, &contact.ground_velocity);
     let a = &body.inv_inertia;
-    let sum = (velocity.linear.sum() + velocity.angular.sum())
-        + (contact.ground_velocity.sum() + contact.offset.sum())
-        + (contact.normal.sum() + a.sum())
-        + (body.mass + material.restitution + material.friction);
     let (e, mu) = (material.restitution, material.friction);
+    let vectors = add2(
+        add2(add2([l.x, l.y], [l.z, w.x]), add2([w.y, w.z], [n.x, n.y])),
+        add2(
+            add2([n.z, o.x], [o.y, o.z]),
+            add2([g.x, g.y], [g.z, body.mass]),
+        ),
+    );
+    let tensor = add2(
+        add2([a.m11, a.m21], [a.m31, a.m12]),
+        add2([a.m22, a.m32], [a.m13, a.m23]),
+    );
+    let all = add2(vectors, add2(tensor, [a.m33, e + mu]));
+    let sum = all[0] + all[1];
     if !(sum.is_finite()
         && body.mass > 0.0
         && e >= 0.0
         && mu >= 0.0
-        && (contact.normal.norm_squared() - 1.0).abs() <= 2e-6)
+        && (n.norm_squared() - 1.0).abs() <= 2e-6)
     {
         return false;
     }
-    if off_diagonal_is_zero(a) {
+    if diagonal {
         a.m11 >= 0.0 && a.m22 >= 0.0 && a.m33 >= 0.0
     } else {
         body.validate().is_ok()
@@ -105,6 +136,7 @@ fn inputs_plainly_valid(
 
 /// [`resolve`] without validation, for callers that validated the body, contact and
 /// material once (the rapier adapter validates materials when they are set).
+#[inline]
 pub fn resolve_unchecked(
     law: Law,
     body: &Body,
@@ -112,34 +144,89 @@ pub fn resolve_unchecked(
     contact: &Contact,
     material: &Material,
 ) -> Result<Impact, ModelError> {
+    let diagonal = off_diagonal_is_zero(&body.inv_inertia);
+    resolve_classified(law, body, velocity, contact, material, diagonal)
+}
+
+/// [`resolve_unchecked`], told whether the inverse inertia is diagonal.
+#[inline(always)]
+fn resolve_classified(
+    law: Law,
+    body: &Body,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+    diagonal: bool,
+) -> Result<Impact, ModelError> {
     let n = &contact.normal;
     let r = &contact.offset;
     let u1 = velocity.linear + velocity.angular.cross(r) - contact.ground_velocity;
     let un = n.dot(&u1);
     if un >= 0.0 || un.is_nan() {
-        let ke = body.kinetic_energy(velocity);
-        return Ok(Impact {
-            impulse: Vector3::zeros(),
-            normal_impulse: 0.0,
-            tangent_impulse: Vector3::zeros(),
-            velocity: *velocity,
-            regime: Regime::Separating,
-            law: if law == Law::Consistent {
-                Law::Consistent
-            } else {
-                Law::Document
-            },
-            fallback: None,
-            ke_before: ke,
-            ke_after: ke,
-        });
+        return Ok(separating(law, body, velocity));
     }
+    let a = &body.inv_inertia;
+    if law != Law::Consistent && diagonal && a.m11 == a.m22 && a.m22 == a.m33 && a.m11 > 0.0 {
+        // The document's law for a sphere or a cube, with `iso` a constant: its own
+        // small code path, where every step is a closed form.
+        return resolve_approaching(law, body, Some(a.m11), velocity, contact, material, &u1);
+    }
+    resolve_general(law, body, velocity, contact, material, &u1)
+}
+
+/// A contact that does not approach: no impulse ([`Regime::Separating`]).
+#[cold]
+#[inline(never)]
+fn separating(law: Law, body: &Body, velocity: &BodyVelocity) -> Impact {
+    let ke = body.kinetic_energy(velocity);
+    Impact {
+        impulse: Vector3::zeros(),
+        normal_impulse: 0.0,
+        tangent_impulse: Vector3::zeros(),
+        velocity: *velocity,
+        regime: Regime::Separating,
+        law: if law == Law::Consistent {
+            Law::Consistent
+        } else {
+            Law::Document
+        },
+        fallback: None,
+        ke_before: ke,
+        ke_after: ke,
+    }
+}
+
+/// Every body and law the isotropic path does not take.
+#[inline(never)]
+fn resolve_general(
+    law: Law,
+    body: &Body,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> Result<Impact, ModelError> {
     let iso = isotropic_inverse_inertia(body);
+    resolve_approaching(law, body, iso, velocity, contact, material, u1)
+}
+
+/// Resolves an approaching contact (`n.u1 < 0`) under `law`.
+#[inline(always)]
+fn resolve_approaching(
+    law: Law,
+    body: &Body,
+    iso: Option<f64>,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> Result<Impact, ModelError> {
+    let u1 = *u1;
     match law {
         Law::Document => {
             let (impulse, regime, _) =
                 document::document_impulse(body, iso, contact, material, &u1)?;
-            let (impact, _) = finish(
+            let (impact, _, _) = finish(
                 body,
                 iso,
                 velocity,
@@ -152,26 +239,14 @@ pub fn resolve_unchecked(
             );
             Ok(impact)
         }
-        Law::Consistent => {
-            let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            let (impact, _) = finish(
-                body,
-                iso,
-                velocity,
-                &u1,
-                contact,
-                impulse,
-                regime,
-                Law::Consistent,
-                None,
-            );
-            Ok(impact)
-        }
+        Law::Consistent => Ok(consistent_impact(
+            body, iso, velocity, contact, material, &u1, None,
+        )),
         Law::Guarded => {
             let reason = match document::document_impulse(body, iso, contact, material, &u1) {
                 Err(_) => Fallback::Jam,
                 Ok((impulse, regime, s)) => {
-                    let (impact, u2) = finish(
+                    let (impact, u2, work) = finish(
                         body,
                         iso,
                         velocity,
@@ -182,27 +257,49 @@ pub fn resolve_unchecked(
                         Law::Document,
                         None,
                     );
-                    match unphysical(contact, material, &impact, &u1, &u2, &s) {
+                    match unphysical(contact, material, &impact, &u1, &u2, work, &s) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }
                 }
             };
-            let (impulse, regime) = consistent::consistent_impulse(body, contact, material, &u1);
-            let (impact, _) = finish(
+            Ok(consistent_impact(
                 body,
                 iso,
                 velocity,
-                &u1,
                 contact,
-                impulse,
-                regime,
-                Law::Consistent,
+                material,
+                &u1,
                 Some(reason),
-            );
-            Ok(impact)
+            ))
         }
     }
+}
+
+/// The consistent law's impact (`fallback` set when `Guarded` fell back to it).
+#[inline(never)]
+fn consistent_impact(
+    body: &Body,
+    iso: Option<f64>,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+    fallback: Option<Fallback>,
+) -> Impact {
+    let (impulse, regime) = consistent::consistent_impulse(body, contact, material, u1);
+    finish(
+        body,
+        iso,
+        velocity,
+        u1,
+        contact,
+        impulse,
+        regime,
+        Law::Consistent,
+        fallback,
+    )
+    .0
 }
 
 /// `a` when the inverse inertia tensor is `a E` with `a > 0` (spheres, cubes), the
@@ -228,13 +325,15 @@ fn off_diagonal_is_zero(a: &Matrix3<f64>) -> bool {
 }
 
 /// Why the document's result is unphysical, if it is (the `Guarded` law's test).
-/// `u1`, `u2` are the relative contact velocities before and after.
+/// `u1`, `u2` are the relative contact velocities before and after, `work` the
+/// impulse's work `P . (u1 + u2) / 2`.
 fn unphysical(
     contact: &Contact,
     material: &Material,
     impact: &Impact,
     u1: &Vector3<f64>,
     u2: &Vector3<f64>,
+    work: f64,
     slip: &Vector3<f64>,
 ) -> Option<Fallback> {
     if impact.normal_impulse < 0.0 {
@@ -250,9 +349,8 @@ fn unphysical(
     if material.restitution <= 1.0 {
         // The work of the impulse in the frame moving with the ground's contact point,
         // where a fixed ground's work-energy balance holds for a translating platform
-        // too: dKE = P . (u1 + u2) / 2 with u the relative contact velocities.
-        let gain = 0.5 * impact.impulse.dot(&(u1 + u2));
-        if gain > ENERGY_GAIN_TOLERANCE * impact.impulse.norm() * u1.norm() {
+        // too: dKE = P . (u1 + u2) / 2 with u the relative contact velocities (`work`).
+        if work > ENERGY_GAIN_TOLERANCE * impact.impulse.norm() * u1.norm() {
             return Some(Fallback::EnergyGain);
         }
     }
@@ -275,30 +373,31 @@ fn finish(
     regime: Regime,
     law: Law,
     fallback: Option<Fallback>,
-) -> (Impact, Vector3<f64>) {
+) -> (Impact, Vector3<f64>, f64) {
     let r = &contact.offset;
     let inv_m = 1.0 / body.mass;
-    let (angular, ke_before) = match iso {
+    let r_p = r.cross(&impulse);
+    let (dw, ke_before) = match iso {
         Some(a) => (
-            velocity.angular + r.cross(&impulse) * a,
+            r_p * a,
             0.5 * (body.mass * velocity.linear.norm_squared()
                 + velocity.angular.norm_squared() / a),
         ),
-        None => (
-            velocity.angular + body.inv_inertia * r.cross(&impulse),
-            body.kinetic_energy(velocity),
-        ),
+        None => (body.inv_inertia * r_p, body.kinetic_energy(velocity)),
     };
+    let dv = impulse * inv_m;
     let after = BodyVelocity {
-        linear: velocity.linear + impulse * inv_m,
-        angular,
+        linear: velocity.linear + dv,
+        angular: velocity.angular + dw,
     };
     let normal_impulse = impulse.dot(&contact.normal);
     // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
-    // one impulse at r, and free of the cancellation of subtracting two energies.
-    let point_after = after.linear + after.angular.cross(r);
-    let point_velocities = u1 + contact.ground_velocity + point_after;
-    let u2 = point_after - contact.ground_velocity;
+    // one impulse at r, and free of the cancellation of subtracting two energies. With
+    // u_B2 = u_B1 + K P it is P . u_B1 + P . K P / 2, and P . K P = |P|^2/m + (r × P) . dw,
+    // a sum of non-negative terms.
+    let point_before = u1 + contact.ground_velocity;
+    let pkp = impulse.dot(&dv) + r_p.dot(&dw);
+    let u2 = u1 + dv + dw.cross(r);
     let impact = Impact {
         impulse,
         normal_impulse,
@@ -308,7 +407,9 @@ fn finish(
         law,
         fallback,
         ke_before,
-        ke_after: ke_before + 0.5 * impulse.dot(&point_velocities),
+        ke_after: ke_before + (impulse.dot(&point_before) + 0.5 * pkp),
     };
-    (impact, u2)
+    // The impulse's work in the frame of the ground's contact point: P . (u1 + u2) / 2.
+    let work = impulse.dot(u1) + 0.5 * pkp;
+    (impact, u2, work)
 }
