@@ -336,7 +336,7 @@ fn swerve_segment(
         if state.p + z[DP] > p_cap {
             return None;
         }
-        let (z_new, err5, err3, k_new) = dop853_step(&flow, &z, &k1, h);
+        let (z_new, err5, err3, k_new, k) = dop853_step(&flow, &z, &k1, h);
         // Hairer's DOP853 error estimate from the 5th- and 3rd-order embedded pairs.
         let e5 = flow.error_size(&err5) / scale;
         let e3 = flow.error_size(&err3) / scale;
@@ -355,71 +355,59 @@ fn swerve_segment(
             h *= factor;
             continue;
         }
-        // Events inside the accepted step, located on the cubic Hermite interpolant.
-        let (un_old, un_new) = (flow.velocity(&z).1, flow.velocity(&z_new).1);
-        let crossing = match phase {
-            Phase::Compression if un_new >= 0.0 => Some((
-                hermite_root(
-                    un_old,
-                    flow.normal_rate(&z),
-                    un_new,
-                    flow.normal_rate(&z_new),
-                    h,
-                    0.0,
-                ),
-                Event::CompressionEnded,
-            )),
+        let grow = if err_norm > 0.0 {
+            (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.333, 6.0)
+        } else {
+            6.0
+        };
+        // Events inside the accepted step, located on DOP853's 7th-order dense output
+        // (Hairer's contd8: three more stages), by Newton's method on its polynomial.
+        let un_new = flow.velocity(&z_new).1;
+        let event = match phase {
+            Phase::Compression if un_new >= 0.0 => Some(Event::CompressionEnded),
             Phase::Restitution { target_work } if state.work + z_new[DW] >= target_work => {
-                let level = target_work - state.work;
-                Some((
-                    hermite_root(z[DW], k1[DW], z_new[DW], k_new[DW], h, level),
-                    Event::Finished,
-                ))
+                Some(Event::Finished)
             }
             _ => None,
         };
-        if let Some((guess, event)) = crossing {
-            // The cubic interpolant is only third-order accurate: polish the location
-            // by Newton's method on the integrated value itself (each iterate is one
-            // step from the start of the accepted step, which is well inside its
-            // error control).
-            let value = |z: &Z| match phase {
-                Phase::Compression => (flow.velocity(z).1, flow.normal_rate(z)),
+        if let Some(event) = event {
+            let dense = Dense::new(&flow, &z, &z_new, &k, &k_new, h);
+            // The event's value as a polynomial in the step fraction x, zero at the event:
+            // u_n (linear in z) or the work given back so far minus its target.
+            let (base, coefficients) = match phase {
+                Phase::Compression => {
+                    let un = |c: &Z| flow.knn * c[DP] + flow.ktn.x * c[DF1] + flow.ktn.y * c[DF2];
+                    (flow.velocity(&z).1, dense.f.map(|c| un(&c)))
+                }
                 Phase::Restitution { target_work } => {
-                    (z[DW] - (target_work - state.work), flow.rate(z)[DW])
+                    (z[DW] - (target_work - state.work), dense.f.map(|c| c[DW]))
                 }
             };
-            let mut dh = guess;
+            let dh = h * dense_root(base, &coefficients);
+            // The dense output is an order less accurate than a step: take one step to
+            // the located point, then one Newton correction on the integrated value
+            // itself, along the rate there (its shift is of the dense output's error,
+            // ~1e-10 of the step, so the neglected curvature is ~1e-20 of it).
             let mut z_event = dop853_step(&flow, &z, &k1, dh).0;
-            for _ in 0..4 {
-                let (v, slope) = value(&z_event);
-                if slope <= 0.0 || slope.is_nan() {
-                    break;
+            let (v, slope) = match phase {
+                Phase::Compression => (flow.velocity(&z_event).1, flow.normal_rate(&z_event)),
+                Phase::Restitution { target_work } => (
+                    z_event[DW] - (target_work - state.work),
+                    flow.rate(&z_event)[DW],
+                ),
+            };
+            if slope > 0.0 && slope.is_finite() {
+                let shift = (-v / slope).clamp(-dh, h - dh);
+                let rate = flow.rate(&z_event);
+                for (zi, ri) in z_event.iter_mut().zip(rate) {
+                    *zi += ri * shift;
                 }
-                let next = (dh - v / slope).clamp(0.0, h);
-                let shift = next - dh;
-                if shift.abs() <= 1e-6 * h {
-                    // A shift this small is taken along the rate at the iterate: the
-                    // neglected curvature term is ~1e-12 of the step's change.
-                    let rate = flow.rate(&z_event);
-                    for (zi, ri) in z_event.iter_mut().zip(rate) {
-                        *zi += ri * shift;
-                    }
-                    break;
-                }
-                dh = next;
-                z_event = dop853_step(&flow, &z, &k1, dh).0;
             }
             store(&z_event, state);
             return Some(event);
         }
         z = z_new;
         k1 = k_new;
-        let grow = if err_norm > 0.0 {
-            (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.333, 6.0)
-        } else {
-            6.0
-        };
         h *= grow;
     }
     None
@@ -568,8 +556,9 @@ fn stage<const N: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k: &[Z; 12]) -> Z
 /// estimates (DOP853: Hairer, Norsett & Wanner, "Solving ODEs I", 2nd ed., II.10;
 /// coefficients of Hairer's `dop853`). Returns the 8th-order solution, the 5th- and
 /// 3rd-order error vectors (without the factor `h`, as in Hairer's estimate), and the
-/// rate at the new point.
-fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> (Z, Z, Z, Z) {
+/// rate at the new point, and the twelve stages (for the dense output).
+#[inline(always)]
+fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> (Z, Z, Z, Z, [Z; 12]) {
     let mut k = [[0.0; 4]; 12];
     k[0] = *k1;
     k[1] = flow.rate(&stage(z, h, &A2, &k));
@@ -587,7 +576,103 @@ fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> (Z, Z, Z, Z) {
     let err5 = stage(&[0.0; 4], 1.0, &E5, &k);
     let err3 = stage(&[0.0; 4], 1.0, &E3, &k);
     let k_new = flow.rate(&z_new);
-    (z_new, err5, err3, k_new)
+    (z_new, err5, err3, k_new, k)
+}
+
+/// DOP853's dense output over one accepted step from `z` (Hairer's contd8): with
+/// `x` the fraction of the step, `z(x) = z + x (f0 + (1-x) (f1 + x (f2 + (1-x) (f3 +
+/// x (f4 + (1-x) (f5 + x f6))))))`, of order 7.
+struct Dense {
+    f: [Z; 7],
+}
+
+impl Dense {
+    fn new(flow: &Flow, z: &Z, z_new: &Z, k: &[Z; 12], k_new: &Z, h: f64) -> Self {
+        let mut ext = [[0.0; 4]; 16];
+        ext[..12].copy_from_slice(k);
+        ext[12] = *k_new;
+        ext[13] = flow.rate(&stage_ext(z, h, &A14, &ext));
+        ext[14] = flow.rate(&stage_ext(z, h, &A15, &ext));
+        ext[15] = flow.rate(&stage_ext(z, h, &A16, &ext));
+        let mut f = [[0.0; 4]; 7];
+        for j in 0..4 {
+            let dz = z_new[j] - z[j];
+            f[0][j] = dz;
+            f[1][j] = h * ext[0][j] - dz;
+            f[2][j] = 2.0 * dz - h * (ext[0][j] + ext[12][j]);
+            for (row, d) in [&D4[..], &D5[..], &D6[..], &D7[..]].iter().enumerate() {
+                let mut acc = 0.0;
+                for &(i, c) in d.iter() {
+                    acc += c * ext[i][j];
+                }
+                f[3 + row][j] = h * acc;
+            }
+        }
+        Self { f }
+    }
+}
+
+/// `z + h * sum(c_i k_i)` over the extended stages.
+#[inline(always)]
+fn stage_ext<const N: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k: &[Z; 16]) -> Z {
+    let mut out = *z;
+    for j in 0..4 {
+        let mut acc = 0.0;
+        for &(i, ci) in c {
+            acc += ci * k[i][j];
+        }
+        out[j] += h * acc;
+    }
+    out
+}
+
+/// The dense-output polynomial with coefficients `f` at `x`, and its derivative in `x`.
+#[inline(always)]
+fn dense_value(f: &[f64; 7], x: f64) -> (f64, f64) {
+    let x1 = 1.0 - x;
+    // Horner from the inside out, alternating factors x and 1 - x, with the derivative.
+    let (mut y, mut dy) = (f[6] * x, f[6]);
+    for (i, &c) in f[..6].iter().enumerate().rev() {
+        y += c;
+        if i % 2 == 1 {
+            (y, dy) = (y * x1, dy * x1 - y);
+        } else {
+            (y, dy) = (y * x, dy * x + y);
+        }
+    }
+    (y, dy)
+}
+
+/// The fraction `x` in `[0, 1]` of the step where `base + p(x)` crosses zero upwards,
+/// with `p` the dense-output polynomial with coefficients `f` (`base < 0 <= base +
+/// p(1)`): Newton's method, safeguarded by bisection on the bracket.
+fn dense_root(base: f64, f: &[f64; 7]) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    // The secant through the ends as the first guess.
+    let end = base + dense_value(f, 1.0).0;
+    let mut x = if end > base {
+        -base / (end - base)
+    } else {
+        1.0
+    };
+    for _ in 0..60 {
+        let (p, dp) = dense_value(f, x);
+        let v = base + p;
+        if v < 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut next = if dp > 0.0 { x - v / dp } else { f64::NAN };
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - x).abs() <= 1e-15 || hi - lo <= 1e-15 {
+            return next;
+        }
+        x = next;
+    }
+    hi
 }
 
 // DOP853 tableau (Hairer's dop853.f, to double precision), nonzero entries only as
@@ -688,30 +773,95 @@ const E3: [(usize, f64); 8] = [
     (11, 0.022651792198360825),
 ];
 
-/// The offset `x` in `[0, h]` where the cubic Hermite interpolant through
-/// `(0, a, da)` and `(h, b, db)` reaches `level` (`a < level <= b`), by bisection.
-fn hermite_root(a: f64, da: f64, b: f64, db: f64, h: f64, level: f64) -> f64 {
-    let value = |x: f64| {
-        let t = x / h;
-        let (t2, t3) = (t * t, t * t * t);
-        (2.0 * t3 - 3.0 * t2 + 1.0) * a
-            + (t3 - 2.0 * t2 + t) * h * da
-            + (-2.0 * t3 + 3.0 * t2) * b
-            + (t3 - t2) * h * db
-            - level
-    };
-    let (mut lo, mut hi) = (0.0, h);
-    // A guess for Newton's method: 2^-24 of the step is plenty.
-    for _ in 0..24 {
-        let mid = 0.5 * (lo + hi);
-        if value(mid) < 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
+// DOP853's dense output (Hairer's dop853.f, contd8): the three extra stages 14-16
+// (rows of A, over the twelve stages and the rate at the step's end, stage 13), and
+// the coefficients d4-d7 of the interpolant.
+const A14: [(usize, f64); 8] = [
+    (0, 5.616750228304795e-2),
+    (6, 2.535002102166248e-1),
+    (7, -2.462390374708025e-1),
+    (8, -1.2419142326381637e-1),
+    (9, 1.532917982787657e-1),
+    (10, 8.20105229563469e-3),
+    (11, 7.5678976605457e-3),
+    (12, -8.298e-3),
+];
+const A15: [(usize, f64); 8] = [
+    (0, 3.183464816350214e-2),
+    (5, 2.8300909672366776e-2),
+    (6, 5.354198830743857e-2),
+    (7, -5.492374857139099e-2),
+    (10, -1.0834732869724932e-4),
+    (11, 3.825710908356584e-4),
+    (12, -3.4046500868740456e-4),
+    (13, 1.413124436746325e-1),
+];
+const A16: [(usize, f64); 8] = [
+    (0, -4.288963015837919e-1),
+    (5, -4.697621415361164),
+    (6, 7.683421196062599),
+    (7, 4.06898981839711),
+    (8, 3.567271874552811e-1),
+    (12, -1.3990241651590146e-3),
+    (13, 2.9475147891527723),
+    (14, -9.15095847217987),
+];
+const D4: [(usize, f64); 12] = [
+    (0, -8.428938276109013),
+    (5, 5.667149535193778e-1),
+    (6, -3.0689499459498917),
+    (7, 2.38466765651207),
+    (8, 2.1170345824450283),
+    (9, -8.71391583777973e-1),
+    (10, 2.2404374302607883),
+    (11, 6.315787787694688e-1),
+    (12, -8.899033645133331e-2),
+    (13, 18.148505520854727),
+    (14, -9.194632392478356),
+    (15, -4.436036387594894),
+];
+const D5: [(usize, f64); 12] = [
+    (0, 10.427508642579134),
+    (5, 242.28349177525817),
+    (6, 165.20045171727028),
+    (7, -374.5467547226902),
+    (8, -22.113666853125306),
+    (9, 7.733432668472264),
+    (10, -30.674084731089398),
+    (11, -9.332130526430229),
+    (12, 15.697238121770845),
+    (13, -31.139403219565178),
+    (14, -9.35292435884448),
+    (15, 35.81684148639408),
+];
+const D6: [(usize, f64); 12] = [
+    (0, 19.985053242002433),
+    (5, -387.0373087493518),
+    (6, -189.17813819516758),
+    (7, 527.8081592054236),
+    (8, -11.573902539959631),
+    (9, 6.8812326946963),
+    (10, -1.0006050966910838),
+    (11, 7.777137798053443e-1),
+    (12, -2.778205752353508),
+    (13, -60.19669523126412),
+    (14, 84.32040550667716),
+    (15, 11.99229113618279),
+];
+const D7: [(usize, f64); 12] = [
+    (0, -25.69393346270375),
+    (5, -154.18974869023643),
+    (6, -231.5293791760455),
+    (7, 357.6391179106141),
+    (8, 93.40532418362432),
+    (9, -37.45832313645163),
+    (10, 104.09964950896231),
+    (11, 29.840293426660504),
+    (12, -43.53345659001114),
+    (13, 96.32455395918828),
+    (14, -39.17726167561544),
+    (15, -149.72683625798564),
+];
 
 /// A jam that impulse-space integration cannot end (Painleve's paradox: the normal
 /// impulse would grow without bound). Resolved as an impulsive tangential impact that
