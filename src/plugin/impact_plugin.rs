@@ -777,7 +777,12 @@ impl<H> ImpactPlugin<H> {
                 seg = after;
                 let settled = event.settled;
                 self.events.push(event);
-                if settled {
+                // A settled impact on a body whose centre of mass leaves the ground (a
+                // spinning cube's corner swinging down while it rises) does not rest it:
+                // holding gravity there lifted the cube for the rest of the step (dice seed
+                // 4, f64 Exact 60 Hz: +3.0e-3 of the throw's energy). It flies on, with
+                // gravity, to its next impact.
+                if settled && hit.normal.dot(&seg.v) <= step.resting_speed {
                     // Resting from here: gravity into the ground is held by the contact.
                     let an = hit.normal.dot(&flight.accel);
                     if an < 0.0 {
@@ -787,6 +792,11 @@ impl<H> ImpactPlugin<H> {
                     if vn < 0.0 {
                         seg.v -= hit.normal * vn;
                     }
+                    break;
+                }
+                if count >= self.config.max_impacts_per_step {
+                    // The last impact allowed in the step (forced settled) on a leaving
+                    // body: it flies on; the safety net below keeps it out of the ground.
                     break;
                 }
                 next = first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
