@@ -22,9 +22,64 @@ pub(crate) struct BodyPart<'a> {
     pub skin: f64,
 }
 
+/// A list that keeps one element inline and spills to a `Vec` beyond: most bodies have one
+/// collider and touch one ground, and the per-step lists of the adapter then allocate nothing.
+#[derive(Clone, Debug, Default)]
+pub(crate) enum SmallList<T> {
+    #[default]
+    Empty,
+    One(T),
+    Many(Vec<T>),
+}
+
+impl<T> SmallList<T> {
+    pub fn push(&mut self, x: T) {
+        match self {
+            Self::Empty => *self = Self::One(x),
+            Self::One(_) => {
+                if let Self::One(a) = std::mem::take(self) {
+                    *self = Self::Many(vec![a, x]);
+                }
+            }
+            Self::Many(v) => v.push(x),
+        }
+    }
+}
+
+impl<T> std::ops::Deref for SmallList<T> {
+    type Target = [T];
+
+    fn deref(&self) -> &[T] {
+        match self {
+            Self::Empty => &[],
+            Self::One(a) => std::slice::from_ref(a),
+            Self::Many(v) => v,
+        }
+    }
+}
+
+impl<'s, T> IntoIterator for &'s SmallList<T> {
+    type Item = &'s T;
+    type IntoIter = std::slice::Iter<'s, T>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl<T> FromIterator<T> for SmallList<T> {
+    fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
+        let mut list = Self::Empty;
+        for x in iter {
+            list.push(x);
+        }
+        list
+    }
+}
+
 /// The colliders of a body and a bound on their distance from its centre of mass.
 pub(crate) struct BodyGeom<'a> {
-    pub parts: Vec<BodyPart<'a>>,
+    pub parts: SmallList<BodyPart<'a>>,
     /// Radius of a sphere about the centre of mass that holds every collider (m).
     pub radius: f64,
 }
@@ -57,7 +112,12 @@ impl GroundGeom<'_> {
 
     /// The collider's world pose at time `t` of the step.
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
-        let rot = UnitQuaternion::from_scaled_axis(self.w * t) * self.rot0;
+        // A ground that does not turn (every fixed one): no rotation to compose.
+        let rot = if self.w == Vector3::zeros() {
+            self.rot0
+        } else {
+            UnitQuaternion::from_scaled_axis(self.w * t) * self.rot0
+        };
         Isometry3::from_parts(Translation3::from(self.com_at(t)), rot) * self.local
     }
 
@@ -366,6 +426,116 @@ pub(crate) fn closest(
     best
 }
 
+/// How close to a ground [`first_impact`] counts as touching (m), for a body of `radius`.
+fn close_tolerance(radius: f64) -> f64 {
+    (1e-3 * radius).clamp(1e-7, 1e-3)
+}
+
+/// Is every query of `part` against `ground` over a flight from `s` in which every point of
+/// the body moves at most `travel` the direct plane query of one face, with the body's support
+/// point over it? For a ground that does not move (no velocity): a half-space, or a cuboid
+/// whose face the direct query picks stays picked and under the body wherever it goes (the
+/// part's origin within `travel` plus its offset turning, the support point within `radius`
+/// of the centre of mass). The part must have a support map.
+fn flat_throughout(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    travel: f64,
+    radius: f64,
+) -> bool {
+    use crate::parry::shape::TypedShape;
+    if ground.v != Vector3::zeros()
+        || ground.w != Vector3::zeros()
+        || part.shape.as_support_map().is_none()
+        || !(travel.is_finite() && radius.is_finite())
+    {
+        return false;
+    }
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(_) => true,
+        TypedShape::Cuboid(cb) => {
+            let pose_g = ground.pose_at(0.0);
+            let to_local = |p: Vector3<f64>| {
+                pose_g
+                    .inverse_transform_point(&nalgebra::Point3::from(p))
+                    .coords
+            };
+            let origin_w = part_pose(part, s).translation.vector;
+            let origin = to_local(origin_w);
+            let com = to_local(s.com);
+            let r_o = travel + 2.0 * (origin_w - s.com).norm();
+            let half = vec_to_na(cb.half_extents);
+            // The face plane_contact_on picks: the largest |p_i| / half_i.
+            let axis = (0..3)
+                .max_by(|i, j| {
+                    (origin[*i].abs() / half[*i]).total_cmp(&(origin[*j].abs() / half[*j]))
+                })
+                .unwrap_or(0);
+            let lead = (origin[axis].abs() - r_o) / half[axis];
+            lead > 0.0
+                && (0..3).filter(|i| *i != axis).all(|i| {
+                    (origin[i].abs() + r_o) / half[i] < lead
+                        && com[i].abs() + travel + radius < half[i]
+                })
+        }
+        _ => false,
+    }
+}
+
+/// Can the pair provably not meet in `[0, dt]` of the flight from `s`, so that
+/// [`first_impact`] would find it `Clear`? `(dist, n)`: the pair's contact at `s` (signed
+/// distance, normal); `radius`: the body's; `speed`: the body's approach bound over the step
+/// (`Flight::max_speed + Flight::max_angular_speed x radius`, as [`approach_bound`] for a
+/// fixed ground).
+///
+/// Only for a ground that does not move (no velocity) and is a half-space, or a cuboid whose
+/// face under the part stays the face the direct query picks, with the body's support point
+/// over it, wherever the part goes in the step: every query of the search is then the direct
+/// plane query, and for a convex ground the gap along the face normal (translation of the
+/// centre of mass, less what the rotation can bring any point of the body closer) bounds the
+/// distance from below. `true` when that bound stays above the search's touching tolerance
+/// over the whole step, by enough that the conservative advancement crosses the step in well
+/// under its step limit.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cannot_close(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    flight: &Flight,
+    s: &State,
+    dt: f64,
+    (dist, n): (f64, Vector3<f64>),
+    radius: f64,
+    speed: f64,
+) -> bool {
+    if !(dt >= 0.0 && speed.is_finite() && radius.is_finite() && dist.is_finite()) {
+        return false;
+    }
+    // Any point of the body moves at most this far in the step.
+    let travel = speed.max(1e-9) * dt;
+    if !flat_throughout(part, ground, s, travel, radius) {
+        return false;
+    }
+    // The lowest the centre of mass's flight goes along `n` in the step:
+    // `n.(v phi1 + a phi2)`, with `phi1 = t` and `phi2 = t^2 / 2` undamped, and
+    // `0 <= phi1 <= t`, `0 <= phi2 <= t^2 / 2` under damping.
+    let (vn, an) = (n.dot(&s.v), n.dot(&flight.accel));
+    let sink = if flight.linear_damping == 0.0 {
+        let at = |t: f64| vn * t + 0.5 * an * t * t;
+        let mut low = at(dt).min(0.0);
+        if an > 0.0 && vn < 0.0 && -vn / an < dt {
+            low = low.min(at(-vn / an));
+        }
+        low
+    } else {
+        vn.min(0.0) * dt + 0.5 * an.min(0.0) * dt * dt
+    };
+    let turn = flight.max_angular_speed(s) * dt * radius;
+    let rounding = 1e-9 * (1.0 + s.com.norm() + dist.abs());
+    let low = dist + sink - turn - rounding;
+    low > close_tolerance(radius) && travel <= 256.0 * low
+}
+
 /// A bound on the speed at which any point of the body can approach any ground during
 /// `[t0, t0 + span]` of the flight from `s0` at `t0`.
 fn approach_bound(
@@ -416,7 +586,7 @@ pub(crate) fn first_impact(
 ) -> Search {
     const MAX_ADVANCE: usize = 512;
     let bound = approach_bound(body, grounds, flight, s0, t0, t_to - t0);
-    let close = (1e-3 * body.radius).clamp(1e-7, 1e-3);
+    let close = close_tolerance(body.radius);
     let mut t = t_from;
     let mut last = (t, flight.advance(s0, t - t0));
     for _ in 0..MAX_ADVANCE {

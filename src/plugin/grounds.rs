@@ -63,6 +63,7 @@ impl<H> ImpactPlugin<H> {
         if let Some(m) = &material {
             m.validate()?;
         }
+        self.grounds_changed();
         let entry = self
             .grounds
             .get_mut(&collider)
@@ -82,6 +83,7 @@ impl<H> ImpactPlugin<H> {
 
     /// Unmarks a ground, its hook flags back to the user's.
     fn unmark(&mut self, colliders: &mut ColliderSet, collider: ColliderHandle) -> bool {
+        self.grounds_changed();
         match self.grounds.remove(&collider) {
             Some(entry) => {
                 if let Some(co) = colliders.get_mut(collider) {
@@ -123,6 +125,7 @@ impl<H> ImpactPlugin<H> {
         collider: ColliderHandle,
         material: Option<GroundMaterial>,
     ) -> Result<(), ConfigError> {
+        self.grounds_changed();
         let co = colliders
             .get(collider)
             .ok_or(ConfigError::NotACollider(collider))?;

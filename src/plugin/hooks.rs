@@ -35,8 +35,8 @@ impl<H> ImpactPlugin<H> {
         c2: ColliderHandle,
     ) -> Option<PairKey> {
         let (body, ground) = match (
-            self.grounds.contains_key(&c1),
-            self.grounds.contains_key(&c2),
+            self.ground_entry(c1).is_some(),
+            self.ground_entry(c2).is_some(),
         ) {
             (true, false) => (c2, c1),
             (false, true) => (c1, c2),
@@ -54,7 +54,7 @@ impl<H> ImpactPlugin<H> {
 
     /// The hook flags the user asked for on a collider.
     pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
-        match self.grounds.get(&c) {
+        match self.ground_entry(c) {
             Some(entry) => entry.user_hooks,
             None => colliders
                 .get(c)
@@ -106,7 +106,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);
                 }
-                let over = self.grounds.get(&key.1).and_then(|g| g.material);
+                let over = self.ground_entry(key.1).and_then(|g| g.material);
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {

@@ -16,11 +16,12 @@ use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, ve
 use super::events::{ImpactEvent, ImpactTiming};
 use super::flight::{Flight, Gyro, State};
 use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Search, closest, contact_checked, first_impact, landing_point,
+    BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
+    first_impact, landing_point,
 };
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
 use crate::model::Material;
-use crate::rapier::math::{Pose, Vector};
+use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
@@ -116,9 +117,12 @@ struct Candidate {
     flight: Flight,
     local_com: Vector3<f64>,
     /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
-    impact_grounds: Vec<usize>,
+    impact_grounds: SmallList<usize>,
     /// Step mode: impulses were applied at the start.
     touched: bool,
+    /// Some pair with an `impact_grounds` ground may meet in the step (else the search from
+    /// the start state would find it clear: see `geometry::cannot_close`).
+    closing: bool,
 }
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -143,6 +147,72 @@ struct StepData {
     roles: HandleMap<PairKey, Role>,
     grounds: Vec<GroundMotion>,
     candidates: Vec<Candidate>,
+    lookup: Lookup,
+}
+
+/// What the hooks ask for every ground pair inside rapier's step, by collider index instead
+/// of hashing: the grounds and the roles as they are at the end of
+/// [`ImpactPlugin::before_step`]. The roles do not change until
+/// [`ImpactPlugin::after_step`]; a ground registration made in between invalidates the ground
+/// table (the map answers then).
+#[derive(Default)]
+struct Lookup {
+    /// `roles` holds what `StepData::roles` holds.
+    roles_built: bool,
+    /// `grounds` holds what `ImpactPlugin::grounds` holds.
+    grounds_valid: bool,
+    grounds: Vec<Option<(ColliderHandle, GroundEntry)>>,
+    /// By body collider index: one of its pairs, and whether it has others (then in
+    /// `StepData::roles`).
+    roles: Vec<Option<RoleSlot>>,
+}
+
+#[derive(Clone, Copy)]
+struct RoleSlot {
+    body: ColliderHandle,
+    ground: ColliderHandle,
+    role: Role,
+    more: bool,
+}
+
+/// A collider handle's index in its arena.
+fn slot_of(c: ColliderHandle) -> usize {
+    c.into_raw_parts().0 as usize
+}
+
+impl Lookup {
+    fn build(
+        grounds: &HandleMap<ColliderHandle, GroundEntry>,
+        roles: &HandleMap<PairKey, Role>,
+    ) -> Self {
+        let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
+            it.map(slot_of).max().map_or(0, |m| m + 1)
+        };
+        let mut out = Self {
+            roles_built: true,
+            grounds_valid: true,
+            grounds: vec![None; len(&mut grounds.keys().copied())],
+            roles: vec![None; len(&mut roles.keys().map(|k| k.0))],
+        };
+        for (h, entry) in grounds {
+            out.grounds[slot_of(*h)] = Some((*h, *entry));
+        }
+        for ((body, ground), role) in roles {
+            let slot = &mut out.roles[slot_of(*body)];
+            match slot {
+                Some(first) => first.more = true,
+                None => {
+                    *slot = Some(RoleSlot {
+                        body: *body,
+                        ground: *ground,
+                        role: *role,
+                        more: false,
+                    })
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
@@ -315,7 +385,38 @@ impl<H> ImpactPlugin<H> {
     /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
     /// solver without bounce).
     pub(crate) fn role(&self, key: &PairKey) -> Role {
+        let lookup = &self.step.lookup;
+        if lookup.roles_built {
+            match lookup.roles.get(slot_of(key.0)) {
+                Some(Some(slot)) if slot.body == key.0 => {
+                    if slot.ground == key.1 {
+                        return slot.role;
+                    }
+                    if !slot.more {
+                        return Role::Resting;
+                    }
+                }
+                _ => return Role::Resting,
+            }
+        }
         self.step.roles.get(key).copied().unwrap_or(Role::Resting)
+    }
+
+    /// The ground entry of a collider, `None` when it is not a ground.
+    pub(crate) fn ground_entry(&self, c: ColliderHandle) -> Option<&GroundEntry> {
+        let lookup = &self.step.lookup;
+        if lookup.grounds_valid {
+            return match lookup.grounds.get(slot_of(c)) {
+                Some(Some((h, entry))) if *h == c => Some(entry),
+                _ => None,
+            };
+        }
+        self.grounds.get(&c)
+    }
+
+    /// A ground was marked, unmarked or given a material: the hooks' ground table is stale.
+    pub(crate) fn grounds_changed(&mut self) {
+        self.step.lookup.grounds_valid = false;
     }
 
     /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
@@ -387,6 +488,8 @@ impl<H> ImpactPlugin<H> {
         H: PhysicsHooks,
     {
         self.events.clear();
+        // The hooks' tables are rebuilt at the end.
+        self.step.lookup = Lookup::default();
         self.sync_grounds(bodies, colliders);
         let dt = to_f64(params.dt);
         let g = vec_to_na(gravity);
@@ -414,16 +517,39 @@ impl<H> ImpactPlugin<H> {
         step.grounds = self.ground_motions(bodies, colliders, dt, step.resting_gap);
         let shadows = std::mem::take(&mut self.shadows);
         let prev_roles = std::mem::take(&mut self.prev_roles);
+        // About as many pairs as last step: no rehashing while the map grows.
+        step.roles.reserve(prev_roles.len());
         let prev_coupled = std::mem::take(&mut self.prev_coupled);
-        let handles: Vec<RigidBodyHandle> = bodies
-            .iter()
-            .filter(|(h, rb)| self.manages(*h, rb) && !rb.is_sleeping())
-            .map(|(h, _)| h)
-            .collect();
+        // The awake managed bodies that may reach a ground. A body surely far from every
+        // ground needs no snapshot, inertia or geometry (only its flight in `Exact` mode); a
+        // body without collider is skipped.
+        let margin = super::convert::to_real(step.resting_gap.max(step.prediction));
+        let g_len = gravity.length();
+        let mut handles: Vec<RigidBodyHandle> = Vec::new();
+        for (handle, rb) in bodies.iter() {
+            if !self.manages(handle, rb) || rb.is_sleeping() {
+                continue;
+            }
+            match surely_far(rb, colliders, g_len, params.dt, margin, &step.grounds) {
+                Some(true) if self.config.timing == TimingMode::Exact => {
+                    let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
+                    step.candidates.push(Candidate {
+                        body: handle,
+                        start,
+                        flight,
+                        local_com,
+                        impact_grounds: SmallList::Empty,
+                        touched: false,
+                        closing: false,
+                    });
+                }
+                Some(false) => handles.push(handle),
+                Some(true) | None => {}
+            }
+        }
         for handle in handles {
             let rb = &bodies[handle];
             let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
-            let inertia = Inertia::of(rb);
             let geom = body_geom(rb, colliders, &local_com);
             if geom.parts.is_empty() {
                 continue;
@@ -436,7 +562,7 @@ impl<H> ImpactPlugin<H> {
                 vec_from_na(&start.com),
                 Vector::splat(super::convert::to_real(geom.radius + reach)),
             );
-            let near: Vec<usize> = step
+            let near: SmallList<usize> = step
                 .grounds
                 .iter()
                 .enumerate()
@@ -450,21 +576,25 @@ impl<H> ImpactPlugin<H> {
                         start,
                         flight,
                         local_com,
-                        impact_grounds: Vec::new(),
+                        impact_grounds: SmallList::Empty,
                         touched: false,
+                        closing: false,
                     });
                 }
                 continue;
             }
-            let ground_geoms: Vec<(usize, GroundGeom)> = near
+            let ground_geoms: SmallList<(usize, GroundGeom)> = near
                 .iter()
                 .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], colliders)?)))
                 .collect();
             let mut state = start;
             let mut touched = false;
-            let mut impact_grounds = Vec::new();
+            let mut impact_grounds = SmallList::Empty;
+            let mut closing = false;
             for (gi, gg) in &ground_geoms {
                 let mut any_impact = false;
+                // No pair of the body with this ground can meet in the step.
+                let mut clear = true;
                 for part in &geom.parts {
                     let key = (part.handle, gg.handle);
                     if self.user_refuses(bodies, colliders, key) {
@@ -472,6 +602,7 @@ impl<H> ImpactPlugin<H> {
                         continue;
                     }
                     let found = contact_checked(part, gg, &state, 0.0, reach);
+                    let contact0 = found.as_ref().ok().copied().flatten();
                     // A pair beyond reach cannot touch in this step: out of the solver, and
                     // no search after the step.
                     let reachable = matches!(found, Ok(Some(_)));
@@ -534,8 +665,9 @@ impl<H> ImpactPlugin<H> {
                                     &hit,
                                     self.config.flat_tolerance,
                                 );
+                                let inertia = Inertia::of(rb);
                                 let single = BodyGeom {
-                                    parts: vec![BodyPart { ..*part }],
+                                    parts: SmallList::One(*part),
                                     radius: geom.radius,
                                 };
                                 let input = ImpactInput {
@@ -571,10 +703,31 @@ impl<H> ImpactPlugin<H> {
                         }
                     };
                     any_impact |= role == Role::Impact && reachable;
+                    // Only asked of a ground the search may run against (a single part's
+                    // pair that is not `Impact` does not make one).
+                    clear = clear
+                        && match contact0 {
+                            Some(_) if role != Role::Impact && geom.parts.len() == 1 => true,
+                            Some((dist, n, _)) => {
+                                self.config.timing != TimingMode::Step
+                                    && cannot_close(
+                                        part,
+                                        gg,
+                                        &flight,
+                                        &state,
+                                        dt,
+                                        (dist, n),
+                                        geom.radius,
+                                        speed,
+                                    )
+                            }
+                            None => false,
+                        };
                     step.roles.insert(key, role);
                 }
                 if any_impact {
                     impact_grounds.push(*gi);
+                    closing |= !clear;
                 }
             }
             if touched {
@@ -588,9 +741,11 @@ impl<H> ImpactPlugin<H> {
                     local_com,
                     impact_grounds,
                     touched,
+                    closing,
                 });
             }
         }
+        step.lookup = Lookup::build(&self.grounds, &step.roles);
         self.step = step;
     }
 
@@ -660,8 +815,38 @@ impl<H> ImpactPlugin<H> {
                 && multibody_joints.rigid_body_link(cand.body).is_none()
                 && rb.user_torque() == Vector::ZERO
                 && !cand.touched;
+            // Before any geometry: a body with no ground left to search, or whose search
+            // would find the step clear (`Candidate::closing`) and that rapier's CCD did not
+            // cut short, only flies (exactly, in `Exact` mode).
+            let has_grounds = cand
+                .impact_grounds
+                .iter()
+                .any(|i| colliders.get(step.grounds[*i].handle).is_some());
+            let clear = mode != TimingMode::Step
+                && free
+                && has_grounds
+                && !cand.closing
+                && self.ccd_consistent(rb, cand, step.dt, step.dt, &step);
+            if !has_grounds || clear {
+                if mode == TimingMode::Exact
+                    && free
+                    && (clear || self.ccd_consistent(rb, cand, step.dt, step.dt, &step))
+                {
+                    let end = cand.flight.advance(&cand.start, step.dt);
+                    let rot = rot_to_na(*rb.rotation());
+                    let s = State {
+                        rot,
+                        w: vec_to_na(rb.angvel()),
+                        ..end
+                    };
+                    let rb = &mut bodies[cand.body];
+                    write_state(rb, &s, &cand.local_com, false);
+                    self.remember(cand.body, rb, &s);
+                }
+                continue;
+            }
             let geom = body_geom(rb, colliders, &cand.local_com);
-            let grounds: Vec<GroundGeom> = cand
+            let grounds: SmallList<GroundGeom> = cand
                 .impact_grounds
                 .iter()
                 .filter_map(|i| {
@@ -677,38 +862,24 @@ impl<H> ImpactPlugin<H> {
                 })
                 .collect();
             let inertia = Inertia::of(rb);
-            if mode == TimingMode::Step || !free || grounds.is_empty() {
-                if grounds.is_empty() {
-                    if mode == TimingMode::Exact
-                        && free
-                        && self.ccd_consistent(rb, cand, step.dt, step.dt, &step)
-                    {
-                        let end = cand.flight.advance(&cand.start, step.dt);
-                        let rot = rot_to_na(*rb.rotation());
-                        let s = State {
-                            rot,
-                            w: vec_to_na(rb.angvel()),
-                            ..end
-                        };
-                        let rb = &mut bodies[cand.body];
-                        write_state(rb, &s, &cand.local_com, false);
-                        self.remember(cand.body, rb, &s);
-                    }
-                    continue;
-                }
+            if mode == TimingMode::Step || !free {
                 self.step_end(bodies, colliders, cand, &geom, &grounds, &inertia, &step);
                 continue;
             }
             // In-step resolution from the start-of-step state.
-            let first = first_impact(
-                &geom,
-                &grounds,
-                &cand.flight,
-                &cand.start,
-                0.0,
-                0.0,
-                step.dt,
-            );
+            let first = if cand.closing {
+                first_impact(
+                    &geom,
+                    &grounds,
+                    &cand.flight,
+                    &cand.start,
+                    0.0,
+                    0.0,
+                    step.dt,
+                )
+            } else {
+                Search::Clear
+            };
             let t_first = match &first {
                 Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
                 Search::Clear => step.dt,
@@ -1020,6 +1191,68 @@ impl<H> ImpactPlugin<H> {
     }
 }
 
+/// The cheap test before any snapshot or geometry, in rapier's precision from what rapier
+/// holds: `Some(true)` when the body's swept bounding sphere, grown beyond the one
+/// [`ImpactPlugin::before_step`] tests (speed bounds over the step, a relative `1e-4` for
+/// rounding and the `f64` shadow), misses every ground's AABB, so that test would find no
+/// ground near either; `None` when the body has no collider to query (as [`body_geom`]).
+fn surely_far(
+    rb: &RigidBody,
+    colliders: &ColliderSet,
+    gravity: Real,
+    dt: Real,
+    margin: Real,
+    grounds: &[GroundMotion],
+) -> Option<bool> {
+    let local_com = rb.local_center_of_mass();
+    let mut radius: Option<Real> = None;
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        if !co.is_enabled() || co.is_sensor() {
+            continue;
+        }
+        let bs = co.shape().compute_local_bounding_sphere();
+        let center = match co.position_wrt_parent() {
+            Some(pose) if bs.center == Vector::ZERO => pose.translation,
+            Some(pose) => pose.transform_point(bs.center),
+            None => bs.center,
+        };
+        let r = (center - local_com).length() + bs.radius + co.contact_skin();
+        radius = Some(radius.map_or(r, |x| x.max(r)));
+    }
+    let radius = radius?;
+    let com = rb.center_of_mass();
+    let (v, w, force) = (rb.linvel(), rb.angvel(), rb.user_force());
+    let mut accel = gravity * rb.gravity_scale().abs();
+    if force != Vector::ZERO {
+        accel += force.length() / rb.mass();
+    }
+    let mut speed = v.length() + accel * dt;
+    if w != Vector::ZERO {
+        // Torque-free motion speeds an anisotropic body's spin up by at most I_max / I_min.
+        let inv = rb.mass_properties().local_mprops.inv_principal_inertia;
+        let spin_up = if inv.is_finite() && inv.min_element() > 0.0 {
+            1.02 * inv.max_element() / inv.min_element()
+        } else {
+            1.0
+        };
+        speed += spin_up * w.length() * radius;
+    }
+    let half = (radius + speed * dt + margin) * 1.0001
+        + 1e-4 * (1.0 + com.abs().max_element() + local_com.length());
+    if !half.is_finite() || !com.is_finite() {
+        return Some(false);
+    }
+    let (lo, hi) = (com - Vector::splat(half), com + Vector::splat(half));
+    Some(
+        grounds
+            .iter()
+            .all(|g| hi.cmplt(g.aabb.mins).any() || lo.cmpgt(g.aabb.maxs).any()),
+    )
+}
+
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
 /// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
 fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
@@ -1087,7 +1320,7 @@ fn body_geom<'a>(
     colliders: &'a ColliderSet,
     local_com: &Vector3<f64>,
 ) -> BodyGeom<'a> {
-    let mut parts = Vec::new();
+    let mut parts = SmallList::Empty;
     let mut radius: f64 = 0.0;
     for ch in rb.colliders() {
         let Some(co) = colliders.get(*ch) else {
