@@ -38,43 +38,44 @@ pub(crate) fn orthonormal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>
 
 /// Solves `K P = d` for the impulse `P` accurately at any `I/m`.
 ///
-/// In the basis `(r̂, t1, t2)` the rotational part of `K` vanishes along `r̂`
-/// (`r × r̂ = 0`), so `K` is block diagonal: `K_rr = 1/m` and a 2x2 block
-/// `E/m + |r|^2 adj(A)` where `A = [t_i . I_w^-1 t_j]`. For an isotropic body this is
-/// the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` of MODEL-NOTES erratum 4.
+/// The rotational part of `K` vanishes along `r` (`r × r = 0`) and `K` is symmetric,
+/// so `K` maps `r` to `r/m` and the plane normal to `r` to itself: along `r`,
+/// `P_r = m (r̂.d) r̂`; in the plane `K` is the 2x2 block `E/m + |r|^2 adj(A)` with
+/// `A = [x_i . I_w^-1 x_j]` on two orthogonal in-plane vectors. For an isotropic body
+/// this is the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` of MODEL-NOTES
+/// erratum 4.
+///
+/// The in-plane vectors are `u = (e × r) / |r|`, with `e = z` when `|r_x| > |r_z|` and
+/// `e = x` otherwise (Hughes and Möller 1999), and `v = r̂ × u`: orthogonal, of equal
+/// length in `[1/√2, 1]`. Not normalising them saves two divisions and the basis's
+/// construction; the 2x2 system is written for the coefficients of `P` on `(u, v)` (a
+/// Galerkin system), with `r × u = |r| v` and `r × v = -|r| u`.
 pub(crate) fn solve_k(body: &Body, r: &Vector3<f64>, d: &Vector3<f64>) -> Vector3<f64> {
     let r2 = r.norm_squared();
     if r2 == 0.0 {
         return d * body.mass;
     }
+    let inv_len = 1.0 / r2.sqrt();
+    let u = if r.x.abs() > r.z.abs() {
+        Vector3::new(-r.y, r.x, 0.0)
+    } else {
+        Vector3::new(0.0, -r.z, r.y)
+    } * inv_len;
+    let v = r.cross(&u) * inv_len;
     let a = &body.inv_inertia;
-    if a.m12 == 0.0
-        && a.m13 == 0.0
-        && a.m23 == 0.0
-        && a.m11 == a.m22
-        && a.m22 == a.m33
-        && a.m11 > 0.0
-    {
-        // Isotropic: K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4).
-        let (m, i) = (body.mass, 1.0 / a.m11);
-        return (d * i + r * (m * r.dot(d))) * (m / (i + m * r2));
-    }
-    let rn = r.norm();
-    let r_hat = r / rn;
-    let (t1, t2) = orthonormal_basis(&r_hat);
-    let it1 = body.inv_inertia * t1;
-    let it2 = body.inv_inertia * t2;
-    let a11 = t1.dot(&it1);
-    let a22 = t2.dot(&it2);
-    let a12 = 0.5 * (t1.dot(&it2) + t2.dot(&it1));
+    let au = a * u;
+    let av = a * v;
+    let uu = u.norm_squared();
     let inv_m = 1.0 / body.mass;
-    // r × t1 = |r| t2 and r × t2 = -|r| t1, hence the adjugate.
-    let k11 = inv_m + r2 * a22;
-    let k22 = inv_m + r2 * a11;
-    let k12 = -r2 * a12;
-    let rhs = Vector2::new(d.dot(&t1), d.dot(&t2));
-    let p_plane = solve_spd2(k11, k12, k22, &rhs);
-    r_hat * (d.dot(&r_hat) * body.mass) + t1 * p_plane.x + t2 * p_plane.y
+    // u.K u = |u|^2/m + (r × u).A (r × u) = |u|^2/m + |r|^2 v.A v, and likewise.
+    let kuu = uu * inv_m + r2 * v.dot(&av);
+    let kvv = uu * inv_m + r2 * u.dot(&au);
+    let kuv = -r2 * 0.5 * (v.dot(&au) + u.dot(&av));
+    let (du, dv) = (u.dot(d), v.dot(d));
+    let inv_det = 1.0 / (kuu * kvv - kuv * kuv);
+    let alpha = (kvv * du - kuv * dv) * inv_det;
+    let beta = (kuu * dv - kuv * du) * inv_det;
+    r * (r.dot(d) * body.mass * (inv_len * inv_len)) + u * alpha + v * beta
 }
 
 /// Solves the symmetric positive definite 2x2 system `[[a, b], [b, c]] x = y`.

@@ -70,11 +70,23 @@ impl Body {
                 Err(ModelError::NotPositiveSemiDefiniteInertia)
             };
         }
-        let scale = a.m11.abs().max(a.m22.abs()).max(a.m33.abs()).max(a.amax());
-        let asym = (a.m12 - a.m21)
-            .abs()
-            .max((a.m13 - a.m31).abs())
-            .max((a.m23 - a.m32).abs());
+        // The entries are finite here, so plain comparisons take the maxima (no NaN
+        // handling needed); the largest magnitude of all nine entries is the scale.
+        let larger = |x: f64, y: f64| if x > y { x } else { y };
+        let scale = larger(
+            larger(
+                larger(a.m11.abs(), a.m22.abs()),
+                larger(a.m33.abs(), a.m12.abs()),
+            ),
+            larger(
+                larger(a.m21.abs(), a.m13.abs()),
+                larger(larger(a.m31.abs(), a.m23.abs()), a.m32.abs()),
+            ),
+        );
+        let asym = larger(
+            larger((a.m12 - a.m21).abs(), (a.m13 - a.m31).abs()),
+            (a.m23 - a.m32).abs(),
+        );
         if asym > 1e-9 * scale {
             return Err(ModelError::AsymmetricInertia(asym / scale));
         }
@@ -84,7 +96,9 @@ impl Body {
         let eps = 1e-12;
         let m2 = |x: f64, y: f64, xy: f64| x * y - xy * xy >= -eps * (x * y + xy * xy);
         let minors2 = m2(a.m11, a.m22, a.m12) && m2(a.m11, a.m33, a.m13) && m2(a.m22, a.m33, a.m23);
-        let det = a.determinant();
+        // The determinant by cofactors of the first row.
+        let det = a.m11 * (a.m22 * a.m33 - a.m32 * a.m23) - a.m12 * (a.m21 * a.m33 - a.m31 * a.m23)
+            + a.m13 * (a.m21 * a.m32 - a.m31 * a.m22);
         let det_ok = det >= -eps * scale * scale * scale;
         if !(diag_ok && minors2 && det_ok) {
             return Err(ModelError::NotPositiveSemiDefiniteInertia);
