@@ -663,11 +663,19 @@ fn dense_root(base: f64, f: &[f64; 7]) -> f64 {
         } else {
             hi = x;
         }
-        let mut next = if dp > 0.0 { x - v / dp } else { f64::NAN };
-        if !(next > lo && next < hi) {
-            next = 0.5 * (lo + hi);
+        let newton = if dp > 0.0 { x - v / dp } else { f64::NAN };
+        // Converged when Newton's step is at rounding level. Tested before the bracket:
+        // at the root the step is a few ulps and may land on the bracket's end just
+        // moved to x, where bisecting would throw the converged x away.
+        if (newton - x).abs() <= 1e-15 {
+            return newton.clamp(lo, hi);
         }
-        if (next - x).abs() <= 1e-15 || hi - lo <= 1e-15 {
+        let next = if newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if hi - lo <= 1e-15 {
             return next;
         }
         x = next;
