@@ -68,12 +68,15 @@ pub(crate) fn document_impulse(
         // not a coordinate axis, and eqs. (13)-(15) would take that noise as the slip
         // direction. The level is the consistent law's, where its slip stops.
         let zero = 1e-3 * SWERVE_TOLERANCE;
-        let ut = if ut.norm_squared() <= zero * zero * u1.norm_squared() {
-            Vector3::zeros()
+        let len2 = ut.norm_squared();
+        let slipping = len2 > zero * zero * u1.norm_squared();
+        let s = if slipping && len2 > 1e-200 && len2.is_finite() {
+            // The common case, inline: the unit initial slip (eqs. 13-15 as atan2).
+            ut * (1.0 / len2.sqrt())
         } else {
-            ut
+            let ut = if slipping { ut } else { Vector3::zeros() };
+            slip_direction(body, contact, &ut, mu)
         };
-        let s = slip_direction(body, contact, &ut, mu);
         let along = n - s * mu;
         let denominator = match iso {
             Some(a) => n.dot(&along) / body.mass + a * r.cross(n).dot(&r.cross(&along)),
@@ -90,7 +93,10 @@ pub(crate) fn document_impulse(
 
 /// The unit slip direction at the start of the impact: the initial tangential contact
 /// velocity (eqs. 13-15 as atan2), or, when it is exactly zero, the direction in which
-/// slip grows from rest (erratum 2).
+/// slip grows from rest (erratum 2). Out of line: [`document_impulse`] takes the common
+/// case (a slip of normal size) itself, so that its registers stay live.
+#[cold]
+#[inline(never)]
 pub(crate) fn slip_direction(
     body: &Body,
     contact: &Contact,
