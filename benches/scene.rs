@@ -114,7 +114,7 @@ fn ball(world: &mut PhysicsWorld, p: [f64; 3], sleep: bool) {
     );
 }
 
-fn with_plugin(mut world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> Scene {
+fn with_plugin(world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> Scene {
     let plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
@@ -123,7 +123,7 @@ fn with_plugin(mut world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> S
                 ..Default::default()
             })
             .expect("valid configuration");
-            p.add_ground(&world.bodies, &mut world.colliders, ground)
+            p.add_ground(&world.bodies, &world.colliders, ground)
                 .expect("the ground exists");
             Some(p)
         }

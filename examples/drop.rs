@@ -135,7 +135,7 @@ fn main() {
                 ..Default::default()
             };
             let mut p = ImpactPlugin::new(config).expect("valid config");
-            p.add_ground(&world.bodies, &mut world.colliders, ground)
+            p.add_ground(&world.bodies, &world.colliders, ground)
                 .expect("the ground collider exists");
             Some(p)
         }

@@ -238,7 +238,7 @@ fn with_plugin(t: &Throw, mode: TimingMode) -> Compared {
     .unwrap();
     p.add_ground_with_material(
         &b.world.bodies,
-        &mut b.world.colliders,
+        &b.world.colliders,
         b.ground,
         GroundMaterial {
             restitution: t.e,
@@ -496,7 +496,7 @@ fn flat_landing(mode: Option<TimingMode>, vx: f64, mu: f64) -> (f64, f64, usize)
             ..Default::default()
         })
         .unwrap();
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });

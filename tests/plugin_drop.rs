@@ -71,7 +71,7 @@ fn run(mode: Option<TimingMode>, dt: f64, duration: f64) -> Trace {
             ..Default::default()
         })
         .unwrap();
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });

@@ -111,7 +111,7 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
     );
     let balls = [0.0, 20.0, 40.0].map(|x| ball(&mut world, [x, 0.1 + h, 0.0], 0.1, e, 0.0));
     let mut p = plugin(TimingMode::Exact);
-    p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+    p.set_all_fixed_colliders_ground(true);
     p.step(&mut world);
     println!(
         "after one step: fixed body's collider {}, parentless {}, kinematic {}",
@@ -126,7 +126,7 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
             .iter()
             .all(|c| !p.is_ground(*c))
     }));
-    p.add_ground(&world.bodies, &mut world.colliders, g_kin)
+    p.add_ground(&world.bodies, &world.colliders, g_kin)
         .unwrap();
     // A fixed ground added later, with a ball over it.
     let (_, g_late) = world.insert(
@@ -174,7 +174,7 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
     }
     // Off: the automatic grounds are ordinary colliders again, flags back to the user's; the
     // ground marked by hand stays.
-    p.set_all_fixed_colliders_ground(&mut world.colliders, false);
+    p.set_all_fixed_colliders_ground(false);
     for (label, c, ground) in [
         ("fixed body", g_body, false),
         ("parentless", g_free, false),
@@ -216,11 +216,11 @@ fn remove_ground_restores_the_users_flags_and_rapiers_bounce() {
     );
     let b = ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, e, 0.0);
     let mut p = plugin(TimingMode::Exact);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     assert!(world.colliders[ground].active_hooks().contains(user));
-    assert!(p.remove_ground(&mut world.colliders, ground));
-    assert!(!p.remove_ground(&mut world.colliders, ground));
+    assert!(p.remove_ground(ground));
+    assert!(!p.remove_ground(ground));
     let flags = world.colliders[ground].active_hooks();
     println!(
         "after remove_ground: ground {}, flags {flags:?}",
@@ -246,10 +246,10 @@ fn remove_ground_restores_the_users_flags_and_rapiers_bounce() {
     );
     ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, e, 0.0);
     let mut p = plugin(TimingMode::Exact);
-    p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+    p.set_all_fixed_colliders_ground(true);
     p.step(&mut world);
     assert!(p.is_ground(ground));
-    assert!(p.remove_ground(&mut world.colliders, ground));
+    assert!(p.remove_ground(ground));
     let mut events = 0;
     for _ in 0..60 {
         p.step(&mut world);
@@ -260,7 +260,7 @@ fn remove_ground_restores_the_users_flags_and_rapiers_bounce() {
         p.is_ground(ground)
     );
     assert!(!p.is_ground(ground) && events == 0);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     p.step(&mut world);
     assert!(p.is_ground(ground));
@@ -287,7 +287,7 @@ fn rising_position_platform(
     let mut p = plugin(timing);
     p.add_ground_with_material(
         &world.bodies,
-        &mut world.colliders,
+        &world.colliders,
         ground,
         GroundMaterial {
             restitution: e,
@@ -416,7 +416,7 @@ fn turntable(mu: f64) {
     let mut p = plugin(TimingMode::Exact);
     p.add_ground_with_material(
         &world.bodies,
-        &mut world.colliders,
+        &world.colliders,
         ground,
         GroundMaterial {
             restitution: e,
@@ -523,7 +523,7 @@ fn check_ramp(label: &str, shape: ColliderBuilder) {
     let mut p = plugin(TimingMode::Exact);
     p.add_ground_with_material(
         &world.bodies,
-        &mut world.colliders,
+        &world.colliders,
         ground,
         GroundMaterial {
             restitution: e,
@@ -634,10 +634,18 @@ impl PhysicsHooks for Conveyor {
     }
 
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
-        self.modified
-            .lock()
-            .unwrap()
-            .push((context.collider1, context.collider2));
+        // Recorded when there is a contact to modify: rapier also calls the hook for a
+        // pair whose manifold has none (a ball far above a half-space ground, whose AABB
+        // every body meets), as it would without the plugin.
+        let has_contacts = context
+            .rigid_mut()
+            .is_some_and(|m| !m.solver_contacts.is_empty());
+        if has_contacts {
+            self.modified
+                .lock()
+                .unwrap()
+                .push((context.collider1, context.collider2));
+        }
         if let Some(m) = context.rigid_mut() {
             for c in m.solver_contacts.iter_mut() {
                 c.tangent_velocity = Vector::new(1.0, 0.0, 0.0);
@@ -699,7 +707,7 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
     let hooks = Conveyor::default();
     *hooks.ghost.lock().unwrap() = Some(ghost_co);
     let mut p = ImpactPlugin::with_hooks(ImpactConfig::default(), hooks).unwrap();
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     p.exclude_body(excluded);
     let (mut bounces, mut modified_in_impact) = (0, false);

@@ -149,7 +149,7 @@ fn run(c: &Case, mode: Option<TimingMode>, dt: f64) -> (Errors, Errors) {
             ..Default::default()
         })
         .unwrap();
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });

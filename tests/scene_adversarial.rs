@@ -113,7 +113,7 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
         );
     }
     let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let mut stats = Stats::new();
     let strict = std::env::var("RAPIER_IMPACT_STRICT_PENETRATION").is_ok();

@@ -54,7 +54,7 @@ fn drop(
             .friction(real(mu)),
     );
     let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let mut stats = Stats::new();
     let mut events = Vec::new();
@@ -134,7 +134,7 @@ fn mass_ratio_scene(drop_height: f64, timing: Option<TimingMode>) -> (f64, f64, 
     let ratio = wide(world.bodies[heavy].mass() / world.bodies[light].mass());
     let mut p = timing.map(|t| {
         let mut p = plugin(t);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });
@@ -274,7 +274,7 @@ fn restitution_combine_rules_are_rapiers() {
                 .restitution_combine_rule(rule),
         );
         let mut p = plugin(TimingMode::Exact);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         let mut stats = Stats::new();
         let mut used = None;

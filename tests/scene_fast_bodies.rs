@@ -83,7 +83,7 @@ fn run(
     let mut p = plugin(timing);
     p.add_ground_with_material(
         &world.bodies,
-        &mut world.colliders,
+        &world.colliders,
         g,
         GroundMaterial {
             restitution: e,

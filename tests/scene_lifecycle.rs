@@ -40,7 +40,7 @@ fn bodies_colliders_and_grounds_change_while_the_plugin_runs() {
                 .restitution(0.7),
         );
         let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         let mut balls: Vec<(RigidBodyHandle, ColliderHandle)> = (0..6)
             .map(|i| ball(&mut world, i as f64, 1.0 + 0.3 * i as f64))
@@ -68,9 +68,9 @@ fn bodies_colliders_and_grounds_change_while_the_plugin_runs() {
                     balls[0] = (b, c);
                 }
                 // The ground stops being ground (rapier bounces everything), then is ground again.
-                200 => assert!(p.remove_ground(&mut world.colliders, current_ground)),
+                200 => assert!(p.remove_ground(current_ground)),
                 260 => p
-                    .add_ground(&world.bodies, &mut world.colliders, current_ground)
+                    .add_ground(&world.bodies, &world.colliders, current_ground)
                     .unwrap(),
                 // The ground collider is removed and a new one inserted (the plugin forgets the
                 // old one by itself), and marked by the all-fixed mode.
@@ -82,7 +82,7 @@ fn bodies_colliders_and_grounds_change_while_the_plugin_runs() {
                             .restitution(0.7),
                         None,
                     );
-                    p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+                    p.set_all_fixed_colliders_ground(true);
                     for (i, (b, _)) in balls.iter().enumerate() {
                         let x = real(i as f64 - 3.0);
                         world.bodies[*b].set_translation(Vector::new(x, 1.0, 2.0), true);
@@ -136,7 +136,7 @@ fn a_bouncing_body_made_kinematic_fixed_and_dynamic_again() {
         );
         let (b, _) = ball(&mut world, 0.0, 1.0);
         let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         let mut stats = Stats::new();
         let mut events_while = [0usize; 3];
@@ -184,7 +184,7 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
         );
         let (b, _) = ball(&mut world, 0.0, 2.0);
         let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         let mut stats = Stats::new();
         let mut ground_y = 0.0;
@@ -237,14 +237,14 @@ fn empty_worlds_and_ground_only_worlds_step() {
         for _ in 0..10 {
             step_checked(&mut world, &mut p, 0.0, &mut stats, "empty");
         }
-        p.set_all_fixed_colliders_ground(&mut world.colliders, true);
+        p.set_all_fixed_colliders_ground(true);
         for _ in 0..10 {
             step_checked(&mut world, &mut p, 0.0, &mut stats, "empty, all fixed");
         }
         // Only ground.
         let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
         let mut q = plugin(timing);
-        q.add_ground(&world.bodies, &mut world.colliders, ground)
+        q.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         for _ in 0..10 {
             step_checked(&mut world, &mut q, 0.0, &mut stats, "ground only");

@@ -108,7 +108,7 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, rapier_impact::ImpactPlugin) {
         );
     }
     let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     (world, p)
 }
@@ -159,6 +159,43 @@ fn run(timing: TimingMode, steps: usize) -> Run {
         // wedged against a wall went 7.8 mm into the ground in the f64 build (step 25 065, no
         // impact event). Bound: twice rapier's allowed linear error.
         let depth = penetration(&world, 0.0);
+        if depth > 0.004 {
+            let (d, b) = deepest_body(&world, 0.0);
+            let rb = &world.bodies[b.unwrap()];
+            let shape = world.colliders[rb.colliders()[0]].shape().shape_type();
+            let mut others = vec![];
+            for pair in world.narrow_phase.contact_pairs_with(rb.colliders()[0]) {
+                if pair.has_any_active_contact() {
+                    let o = if pair.collider1 == rb.colliders()[0] {
+                        pair.collider2
+                    } else {
+                        pair.collider1
+                    };
+                    others.push((
+                        o.into_raw_parts(),
+                        pair.manifolds()
+                            .iter()
+                            .map(|m| m.data.solver_contacts.len())
+                            .sum::<usize>(),
+                    ));
+                }
+            }
+            eprintln!(
+                "DBG {k} depth {d:.5} body {:?} {shape:?} pos {:?} rot {:?} v {:?} w {:?} sleeping {} events {:?} contacts {:?}",
+                b.unwrap().into_raw_parts(),
+                rb.translation(),
+                rb.rotation(),
+                rb.linvel(),
+                rb.angvel(),
+                rb.is_sleeping(),
+                p.events()
+                    .iter()
+                    .filter(|e| Some(e.body) == b)
+                    .map(|e| (e.time, e.normal_impulse, format!("{:?}", e.regime)))
+                    .collect::<Vec<_>>(),
+                others
+            );
+        }
         stats.max_penetration = stats.max_penetration.max(depth);
         assert!(
             depth <= 2.0 * allowed,

@@ -58,7 +58,7 @@ fn trace(timing: TimingMode, steps: usize) -> (Vec<u64>, Stats) {
         }
     }
     let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let mut stats = Stats::new();
     let mut out = Vec::with_capacity(steps);

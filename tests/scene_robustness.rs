@@ -103,7 +103,7 @@ fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
     }
     let mut plugin = timing.map(|t| {
         let mut p = plugin(t);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });
@@ -248,7 +248,7 @@ fn mass_ratio(drop_height: f64, timing: Option<TimingMode>) -> (f64, Stats) {
     );
     let mut p = timing.map(|t| {
         let mut p = plugin(t);
-        p.add_ground(&world.bodies, &mut world.colliders, ground)
+        p.add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
         p
     });
@@ -344,7 +344,7 @@ fn cube_energy_gain(seed: u64, timing: TimingMode) -> f64 {
         ..Default::default()
     })
     .unwrap();
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let energy = |world: &PhysicsWorld| -> (f64, f64) {
         let rb = &world.bodies[cube];

@@ -370,7 +370,7 @@ pub fn plugin(
         ..Default::default()
     })
     .expect("the default configuration is valid");
-    p.add_ground(&world.bodies, &mut world.colliders, ground)
+    p.add_ground(&world.bodies, &world.colliders, ground)
         .expect("the ground collider exists");
     Some(p)
 }

@@ -58,6 +58,16 @@ impl<T> std::ops::Deref for SmallList<T> {
     }
 }
 
+impl<T> std::ops::DerefMut for SmallList<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        match self {
+            Self::Empty => &mut [],
+            Self::One(a) => std::slice::from_mut(a),
+            Self::Many(v) => v,
+        }
+    }
+}
+
 impl<'s, T> IntoIterator for &'s SmallList<T> {
     type Item = &'s T;
     type IntoIter = std::slice::Iter<'s, T>;

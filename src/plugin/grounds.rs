@@ -1,20 +1,22 @@
-//! Ground registration: which colliders are ground, their optional material, and the hook
-//! flags the plugin adds to them (remembering the user's own).
+//! Ground registration: which colliders are ground, and their optional material.
+//!
+//! A ground collider keeps its own hook flags: the plugin puts its flags on the colliders of
+//! the managed bodies near a ground instead (see `hook_flags.rs`), so that the pairs of a
+//! ground with bodies the plugin does not manage stay exactly rapier's.
 
 use super::config::{ConfigError, GroundMaterial};
-use super::impact_plugin::{GroundEntry, ImpactPlugin, PLUGIN_HOOKS};
+use super::impact_plugin::{GroundEntry, ImpactPlugin};
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 
 impl<H> ImpactPlugin<H> {
     /// Marks one collider as ground, with the materials rapier combines from the colliders.
     ///
     /// The collider must exist and be parentless, or attached to a fixed or kinematic body.
-    /// Its hook flags gain `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS`; the flags it had
-    /// are kept for the user's hook.
+    /// Its hook flags are left as they are.
     pub fn add_ground(
         &mut self,
         bodies: &RigidBodySet,
-        colliders: &mut ColliderSet,
+        colliders: &ColliderSet,
         collider: ColliderHandle,
     ) -> Result<(), ConfigError> {
         self.insert_ground(bodies, colliders, collider, None)
@@ -25,7 +27,7 @@ impl<H> ImpactPlugin<H> {
     pub fn add_ground_with_material(
         &mut self,
         bodies: &RigidBodySet,
-        colliders: &mut ColliderSet,
+        colliders: &ColliderSet,
         collider: ColliderHandle,
         material: GroundMaterial,
     ) -> Result<(), ConfigError> {
@@ -37,7 +39,7 @@ impl<H> ImpactPlugin<H> {
     pub fn add_ground_body(
         &mut self,
         bodies: &RigidBodySet,
-        colliders: &mut ColliderSet,
+        colliders: &ColliderSet,
         body: RigidBodyHandle,
     ) -> Result<(), ConfigError> {
         let rb = bodies.get(body).ok_or(ConfigError::NotABody(body))?;
@@ -72,33 +74,23 @@ impl<H> ImpactPlugin<H> {
         Ok(())
     }
 
-    /// Makes a ground an ordinary collider again (its hook flags back to the user's).
-    /// Returns whether it was a ground. The all-fixed mode
+    /// Makes a ground an ordinary collider again. Returns whether it was a ground. The all-fixed mode
     /// ([`Self::set_all_fixed_colliders_ground`]) does not mark it again; [`Self::add_ground`]
     /// does.
-    pub fn remove_ground(&mut self, colliders: &mut ColliderSet, collider: ColliderHandle) -> bool {
+    pub fn remove_ground(&mut self, collider: ColliderHandle) -> bool {
         self.unmarked.insert(collider);
-        self.unmark(colliders, collider)
+        self.unmark(collider)
     }
 
-    /// Unmarks a ground, its hook flags back to the user's.
-    fn unmark(&mut self, colliders: &mut ColliderSet, collider: ColliderHandle) -> bool {
+    fn unmark(&mut self, collider: ColliderHandle) -> bool {
         self.grounds_changed();
-        match self.grounds.remove(&collider) {
-            Some(entry) => {
-                if let Some(co) = colliders.get_mut(collider) {
-                    co.set_active_hooks(entry.user_hooks);
-                }
-                true
-            }
-            None => false,
-        }
+        self.grounds.remove(&collider).is_some()
     }
 
     /// Every fixed collider (parentless, or on a fixed body) is ground, including those
     /// added later; checked at each [`Self::before_step`]. Turning it off unmarks the
     /// colliders it marked.
-    pub fn set_all_fixed_colliders_ground(&mut self, colliders: &mut ColliderSet, enabled: bool) {
+    pub fn set_all_fixed_colliders_ground(&mut self, enabled: bool) {
         self.all_fixed = enabled;
         if !enabled {
             let auto: Vec<ColliderHandle> = self
@@ -108,7 +100,7 @@ impl<H> ImpactPlugin<H> {
                 .map(|(h, _)| *h)
                 .collect();
             for h in auto {
-                self.unmark(colliders, h);
+                self.unmark(h);
             }
         }
     }
@@ -121,7 +113,7 @@ impl<H> ImpactPlugin<H> {
     fn insert_ground(
         &mut self,
         bodies: &RigidBodySet,
-        colliders: &mut ColliderSet,
+        colliders: &ColliderSet,
         collider: ColliderHandle,
         material: Option<GroundMaterial>,
     ) -> Result<(), ConfigError> {
@@ -135,27 +127,19 @@ impl<H> ImpactPlugin<H> {
                 return Err(ConfigError::DynamicGround(collider));
             }
         }
-        let user_hooks = match self.grounds.get(&collider) {
-            Some(entry) => entry.user_hooks,
-            None => co.active_hooks(),
-        };
         self.grounds.insert(
             collider,
             GroundEntry {
                 material: material.map(GroundMaterial::to_model),
-                user_hooks,
                 automatic: false,
             },
         );
-        if let Some(co) = colliders.get_mut(collider) {
-            co.set_active_hooks(user_hooks | PLUGIN_HOOKS);
-        }
         Ok(())
     }
 
     /// Keeps the registry in step with the sets: forgets removed colliders, marks new fixed
-    /// colliders in all-fixed mode, restores the plugin's hook flags if they were overwritten.
-    pub(crate) fn sync_grounds(&mut self, bodies: &RigidBodySet, colliders: &mut ColliderSet) {
+    /// colliders in all-fixed mode.
+    pub(crate) fn sync_grounds(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
         self.unmarked.retain(|h| colliders.get(*h).is_some());
         if self.all_fixed {
@@ -170,25 +154,17 @@ impl<H> ImpactPlugin<H> {
                 })
                 .map(|(h, _)| h)
                 .collect();
+            if !new.is_empty() {
+                self.grounds_changed();
+            }
             for h in new {
-                let user_hooks = colliders[h].active_hooks();
                 self.grounds.insert(
                     h,
                     GroundEntry {
                         material: None,
-                        user_hooks,
                         automatic: true,
                     },
                 );
-            }
-        }
-        for (h, entry) in self.grounds.iter_mut() {
-            let flags = colliders[*h].active_hooks();
-            if !flags.contains(PLUGIN_HOOKS) {
-                entry.user_hooks = flags;
-                if let Some(co) = colliders.get_mut(*h) {
-                    co.set_active_hooks(flags | PLUGIN_HOOKS);
-                }
             }
         }
     }

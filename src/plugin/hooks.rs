@@ -1,8 +1,8 @@
 //! The plugin as rapier's `PhysicsHooks`.
 //!
 //! Called by rapier's narrow phase (every step, for every pair with a hook flag: the plugin
-//! sets `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on each ground collider) and by its
-//! CCD. It reads the roles [`ImpactPlugin::before_step`] assigned:
+//! sets `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on the colliders of each managed body
+//! near a ground, see `hook_flags.rs`) and by its CCD. It reads the roles [`ImpactPlugin::before_step`] assigned:
 //! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
 //!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its
 //!   collision events, but neither its solver nor its restitution pass sees the pair;
@@ -54,12 +54,8 @@ impl<H> ImpactPlugin<H> {
 
     /// The hook flags the user asked for on a collider.
     pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
-        match self.ground_entry(c) {
-            Some(entry) => entry.user_hooks,
-            None => colliders
-                .get(c)
-                .map_or(ActiveHooks::empty(), |co| co.active_hooks()),
-        }
+        self.step_user_flags(c)
+            .unwrap_or_else(|| self.recorded_user_flags(colliders, c))
     }
 }
 

@@ -19,6 +19,7 @@ use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, landing_point,
 };
+use super::hook_flags::HookedBody;
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
 use crate::model::Material;
 use crate::rapier::math::{Pose, Real, Vector};
@@ -85,16 +86,9 @@ pub(crate) enum Role {
 pub(crate) struct GroundEntry {
     /// Material override.
     pub material: Option<Material>,
-    /// The collider's hook flags before the plugin added its own: what the user's hook
-    /// asked for.
-    pub user_hooks: ActiveHooks,
     /// Marked by the all-fixed-colliders mode rather than by the user.
     pub automatic: bool,
 }
-
-/// The hook flags the plugin needs on every ground collider.
-pub(crate) const PLUGIN_HOOKS: ActiveHooks =
-    ActiveHooks::FILTER_CONTACT_PAIRS.union(ActiveHooks::MODIFY_SOLVER_CONTACTS);
 
 /// A ground's motion over the step: start pose of its centre-of-mass frame, velocities.
 #[derive(Clone, Copy, Debug)]
@@ -108,6 +102,23 @@ struct GroundMotion {
     w: Vector3<f64>,
     /// World AABB over the step (start and predicted end).
     aabb: Aabb,
+    /// A half-space ground that does not turn in the step: its world outward normal `n` and
+    /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
+    /// half-space an AABB as large as the number range, which every body meets.)
+    plane: Option<(Vector, Real)>,
+}
+
+impl GroundMotion {
+    /// Does the ground miss the axis-aligned cube `centre ± half` over the whole step?
+    fn misses_cube(&self, centre: Vector, half: Real) -> bool {
+        let (lo, hi) = (centre - Vector::splat(half), centre + Vector::splat(half));
+        if hi.cmplt(self.aabb.mins).any() || lo.cmpgt(self.aabb.maxs).any() {
+            return true;
+        }
+        // The cube's lowest point along n is `n·centre - half |n|_1`.
+        self.plane
+            .is_some_and(|(n, d)| n.dot(centre) - half * n.abs().element_sum() > d)
+    }
 }
 
 /// A managed body's start-of-step snapshot.
@@ -123,6 +134,12 @@ struct Candidate {
     /// Some pair with an `impact_grounds` ground may meet in the step (else the search from
     /// the start state would find it clear: see `geometry::cannot_close`).
     closing: bool,
+    /// Resting pairs of a body turning fast enough that another of its points could reach
+    /// the ground in the step (a box tipping off its edge, a capsule swinging down at a
+    /// wall): each ground's index (in `StepData::grounds`) and the resting contact point in
+    /// the body's frame (from its centre of mass). Checked after the step (see
+    /// `ImpactPlugin::swing_end`).
+    swing: SmallList<(usize, Vector3<f64>)>,
 }
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -165,6 +182,8 @@ struct Lookup {
     /// By body collider index: one of its pairs, and whether it has others (then in
     /// `StepData::roles`).
     roles: Vec<Option<RoleSlot>>,
+    /// By collider index: the hook flags the user set on a collider the plugin flagged.
+    user_flags: Vec<Option<(ColliderHandle, ActiveHooks)>>,
 }
 
 #[derive(Clone, Copy)]
@@ -184,6 +203,7 @@ impl Lookup {
     fn build(
         grounds: &HandleMap<ColliderHandle, GroundEntry>,
         roles: &HandleMap<PairKey, Role>,
+        hooked: &HandleMap<RigidBodyHandle, HookedBody>,
     ) -> Self {
         let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
             it.map(slot_of).max().map_or(0, |m| m + 1)
@@ -193,7 +213,18 @@ impl Lookup {
             grounds_valid: true,
             grounds: vec![None; len(&mut grounds.keys().copied())],
             roles: vec![None; len(&mut roles.keys().map(|k| k.0))],
+            user_flags: vec![
+                None;
+                len(&mut hooked
+                    .values()
+                    .flat_map(|e| e.colliders.iter().map(|(c, _)| *c)))
+            ],
         };
+        for entry in hooked.values() {
+            for (c, user) in entry.colliders.iter() {
+                out.user_flags[slot_of(*c)] = Some((*c, *user));
+            }
+        }
         for (h, entry) in grounds {
             out.grounds[slot_of(*h)] = Some((*h, *entry));
         }
@@ -238,7 +269,7 @@ impl Lookup {
 /// world.colliders[ground].set_restitution(0.8);
 ///
 /// let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-/// plugin.add_ground(&world.bodies, &mut world.colliders, ground).unwrap();
+/// plugin.add_ground(&world.bodies, &world.colliders, ground).unwrap();
 /// let mut bounced = false;
 /// for _ in 0..30 {
 ///     // Half a second: the ball hits the ground at 0.45 s and rises.
@@ -262,7 +293,7 @@ impl Lookup {
 /// let config = ImpactConfig { timing: TimingMode::TimeOfImpact, ..Default::default() };
 /// // `()` stands for the hook the simulation already had.
 /// let mut plugin = ImpactPlugin::with_hooks(config, ()).unwrap();
-/// plugin.add_ground(&bodies, &mut colliders, ground).unwrap();
+/// plugin.add_ground(&bodies, &colliders, ground).unwrap();
 ///
 /// let (mut pipeline, mut islands, mut broad_phase, mut narrow_phase) =
 ///     (PhysicsPipeline::new(), IslandManager::new(), BroadPhaseBvh::new(), NarrowPhase::new());
@@ -294,6 +325,10 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) excluded: HandleSet<RigidBodyHandle>,
     pub(crate) user_hooks: H,
     step: StepData,
+    /// Managed bodies whose colliders carry the plugin's hook flags (see `hook_flags.rs`).
+    pub(crate) hooked: HandleMap<RigidBodyHandle, HookedBody>,
+    /// Counts the steps, to find the hooked bodies no step needs any more.
+    pub(crate) hook_stamp: u64,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
@@ -324,6 +359,8 @@ impl<H> ImpactPlugin<H> {
             excluded: HandleSet::default(),
             user_hooks,
             step: StepData::default(),
+            hooked: HandleMap::default(),
+            hook_stamp: 0,
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
             prev_coupled: HandleSet::default(),
@@ -412,6 +449,15 @@ impl<H> ImpactPlugin<H> {
             };
         }
         self.grounds.get(&c)
+    }
+
+    /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
+    /// another collider (its flags are the user's) or outside the step's tables.
+    pub(crate) fn step_user_flags(&self, c: ColliderHandle) -> Option<ActiveHooks> {
+        match self.step.lookup.user_flags.get(slot_of(c)) {
+            Some(Some((h, user))) if *h == c => Some(*user),
+            _ => None,
+        }
     }
 
     /// A ground was marked, unmarked or given a material: the hooks' ground table is stale.
@@ -541,12 +587,14 @@ impl<H> ImpactPlugin<H> {
                         impact_grounds: SmallList::Empty,
                         touched: false,
                         closing: false,
+                        swing: SmallList::Empty,
                     });
                 }
                 Some(false) => handles.push(handle),
                 Some(true) | None => {}
             }
         }
+        let mut near_bodies = Vec::with_capacity(self.hooked.len());
         for handle in handles {
             let rb = &bodies[handle];
             let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
@@ -566,7 +614,7 @@ impl<H> ImpactPlugin<H> {
                 .grounds
                 .iter()
                 .enumerate()
-                .filter(|(_, g)| g.aabb.intersects(&sphere))
+                .filter(|(_, g)| !g.misses_cube(sphere.center(), sphere.half_extents().x))
                 .map(|(i, _)| i)
                 .collect();
             if near.is_empty() {
@@ -579,10 +627,12 @@ impl<H> ImpactPlugin<H> {
                         impact_grounds: SmallList::Empty,
                         touched: false,
                         closing: false,
+                        swing: SmallList::Empty,
                     });
                 }
                 continue;
             }
+            near_bodies.push(handle);
             let ground_geoms: SmallList<(usize, GroundGeom)> = near
                 .iter()
                 .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], colliders)?)))
@@ -591,6 +641,14 @@ impl<H> ImpactPlugin<H> {
             let mut touched = false;
             let mut impact_grounds = SmallList::Empty;
             let mut closing = false;
+            let mut swing = SmallList::Empty;
+            // How much deeper than a resting contact point another point of the body can go
+            // in the step by turning about it (not for a ball turning about its centre).
+            let turning_reach = if geom.parts.len() == 1 && centred_ball(&geom.parts[0]) {
+                0.0
+            } else {
+                flight.max_angular_speed(&start) * 2.0 * geom.radius * dt
+            };
             for (gi, gg) in &ground_geoms {
                 let mut any_impact = false;
                 // No pair of the body with this ground can meet in the step.
@@ -702,6 +760,11 @@ impl<H> ImpactPlugin<H> {
                             }
                         }
                     };
+                    if role == Role::Resting && turning_reach > step.resting_gap {
+                        if let Some((_, _, p)) = contact0 {
+                            swing.push((*gi, state.rot.inverse() * (p - state.com)));
+                        }
+                    }
                     any_impact |= role == Role::Impact && reachable;
                     // Only asked of a ground the search may run against (a single part's
                     // pair that is not `Impact` does not make one).
@@ -733,7 +796,10 @@ impl<H> ImpactPlugin<H> {
             if touched {
                 write_state(&mut bodies[handle], &state, &local_com, true);
             }
-            if !impact_grounds.is_empty() || self.config.timing == TimingMode::Exact {
+            if !impact_grounds.is_empty()
+                || !swing.is_empty()
+                || self.config.timing == TimingMode::Exact
+            {
                 step.candidates.push(Candidate {
                     body: handle,
                     start: state,
@@ -742,10 +808,12 @@ impl<H> ImpactPlugin<H> {
                     impact_grounds,
                     touched,
                     closing,
+                    swing,
                 });
             }
         }
-        step.lookup = Lookup::build(&self.grounds, &step.roles);
+        self.update_hook_flags(&near_bodies, bodies, colliders);
+        step.lookup = Lookup::build(&self.grounds, &step.roles, &self.hooked);
         self.step = step;
     }
 
@@ -804,12 +872,23 @@ impl<H> ImpactPlugin<H> {
         }
         let mode = self.config.timing;
         for cand in &step.candidates {
-            let Some(rb) = bodies.get(cand.body) else {
-                continue;
-            };
-            if !self.manages(cand.body, rb) {
+            if !bodies
+                .get(cand.body)
+                .is_some_and(|rb| self.manages(cand.body, rb))
+            {
                 continue;
             }
+            let has_grounds = cand
+                .impact_grounds
+                .iter()
+                .any(|i| colliders.get(step.grounds[*i].handle).is_some());
+            if !has_grounds
+                && !cand.swing.is_empty()
+                && self.swing_end(bodies, colliders, cand, &step)
+            {
+                continue;
+            }
+            let rb = &bodies[cand.body];
             let free = !touches_other(rb, narrow_phase)
                 && impulse_joints.attached_joints(cand.body).next().is_none()
                 && multibody_joints.rigid_body_link(cand.body).is_none()
@@ -818,10 +897,6 @@ impl<H> ImpactPlugin<H> {
             // Before any geometry: a body with no ground left to search, or whose search
             // would find the step clear (`Candidate::closing`) and that rapier's CCD did not
             // cut short, only flies (exactly, in `Exact` mode).
-            let has_grounds = cand
-                .impact_grounds
-                .iter()
-                .any(|i| colliders.get(step.grounds[*i].handle).is_some());
             let clear = mode != TimingMode::Step
                 && free
                 && has_grounds
@@ -1091,6 +1166,63 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
+    /// After the step, for a body whose ground pairs were all resting (rapier's) while it
+    /// turned fast: rapier's contact manifold, made at the step's start, holds only the
+    /// points near the ground then, so a point swinging down from higher up (a box tipping
+    /// off its edge, a capsule's end at a wall) can end the step deep in the ground, still
+    /// approaching (issue 5: 8-13 mm at 30-60 Hz, rapier alone 5.3 cm). When the deepest
+    /// point is deeper than the resting gap and approaches faster than a fall through it,
+    /// while the resting contact point itself does not (the body turned about it, rather
+    /// than being pushed into the ground by a body on it: a heavy box on a light one, see
+    /// the pressed roles), it is resolved as a step-end impact (`step_end`, pushed out).
+    /// Returns whether it was.
+    fn swing_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        step: &StepData,
+    ) -> bool {
+        let Some(rb) = bodies.get(cand.body) else {
+            return false;
+        };
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let grounds: SmallList<GroundGeom> = cand
+            .swing
+            .iter()
+            .filter_map(|(i, _)| ground_geom(&step.grounds[*i], colliders))
+            .collect();
+        let end = State {
+            com: vec_to_na(rb.center_of_mass()),
+            rot: rot_to_na(*rb.rotation()),
+            v: vec_to_na(rb.linvel()),
+            w: vec_to_na(rb.angvel()),
+        };
+        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
+            return false;
+        };
+        if !(hit.dist < -step.resting_gap && hit.un < -step.pressed_speed) {
+            return false;
+        }
+        // The resting contact's material point, now.
+        let pivot_pushed = cand.swing.iter().any(|(i, local)| {
+            let gm = &step.grounds[*i];
+            if gm.handle != grounds[hit.ground].handle {
+                return false;
+            }
+            let p = end.com + end.rot * local;
+            let u = super::geometry::body_velocity_at(&end, &p)
+                - grounds[hit.ground].velocity_at(&p, step.dt);
+            hit.normal.dot(&u) < -step.pressed_speed
+        });
+        if pivot_pushed {
+            return false;
+        }
+        let inertia = Inertia::of(rb);
+        self.step_end(bodies, colliders, cand, &geom, &grounds, &inertia, step);
+        true
+    }
+
     /// The material of a body collider against a ground collider.
     fn material_of(
         &self,
@@ -1127,6 +1259,14 @@ impl<H> ImpactPlugin<H> {
             let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
             let loosen = super::convert::to_real(gap + to_f64(co.contact_skin()));
             let mut aabb = co.compute_aabb().loosened(loosen);
+            // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
+            let half_space = co.shape().as_halfspace();
+            let plane_at = |pose: &Pose| {
+                half_space.map(|hs| {
+                    let n = pose.rotation * hs.normal;
+                    (n, n.dot(pose.translation) + loosen)
+                })
+            };
             let motion = match parent {
                 Some((_, rb)) if rb.is_dynamic() => continue,
                 Some((bh, rb)) if !rb.is_fixed() => {
@@ -1153,11 +1293,15 @@ impl<H> ImpactPlugin<H> {
                         Translation3::from(com0 + v * dt),
                         UnitQuaternion::from_scaled_axis(w * dt) * frame0.rotation,
                     ) * local_frame;
-                    aabb.merge(
-                        &co.shape()
-                            .compute_aabb(&super::convert::pose_from_na(&end))
-                            .loosened(loosen),
-                    );
+                    let end_pose = super::convert::pose_from_na(&end);
+                    aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
+                    // A turning half-space sweeps too much for one plane: AABB only.
+                    let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
+                        (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => {
+                            Some((n, d0.max(d1)))
+                        }
+                        _ => None,
+                    };
                     GroundMotion {
                         handle: *handle,
                         body: Some(bh),
@@ -1167,6 +1311,7 @@ impl<H> ImpactPlugin<H> {
                         v,
                         w,
                         aabb,
+                        plane,
                     }
                 }
                 _ => {
@@ -1180,6 +1325,7 @@ impl<H> ImpactPlugin<H> {
                         v: Vector3::zeros(),
                         w: Vector3::zeros(),
                         aabb,
+                        plane: plane_at(co.position()),
                     }
                 }
             };
@@ -1245,12 +1391,7 @@ fn surely_far(
     if !half.is_finite() || !com.is_finite() {
         return Some(false);
     }
-    let (lo, hi) = (com - Vector::splat(half), com + Vector::splat(half));
-    Some(
-        grounds
-            .iter()
-            .all(|g| hi.cmplt(g.aabb.mins).any() || lo.cmpgt(g.aabb.maxs).any()),
-    )
+    Some(grounds.iter().all(|g| g.misses_cube(com, half)))
 }
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
@@ -1345,6 +1486,14 @@ fn body_geom<'a>(
         });
     }
     BodyGeom { parts, radius }
+}
+
+/// Is the part a ball centred on the body's centre of mass (it cannot swing about a
+/// contact)?
+fn centred_ball(part: &BodyPart) -> bool {
+    part.shape.as_ball().is_some_and(|b| {
+        part.local.translation.vector.norm() <= 1e-9 * super::convert::to_f64(b.radius)
+    })
 }
 
 /// A ground's geometry for the queries, if its collider still exists.

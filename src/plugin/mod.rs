@@ -9,6 +9,7 @@ mod events;
 mod flight;
 mod geometry;
 mod grounds;
+mod hook_flags;
 mod hooks;
 mod impact_plugin;
 mod resolve;

@@ -1,0 +1,154 @@
+//! The plugin's hook flags, on the colliders of the managed bodies near a ground.
+//!
+//! rapier calls the hooks of a contact pair when either collider has the flag, and never
+//! recycles the contacts of such a pair (`IntegrationParameters::contact_recycling`: a pair
+//! with hook flags is fully updated every step). Flags on a ground would therefore change
+//! how rapier treats every body touching it, managed or not. The plugin instead flags the
+//! colliders of each managed body whose bounding sphere can reach a ground in the step
+//! (found in [`ImpactPlugin::before_step`]), and takes the flags off again once the body is
+//! far, unmanaged or gone. The pairs of bodies the plugin does not manage stay exactly
+//! rapier's, and a body far from every ground costs rapier nothing.
+//!
+//! The flags the user had set are recorded and handed back: the wrapped hook is called
+//! exactly when they ask for it.
+
+use super::geometry::SmallList;
+use super::impact_plugin::ImpactPlugin;
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+};
+
+/// The hook flags the plugin needs on a managed body's colliders near a ground.
+pub(crate) const PLUGIN_HOOKS: ActiveHooks =
+    ActiveHooks::FILTER_CONTACT_PAIRS.union(ActiveHooks::MODIFY_SOLVER_CONTACTS);
+
+/// A body whose colliders carry the plugin's flags.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct HookedBody {
+    /// Each flagged collider with the flags the user had set on it.
+    pub colliders: SmallList<(ColliderHandle, ActiveHooks)>,
+    /// The step (`ImpactPlugin::hook_stamp`) that last needed the flags.
+    stamp: u64,
+}
+
+impl<H> ImpactPlugin<H> {
+    /// Flags the colliders of `bodies` (each near a ground this step) and unflags those of
+    /// every body that no longer needs it: far from the grounds, no longer managed, removed.
+    /// A sleeping managed body keeps its flags: its contacts are as rapier left them when it
+    /// fell asleep, and rapier does not update them until it wakes.
+    pub(crate) fn update_hook_flags(
+        &mut self,
+        near: &[RigidBodyHandle],
+        bodies: &RigidBodySet,
+        colliders: &mut ColliderSet,
+    ) {
+        self.hook_stamp = self.hook_stamp.wrapping_add(1);
+        let stamp = self.hook_stamp;
+        for handle in near {
+            let Some(rb) = bodies.get(*handle) else {
+                continue;
+            };
+            let entry = self.hooked.entry(*handle).or_default();
+            entry.stamp = stamp;
+            flag_body(entry, rb, colliders);
+        }
+        let mut hooked = std::mem::take(&mut self.hooked);
+        hooked.retain(|handle, entry| {
+            if entry.stamp == stamp {
+                return true;
+            }
+            if bodies
+                .get(*handle)
+                .is_some_and(|rb| rb.is_sleeping() && self.manages(*handle, rb))
+            {
+                entry.stamp = stamp;
+                return true;
+            }
+            for (c, user) in entry.colliders.iter() {
+                restore(colliders, *c, *user);
+            }
+            false
+        });
+        self.hooked = hooked;
+    }
+
+    /// The hook flags the user set on a collider (those rapier would have seen without the
+    /// plugin).
+    pub(crate) fn recorded_user_flags(
+        &self,
+        colliders: &ColliderSet,
+        c: ColliderHandle,
+    ) -> ActiveHooks {
+        let Some(co) = colliders.get(c) else {
+            return ActiveHooks::empty();
+        };
+        let flags = co.active_hooks();
+        if !flags.contains(PLUGIN_HOOKS) {
+            // Not flagged by the plugin, or the user has set new flags since.
+            return flags;
+        }
+        co.parent()
+            .and_then(|p| self.hooked.get(&p))
+            .and_then(|e| e.colliders.iter().find(|(h, _)| *h == c))
+            .map_or(flags, |(_, user)| *user)
+    }
+
+    /// Takes the plugin's hook flags off every collider (the user's flags back) and returns
+    /// the wrapped hook. Use it to go on without the plugin: otherwise the flags it left make
+    /// rapier call the next hook for pairs the user never asked about.
+    pub fn detach(mut self, colliders: &mut ColliderSet) -> H {
+        for entry in self.hooked.values() {
+            for (c, user) in entry.colliders.iter() {
+                restore(colliders, *c, *user);
+            }
+        }
+        self.hooked.clear();
+        self.user_hooks
+    }
+}
+
+/// Flags the body's colliders (new ones included) and gives back those detached from it.
+fn flag_body(entry: &mut HookedBody, rb: &RigidBody, colliders: &mut ColliderSet) {
+    let attached = rb.colliders();
+    let same = entry.colliders.len() == attached.len()
+        && entry
+            .colliders
+            .iter()
+            .zip(attached)
+            .all(|((h, _), a)| h == a);
+    if !same {
+        for (c, user) in entry.colliders.iter() {
+            if !attached.contains(c) {
+                restore(colliders, *c, *user);
+            }
+        }
+        let old = std::mem::take(&mut entry.colliders);
+        for c in attached {
+            let user = old
+                .iter()
+                .find(|(h, _)| h == c)
+                .map(|(_, u)| *u)
+                .or_else(|| colliders.get(*c).map(|co| co.active_hooks()));
+            if let Some(user) = user {
+                entry.colliders.push((*c, user));
+            }
+        }
+    }
+    for (c, user) in entry.colliders.iter_mut() {
+        if let Some(co) = colliders.get_mut(*c) {
+            let flags = co.active_hooks();
+            if !flags.contains(PLUGIN_HOOKS) {
+                // New, or the user set the flags since the last step: theirs now.
+                *user = flags;
+                co.set_active_hooks(flags | PLUGIN_HOOKS);
+            }
+        }
+    }
+}
+
+/// The user's flags back on a collider, if it still exists.
+fn restore(colliders: &mut ColliderSet, c: ColliderHandle, user: ActiveHooks) {
+    if let Some(co) = colliders.get_mut(c) {
+        co.set_active_hooks(user);
+    }
+}
