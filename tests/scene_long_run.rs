@@ -1,8 +1,7 @@
 //! A long run (issue 5): 100 000 steps (27.8 min of simulated time at 60 Hz) of a mixed scene
 //! on a half-space ground inside four walls (fixed, not ground: rapier's contacts): balls of several restitutions, boxes and capsules dropped at
 //! angles, a cube thrown tumbling, and a stack of three boxes. Asserted at every step: all
-//! finite, no body below the ground by more than twice rapier's allowed linear error (10 mm:
-//! resting pairs and wall contacts are rapier's, see the bound in `run`), no
+//! finite, no body below the ground by more than rapier's allowed linear error (5 mm), no
 //! impact gaining kinetic energy; overall: every body stays within the arena, and every 10 000
 //! steps a third of the bodies are thrown up again with spin (ten cycles of landing and
 //! settling); the scene comes to rest after the last throw (every body asleep),
@@ -155,50 +154,14 @@ fn run(timing: TimingMode, steps: usize) -> Run {
         for ev in p.events() {
             check_event(ev, &mut stats, &label);
         }
-        // Resting pairs and contacts with the walls and other bodies are rapier's: a box
-        // wedged against a wall went 7.8 mm into the ground in the f64 build (step 25 065, no
-        // impact event). Bound: twice rapier's allowed linear error.
+        // Resting pairs and contacts with the walls and other bodies are rapier's. Before the
+        // step-end check of bodies turning about a resting contact (`swing_end`), a box
+        // wedged against a wall went 7.8 mm into the ground in the f64 build and a capsule
+        // swinging down at a wall 11.1 mm in f32, and this bound was twice the allowed error.
         let depth = penetration(&world, 0.0);
-        if depth > 0.004 {
-            let (d, b) = deepest_body(&world, 0.0);
-            let rb = &world.bodies[b.unwrap()];
-            let shape = world.colliders[rb.colliders()[0]].shape().shape_type();
-            let mut others = vec![];
-            for pair in world.narrow_phase.contact_pairs_with(rb.colliders()[0]) {
-                if pair.has_any_active_contact() {
-                    let o = if pair.collider1 == rb.colliders()[0] {
-                        pair.collider2
-                    } else {
-                        pair.collider1
-                    };
-                    others.push((
-                        o.into_raw_parts(),
-                        pair.manifolds()
-                            .iter()
-                            .map(|m| m.data.solver_contacts.len())
-                            .sum::<usize>(),
-                    ));
-                }
-            }
-            eprintln!(
-                "DBG {k} depth {d:.5} body {:?} {shape:?} pos {:?} rot {:?} v {:?} w {:?} sleeping {} events {:?} contacts {:?}",
-                b.unwrap().into_raw_parts(),
-                rb.translation(),
-                rb.rotation(),
-                rb.linvel(),
-                rb.angvel(),
-                rb.is_sleeping(),
-                p.events()
-                    .iter()
-                    .filter(|e| Some(e.body) == b)
-                    .map(|e| (e.time, e.normal_impulse, format!("{:?}", e.regime)))
-                    .collect::<Vec<_>>(),
-                others
-            );
-        }
         stats.max_penetration = stats.max_penetration.max(depth);
         assert!(
-            depth <= 2.0 * allowed,
+            depth <= allowed,
             "{label}: step {k}: {depth:e} m below the ground"
         );
         trace.push(state_hash(&world) ^ events_hash(p.events()).rotate_left(1));

@@ -4,9 +4,8 @@
 //! a rayon pool of 1, 2 and 4 threads, gives bitwise the same trace (poses, velocities, sleep
 //! states, impact events at every step), with the per-step checks.
 //!
-//! Balls only, and Step mode left out: with boxes in the piles, a box tumbling off another
-//! onto an edge goes 7.8-8.8 mm into the ground (its pair is a resting one, rapier's; rapier
-//! alone: 5.3 cm in the same scene), reported in docs/guarantees.md.
+//! Balls only, in `TimeOfImpact` and `Exact` modes; boxes tumbling off balls, in every mode,
+//! are `scene_resting.rs`'s.
 //!
 //! Run: `cargo test --release --features parallel --test scene_parallel` (and with
 //! `--features f64,parallel`).
