@@ -86,7 +86,7 @@ fn validate_one_by_one(
 
 /// A sufficient condition for every check of [`resolve`] to pass, cheap enough to run
 /// on every impact: every input is finite (one sum of all of them is finite iff each
-/// is; summed as a tree of pairs, so it takes a few vector additions), `m > 0`,
+/// is; summed as a tree of 3-vectors, so it takes a few vector additions), `m > 0`,
 /// `e, mu >= 0`, a unit normal, and a valid inverse inertia (a diagonal one with a
 /// non-negative diagonal, else the full check of [`Body::validate`]). `diagonal` says
 /// whether the inverse inertia's off-diagonal entries are all zero.
@@ -98,27 +98,15 @@ fn inputs_plainly_valid(
     material: &Material,
     diagonal: bool,
 ) -> bool {
-    #[inline(always)]
-    fn add2(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-        [a[0] + b[0], a[1] + b[1]]
-    }
     let (l, w) = (&velocity.linear, &velocity.angular);
     let (n, o, g) = (&contact.normal, &contact.offset, &contact.ground_velocity);
     let a = &body.inv_inertia;
     let (e, mu) = (material.restitution, material.friction);
-    let vectors = add2(
-        add2(add2([l.x, l.y], [l.z, w.x]), add2([w.y, w.z], [n.x, n.y])),
-        add2(
-            add2([n.z, o.x], [o.y, o.z]),
-            add2([g.x, g.y], [g.z, body.mass]),
-        ),
-    );
-    let tensor = add2(
-        add2([a.m11, a.m21], [a.m31, a.m12]),
-        add2([a.m22, a.m32], [a.m13, a.m23]),
-    );
-    let all = add2(vectors, add2(tensor, [a.m33, e + mu]));
-    let sum = all[0] + all[1];
+    // Whole 3-vectors (and the tensor's columns), added as a tree.
+    let vectors = ((l + w) + (n + o)) + (g + a.column(0));
+    let columns = a.column(1) + a.column(2);
+    let all = vectors + columns;
+    let sum = (all.x + all.y) + (all.z + body.mass) + (e + mu);
     if !(sum.is_finite()
         && body.mass > 0.0
         && e >= 0.0
