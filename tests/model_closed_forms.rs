@@ -514,3 +514,88 @@ fn cube_balanced_on_its_diagonal_bounces_like_a_point_mass() {
         assert_close(&format!("mu = {mu}: |w2|"), out.w2.norm(), 0.0, 1e-14, 1.0);
     }
 }
+
+/// A body that does not rotate (zero inverse inertia tensor): `K = E/m`, so the sticking
+/// impulse is `m (-(1+e) u_n n - u_t)`, accepted iff `|u_t| <= mu (1+e) |u_n|`, and the
+/// slipping one `m (1+e) |u_n| (n - mu s)` (eqs. 10-12 and 16-19 with `I -> inf`).
+/// The angular velocity is unchanged and carries no energy; the work is
+/// `P . (u_1 + u_2) / 2` with `u` the contact-point velocities. Document and Guarded take
+/// the isotropic path with `a = 0`; Consistent takes the general path and must agree.
+#[test]
+fn non_rotating_body_is_a_point_mass_at_the_contact() {
+    let mut rng = Rng::new(0x0A0B);
+    let (mut sticks, mut slips) = (0, 0);
+    for k in 0..2000 {
+        let mass = rng.log_uniform(0.1, 10.0);
+        let body = Body {
+            mass,
+            inv_inertia: Matrix3::zeros(),
+        };
+        let n = rng.unit_vector();
+        let c = Contact::fixed(n, -n * rng.uniform(0.1, 1.0) + rng.vector(0.5));
+        let vel = BodyVelocity {
+            linear: -n * rng.uniform(0.5, 5.0) + rng.vector(3.0),
+            angular: rng.vector(2.0),
+        };
+        let m = Material {
+            restitution: rng.uniform(0.0, 1.0),
+            friction: rng.uniform(0.0, 1.0),
+        };
+        let u1 = contact_velocity(&vel, &c);
+        let un = n.dot(&u1);
+        if un >= -1e-3 {
+            continue;
+        }
+        let ut = u1 - n * un;
+        let (e, mu) = (m.restitution, m.friction);
+        let limit = mu * (1.0 + e) * -un;
+        // Away from the stick/slip boundary, where rounding picks the regime.
+        if (ut.norm() - limit).abs() <= 1e-9 * u1.norm() {
+            continue;
+        }
+        let stick = ut.norm() <= limit;
+        let expected = if stick {
+            sticks += 1;
+            (-(n * ((1.0 + e) * un)) - ut) * mass
+        } else {
+            slips += 1;
+            (n - ut / ut.norm() * mu) * (mass * (1.0 + e) * -un)
+        };
+        let v2 = vel.linear + expected / mass;
+        let ke1 = 0.5 * mass * vel.linear.norm_squared();
+        let u2 = u1 + expected / mass;
+        let ke2 = ke1 + 0.5 * expected.dot(&(u1 + u2));
+        let consistent = resolve(Law::Consistent, &body, &vel, &c, &m).expect("valid");
+        for law in [Law::Document, Law::Guarded, Law::Consistent] {
+            let i = resolve(law, &body, &vel, &c, &m).expect("valid");
+            let tag = format!("case {k}, {law:?}");
+            let scale = expected.norm();
+            assert!(
+                rel_to(&i.impulse, &expected, scale) <= 1e-12,
+                "{tag}: impulse {:?}, expected {expected:?}",
+                i.impulse
+            );
+            let vscale = vel.linear.norm().max(v2.norm());
+            let dv = rel_to(&i.velocity.linear, &v2, vscale);
+            assert!(dv <= 1e-12, "{tag}: v2 relative error {dv:e}");
+            assert_eq!(i.velocity.angular, vel.angular, "{tag}: w2");
+            assert_close(&format!("{tag}: KE before"), i.ke_before, ke1, 1e-14, ke1);
+            assert_close(&format!("{tag}: KE after"), i.ke_after, ke2, 1e-12, ke1);
+            assert_close(
+                &format!("{tag}: KE after vs Consistent"),
+                i.ke_after,
+                consistent.ke_after,
+                1e-12,
+                ke1,
+            );
+            if law == Law::Document {
+                let regime = if stick { Regime::Stick } else { Regime::Slip };
+                assert_eq!(i.regime, regime, "{tag}: regime");
+            }
+        }
+    }
+    assert!(
+        sticks >= 100 && slips >= 100,
+        "{sticks} sticks, {slips} slips"
+    );
+}

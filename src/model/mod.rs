@@ -159,6 +159,9 @@ fn resolve_classified(
         // small code path, where every step is a closed form.
         return resolve_approaching(law, body, Some(a.m11), velocity, contact, material, &u1);
     }
+    if law != Law::Consistent && diagonal && a.m11 == 0.0 && a.m22 == 0.0 && a.m33 == 0.0 {
+        return resolve_non_rotating(law, body, velocity, contact, material, &u1);
+    }
     resolve_general(law, body, velocity, contact, material, &u1)
 }
 
@@ -182,6 +185,21 @@ fn separating(law: Law, body: &Body, velocity: &BodyVelocity) -> Impact {
         ke_before: ke,
         ke_after: ke,
     }
+}
+
+/// The document's law for a body that does not rotate (zero inverse inertia): the
+/// isotropic closed forms with `a = 0` (`K = E/m`), in a copy of its own so that the
+/// sphere's path keeps knowing `a > 0`.
+#[inline(never)]
+fn resolve_non_rotating(
+    law: Law,
+    body: &Body,
+    velocity: &BodyVelocity,
+    contact: &Contact,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> Result<Impact, ModelError> {
+    resolve_approaching(law, body, Some(0.0), velocity, contact, material, u1)
 }
 
 /// Every body and law the isotropic path does not take.
@@ -368,8 +386,14 @@ fn finish(
     let (dw, ke_before) = match iso {
         Some(a) => (
             r_p * a,
+            // With a = 0 (a body that does not rotate) the angular velocity carries no
+            // energy, as in `Body::kinetic_energy`.
             0.5 * (body.mass * velocity.linear.norm_squared()
-                + velocity.angular.norm_squared() / a),
+                + if a > 0.0 {
+                    velocity.angular.norm_squared() / a
+                } else {
+                    0.0
+                }),
         ),
         None => (body.inv_inertia * r_p, body.kinetic_energy(velocity)),
     };
