@@ -231,8 +231,9 @@ fn unmanaged_bodies_move_bitwise_as_in_rapier_alone() {
     }
 }
 
-/// The plugin's hook flags are on a managed body's colliders only while it is near a ground,
-/// the user's own flags survive them, and `detach` takes them off.
+/// Where the plugin's hook flags go: on the grounds while every dynamic body is managed; on
+/// the managed bodies near a ground (only) while some dynamic body is not; the user's own
+/// flags survive both, and `detach` takes the plugin's off.
 #[test]
 fn hook_flags_follow_the_bodies_near_a_ground() {
     let mut world = PhysicsWorld::default();
@@ -260,30 +261,44 @@ fn hook_flags_follow_the_bodies_near_a_ground() {
     p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let both = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
-    p.step(&mut world);
+    let none = ActiveHooks::empty();
     let flags = |w: &PhysicsWorld, c: ColliderHandle| w.colliders[c].active_hooks();
-    assert_eq!(flags(&world, ground), ActiveHooks::MODIFY_SOLVER_CONTACTS);
-    assert_eq!(flags(&world, low), both);
-    assert_eq!(flags(&world, own), both);
-    assert_eq!(flags(&world, high), ActiveHooks::empty());
-    // Excluded: the plugin's flags come off at the next step.
+    // Every dynamic body managed: the ground carries the flags, the bodies their own.
+    p.step(&mut world);
+    assert_eq!(flags(&world, ground), both);
+    assert_eq!(flags(&world, low), none);
+    assert_eq!(flags(&world, own), ActiveHooks::FILTER_CONTACT_PAIRS);
+    assert_eq!(flags(&world, high), none);
+    // One excluded: the ground gets the user's flags back, the managed bodies near it
+    // carry the plugin's, the far one and the excluded one none.
     let low_body = world.colliders[low].parent().unwrap();
     p.exclude_body(low_body);
     p.step(&mut world);
-    assert_eq!(flags(&world, low), ActiveHooks::empty());
-    p.include_body(low_body);
-    p.step(&mut world);
-    assert_eq!(flags(&world, low), both);
+    assert_eq!(flags(&world, ground), ActiveHooks::MODIFY_SOLVER_CONTACTS);
+    assert_eq!(flags(&world, low), none);
+    assert_eq!(flags(&world, own), both);
+    assert_eq!(flags(&world, high), none);
     // The user changes their flags between steps: the plugin adds its own to the new ones
     // and hands the new ones back.
     world.colliders[own].set_active_hooks(ActiveHooks::empty());
     p.step(&mut world);
     assert_eq!(flags(&world, own), both);
+    let own_body = world.colliders[own].parent().unwrap();
+    p.exclude_body(own_body);
+    p.step(&mut world);
+    assert_eq!(flags(&world, own), none);
+    // All managed again: back on the ground.
+    p.include_body(low_body);
+    p.include_body(own_body);
+    p.step(&mut world);
+    assert_eq!(flags(&world, ground), both);
+    assert_eq!(flags(&world, low), none);
+    assert_eq!(flags(&world, own), none);
     // `detach` hands the wrapped hook back (here `()`).
     let _hooks: () = p.detach(&mut world.colliders);
-    assert_eq!(flags(&world, low), ActiveHooks::empty());
-    assert_eq!(flags(&world, own), ActiveHooks::empty());
     assert_eq!(flags(&world, ground), ActiveHooks::MODIFY_SOLVER_CONTACTS);
+    assert_eq!(flags(&world, low), none);
+    assert_eq!(flags(&world, own), none);
 }
 
 #[test]

@@ -172,9 +172,10 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
             "{label}: first impact at {got}, expected {expected}"
         );
     }
-    // Off: the automatic grounds are ordinary colliders again, flags back to the user's; the
-    // ground marked by hand stays.
+    // Off: the automatic grounds are ordinary colliders again, their flags back to the
+    // user's from the next step; the ground marked by hand stays.
     p.set_all_fixed_colliders_ground(false);
+    p.step(&mut world);
     for (label, c, ground) in [
         ("fixed body", g_body, false),
         ("parentless", g_free, false),

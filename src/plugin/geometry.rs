@@ -271,6 +271,11 @@ fn direct_plane_contact(
     t: f64,
 ) -> Option<PairContact> {
     use crate::parry::shape::TypedShape;
+    if let Some(ball) = part.shape.as_ball() {
+        if let Some(found) = ball_plane_contact(part, to_f64(ball.radius), ground, s, t) {
+            return found;
+        }
+    }
     let center = part_pose(part, s).translation.vector;
     match ground.shape.as_typed_shape() {
         TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
@@ -281,6 +286,61 @@ fn direct_plane_contact(
             .find_map(|tri| plane_contact_on(part, ground, s, t, center, Some(tri)).ok()),
         _ => None,
     }
+}
+
+/// [`plane_contact_on`] for a ball on a half-space or a cuboid, with the ball's support
+/// point written out (`centre - r n`): the same contact, without the general path's pose
+/// compositions and support-map call (most bodies in a ball scene take this path every step
+/// they are near the ground). `None`: not such a pair, take the general path; `Some(None)`:
+/// the ball is beside the cuboid's nearest face.
+fn ball_plane_contact(
+    part: &BodyPart,
+    radius: f64,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+) -> Option<Option<PairContact>> {
+    use crate::parry::shape::TypedShape;
+    let offset = part.local.translation.vector;
+    let centre = if offset == Vector3::zeros() {
+        s.com
+    } else {
+        s.com + s.rot * offset
+    };
+    let skins = part.skin + ground.skin;
+    let pose_g = ground.pose_at(t);
+    let (n, height) = match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => {
+            let n = pose_g.rotation * vec_to_na(hs.normal);
+            let len = n.norm();
+            if len.is_nan() || len <= 0.0 {
+                return Some(None);
+            }
+            let n = n / len;
+            (n, n.dot(&(centre - pose_g.translation.vector)) - radius)
+        }
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(centre))
+                .coords;
+            // The face the centre is furthest out of, relative to the half extents (as
+            // `plane_contact_on` picks it).
+            let axis = (0..3)
+                .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
+                .unwrap_or(1);
+            let tol = 1e-6 * (1.0 + centre.norm());
+            if !(0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol) {
+                return Some(None);
+            }
+            let mut nl = Vector3::zeros();
+            nl[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
+            (pose_g.rotation * nl, p[axis].abs() - half[axis] - radius)
+        }
+        _ => return None,
+    };
+    let support = centre - n * radius;
+    Some(Some((height - skins, n, support - n * part.skin)))
 }
 
 /// The mesh or heightfield triangles under the world point `p` at time `t`: the closest

@@ -1,8 +1,7 @@
 //! Ground registration: which colliders are ground, and their optional material.
 //!
-//! A ground collider keeps its own hook flags: the plugin puts its flags on the colliders of
-//! the managed bodies near a ground instead (see `hook_flags.rs`), so that the pairs of a
-//! ground with bodies the plugin does not manage stay exactly rapier's.
+//! Marking a ground changes nothing in the collider set: the plugin's hook flags are put on
+//! at each step (see `hook_flags.rs`).
 
 use super::config::{ConfigError, GroundMaterial};
 use super::impact_plugin::{GroundEntry, ImpactPlugin};
@@ -12,7 +11,8 @@ impl<H> ImpactPlugin<H> {
     /// Marks one collider as ground, with the materials rapier combines from the colliders.
     ///
     /// The collider must exist and be parentless, or attached to a fixed or kinematic body.
-    /// Its hook flags are left as they are.
+    /// Its hook flags are the user's: the plugin adds its own at each step where needed and
+    /// hands the user's to the wrapped hook.
     pub fn add_ground(
         &mut self,
         bodies: &RigidBodySet,

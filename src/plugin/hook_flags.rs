@@ -1,16 +1,22 @@
-//! The plugin's hook flags, on the colliders of the managed bodies near a ground.
+//! The plugin's hook flags: on the grounds, or on the managed bodies near a ground.
 //!
 //! rapier calls the hooks of a contact pair when either collider has the flag, and never
 //! recycles the contacts of such a pair (`IntegrationParameters::contact_recycling`: a pair
-//! with hook flags is fully updated every step). Flags on a ground would therefore change
-//! how rapier treats every body touching it, managed or not. The plugin instead flags the
-//! colliders of each managed body whose bounding sphere can reach a ground in the step
-//! (found in [`ImpactPlugin::before_step`]), and takes the flags off again once the body is
-//! far, unmanaged or gone. The pairs of bodies the plugin does not manage stay exactly
-//! rapier's, and a body far from every ground costs rapier nothing.
+//! with hook flags is fully updated every step). Where the flags go is a trade:
+//! - on the grounds: only ground pairs are hooked, and every contact between bodies keeps
+//!   rapier's recycling and speed; but a dynamic body the plugin does not manage (excluded,
+//!   translation locked) would have its ground pairs hooked too, and so no longer move
+//!   exactly as in rapier alone;
+//! - on the colliders of each managed body whose bounding sphere can reach a ground in the
+//!   step (found in [`ImpactPlugin::before_step`]; kept while it sleeps, taken off once it is
+//!   far, unmanaged or gone): every pair of an unmanaged body stays exactly rapier's, but the
+//!   contacts between managed bodies near a ground are hooked as well (a pile's bottom
+//!   layer: not recycled, and the hooks called).
 //!
-//! The flags the user had set are recorded and handed back: the wrapped hook is called
-//! exactly when they ask for it.
+//! The plugin takes the first while every dynamic body in the world is managed (the usual
+//! scene), and the second from the first step some dynamic, enabled body is not. The flags
+//! the user had set are recorded and handed back: the wrapped hook is called exactly when
+//! they ask for it.
 
 use super::geometry::SmallList;
 use super::impact_plugin::ImpactPlugin;
@@ -32,34 +38,62 @@ pub(crate) struct HookedBody {
 }
 
 impl<H> ImpactPlugin<H> {
-    /// Flags the colliders of `bodies` (each near a ground this step) and unflags those of
-    /// every body that no longer needs it: far from the grounds, no longer managed, removed.
-    /// A sleeping managed body keeps its flags: its contacts are as rapier left them when it
-    /// fell asleep, and rapier does not update them until it wakes.
+    /// Puts the flags where this step needs them (see the module's documentation):
+    /// `near` are the managed bodies that can reach a ground in the step, `unmanaged`
+    /// whether the world holds a dynamic, enabled body the plugin does not manage.
     pub(crate) fn update_hook_flags(
         &mut self,
         near: &[RigidBodyHandle],
+        unmanaged: bool,
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
     ) {
+        // Grounds: flagged in the first arrangement, and never once unmarked.
+        let grounds = &self.grounds;
+        self.flagged_grounds.retain(|c, user| {
+            let keep = !unmanaged && grounds.contains_key(c);
+            if !keep {
+                restore(colliders, *c, *user);
+            }
+            keep
+        });
+        if !unmanaged {
+            for c in self.grounds.keys() {
+                if let Some(co) = colliders.get_mut(*c) {
+                    let flags = co.active_hooks();
+                    if !flags.contains(PLUGIN_HOOKS) {
+                        // New, or the user set the flags since the last step: theirs now.
+                        self.flagged_grounds.insert(*c, flags);
+                        co.set_active_hooks(flags | PLUGIN_HOOKS);
+                    }
+                }
+            }
+        }
+        // Bodies: flagged in the second.
         self.hook_stamp = self.hook_stamp.wrapping_add(1);
         let stamp = self.hook_stamp;
-        for handle in near {
-            let Some(rb) = bodies.get(*handle) else {
-                continue;
-            };
-            let entry = self.hooked.entry(*handle).or_default();
-            entry.stamp = stamp;
-            flag_body(entry, rb, colliders);
+        if unmanaged {
+            for handle in near {
+                let Some(rb) = bodies.get(*handle) else {
+                    continue;
+                };
+                let entry = self.hooked.entry(*handle).or_default();
+                entry.stamp = stamp;
+                flag_body(entry, rb, colliders);
+            }
+        }
+        if self.hooked.is_empty() {
+            return;
         }
         let mut hooked = std::mem::take(&mut self.hooked);
         hooked.retain(|handle, entry| {
             if entry.stamp == stamp {
                 return true;
             }
-            if bodies
-                .get(*handle)
-                .is_some_and(|rb| rb.is_sleeping() && self.manages(*handle, rb))
+            if unmanaged
+                && bodies
+                    .get(*handle)
+                    .is_some_and(|rb| rb.is_sleeping() && self.manages(*handle, rb))
             {
                 entry.stamp = stamp;
                 return true;
@@ -87,6 +121,9 @@ impl<H> ImpactPlugin<H> {
             // Not flagged by the plugin, or the user has set new flags since.
             return flags;
         }
+        if let Some(user) = self.flagged_grounds.get(&c) {
+            return *user;
+        }
         co.parent()
             .and_then(|p| self.hooked.get(&p))
             .and_then(|e| e.colliders.iter().find(|(h, _)| *h == c))
@@ -97,6 +134,9 @@ impl<H> ImpactPlugin<H> {
     /// the wrapped hook. Use it to go on without the plugin: otherwise the flags it left make
     /// rapier call the next hook for pairs the user never asked about.
     pub fn detach(mut self, colliders: &mut ColliderSet) -> H {
+        for (c, user) in &self.flagged_grounds {
+            restore(colliders, *c, *user);
+        }
         for entry in self.hooked.values() {
             for (c, user) in entry.colliders.iter() {
                 restore(colliders, *c, *user);
