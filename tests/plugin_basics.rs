@@ -8,6 +8,9 @@
 // widening in one build are identities in the other.
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
+mod plugin_support;
+
+use plugin_support::*;
 use rapier_impact::model::Regime;
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::parry::utils::Array2;
@@ -15,45 +18,6 @@ use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
     ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode,
 };
-use std::sync::Mutex;
-
-const G: f64 = 9.81;
-const F64: bool = cfg!(feature = "f64");
-
-fn up() -> Unit<Vector> {
-    Unit::new_unchecked(Vector::Y)
-}
-
-fn plugin(timing: TimingMode) -> ImpactPlugin {
-    ImpactPlugin::new(ImpactConfig {
-        timing,
-        ..Default::default()
-    })
-    .unwrap()
-}
-
-/// A user hook recording the pairs it is asked about, and refusing the pairs of one
-/// "ghost" collider.
-#[derive(Default)]
-struct Recorder {
-    seen: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
-    ghost: Mutex<Option<ColliderHandle>>,
-}
-
-impl PhysicsHooks for Recorder {
-    fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
-        self.seen
-            .lock()
-            .unwrap()
-            .push((context.collider1, context.collider2));
-        let ghost = *self.ghost.lock().unwrap();
-        if ghost == Some(context.collider1) || ghost == Some(context.collider2) {
-            None
-        } else {
-            Some(SolverFlags::COMPUTE_RIGID_IMPULSES)
-        }
-    }
-}
 
 #[test]
 fn wrapped_user_hook_still_sees_every_non_ground_pair() {
@@ -80,9 +44,8 @@ fn wrapped_user_hook_still_sees_every_non_ground_pair() {
             .restitution(0.5)
             .active_hooks(hooks),
     );
-    let recorder = Recorder::default();
-    *recorder.ghost.lock().unwrap() = Some(ghost_co);
-    let mut p = ImpactPlugin::with_hooks(ImpactConfig::default(), recorder).unwrap();
+    let mut p =
+        ImpactPlugin::with_hooks(ImpactConfig::default(), GhostFilter::new(ghost_co)).unwrap();
     p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
     let mut ground_events = 0;
@@ -90,24 +53,20 @@ fn wrapped_user_hook_still_sees_every_non_ground_pair() {
         p.step(&mut world);
         ground_events += p.events().len();
     }
-    let seen = p.user_hooks().seen.lock().unwrap().clone();
-    let saw = |a: ColliderHandle, b: ColliderHandle| {
-        seen.iter()
-            .any(|&(x, y)| (x, y) == (a, b) || (x, y) == (b, a))
-    };
-    println!("pairs the user hook saw: {}", seen.len());
+    let seen = &p.user_hooks().seen;
+    println!("pairs the user hook saw: {}", seen.lock().unwrap().len());
     assert!(
-        saw(box_co, platform),
+        saw(seen, box_co, platform),
         "the user hook never saw box-platform"
     );
     assert!(
-        saw(ghost_co, platform),
+        saw(seen, ghost_co, platform),
         "the user hook never saw ghost-platform"
     );
     // The user's filter is asked about the managed pair too (it decides whether there is a
     // contact: see `tests/plugin_grounds.rs`); it accepted it, so the plugin bounced the ball.
     assert!(
-        saw(ball_co, ground),
+        saw(seen, ball_co, ground),
         "the user's filter was not asked about a managed ground pair"
     );
     assert!(ground_events > 0, "the ball never hit the ground");
@@ -191,11 +150,7 @@ fn trace(world: &PhysicsWorld, bodies: &[RigidBodyHandle]) -> Vec<[Real; 13]> {
 
 #[test]
 fn unmanaged_bodies_move_bitwise_as_in_rapier_alone() {
-    for timing in [
-        TimingMode::Step,
-        TimingMode::TimeOfImpact,
-        TimingMode::Exact,
-    ] {
+    for timing in MODES {
         for recycling in [false, true] {
             let mut alone = PhysicsWorld::default();
             alone.integration_parameters.contact_recycling = recycling;
@@ -204,8 +159,7 @@ fn unmanaged_bodies_move_bitwise_as_in_rapier_alone() {
             with.integration_parameters.contact_recycling = recycling;
             let (ground, others2) = unmanaged_scene(&mut with);
             assert_eq!(others, others2);
-            let mut p = plugin(timing);
-            p.add_ground(&with.bodies, &with.colliders, ground).unwrap();
+            let mut p = plugin_on(&with, ground, timing);
             for b in &others[..4] {
                 p.exclude_body(*b);
             }
@@ -257,9 +211,7 @@ fn hook_flags_follow_the_bodies_near_a_ground() {
         RigidBodyBuilder::dynamic().translation(Vector::new(-2.0, 0.101, 0.0)),
         ColliderBuilder::ball(0.1).active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
     let both = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
     let none = ActiveHooks::empty();
     let flags = |w: &PhysicsWorld, c: ColliderHandle| w.colliders[c].active_hooks();
@@ -440,17 +392,7 @@ fn a_rising_kinematic_platform_enters_the_model() {
         RigidBodyBuilder::dynamic().translation(Vector::new(0.0, (0.1 + h) as Real, 0.0)),
         ColliderBuilder::ball(0.1).friction(0.0),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: 0.0,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, 0.0);
     let dt = f64::from(world.integration_parameters.dt);
     // Contact when h - g t^2 / 2 = V t.
     let t_hit = (-v_up + (v_up * v_up + 2.0 * G * h).sqrt()) / G;
@@ -492,17 +434,7 @@ fn check_slope(ground_collider: ColliderBuilder, n: [f64; 3], label: &str) {
         RigidBodyBuilder::dynamic().translation(Vector::new(0.0, h as Real, 0.0)),
         ColliderBuilder::ball(0.1),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: 0.0,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, 0.0);
     let dt = f64::from(world.integration_parameters.dt);
     // Centre at (0, y, 0) touches when n_y y = R.
     let t_hit = (2.0 * (h - 0.1 / n[1]) / G).sqrt();
@@ -598,9 +530,7 @@ fn every_ground_shape_bounces_by_the_closed_form() {
             RigidBodyBuilder::dynamic().translation(Vector::new(0.3, (0.1 + h0) as Real, 0.2)),
             ColliderBuilder::ball(0.1).restitution(e as Real),
         );
-        let mut p = plugin(TimingMode::Exact);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, TimingMode::Exact);
         let dt = f64::from(world.integration_parameters.dt);
         let mut impacts = Vec::new();
         let mut apex: f64 = 0.0;
@@ -648,9 +578,7 @@ fn a_box_landing_flat_does_not_spin() {
                 .restitution(0.5)
                 .friction(0.6),
         );
-        let mut p = plugin(TimingMode::Exact);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, TimingMode::Exact);
         let mut first = None;
         for _ in 0..60 {
             p.step(&mut world);
@@ -691,9 +619,7 @@ fn a_box_on_an_edge_or_a_corner_lands_there() {
                 .rotation(rotation),
             ColliderBuilder::cuboid(0.2, 0.2, 0.2).restitution(0.5),
         );
-        let mut p = plugin(TimingMode::Exact);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, TimingMode::Exact);
         let mut first = None;
         for _ in 0..60 {
             p.step(&mut world);
@@ -736,9 +662,7 @@ fn settle(
             .linvel(Vector::new(vx, 0.0, 0.0)),
         body.restitution(0.5).friction(0.5),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
     let mut out = Vec::new();
     let mut impacts = 0;
     for _ in 0..steps {
@@ -842,17 +766,7 @@ fn a_falling_rod_gets_the_closed_form_impulse_and_spin() {
                 .rotation(Vector::new(0.0, 0.0, phi as Real)),
             ColliderBuilder::cuboid((0.5 * len) as Real, a as Real, a as Real),
         );
-        let mut p = plugin(TimingMode::Exact);
-        p.add_ground_with_material(
-            &world.bodies,
-            &world.colliders,
-            ground,
-            GroundMaterial {
-                restitution: e,
-                friction: 0.0,
-            },
-        )
-        .unwrap();
+        let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, 0.0);
         let mass = f64::from(world.bodies[rod].mass());
         let mut event = None;
         for _ in 0..60 {
@@ -912,17 +826,7 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
             (side / 2.0) as Real,
         ),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: mu,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, mu);
     let dt = f64::from(world.integration_parameters.dt);
     let mass = f64::from(world.bodies[cube].mass());
     let start = world.bodies[cube].translation();
@@ -936,11 +840,7 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
                 f64::from(start.y) - 0.5 * G * t * t,
                 f64::from(start.z),
             );
-            let point = Vector3::new(
-                f64::from(ev.point.x),
-                f64::from(ev.point.y),
-                f64::from(ev.point.z),
-            );
+            let point = na(ev.point);
             let body = Body::isotropic(mass, mass * side * side / 6.0);
             let velocity = BodyVelocity {
                 linear: Vector3::new(0.0, -G * t, 0.0),
@@ -952,11 +852,7 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
                 friction: mu,
             };
             let model = resolve(Law::Guarded, &body, &velocity, &contact, &material).unwrap();
-            let got = Vector3::new(
-                f64::from(ev.impulse.x),
-                f64::from(ev.impulse.y),
-                f64::from(ev.impulse.z),
-            );
+            let got = na(ev.impulse);
             let err = (got - model.impulse).norm() / model.impulse.norm();
             println!(
                 "corner: {} point, impulse {got:?}, model {:?}, relative difference {err:.2e}, regime {:?}",
@@ -979,11 +875,7 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
 fn a_fast_ball_neither_tunnels_nor_bounces_twice() {
     // 40 m/s onto a 2 cm thick slab: 0.67 m per step at 60 Hz, far more than the slab.
     let (e, v0) = (0.5, 40.0);
-    for timing in [
-        TimingMode::Step,
-        TimingMode::TimeOfImpact,
-        TimingMode::Exact,
-    ] {
+    for timing in MODES {
         for bullet in [false, true] {
             let mut world = PhysicsWorld::default();
             let (_, ground) = world.insert(
@@ -997,17 +889,7 @@ fn a_fast_ball_neither_tunnels_nor_bounces_twice() {
                     .ccd_enabled(bullet),
                 ColliderBuilder::ball(0.05),
             );
-            let mut p = plugin(timing);
-            p.add_ground_with_material(
-                &world.bodies,
-                &world.colliders,
-                ground,
-                GroundMaterial {
-                    restitution: e,
-                    friction: 0.0,
-                },
-            )
-            .unwrap();
+            let mut p = plugin_with_material(&world, ground, timing, e, 0.0);
             let mut impacts = Vec::new();
             let mut lowest = Real::MAX;
             for k in 0..12 {
@@ -1049,9 +931,7 @@ fn a_fast_body_stopped_by_a_non_ground_wall_is_not_pulled_through_it() {
             .linvel(Vector::new(60.0, 0.0, 0.0)),
         ColliderBuilder::ball(0.05),
     );
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
     let mut furthest = Real::MIN;
     for _ in 0..10 {
         p.step(&mut world);
@@ -1117,9 +997,7 @@ fn landings_on_large_flat_grounds_use_the_face_normal() {
                     .angvel(Vector::new(rnd(), rnd(), rnd()) * 10.0),
                 body.restitution(0.5).friction(0.4),
             );
-            let mut p = plugin(TimingMode::Exact);
-            p.add_ground(&world.bodies, &world.colliders, ground)
-                .unwrap();
+            let mut p = plugin_on(&world, ground, TimingMode::Exact);
             for _ in 0..40 {
                 p.step(&mut world);
                 for ev in p.events() {

@@ -22,31 +22,13 @@
 //! The expected inertia is computed here from the shapes (cuboid `m (b^2 + c^2)/12`; capsule
 //! as a cylinder and two hemispheres at density 1), not read from rapier.
 
+mod plugin_support;
+
+use plugin_support::*;
+use rapier_impact::TimingMode;
 use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material, Regime};
 use rapier_impact::na::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, TimingMode};
-
-const F64: bool = cfg!(feature = "f64");
-const MODES: [TimingMode; 3] = [
-    TimingMode::Step,
-    TimingMode::TimeOfImpact,
-    TimingMode::Exact,
-];
-
-#[allow(clippy::unnecessary_cast)]
-fn real(x: f64) -> Real {
-    x as Real
-}
-
-#[allow(clippy::unnecessary_cast)]
-fn wide(x: Real) -> f64 {
-    x as f64
-}
-
-fn na(v: Vector) -> Vector3<f64> {
-    Vector3::new(wide(v.x), wide(v.y), wide(v.z))
-}
 
 /// The shapes thrown, in their local frame (centre of mass at the origin).
 #[derive(Clone, Copy, Debug)]
@@ -145,7 +127,7 @@ fn build(t: &Throw) -> Built {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+        ColliderBuilder::halfspace(up())
             .restitution(real(t.e))
             .friction(real(t.mu)),
     );
@@ -231,21 +213,7 @@ struct Compared {
 
 fn with_plugin(t: &Throw, mode: TimingMode) -> Compared {
     let mut b = build(t);
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        timing: mode,
-        ..Default::default()
-    })
-    .unwrap();
-    p.add_ground_with_material(
-        &b.world.bodies,
-        &b.world.colliders,
-        b.ground,
-        GroundMaterial {
-            restitution: t.e,
-            friction: t.mu,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&b.world, b.ground, mode, t.e, t.mu);
     let dt = wide(b.world.integration_parameters.dt);
     for k in 0..240 {
         p.step(&mut b.world);
@@ -478,7 +446,7 @@ fn flat_landing(mode: Option<TimingMode>, vx: f64, mu: f64) -> (f64, f64, usize)
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+        ColliderBuilder::halfspace(up())
             .restitution(real(e))
             .friction(real(mu)),
     );
@@ -490,16 +458,7 @@ fn flat_landing(mode: Option<TimingMode>, vx: f64, mu: f64) -> (f64, f64, usize)
             .restitution(real(e))
             .friction(real(mu)),
     );
-    let mut plugin = mode.map(|timing| {
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            ..Default::default()
-        })
-        .unwrap();
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut plugin = mode.map(|timing| plugin_on(&world, ground, timing));
     let g = -wide(world.gravity.y);
     let (mut points, mut bounced, mut w_max, mut apex) = (0, false, 0.0f64, f64::NAN);
     for _ in 0..120 {

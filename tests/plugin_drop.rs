@@ -11,14 +11,15 @@
 // widening in one build are identities in the other.
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
-use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+mod plugin_support;
 
-const G: f64 = 9.81;
+use plugin_support::*;
+use rapier_impact::TimingMode;
+use rapier_impact::rapier::prelude::*;
+
 const H0: f64 = 1.0;
 const E: f64 = 0.8;
 const RADIUS: f64 = 0.1;
-const F64: bool = cfg!(feature = "f64");
 
 /// MODEL-NOTES: the first five impact times for h0 = 1, g = 9.81, e = 0.8.
 const NOTES_TIMES: [f64; 5] = [0.451524, 1.173961, 1.751912, 2.214272, 2.584160];
@@ -55,7 +56,7 @@ fn run(mode: Option<TimingMode>, dt: f64, duration: f64) -> Trace {
     world.integration_parameters.dt = dt as Real;
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+        ColliderBuilder::halfspace(up())
             .restitution(E as Real)
             .friction(0.5),
     );
@@ -65,16 +66,7 @@ fn run(mode: Option<TimingMode>, dt: f64, duration: f64) -> Trace {
             .restitution(E as Real)
             .friction(0.5),
     );
-    let mut plugin = mode.map(|timing| {
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            ..Default::default()
-        })
-        .unwrap();
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut plugin = mode.map(|timing| plugin_on(&world, ground, timing));
     let dt = f64::from(world.integration_parameters.dt);
     let steps = (duration / dt).ceil() as usize;
     let mut trace = Trace {

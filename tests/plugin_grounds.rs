@@ -22,40 +22,14 @@
 // widening in one build are identities in the other.
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
+mod plugin_support;
+
+use plugin_support::*;
 use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material};
 use rapier_impact::na::{Matrix3, Vector3};
-use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode};
-use std::sync::Mutex;
-
-const G: f64 = 9.81;
-const F64: bool = cfg!(feature = "f64");
-
-fn real(x: f64) -> Real {
-    x as Real
-}
-
-fn wide(x: Real) -> f64 {
-    x as f64
-}
-
-fn na(v: Vector) -> Vector3<f64> {
-    Vector3::new(wide(v.x), wide(v.y), wide(v.z))
-}
-
-fn up() -> Unit<Vector> {
-    Unit::new_unchecked(Vector::Y)
-}
-
-fn plugin(timing: TimingMode) -> ImpactPlugin {
-    ImpactPlugin::new(ImpactConfig {
-        timing,
-        ..Default::default()
-    })
-    .unwrap()
-}
+use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
 
 /// Tolerances `(time (s), velocity (m/s))` of an exact in-step impact.
 fn tol() -> (f64, f64) {
@@ -81,6 +55,26 @@ fn ball(world: &mut PhysicsWorld, at: [f64; 3], r: f64, e: f64, mu: f64) -> Rigi
 /// The first impact time of a ball whose bottom is `h` above the ground at `t0`, at rest.
 fn fall_time(h: f64) -> f64 {
     (2.0 * h / G).sqrt()
+}
+
+/// Steps until the plugin reports an impact (120 steps at most): the impact's time (s) and
+/// event, and the ball's velocity and spin right after it (the step-end velocity carried back
+/// to the impact: free flight under gravity).
+fn first_impact(
+    world: &mut PhysicsWorld,
+    p: &mut ImpactPlugin,
+    ball: RigidBodyHandle,
+) -> Option<(f64, ImpactEvent, Vector3<f64>, Vector3<f64>)> {
+    let dt = wide(world.integration_parameters.dt);
+    for k in 0..120 {
+        p.step(world);
+        if let Some(ev) = p.events().first().copied() {
+            let rb = &world.bodies[ball];
+            let v = na(rb.linvel()) + Vector3::new(0.0, G * (dt - ev.time), 0.0);
+            return Some((k as f64 * dt + ev.time, ev, v, na(rb.angvel())));
+        }
+    }
+    None
 }
 
 // ---------------------------------------------------------------------------------------
@@ -216,9 +210,7 @@ fn remove_ground_restores_the_users_flags_and_rapiers_bounce() {
             .active_hooks(user),
     );
     let b = ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, e, 0.0);
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
     assert!(world.colliders[ground].active_hooks().contains(user));
     assert!(p.remove_ground(ground));
     assert!(!p.remove_ground(ground));
@@ -285,17 +277,7 @@ fn rising_position_platform(
         ColliderBuilder::cuboid(2.0, 0.5, 2.0).friction(0.0),
     );
     let b = ball(&mut world, [0.0, 0.1 + h, 0.0], 0.1, 0.0, 0.0);
-    let mut p = plugin(timing);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: 0.0,
-        },
-    )
-    .unwrap();
+    let p = plugin_with_material(&world, ground, timing, e, 0.0);
     (world, p, b, platform)
 }
 
@@ -414,18 +396,7 @@ fn turntable(mu: f64) {
     let mut world = PhysicsWorld::default();
     let (_, ground) = table(&mut world);
     let b = ball(&mut world, [r_pos, radius + h, 0.0], radius, 0.0, 0.0);
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: mu,
-        },
-    )
-    .unwrap();
-    let dt = wide(world.integration_parameters.dt);
+    let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, mu);
     let t_hit = fall_time(h);
     let un = G * t_hit;
     // Platform frame: the contact's tangential velocity is u_t = v_t - v_ground = omega r z.
@@ -441,29 +412,20 @@ fn turntable(mu: f64) {
     // Spin from the tangential impulse at the offset -R y: w_x = -5/2 dvz / R.
     let expected_w = Vector3::new(-2.5 * dvz / radius, 0.0, 0.0);
     let (tt, tv) = tol();
-    for k in 0..120 {
-        p.step(&mut world);
-        if let Some(ev) = p.events().first() {
-            let t = k as f64 * dt + ev.time;
-            let rb = &world.bodies[b];
-            let v = na(rb.linvel()) + Vector3::new(0.0, G * (dt - ev.time), 0.0);
-            let w = na(rb.angvel());
-            let slip_after = v.z - w.x * radius + omega_eff * r_pos;
-            println!(
-                "turntable mu {mu} ({}): impact {t:.7} s (expected {t_hit:.7}), v' {v:.6?} (expected {expected_v:.6?}), w' {w:.5?} (expected {expected_w:.5?}), contact slip after (platform frame) {slip_after:.2e}, regime {:?}",
-                if stick { "stick" } else { "slip" },
-                ev.regime
-            );
-            assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
-            assert!((v - expected_v).norm() < tv, "v' {v:?} vs {expected_v:?}");
-            assert!(
-                (w - expected_w).norm() < tv / radius,
-                "w' {w:?} vs {expected_w:?}"
-            );
-            return;
-        }
-    }
-    panic!("the ball never met the turntable");
+    let (t, ev, v, w) =
+        first_impact(&mut world, &mut p, b).expect("the ball never met the turntable");
+    let slip_after = v.z - w.x * radius + omega_eff * r_pos;
+    println!(
+        "turntable mu {mu} ({}): impact {t:.7} s (expected {t_hit:.7}), v' {v:.6?} (expected {expected_v:.6?}), w' {w:.5?} (expected {expected_w:.5?}), contact slip after (platform frame) {slip_after:.2e}, regime {:?}",
+        if stick { "stick" } else { "slip" },
+        ev.regime
+    );
+    assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
+    assert!((v - expected_v).norm() < tv, "v' {v:?} vs {expected_v:?}");
+    assert!(
+        (w - expected_w).norm() < tv / radius,
+        "w' {w:?} vs {expected_w:?}"
+    );
 }
 
 #[test]
@@ -521,19 +483,8 @@ fn check_ramp(label: &str, shape: ColliderBuilder) {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(RigidBodyBuilder::fixed(), shape);
     let b = ball(&mut world, [x0, h, 0.2], radius, 0.0, 0.0);
-    let mut p = plugin(TimingMode::Exact);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        ground,
-        GroundMaterial {
-            restitution: e,
-            friction: mu,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&world, ground, TimingMode::Exact, e, mu);
     let n = slope_normal();
-    let dt = wide(world.integration_parameters.dt);
     // The centre touches when n . c = R: sin(a) x0 + cos(a) y = R.
     let y_hit = (radius - n.x * x0) / n.y;
     let t_hit = (2.0 * (h - y_hit) / G).sqrt();
@@ -554,46 +505,37 @@ fn check_ramp(label: &str, shape: ColliderBuilder) {
     )
     .unwrap();
     let (tt, tv) = tol();
-    for k in 0..120 {
-        p.step(&mut world);
-        if let Some(ev) = p.events().first() {
-            let t = k as f64 * dt + ev.time;
-            let rb = &world.bodies[b];
-            let v = na(rb.linvel()) + Vector3::new(0.0, G * (dt - ev.time), 0.0);
-            let w = na(rb.angvel());
-            let normal = na(ev.normal);
-            let (dir, speed) = (v.normalize(), v.norm());
-            let (dir_m, speed_m) = (
-                impact.velocity.linear.normalize(),
-                impact.velocity.linear.norm(),
-            );
-            println!(
-                "{label} at {SLOPE_DEG} deg: impact {t:.7} s (expected {t_hit:.7}), normal {normal:.6?} (expected {n:.6?}), bounce direction {dir:.6?} (model {dir_m:.6?}), speed {speed:.6} (model {speed_m:.6}), w' {w:.4?} (model {:.4?}), regime {:?} (model {:?})",
-                impact.velocity.angular, ev.regime, impact.regime
-            );
-            assert!(
-                (t - t_hit).abs() < tt,
-                "{label}: impact time {t} vs {t_hit}"
-            );
-            assert!(
-                (normal - n).norm() < 1e-5,
-                "{label}: normal {normal:?} vs {n:?}"
-            );
-            assert!(
-                (v - impact.velocity.linear).norm() < tv,
-                "{label}: v' {v:?} vs {:?}",
-                impact.velocity.linear
-            );
-            assert!(
-                (w - impact.velocity.angular).norm() < tv / radius,
-                "{label}: w' {w:?} vs {:?}",
-                impact.velocity.angular
-            );
-            assert_eq!(ev.regime, impact.regime, "{label}");
-            return;
-        }
-    }
-    panic!("{label}: the ball never hit");
+    let (t, ev, v, w) = first_impact(&mut world, &mut p, b)
+        .unwrap_or_else(|| panic!("{label}: the ball never hit"));
+    let normal = na(ev.normal);
+    let (dir, speed) = (v.normalize(), v.norm());
+    let (dir_m, speed_m) = (
+        impact.velocity.linear.normalize(),
+        impact.velocity.linear.norm(),
+    );
+    println!(
+        "{label} at {SLOPE_DEG} deg: impact {t:.7} s (expected {t_hit:.7}), normal {normal:.6?} (expected {n:.6?}), bounce direction {dir:.6?} (model {dir_m:.6?}), speed {speed:.6} (model {speed_m:.6}), w' {w:.4?} (model {:.4?}), regime {:?} (model {:?})",
+        impact.velocity.angular, ev.regime, impact.regime
+    );
+    assert!(
+        (t - t_hit).abs() < tt,
+        "{label}: impact time {t} vs {t_hit}"
+    );
+    assert!(
+        (normal - n).norm() < 1e-5,
+        "{label}: normal {normal:?} vs {n:?}"
+    );
+    assert!(
+        (v - impact.velocity.linear).norm() < tv,
+        "{label}: v' {v:?} vs {:?}",
+        impact.velocity.linear
+    );
+    assert!(
+        (w - impact.velocity.angular).norm() < tv / radius,
+        "{label}: w' {w:?} vs {:?}",
+        impact.velocity.angular
+    );
+    assert_eq!(ev.regime, impact.regime, "{label}");
 }
 
 #[test]
@@ -613,25 +555,14 @@ fn a_sloped_trimesh_bounces_by_the_model_at_its_normal() {
 /// A user hook: a conveyor (every contact it modifies gets a tangent velocity of 1 m/s
 /// along x) and a filter that refuses the pairs of one "ghost" collider; both record the
 /// pairs they are asked about.
-#[derive(Default)]
 struct Conveyor {
-    filtered: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
-    modified: Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
-    ghost: Mutex<Option<ColliderHandle>>,
+    filter: GhostFilter,
+    modified: Pairs,
 }
 
 impl PhysicsHooks for Conveyor {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
-        self.filtered
-            .lock()
-            .unwrap()
-            .push((context.collider1, context.collider2));
-        let ghost = *self.ghost.lock().unwrap();
-        if ghost == Some(context.collider1) || ghost == Some(context.collider2) {
-            None
-        } else {
-            Some(SolverFlags::COMPUTE_RIGID_IMPULSES)
-        }
+        self.filter.filter(context)
     }
 
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
@@ -653,17 +584,6 @@ impl PhysicsHooks for Conveyor {
             }
         }
     }
-}
-
-fn saw(
-    list: &Mutex<Vec<(ColliderHandle, ColliderHandle)>>,
-    a: ColliderHandle,
-    b: ColliderHandle,
-) -> bool {
-    list.lock()
-        .unwrap()
-        .iter()
-        .any(|&(x, y)| (x, y) == (a, b) || (x, y) == (b, a))
 }
 
 #[test]
@@ -705,8 +625,10 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
         RigidBodyBuilder::dynamic().translation(Vector::new(5.0, 0.6, 0.0)),
         ColliderBuilder::ball(0.1).restitution(0.5),
     );
-    let hooks = Conveyor::default();
-    *hooks.ghost.lock().unwrap() = Some(ghost_co);
+    let hooks = Conveyor {
+        filter: GhostFilter::new(ghost_co),
+        modified: Pairs::default(),
+    };
     let mut p = ImpactPlugin::with_hooks(ImpactConfig::default(), hooks).unwrap();
     p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();
@@ -731,10 +653,10 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
     let ghost_y = wide(world.bodies[ghost].translation().y);
     println!(
         "user hook: filter saw platform-box {}, excluded-ground {}, ghost-ground {}, bouncer-ground {}; modify saw platform-box {}, excluded-ground {}",
-        saw(&h.filtered, platform, on_platform_co),
-        saw(&h.filtered, ground, excluded_co),
-        saw(&h.filtered, ground, ghost_co),
-        saw(&h.filtered, ground, bouncer_co),
+        saw(&h.filter.seen, platform, on_platform_co),
+        saw(&h.filter.seen, ground, excluded_co),
+        saw(&h.filter.seen, ground, ghost_co),
+        saw(&h.filter.seen, ground, bouncer_co),
         saw(&h.modified, platform, on_platform_co),
         saw(&h.modified, ground, excluded_co),
     );
@@ -744,9 +666,9 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
         x(on_ground) + 10.0,
         x(excluded) + 20.0
     );
-    assert!(saw(&h.filtered, platform, on_platform_co));
+    assert!(saw(&h.filter.seen, platform, on_platform_co));
     assert!(saw(&h.modified, platform, on_platform_co));
-    assert!(saw(&h.filtered, ground, excluded_co));
+    assert!(saw(&h.filter.seen, ground, excluded_co));
     assert!(saw(&h.modified, ground, excluded_co));
     assert!(
         !modified_in_impact,

@@ -20,10 +20,12 @@
 //! rounded release state (`f32` or `f64`), so the comparison measures the step, not the
 //! rounding of the inputs.
 
-use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+mod plugin_support;
 
-const F64: bool = cfg!(feature = "f64");
+use plugin_support::*;
+use rapier_impact::TimingMode;
+use rapier_impact::rapier::prelude::*;
+
 const RADIUS: f64 = 0.1;
 /// Release gap from the ball's bottom to the ground (m).
 const GAP: f64 = 0.2;
@@ -31,16 +33,6 @@ const DTS: [f64; 3] = [1.0 / 60.0, 1.0 / 240.0, 1.0 / 1000.0];
 /// The ball counts as off the ground after the bounce once its bottom is this high (m): above
 /// rapier's allowed penetration and contact skin, so rapier alone has finished its bounce too.
 const CLEAR: f64 = 5e-3;
-
-#[allow(clippy::unnecessary_cast)]
-fn real(x: f64) -> Real {
-    x as Real
-}
-
-#[allow(clippy::unnecessary_cast)]
-fn wide(x: Real) -> f64 {
-    x as f64
-}
 
 #[derive(Clone, Copy, Debug)]
 struct Case {
@@ -110,7 +102,7 @@ fn run(c: &Case, mode: Option<TimingMode>, dt: f64) -> (Errors, Errors) {
     let g = -wide(world.gravity.y);
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+        ColliderBuilder::halfspace(up())
             .restitution(real(c.e))
             .friction(real(c.mu)),
     );
@@ -143,16 +135,7 @@ fn run(c: &Case, mode: Option<TimingMode>, dt: f64) -> (Errors, Errors) {
         c.name
     );
 
-    let mut plugin = mode.map(|timing| {
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            ..Default::default()
-        })
-        .unwrap();
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut plugin = mode.map(|timing| plugin_on(&world, ground, timing));
     let steps = (2.0 / dt) as usize;
     for _ in 0..steps {
         match plugin.as_mut() {

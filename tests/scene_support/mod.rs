@@ -14,7 +14,7 @@
 
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
+use rapier_impact::{GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
 use std::hash::{DefaultHasher, Hash, Hasher};
 
 pub const G: f64 = 9.81;
@@ -55,6 +55,36 @@ pub fn plugin(timing: TimingMode) -> ImpactPlugin {
         ..Default::default()
     })
     .unwrap()
+}
+
+/// [`plugin`] with `ground` registered at its collider's own restitution and friction.
+pub fn plugin_on(world: &PhysicsWorld, ground: ColliderHandle, timing: TimingMode) -> ImpactPlugin {
+    let mut p = plugin(timing);
+    p.add_ground(&world.bodies, &world.colliders, ground)
+        .unwrap();
+    p
+}
+
+/// [`plugin`] with `ground` registered under the material `(restitution, friction)`.
+pub fn plugin_with_material(
+    world: &PhysicsWorld,
+    ground: ColliderHandle,
+    timing: TimingMode,
+    restitution: f64,
+    friction: f64,
+) -> ImpactPlugin {
+    let mut p = plugin(timing);
+    p.add_ground_with_material(
+        &world.bodies,
+        &world.colliders,
+        ground,
+        GroundMaterial {
+            restitution,
+            friction,
+        },
+    )
+    .unwrap();
+    p
 }
 
 /// What the checks measured over a run.
