@@ -14,37 +14,12 @@ use rapier_impact::model::{Body, BodyVelocity, Contact, Law, Material, resolve, 
 use rapier_impact::na::{Matrix3, Rotation3, Vector3};
 use std::hint::black_box;
 
+/// SplitMix64 (the tests' generator): the batches are the same on every run.
+#[path = "../tests/model_support/rng.rs"]
+mod rng;
+use rng::Rng;
+
 const BATCH: usize = 1024;
-
-/// SplitMix64: a tiny seeded generator so the batches are the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn unit(&mut self) -> Vector3<f64> {
-        loop {
-            let v = Vector3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let n = v.norm();
-            if n > 0.1 && n <= 1.0 {
-                return v / n;
-            }
-        }
-    }
-}
 
 #[derive(Clone, Copy)]
 struct Sample {
@@ -58,25 +33,25 @@ struct Sample {
 fn stick_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let radius = rng.range(0.02, 0.5);
+            let radius = rng.uniform(0.02, 0.5);
             Sample {
                 body: Body::isotropic(1.0, 0.4 * radius * radius),
                 contact: Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius)),
                 velocity: BodyVelocity {
                     linear: Vector3::new(
-                        rng.range(-1.0, 1.0),
-                        rng.range(-1.0, 1.0),
-                        rng.range(-5.0, -1.0),
+                        rng.uniform(-1.0, 1.0),
+                        rng.uniform(-1.0, 1.0),
+                        rng.uniform(-5.0, -1.0),
                     ),
                     angular: Vector3::new(
-                        rng.range(-2.0, 2.0),
-                        rng.range(-2.0, 2.0),
-                        rng.range(-2.0, 2.0),
+                        rng.uniform(-2.0, 2.0),
+                        rng.uniform(-2.0, 2.0),
+                        rng.uniform(-2.0, 2.0),
                     ),
                 },
                 material: Material {
-                    restitution: rng.range(0.2, 0.9),
-                    friction: rng.range(0.5, 1.0),
+                    restitution: rng.uniform(0.2, 0.9),
+                    friction: rng.uniform(0.5, 1.0),
                 },
             }
         })
@@ -87,21 +62,21 @@ fn stick_batch(rng: &mut Rng) -> Vec<Sample> {
 fn slip_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let radius = rng.range(0.02, 0.5);
+            let radius = rng.uniform(0.02, 0.5);
             Sample {
                 body: Body::isotropic(1.0, 0.4 * radius * radius),
                 contact: Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius)),
                 velocity: BodyVelocity {
                     linear: Vector3::new(
-                        rng.range(5.0, 10.0),
-                        rng.range(-5.0, 5.0),
-                        rng.range(-3.0, -1.0),
+                        rng.uniform(5.0, 10.0),
+                        rng.uniform(-5.0, 5.0),
+                        rng.uniform(-3.0, -1.0),
                     ),
                     angular: Vector3::zeros(),
                 },
                 material: Material {
-                    restitution: rng.range(0.2, 0.9),
-                    friction: rng.range(0.05, 0.2),
+                    restitution: rng.uniform(0.2, 0.9),
+                    friction: rng.uniform(0.05, 0.2),
                 },
             }
         })
@@ -113,19 +88,19 @@ fn slip_batch(rng: &mut Rng) -> Vec<Sample> {
 fn swerve_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let corner = Vector3::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -0.5);
+            let corner = Vector3::new(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), -0.5);
             // Slip perpendicular to the corner's horizontal offset.
-            let across = Vector3::new(-corner.y, corner.x, 0.0).normalize() * rng.range(1.0, 3.0);
+            let across = Vector3::new(-corner.y, corner.x, 0.0).normalize() * rng.uniform(1.0, 3.0);
             Sample {
                 body: Body::isotropic(1.0, 1.0 / 6.0),
                 contact: Contact::fixed(Vector3::z(), corner),
                 velocity: BodyVelocity {
-                    linear: across + Vector3::new(0.0, 0.0, rng.range(-3.0, -1.0)),
+                    linear: across + Vector3::new(0.0, 0.0, rng.uniform(-3.0, -1.0)),
                     angular: Vector3::zeros(),
                 },
                 material: Material {
-                    restitution: rng.range(0.2, 0.9),
-                    friction: rng.range(0.1, 0.3),
+                    restitution: rng.uniform(0.2, 0.9),
+                    friction: rng.uniform(0.1, 0.3),
                 },
             }
         })
@@ -137,7 +112,7 @@ fn swerve_batch(rng: &mut Rng) -> Vec<Sample> {
 fn fallback_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let phi = rng.range(0.6, 1.0);
+            let phi = rng.uniform(0.6, 1.0);
             let axis = Vector3::new(phi.cos(), 0.0, phi.sin());
             let inertia =
                 Matrix3::identity() / 12.0 + axis * axis.transpose() * (1e-6 / 12.0 - 1.0 / 12.0);
@@ -145,7 +120,7 @@ fn fallback_batch(rng: &mut Rng) -> Vec<Sample> {
                 body: Body::from_inertia(1.0, inertia).expect("SPD"),
                 contact: Contact::fixed(Vector3::z(), -axis * 0.5),
                 velocity: BodyVelocity {
-                    linear: Vector3::new(rng.range(0.4, 0.8), 0.0, -1.0),
+                    linear: Vector3::new(rng.uniform(0.4, 0.8), 0.0, -1.0),
                     angular: Vector3::zeros(),
                 },
                 material: Material {
@@ -162,12 +137,12 @@ fn fallback_batch(rng: &mut Rng) -> Vec<Sample> {
 fn effect_batch(rng: &mut Rng, friction: bool, spin: bool) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let n = rng.unit();
-            let rot = Rotation3::new(rng.unit() * rng.range(0.0, 3.0));
+            let n = rng.direction();
+            let rot = Rotation3::new(rng.direction() * rng.uniform(0.0, 3.0));
             let principal = Matrix3::from_diagonal(&Vector3::new(
-                rng.range(0.5, 2.0),
-                rng.range(0.5, 2.0),
-                rng.range(0.5, 2.0),
+                rng.uniform(0.5, 2.0),
+                rng.uniform(0.5, 2.0),
+                rng.uniform(0.5, 2.0),
             ));
             let inv_inertia = if spin {
                 rot.matrix() * principal * rot.matrix().transpose()
@@ -179,14 +154,14 @@ fn effect_batch(rng: &mut Rng, friction: bool, spin: bool) -> Vec<Sample> {
                     mass: 1.0,
                     inv_inertia,
                 },
-                contact: Contact::fixed(n, -n * 0.5 + rng.unit() * 0.2),
+                contact: Contact::fixed(n, -n * 0.5 + rng.direction() * 0.2),
                 velocity: BodyVelocity {
-                    linear: -n * rng.range(1.0, 5.0) + rng.unit(),
-                    angular: rng.unit(),
+                    linear: -n * rng.uniform(1.0, 5.0) + rng.direction(),
+                    angular: rng.direction(),
                 },
                 material: Material {
-                    restitution: rng.range(0.2, 0.9),
-                    friction: if friction { rng.range(0.1, 1.0) } else { 0.0 },
+                    restitution: rng.uniform(0.2, 0.9),
+                    friction: if friction { rng.uniform(0.1, 1.0) } else { 0.0 },
                 },
             }
         })
@@ -295,7 +270,7 @@ fn run_law(
 }
 
 fn per_regime(c: &mut Criterion) {
-    let mut rng = Rng(0x5EED);
+    let mut rng = Rng::new(0x5EED);
     let batches = [
         ("stick", stick_batch(&mut rng)),
         ("slip", slip_batch(&mut rng)),
@@ -307,7 +282,7 @@ fn per_regime(c: &mut Criterion) {
 }
 
 fn per_effect_set(c: &mut Criterion) {
-    let mut rng = Rng(0xEFFEC7);
+    let mut rng = Rng::new(0xEFFEC7);
     let batches = [
         ("frictionless", effect_batch(&mut rng, false, true)),
         ("no_spin", effect_batch(&mut rng, true, false)),

@@ -30,6 +30,11 @@ use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
+/// SplitMix64 (the tests' generator), so each scene is the same on every run.
+#[path = "../tests/model_support/rng.rs"]
+mod rng;
+use rng::Rng;
+
 const SIZES: [usize; 3] = [100, 1_000, 10_000];
 const RADIUS: f64 = 0.05;
 const SPACING: f64 = 0.15;
@@ -56,20 +61,6 @@ const MODES: [(Mode, &str); 4] = [
 
 fn real(x: f64) -> Real {
     x as Real
-}
-
-/// SplitMix64, so each scene is the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
-    }
 }
 
 /// A world, its plugin (none for rapier alone), and the steps taken since it was built.
@@ -141,14 +132,14 @@ fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
     let side = (n as f64).sqrt().ceil() as usize;
     let centre = 0.5 * (side - 1) as f64 * SPACING;
     let (mut world, ground) = world_with_ground(centre + 1.0);
-    let mut rng = Rng(SEED);
+    let mut rng = Rng::new(SEED);
     for i in 0..n {
         let (row, col) = (i / side, i % side);
-        let gap = rng.range(0.05, 0.45);
+        let gap = rng.uniform(0.05, 0.45);
         let p = [
-            col as f64 * SPACING - centre + rng.range(-0.02, 0.02),
+            col as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
             lift + gap + RADIUS,
-            row as f64 * SPACING - centre + rng.range(-0.02, 0.02),
+            row as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
         ];
         ball(&mut world, p, true);
     }
@@ -178,15 +169,15 @@ fn pile(n: usize, mode: Mode) -> Scene {
                 .friction(real(FRICTION)),
         );
     }
-    let mut rng = Rng(SEED);
+    let mut rng = Rng::new(SEED);
     let per_layer = side * side;
     for i in 0..n {
         let (level, cell) = (i / per_layer, i % per_layer);
         let (row, col) = (cell / side, cell % side);
         let p = [
-            (col as f64 + 0.5) * pitch - inner + rng.range(-0.004, 0.004),
+            (col as f64 + 0.5) * pitch - inner + rng.uniform(-0.004, 0.004),
             RADIUS + 0.02 + level as f64 * (pitch + 0.02),
-            (row as f64 + 0.5) * pitch - inner + rng.range(-0.004, 0.004),
+            (row as f64 + 0.5) * pitch - inner + rng.uniform(-0.004, 0.004),
         ];
         ball(&mut world, p, false);
     }

@@ -17,35 +17,10 @@ use rapier_impact::model::{
 };
 use rapier_impact::na::{Matrix3, Rotation3, Vector3};
 
-/// SplitMix64, seeded, so every run checks the same impacts.
-struct Rng(u64);
+// SplitMix64 (`model_support`'s), seeded, so every run checks the same impacts.
+mod model_support;
 
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-    fn unit(&mut self) -> Vector3<f64> {
-        loop {
-            let v = Vector3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let n = v.norm();
-            if n > 0.1 && n <= 1.0 {
-                return v / n;
-            }
-        }
-    }
-}
+use model_support::Rng;
 
 /// The reference's state: contact velocity, work of the normal impulse, friction
 /// impulse.
@@ -158,42 +133,42 @@ struct Case {
 fn cases(rng: &mut Rng) -> Vec<Case> {
     let mut out = Vec::new();
     for _ in 0..150 {
-        let corner = Vector3::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -0.5);
-        let across = Vector3::new(-corner.y, corner.x, 0.0).normalize() * rng.range(1.0, 3.0);
+        let corner = Vector3::new(rng.uniform(-0.5, 0.5), rng.uniform(-0.5, 0.5), -0.5);
+        let across = Vector3::new(-corner.y, corner.x, 0.0).normalize() * rng.uniform(1.0, 3.0);
         out.push(Case {
             body: Body::isotropic(1.0, 1.0 / 6.0),
             contact: Contact::fixed(Vector3::z(), corner),
             velocity: BodyVelocity {
-                linear: across + Vector3::new(0.0, 0.0, rng.range(-3.0, -1.0)),
+                linear: across + Vector3::new(0.0, 0.0, rng.uniform(-3.0, -1.0)),
                 angular: Vector3::zeros(),
             },
             material: Material {
-                restitution: rng.range(0.0, 1.0),
-                friction: rng.range(0.1, 0.3),
+                restitution: rng.uniform(0.0, 1.0),
+                friction: rng.uniform(0.1, 0.3),
             },
         });
     }
     for _ in 0..150 {
-        let n = rng.unit();
-        let rot = Rotation3::new(rng.unit() * rng.range(0.0, 3.0));
+        let n = rng.direction();
+        let rot = Rotation3::new(rng.direction() * rng.uniform(0.0, 3.0));
         let principal = Matrix3::from_diagonal(&Vector3::new(
-            rng.range(0.5, 2.0),
-            rng.range(0.5, 2.0),
-            rng.range(0.5, 2.0),
+            rng.uniform(0.5, 2.0),
+            rng.uniform(0.5, 2.0),
+            rng.uniform(0.5, 2.0),
         ));
         out.push(Case {
             body: Body {
-                mass: rng.range(0.5, 2.0),
+                mass: rng.uniform(0.5, 2.0),
                 inv_inertia: rot.matrix() * principal * rot.matrix().transpose(),
             },
-            contact: Contact::fixed(n, -n * 0.5 + rng.unit() * 0.4),
+            contact: Contact::fixed(n, -n * 0.5 + rng.direction() * 0.4),
             velocity: BodyVelocity {
-                linear: -n * rng.range(1.0, 5.0) + rng.unit() * rng.range(1.0, 4.0),
-                angular: rng.unit() * rng.range(0.0, 2.0),
+                linear: -n * rng.uniform(1.0, 5.0) + rng.direction() * rng.uniform(1.0, 4.0),
+                angular: rng.direction() * rng.uniform(0.0, 2.0),
             },
             material: Material {
-                restitution: rng.range(0.0, 1.0),
-                friction: rng.range(0.05, 0.5),
+                restitution: rng.uniform(0.0, 1.0),
+                friction: rng.uniform(0.05, 0.5),
             },
         });
     }
@@ -202,7 +177,7 @@ fn cases(rng: &mut Rng) -> Vec<Case> {
 
 #[test]
 fn swerving_slip_matches_an_independent_fixed_step_rk4_reference() {
-    let mut rng = Rng(0x05E4_E47E);
+    let mut rng = Rng::new(0x05E4_E47E);
     let (mut compared, mut worst, mut worst_reference) = (0, 0.0f64, 0.0f64);
     for (k, c) in cases(&mut rng).iter().enumerate() {
         let impact = resolve(

@@ -16,22 +16,9 @@ use rapier_impact::{ImpactTiming, TimingMode};
 use scene_support::*;
 
 /// The deterministic generator of `examples/common` (splitmix64), for the sweep's pile.
-struct Rng(u64);
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self(seed ^ 0x9E37_79B9_7F4A_7C15)
-    }
-
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+#[path = "model_support/rng.rs"]
+mod rng;
+use rng::Rng;
 
 /// What a pile run measured.
 #[derive(Debug)]
@@ -79,15 +66,15 @@ fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
                 .friction(0.5),
         );
     }
-    let mut rng = Rng::new(3);
+    let mut rng = Rng::like_examples(3);
     let mut balls = Vec::new();
     for i in 0..side * side * 5 {
         let (level, cell) = (i / (side * side), i % (side * side));
         let (row, col) = (cell / side, cell % side);
         let p = [
-            (col as f64 + 0.5) * pitch - inner + rng.range(-0.01, 0.01),
+            (col as f64 + 0.5) * pitch - inner + rng.uniform(-0.01, 0.01),
             PILE_R + 0.1 + level as f64 * (pitch + 0.03),
-            (row as f64 + 0.5) * pitch - inner + rng.range(-0.01, 0.01),
+            (row as f64 + 0.5) * pitch - inner + rng.uniform(-0.01, 0.01),
         ];
         let (b, _) = world.insert(
             RigidBodyBuilder::dynamic().translation(Vector::new(
@@ -309,12 +296,15 @@ fn cube_energy_gain(seed: u64, timing: TimingMode) -> f64 {
             .restitution(0.5)
             .friction(0.5),
     );
-    let mut rng = Rng::new(seed);
-    let height = rng.range(0.5, 1.0);
-    let (speed, heading) = (rng.range(1.0, 3.0), rng.range(0.0, std::f64::consts::TAU));
-    let spin: [f64; 3] = std::array::from_fn(|_| rng.range(-10.0, 10.0));
+    let mut rng = Rng::like_examples(seed);
+    let height = rng.uniform(0.5, 1.0);
+    let (speed, heading) = (
+        rng.uniform(1.0, 3.0),
+        rng.uniform(0.0, std::f64::consts::TAU),
+    );
+    let spin: [f64; 3] = std::array::from_fn(|_| rng.uniform(-10.0, 10.0));
     let q = loop {
-        let q: [f64; 4] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let q: [f64; 4] = std::array::from_fn(|_| rng.uniform(-1.0, 1.0));
         let n2: f64 = q.iter().map(|x| x * x).sum();
         if n2 > 1e-3 && n2 <= 1.0 {
             let n = n2.sqrt();

@@ -1,4 +1,5 @@
-//! Helpers shared by the `model_*` integration tests: a seeded random generator,
+//! Helpers shared by the `model_*` integration tests: a seeded random generator (`rng.rs`,
+//! which the scene test and the benches include too),
 //! random rotations and bodies, an independent kinetic energy, relative errors, and a
 //! double-double (about 106-bit) linear solve used as the exact reference.
 //!
@@ -8,64 +9,11 @@
 
 use rapier_impact::model::seed::SeedInput;
 use rapier_impact::model::{Body, BodyVelocity, Contact, Material};
-use rapier_impact::na::{Matrix3, Rotation3, Unit, Vector3};
+use rapier_impact::na::{Matrix3, Rotation3, Vector3};
 
-/// SplitMix64: small, seeded, reproducible.
-pub struct Rng(u64);
+mod rng;
 
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.unit()
-    }
-
-    /// `10^x` with `x` uniform in `[log10 a, log10 b]`.
-    pub fn log_uniform(&mut self, a: f64, b: f64) -> f64 {
-        10f64.powf(self.uniform(a.log10(), b.log10()))
-    }
-
-    pub fn vector(&mut self, a: f64) -> Vector3<f64> {
-        Vector3::new(
-            self.uniform(-a, a),
-            self.uniform(-a, a),
-            self.uniform(-a, a),
-        )
-    }
-
-    /// Uniform on the unit sphere.
-    pub fn unit_vector(&mut self) -> Vector3<f64> {
-        loop {
-            let v = self.vector(1.0);
-            let n2 = v.norm_squared();
-            if n2 > 1e-4 && n2 <= 1.0 {
-                return v / n2.sqrt();
-            }
-        }
-    }
-
-    /// A uniformly random rotation.
-    pub fn rotation(&mut self) -> Matrix3<f64> {
-        let axis = Unit::new_normalize(self.unit_vector());
-        let angle = self.uniform(-std::f64::consts::PI, std::f64::consts::PI);
-        *Rotation3::from_axis_angle(&axis, angle).matrix()
-    }
-}
+pub use rng::Rng;
 
 /// A rotation taking `+z` to the unit vector `n`.
 pub fn rotation_z_to(n: &Vector3<f64>) -> Matrix3<f64> {
