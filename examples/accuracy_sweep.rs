@@ -453,35 +453,8 @@ fn run_cube(dt: f64, mode: Mode, law: Law, seed: u64) -> (f64, f64, f64, f64) {
     let (e, mu) = (0.5, 0.5);
     let (mut world, mut plugin, _) = scene(dt, mode, law, e, mu);
     // The throw of examples/dice.rs.
-    let mut rng = Rng::new(seed);
-    let height = rng.range(0.5, 1.0);
-    let (speed, heading) = (rng.range(1.0, 3.0), rng.range(0.0, std::f64::consts::TAU));
-    let spin: [f64; 3] = std::array::from_fn(|_| rng.range(-10.0, 10.0));
-    let q = loop {
-        let q: [f64; 4] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
-        let n2: f64 = q.iter().map(|x| x * x).sum();
-        if n2 > 1e-3 && n2 <= 1.0 {
-            let n = n2.sqrt();
-            break [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
-        }
-    };
     let half = 0.5 * CUBE_SIZE;
-    let (cube, _) = world.insert(
-        RigidBodyBuilder::dynamic()
-            .pose(Pose::from_parts(
-                Vector::new(0.0, real(height + half * 3f64.sqrt()), 0.0),
-                Rotation::from_xyzw(real(q[0]), real(q[1]), real(q[2]), real(q[3])),
-            ))
-            .linvel(Vector::new(
-                real(speed * heading.cos()),
-                0.0,
-                real(speed * heading.sin()),
-            ))
-            .angvel(Vector::new(real(spin[0]), real(spin[1]), real(spin[2]))),
-        ColliderBuilder::cuboid(real(half), real(half), real(half))
-            .restitution(real(e))
-            .friction(real(mu)),
-    );
+    let cube = common::DiceThrow::new(seed).insert_cube(&mut world, half, e, mu);
     let energy = |world: &PhysicsWorld| -> (f64, f64) {
         let rb = &world.bodies[cube];
         let m = wide(rb.mass());

@@ -18,7 +18,7 @@
 
 mod common;
 
-use common::{Args, CSV, EventsCsv, F64, LAW, MODE, Mode, Rng, TraceCsv, flag, real, wide};
+use common::{Args, CSV, DiceThrow, EventsCsv, F64, LAW, MODE, Mode, TraceCsv, flag, real, wide};
 use rapier_impact::rapier::prelude::*;
 
 const ABOUT: &str = "A cube thrown onto the ground, tumbling: its impacts and the face on top.";
@@ -75,39 +75,12 @@ fn main() {
 
     // The throw: 0.5 to 1 m up, 1 to 3 m/s sideways in a random direction, a random spin of
     // up to 10 rad/s per axis, a random orientation (uniform unit quaternion).
-    let mut rng = Rng::new(seed);
-    let height = rng.range(0.5, 1.0);
-    let (speed, heading) = (rng.range(1.0, 3.0), rng.range(0.0, std::f64::consts::TAU));
-    let spin: [f64; 3] = std::array::from_fn(|_| rng.range(-10.0, 10.0));
-    let q = loop {
-        let q: [f64; 4] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
-        let n2: f64 = q.iter().map(|x| x * x).sum();
-        if n2 > 1e-3 && n2 <= 1.0 {
-            let n = n2.sqrt();
-            break [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
-        }
-    };
+    let throw = DiceThrow::new(seed);
+    let (height, speed, spin) = (throw.height, throw.speed, throw.spin);
 
     let mut world = common::world(dt);
     let ground = common::ground(&mut world, e, mu);
-    let half = 0.5 * size;
-    let (cube, _) = world.insert(
-        RigidBodyBuilder::dynamic()
-            .pose(Pose::from_parts(
-                // The bounding sphere's bottom `height` above the ground.
-                Vector::new(0.0, real(height + half * 3f64.sqrt()), 0.0),
-                Rotation::from_xyzw(real(q[0]), real(q[1]), real(q[2]), real(q[3])),
-            ))
-            .linvel(Vector::new(
-                real(speed * heading.cos()),
-                0.0,
-                real(speed * heading.sin()),
-            ))
-            .angvel(Vector::new(real(spin[0]), real(spin[1]), real(spin[2]))),
-        ColliderBuilder::cuboid(real(half), real(half), real(half))
-            .restitution(real(e))
-            .friction(real(mu)),
-    );
+    let cube = throw.insert_cube(&mut world, 0.5 * size, e, mu);
     let mut plugin = common::plugin(mode, law, &mut world, ground);
     let mut csv = args.path("--csv").map(|p| TraceCsv::create(&p, cube));
     let mut events_csv = args.path("--events").map(|p| EventsCsv::create(&p));

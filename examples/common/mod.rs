@@ -1,7 +1,7 @@
 //! Code shared by the example scenes (`mod common;` in each): a small flag parser where every
 //! flag has a default, the `--mode` and `--law` choices, the `--f64` check, the scene's ground,
-//! one step with or without the plugin, the CSV trace and events writers, and a seeded random
-//! number generator.
+//! one step with or without the plugin, the dice throw, the CSV trace and events writers, and a
+//! seeded random number generator.
 //!
 //! Conventions of every scene: y up, ground surface at y = 0, rapier's default gravity.
 #![allow(dead_code)] // each example uses a part of this module
@@ -389,6 +389,76 @@ pub fn step<'a>(
             world.step();
             &[]
         }
+    }
+}
+
+/// The random throw of `examples/dice.rs`: 0.5 to 1 m up, 1 to 3 m/s sideways in a random
+/// direction, a random spin of up to 10 rad/s per axis, a random orientation (uniform unit
+/// quaternion).
+pub struct DiceThrow {
+    /// Height of the cube's bounding sphere's bottom above the ground (m).
+    pub height: f64,
+    /// Horizontal speed (m/s) and its direction (rad about y, from +x).
+    pub speed: f64,
+    pub heading: f64,
+    /// Angular velocity (rad/s).
+    pub spin: [f64; 3],
+    /// Orientation `[x, y, z, w]`.
+    pub q: [f64; 4],
+}
+
+impl DiceThrow {
+    /// The throw for `seed`.
+    pub fn new(seed: u64) -> Self {
+        let mut rng = Rng::new(seed);
+        let height = rng.range(0.5, 1.0);
+        let (speed, heading) = (rng.range(1.0, 3.0), rng.range(0.0, std::f64::consts::TAU));
+        let spin: [f64; 3] = std::array::from_fn(|_| rng.range(-10.0, 10.0));
+        let q = loop {
+            let q: [f64; 4] = std::array::from_fn(|_| rng.range(-1.0, 1.0));
+            let n2: f64 = q.iter().map(|x| x * x).sum();
+            if n2 > 1e-3 && n2 <= 1.0 {
+                let n = n2.sqrt();
+                break [q[0] / n, q[1] / n, q[2] / n, q[3] / n];
+            }
+        };
+        Self {
+            height,
+            speed,
+            heading,
+            spin,
+            q,
+        }
+    }
+
+    /// Inserts a cube of half edge `half` (restitution `e`, friction `mu`) thrown so.
+    pub fn insert_cube(
+        &self,
+        world: &mut PhysicsWorld,
+        half: f64,
+        e: f64,
+        mu: f64,
+    ) -> RigidBodyHandle {
+        let (q, spin) = (self.q, self.spin);
+        world
+            .insert(
+                RigidBodyBuilder::dynamic()
+                    .pose(Pose::from_parts(
+                        // The bounding sphere's bottom `height` above the ground.
+                        Vector::new(0.0, real(self.height + half * 3f64.sqrt()), 0.0),
+                        Rotation::from_xyzw(real(q[0]), real(q[1]), real(q[2]), real(q[3])),
+                    ))
+                    .linvel(Vector::new(
+                        real(self.speed * self.heading.cos()),
+                        0.0,
+                        real(self.speed * self.heading.sin()),
+                    ))
+                    .angvel(Vector::new(real(spin[0]), real(spin[1]), real(spin[2]))),
+                ColliderBuilder::cuboid(real(half), real(half), real(half))
+                    .restitution(real(e))
+                    .friction(real(mu)),
+            )
+            .0
     }
 }
 
