@@ -68,15 +68,7 @@ fn erratum1_eq19_as_printed_is_not_the_solution_of_eq18() {
     assert_eq!(out.regime, Regime::Slip);
     let jz = out.impulse.z;
     let theta = out.theta.expect("slip has a direction");
-    let (i, m, lx, ly, h, mu, e) = (
-        s.inertia,
-        s.mass,
-        s.lx,
-        s.ly,
-        s.h,
-        s.friction,
-        s.restitution,
-    );
+    let (i, m, lx, ly, h, mu, e) = notation(&s);
     let c = lx * theta.cos() + ly * theta.sin();
     // (18) holds for the crate's J_z ...
     let lhs18 = jz * (lx * lx + ly * ly + i / m);

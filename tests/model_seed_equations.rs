@@ -240,16 +240,23 @@ fn eq13_to_15_slip_angle_equals_the_documents_cases_away_from_their_edges() {
     }
 }
 
-#[test]
-fn eq16_17_slip_friction_is_mu_jz_along_theta() {
-    let mut rng = Rng::new(7);
-    for k in 0..STATES {
+/// The random states approaching the ground (`u_z1T < 0`) among `STATES` draws: the draw's
+/// index, the state, its contact velocity `u_1T` and a random slip angle (drawn after the state,
+/// for the approaching ones only).
+fn approaching_slips(mut rng: Rng) -> impl Iterator<Item = (usize, SeedInput, Vector3<f64>, f64)> {
+    (0..STATES).filter_map(move |k| {
         let s = random_seed_input(&mut rng);
         let u1t = contact_velocity(&s, &s.u1, &s.w1);
         if u1t.z >= 0.0 {
-            continue;
+            return None;
         }
-        let theta = rng.uniform(-PI, PI);
+        Some((k, s, u1t, rng.uniform(-PI, PI)))
+    })
+}
+
+#[test]
+fn eq16_17_slip_friction_is_mu_jz_along_theta() {
+    for (k, s, u1t, theta) in approaching_slips(Rng::new(7)) {
         let Ok(j) = slip_impulse(&s, &u1t, theta) else {
             continue; // a jam is tested elsewhere
         };
@@ -273,26 +280,11 @@ fn eq16_17_slip_friction_is_mu_jz_along_theta() {
 
 #[test]
 fn eq18_slip_normal_impulse_balances_the_substituted_eq12() {
-    let mut rng = Rng::new(8);
-    for k in 0..STATES {
-        let s = random_seed_input(&mut rng);
-        let u1t = contact_velocity(&s, &s.u1, &s.w1);
-        if u1t.z >= 0.0 {
-            continue;
-        }
-        let theta = rng.uniform(-PI, PI);
+    for (k, s, u1t, theta) in approaching_slips(Rng::new(8)) {
         let Ok(j) = slip_impulse(&s, &u1t, theta) else {
             continue;
         };
-        let (i, m, lx, ly, h, mu, e) = (
-            s.inertia,
-            s.mass,
-            s.lx,
-            s.ly,
-            s.h,
-            s.friction,
-            s.restitution,
-        );
+        let (i, m, lx, ly, h, mu, e) = notation(&s);
         // (18): J_z (l_x^2 + l_y^2 + I/m) = mu h J_z (l_x cos + l_y sin) - (1+e) u_z1T I
         let lhs = j.z * (lx * lx + ly * ly + i / m);
         let friction_term = mu * h * j.z * (lx * theta.cos() + ly * theta.sin());
@@ -310,24 +302,9 @@ fn eq18_slip_normal_impulse_balances_the_substituted_eq12() {
 
 #[test]
 fn eq19_corrected_normal_impulse_and_newtons_law_hold_while_slipping() {
-    let mut rng = Rng::new(9);
     let mut checked = 0;
-    for k in 0..STATES {
-        let s = random_seed_input(&mut rng);
-        let u1t = contact_velocity(&s, &s.u1, &s.w1);
-        if u1t.z >= 0.0 {
-            continue;
-        }
-        let theta = rng.uniform(-PI, PI);
-        let (i, m, lx, ly, h, mu, e) = (
-            s.inertia,
-            s.mass,
-            s.lx,
-            s.ly,
-            s.h,
-            s.friction,
-            s.restitution,
-        );
+    for (k, s, u1t, theta) in approaching_slips(Rng::new(9)) {
+        let (i, m, lx, ly, h, mu, e) = notation(&s);
         let denominator =
             lx * lx + ly * ly + i / m - mu * h * (lx * theta.cos() + ly * theta.sin());
         let result = slip_impulse(&s, &u1t, theta);

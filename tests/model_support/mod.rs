@@ -15,6 +15,19 @@ mod rng;
 
 pub use rng::Rng;
 
+/// A seed input's scalars in the document's notation: `(I, m, l_x, l_y, h, mu, e)`.
+pub fn notation(s: &SeedInput) -> (f64, f64, f64, f64, f64, f64, f64) {
+    (
+        s.inertia,
+        s.mass,
+        s.lx,
+        s.ly,
+        s.h,
+        s.friction,
+        s.restitution,
+    )
+}
+
 /// A rotation taking `+z` to the unit vector `n`.
 pub fn rotation_z_to(n: &Vector3<f64>) -> Matrix3<f64> {
     let z = Vector3::z();
