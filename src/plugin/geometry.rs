@@ -553,6 +553,87 @@ fn flat_throughout(
     }
 }
 
+/// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of
+/// mass, so its rotation does not move it) without linear damping against grounds whose
+/// every query over the flight is one face's plane ([`flat_throughout`]) and towards which
+/// the acceleration does not point (`n.a <= 0`: a concave gap, so the approach, once
+/// started, ends on the ground): the gap to each plane is `d + un t + an t^2 / 2`, exactly,
+/// and the impact is its downward root. `None` where that does not apply, or where the
+/// search could decide otherwise (a start inside a ground and separating; a contact within
+/// the touching tolerance at the end of the interval): the search then runs.
+fn ball_on_flat(
+    body: &BodyGeom,
+    grounds: &[GroundGeom],
+    flight: &Flight,
+    s0: &State,
+    t0: f64,
+    t_from: f64,
+    t_to: f64,
+) -> Option<Search> {
+    let [part] = &body.parts[..] else {
+        return None;
+    };
+    if part.shape.as_ball().is_none()
+        || part.local.translation.vector != Vector3::zeros()
+        || flight.linear_damping != 0.0
+        || t_from != t0
+        || t_to < t_from
+        || t_to.is_nan()
+    {
+        return None;
+    }
+    let span = t_to - t0;
+    let travel = flight.max_speed(s0, span) * span;
+    let close = close_tolerance(body.radius);
+    let center = s0.com;
+    let mut first: Option<f64> = None;
+    for ground in grounds {
+        if ground.skip.contains(&part.handle) {
+            continue;
+        }
+        if !flat_throughout(part, ground, s0, travel, body.radius) {
+            return None;
+        }
+        let (d, n, _) = plane_contact_on(part, ground, s0, t0, center, None).ok()?;
+        let (vn, an) = (n.dot(&s0.v), n.dot(&flight.accel));
+        if an > 0.0 || !an.is_finite() || !d.is_finite() || !vn.is_finite() {
+            return None;
+        }
+        // The downward root of `d + vn t + an t^2 / 2`, if any.
+        let root = if d < 0.0 {
+            if vn < 0.0 {
+                0.0
+            } else {
+                return None;
+            }
+        } else if an == 0.0 {
+            if vn < 0.0 { d / -vn } else { continue }
+        } else {
+            let sq = (vn * vn - 2.0 * an * d).sqrt();
+            if vn < 0.0 {
+                2.0 * d / (sq - vn)
+            } else {
+                (vn + sq) / -an
+            }
+        };
+        if root > span || root.is_nan() {
+            // No impact in the interval, unless within the touching tolerance at its end.
+            if d + vn * span + 0.5 * an * span * span <= close {
+                return None;
+            }
+            continue;
+        }
+        first = Some(first.map_or(root, |f: f64| f.min(root)));
+    }
+    let Some(tau) = first else {
+        return Some(Search::Clear);
+    };
+    let t = t0 + tau;
+    let s = flight.advance(s0, tau);
+    let h = closest(body, grounds, &s, t, close)?;
+    (h.un < 0.0).then_some(Search::Hit(t, s, h))
+}
+
 /// Can the pair provably not meet in `[0, dt]` of the flight from `s`, so that
 /// [`first_impact`] would find it `Clear`? `(dist, n)`: the pair's contact at `s` (signed
 /// distance, normal); `radius`: the body's; `speed`: the body's approach bound over the step
@@ -655,6 +736,9 @@ pub(crate) fn first_impact(
     t_to: f64,
 ) -> Search {
     const MAX_ADVANCE: usize = 512;
+    if let Some(found) = ball_on_flat(body, grounds, flight, s0, t0, t_from, t_to) {
+        return found;
+    }
     let bound = approach_bound(body, grounds, flight, s0, t0, t_to - t0);
     let close = close_tolerance(body.radius);
     let mut t = t_from;
