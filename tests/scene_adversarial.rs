@@ -112,9 +112,7 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
                 .friction_combine_rule(rule(b.rule)),
         );
     }
-    let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, timing);
     let mut stats = Stats::new();
     let strict = std::env::var("RAPIER_IMPACT_STRICT_PENETRATION").is_ok();
     let allowed = wide(world.integration_parameters.allowed_linear_error());

@@ -53,9 +53,7 @@ fn drop(
             .restitution(real(e))
             .friction(real(mu)),
     );
-    let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, timing);
     let mut stats = Stats::new();
     let mut events = Vec::new();
     for _ in 0..(seconds * 60.0).ceil() as usize {
@@ -132,12 +130,7 @@ fn mass_ratio_scene(drop_height: f64, timing: Option<TimingMode>) -> (f64, f64, 
             .restitution(0.5),
     );
     let ratio = wide(world.bodies[heavy].mass() / world.bodies[light].mass());
-    let mut p = timing.map(|t| {
-        let mut p = plugin(t);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut p = timing.map(|t| plugin_on(&world, ground, t));
     let mut stats = Stats::new();
     let mut worst: f64 = 0.0;
     for _ in 0..600 {
@@ -273,9 +266,7 @@ fn restitution_combine_rules_are_rapiers() {
                 .restitution(real(eb))
                 .restitution_combine_rule(rule),
         );
-        let mut p = plugin(TimingMode::Exact);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, TimingMode::Exact);
         let mut stats = Stats::new();
         let mut used = None;
         for _ in 0..60 {

@@ -17,7 +17,7 @@
 mod scene_support;
 
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{GroundMaterial, TimingMode};
+use rapier_impact::TimingMode;
 use scene_support::*;
 
 #[derive(Clone, Copy, Debug)]
@@ -80,17 +80,7 @@ fn run(
             .ccd_enabled(ccd),
         shape,
     );
-    let mut p = plugin(timing);
-    p.add_ground_with_material(
-        &world.bodies,
-        &world.colliders,
-        g,
-        GroundMaterial {
-            restitution: e,
-            friction: 0.3,
-        },
-    )
-    .unwrap();
+    let mut p = plugin_with_material(&world, g, timing, e, 0.3);
     let mut stats = Stats::new();
     let mut bounces = Vec::new();
     let mut rebound = f64::NAN;

@@ -39,9 +39,7 @@ fn bodies_colliders_and_grounds_change_while_the_plugin_runs() {
                 .translation(Vector::new(0.0, -0.5, 0.0))
                 .restitution(0.7),
         );
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut balls: Vec<(RigidBodyHandle, ColliderHandle)> = (0..6)
             .map(|i| ball(&mut world, i as f64, 1.0 + 0.3 * i as f64))
             .collect();
@@ -135,9 +133,7 @@ fn a_bouncing_body_made_kinematic_fixed_and_dynamic_again() {
             ColliderBuilder::halfspace(up()).restitution(0.8),
         );
         let (b, _) = ball(&mut world, 0.0, 1.0);
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
         let mut events_while = [0usize; 3];
         for k in 0..600 {
@@ -183,9 +179,7 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
                 .restitution(0.5),
         );
         let (b, _) = ball(&mut world, 0.0, 2.0);
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
         let mut ground_y = 0.0;
         let mut bounces_on_moved = 0;
@@ -243,9 +237,7 @@ fn empty_worlds_and_ground_only_worlds_step() {
         }
         // Only ground.
         let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
-        let mut q = plugin(timing);
-        q.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut q = plugin_on(&world, ground, timing);
         for _ in 0..10 {
             step_checked(&mut world, &mut q, 0.0, &mut stats, "ground only");
             step_checked(

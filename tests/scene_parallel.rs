@@ -56,9 +56,7 @@ fn trace(timing: TimingMode, steps: usize) -> (Vec<u64>, Stats) {
             }
         }
     }
-    let mut p = plugin(timing);
-    p.add_ground(&world.bodies, &world.colliders, ground)
-        .unwrap();
+    let mut p = plugin_on(&world, ground, timing);
     let mut stats = Stats::new();
     let mut out = Vec::with_capacity(steps);
     for _ in 0..steps {

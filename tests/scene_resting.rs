@@ -38,9 +38,7 @@ fn a_resting_ball_sleeps_wakes_when_hit_and_bounces_again() {
             RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.7, 0.0)),
             ColliderBuilder::ball(0.2).restitution(0.7).friction(0.5),
         );
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
         let mut asleep_at = None;
         for k in 0..1200 {
@@ -108,9 +106,7 @@ fn a_box_rests_flat_without_jitter_for_10_000_steps() {
                 .restitution(0.5)
                 .friction(0.6),
         );
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
         for _ in 0..120 {
             step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
@@ -175,9 +171,7 @@ fn a_ball_launched_sliding_rolls_at_five_sevenths() {
                     .restitution(0.8)
                     .friction(real(mu)),
             );
-            let mut p = plugin(timing);
-            p.add_ground(&world.bodies, &world.colliders, ground)
-                .unwrap();
+            let mut p = plugin_on(&world, ground, timing);
             let mut stats = Stats::new();
             let (mut vy_max, mut dy_max) = (0.0f64, 0.0f64);
             let mut rolled_at = None;
@@ -280,9 +274,7 @@ fn boxes_tumbling_off_balls_onto_an_edge_stay_out_of_the_ground() {
                     );
                 }
             }
-            let mut p = plugin(timing);
-            p.add_ground(&world.bodies, &world.colliders, ground)
-                .unwrap();
+            let mut p = plugin_on(&world, ground, timing);
             let mut stats = Stats::new();
             for _ in 0..(6.0 / dt) as usize {
                 step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
@@ -336,9 +328,7 @@ fn a_box_woken_by_a_rolling_ball_does_not_drop_into_the_ground() {
         let label = format!("woken box {timing:?}");
         let mut world = PhysicsWorld::default();
         let (ground, bx) = scene(&mut world);
-        let mut p = plugin(timing);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
+        let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
         for _ in 0..200 {
             step_checked(&mut world, &mut p, 0.0, &mut stats, &label);

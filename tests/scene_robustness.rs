@@ -88,12 +88,7 @@ fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
         );
         balls.push(b);
     }
-    let mut plugin = timing.map(|t| {
-        let mut p = plugin(t);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut plugin = timing.map(|t| plugin_on(&world, ground, t));
     let steps = (PILE_T / dt).ceil() as usize;
     let mut out = Pile {
         settle: None,
@@ -233,12 +228,7 @@ fn mass_ratio(drop_height: f64, timing: Option<TimingMode>) -> (f64, Stats) {
             .density(1e4)
             .restitution(0.5),
     );
-    let mut p = timing.map(|t| {
-        let mut p = plugin(t);
-        p.add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-        p
-    });
+    let mut p = timing.map(|t| plugin_on(&world, ground, t));
     let mut stats = Stats::new();
     for _ in 0..600 {
         match p.as_mut() {
