@@ -209,41 +209,7 @@ fn a_pile_of_balls_settles_as_in_rapier_alone() {
 /// its mass) dropped on it from `drop_height`.
 fn mass_ratio(drop_height: f64, timing: Option<TimingMode>) -> (f64, Stats) {
     let label = format!("mass ratio, dropped {drop_height} m, {timing:?}");
-    let mut world = PhysicsWorld::default();
-    let (_, ground) = world.insert(
-        RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(up())
-            .restitution(0.5)
-            .friction(0.5),
-    );
-    world.insert(
-        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.1, 0.0)),
-        ColliderBuilder::cuboid(1.0, 0.1, 1.0)
-            .density(1e-2)
-            .restitution(0.5),
-    );
-    world.insert(
-        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(0.7 + drop_height), 0.0)),
-        ColliderBuilder::cuboid(0.5, 0.5, 0.5)
-            .density(1e4)
-            .restitution(0.5),
-    );
-    let mut p = timing.map(|t| plugin_on(&world, ground, t));
-    let mut stats = Stats::new();
-    for _ in 0..600 {
-        match p.as_mut() {
-            Some(p) => {
-                p.step(&mut world);
-                for ev in p.events() {
-                    check_event(ev, &mut stats, &label);
-                }
-            }
-            None => world.step(),
-        }
-        assert_finite(&world, &label);
-        stats.steps += 1;
-        stats.max_penetration = stats.max_penetration.max(penetration(&world, 0.0));
-    }
+    let (_, stats) = mass_ratio_run(drop_height, timing, &label);
     (stats.max_penetration, stats)
 }
 

@@ -270,6 +270,52 @@ pub fn step_checked(
     check_step(world, plugin.events(), ground_y, stats, label);
 }
 
+/// The mass-ratio scene: a light box (2 m x 0.2 m x 2 m, density 1e-2: 8 kg) resting on a
+/// half-space ground (e = 0.5, mu = 0.5) and a heavy one (a 1 m cube, density 1e4: 10 t, 1.25e6
+/// times the light one) dropped on it from `drop_height`, stepped 600 times (10 s) with the
+/// plugin in `timing` (every event checked) or rapier alone, every body finite at every step.
+/// Returns the mass ratio and the stats; their `max_penetration` is the deepest the boxes went
+/// below the ground.
+pub fn mass_ratio_run(drop_height: f64, timing: Option<TimingMode>, label: &str) -> (f64, Stats) {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.5)
+            .friction(0.5),
+    );
+    let (light, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.1, 0.0)),
+        ColliderBuilder::cuboid(1.0, 0.1, 1.0)
+            .density(1e-2)
+            .restitution(0.5),
+    );
+    let (heavy, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(0.7 + drop_height), 0.0)),
+        ColliderBuilder::cuboid(0.5, 0.5, 0.5)
+            .density(1e4)
+            .restitution(0.5),
+    );
+    let ratio = wide(world.bodies[heavy].mass() / world.bodies[light].mass());
+    let mut p = timing.map(|t| plugin_on(&world, ground, t));
+    let mut stats = Stats::new();
+    for _ in 0..600 {
+        match p.as_mut() {
+            Some(p) => {
+                p.step(&mut world);
+                for ev in p.events() {
+                    check_event(ev, &mut stats, label);
+                }
+            }
+            None => world.step(),
+        }
+        assert_finite(&world, label);
+        stats.steps += 1;
+        stats.max_penetration = stats.max_penetration.max(penetration(&world, 0.0));
+    }
+    (ratio, stats)
+}
+
 /// A hash of every body's pose and velocities, bit for bit.
 pub fn state_hash(world: &PhysicsWorld) -> u64 {
     let mut h = DefaultHasher::new();
