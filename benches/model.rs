@@ -29,31 +29,38 @@ struct Sample {
     material: Material,
 }
 
+/// A solid ball of unit mass and radius `radius` touching the ground (normal +z) at its
+/// bottom.
+fn ball(radius: f64, linear: Vector3<f64>, angular: Vector3<f64>, material: Material) -> Sample {
+    Sample {
+        body: Body::isotropic(1.0, 0.4 * radius * radius),
+        contact: Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius)),
+        velocity: BodyVelocity { linear, angular },
+        material,
+    }
+}
+
 /// Balls landing with little slip for their friction: the document's case A.
 fn stick_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let radius = rng.uniform(0.02, 0.5);
-            Sample {
-                body: Body::isotropic(1.0, 0.4 * radius * radius),
-                contact: Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius)),
-                velocity: BodyVelocity {
-                    linear: Vector3::new(
-                        rng.uniform(-1.0, 1.0),
-                        rng.uniform(-1.0, 1.0),
-                        rng.uniform(-5.0, -1.0),
-                    ),
-                    angular: Vector3::new(
-                        rng.uniform(-2.0, 2.0),
-                        rng.uniform(-2.0, 2.0),
-                        rng.uniform(-2.0, 2.0),
-                    ),
-                },
-                material: Material {
+            ball(
+                rng.uniform(0.02, 0.5),
+                Vector3::new(
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-1.0, 1.0),
+                    rng.uniform(-5.0, -1.0),
+                ),
+                Vector3::new(
+                    rng.uniform(-2.0, 2.0),
+                    rng.uniform(-2.0, 2.0),
+                    rng.uniform(-2.0, 2.0),
+                ),
+                Material {
                     restitution: rng.uniform(0.2, 0.9),
                     friction: rng.uniform(0.5, 1.0),
                 },
-            }
+            )
         })
         .collect()
 }
@@ -62,23 +69,19 @@ fn stick_batch(rng: &mut Rng) -> Vec<Sample> {
 fn slip_batch(rng: &mut Rng) -> Vec<Sample> {
     (0..BATCH)
         .map(|_| {
-            let radius = rng.uniform(0.02, 0.5);
-            Sample {
-                body: Body::isotropic(1.0, 0.4 * radius * radius),
-                contact: Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius)),
-                velocity: BodyVelocity {
-                    linear: Vector3::new(
-                        rng.uniform(5.0, 10.0),
-                        rng.uniform(-5.0, 5.0),
-                        rng.uniform(-3.0, -1.0),
-                    ),
-                    angular: Vector3::zeros(),
-                },
-                material: Material {
+            ball(
+                rng.uniform(0.02, 0.5),
+                Vector3::new(
+                    rng.uniform(5.0, 10.0),
+                    rng.uniform(-5.0, 5.0),
+                    rng.uniform(-3.0, -1.0),
+                ),
+                Vector3::zeros(),
+                Material {
                     restitution: rng.uniform(0.2, 0.9),
                     friction: rng.uniform(0.05, 0.2),
                 },
-            }
+            )
         })
         .collect()
 }
