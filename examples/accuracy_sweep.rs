@@ -822,6 +822,8 @@ fn report(rows: &[Row], secs: &BTreeMap<String, (f64, f64)>, total: f64) -> Stri
 // Plots
 
 type PlotResult = Result<(), Box<dyn std::error::Error>>;
+/// The axes of the drop and spin plots.
+type Axis = plotters::coord::types::RangedCoordf64;
 
 const MODE_COLORS: [RGBColor; 4] = [
     RGBColor(200, 30, 30),
@@ -934,6 +936,39 @@ fn plot_tradeoff(rows: &[Row], path: &Path) -> PlotResult {
     Ok(())
 }
 
+/// Draws the closed form (thick, black) and each mode's trace (`width` px, in the mode's
+/// colour) on `chart`, with their legend at `position`.
+fn draw_against_closed_form<'c, 'b: 'c, 'n>(
+    chart: &mut ChartContext<'c, SVGBackend<'b>, Cartesian2d<Axis, Axis>>,
+    analytic: Vec<(f64, f64)>,
+    traces: impl Iterator<Item = (&'n str, Vec<(f64, f64)>)>,
+    width: u32,
+    position: SeriesLabelPosition,
+) -> PlotResult {
+    chart
+        .draw_series(LineSeries::new(analytic, BLACK.stroke_width(3)))?
+        .label("closed form")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(3)));
+    for (name, trace) in traces {
+        let color = mode_color(name);
+        chart
+            .draw_series(LineSeries::new(trace, color.stroke_width(width)))?
+            .label(if name == "rapier" {
+                "rapier alone".to_string()
+            } else {
+                format!("plugin, {name}")
+            })
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(position)
+        .draw()?;
+    Ok(())
+}
+
 /// The drop at dt = 1/60: analytic, rapier alone, the plugin in `toi` and `exact` modes.
 fn plot_drop(traces: &[(&str, Vec<(f64, f64)>)], path: &Path) -> PlotResult {
     let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
@@ -958,27 +993,13 @@ fn plot_drop(traces: &[(&str, Vec<(f64, f64)>)], path: &Path) -> PlotResult {
             (t, drop_height(t))
         })
         .collect();
-    chart
-        .draw_series(LineSeries::new(analytic, BLACK.stroke_width(3)))?
-        .label("closed form")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(3)));
-    for (name, trace) in traces {
-        let color = mode_color(name);
-        chart
-            .draw_series(LineSeries::new(trace.clone(), color.stroke_width(1)))?
-            .label(if *name == "rapier" {
-                "rapier alone".to_string()
-            } else {
-                format!("plugin, {name}")
-            })
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()?;
+    draw_against_closed_form(
+        &mut chart,
+        analytic,
+        traces.iter().map(|(name, trace)| (*name, trace.clone())),
+        1,
+        SeriesLabelPosition::UpperRight,
+    )?;
     root.present()?;
     Ok(())
 }
@@ -1021,30 +1042,15 @@ fn plot_spin(traces: &[(&str, SpinTrace)], path: &Path) -> PlotResult {
             .x_desc("t (s)")
             .y_desc(label)
             .draw()?;
-        chart
-            .draw_series(LineSeries::new(analytic, BLACK.stroke_width(3)))?
-            .label("closed form")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(3)));
-        for (name, trace) in traces {
-            let color = mode_color(name);
-            chart
-                .draw_series(LineSeries::new(
-                    trace.iter().map(|p| (p.0, pick(p))),
-                    color.stroke_width(2),
-                ))?
-                .label(if *name == "rapier" {
-                    "rapier alone".to_string()
-                } else {
-                    format!("plugin, {name}")
-                })
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        draw_against_closed_form(
+            &mut chart,
+            analytic,
+            traces
+                .iter()
+                .map(|(name, trace)| (*name, trace.iter().map(|p| (p.0, pick(p))).collect())),
+            2,
+            SeriesLabelPosition::LowerRight,
+        )?;
     }
     root.present()?;
     Ok(())
