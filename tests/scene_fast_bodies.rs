@@ -16,8 +16,8 @@
 
 mod scene_support;
 
-use rapier_impact::rapier::prelude::*;
 use rapier_impact::TimingMode;
+use rapier_impact::rapier::prelude::*;
 use scene_support::*;
 
 #[derive(Clone, Copy, Debug)]
