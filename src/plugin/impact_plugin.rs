@@ -141,8 +141,11 @@ struct Candidate {
     /// `ImpactPlugin::swing_end`).
     swing: SmallList<(usize, Vector3<f64>)>,
     /// The grounds of resting pairs of a ball spinning fast about its centre (see
-    /// `ImpactPlugin::sunk_ball_end`).
+    /// `ImpactPlugin::sunk_end`).
     spinning_ball: SmallList<usize>,
+    /// Its rotation moves its surface (it is not a single ball about its centre): see
+    /// `ImpactPlugin::turned_end`.
+    turns_surface: bool,
 }
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -608,6 +611,7 @@ impl<H> ImpactPlugin<H> {
                         closing: false,
                         swing: SmallList::Empty,
                         spinning_ball: SmallList::Empty,
+                        turns_surface: false,
                     });
                 }
                 Some(false) => handles.push(handle),
@@ -649,6 +653,7 @@ impl<H> ImpactPlugin<H> {
                         closing: false,
                         swing: SmallList::Empty,
                         spinning_ball: SmallList::Empty,
+                        turns_surface: false,
                     });
                 }
                 continue;
@@ -850,6 +855,7 @@ impl<H> ImpactPlugin<H> {
                     closing,
                     swing,
                     spinning_ball,
+                    turns_surface: can_swing,
                 });
             }
         }
@@ -939,14 +945,15 @@ impl<H> ImpactPlugin<H> {
                 .impact_grounds
                 .iter()
                 .any(|i| colliders.get(step.grounds[*i].handle).is_some());
-            if !has_grounds
-                && !cand.swing.is_empty()
-                && self.swing_end(bodies, colliders, cand, &step)
-            {
-                continue;
+            if !has_grounds && !cand.swing.is_empty() {
+                if self.swing_end(bodies, colliders, cand, &step) {
+                    continue;
+                }
+                let grounds: SmallList<usize> = cand.swing.iter().map(|(i, _)| *i).collect();
+                self.sunk_end(bodies, colliders, cand, &grounds, &step);
             }
             if !has_grounds && !cand.spinning_ball.is_empty() {
-                self.sunk_ball_end(bodies, colliders, cand, &step);
+                self.sunk_end(bodies, colliders, cand, &cand.spinning_ball, &step);
             }
             let rb = &bodies[cand.body];
             let free = !touches_other(rb, narrow_phase)
@@ -977,6 +984,9 @@ impl<H> ImpactPlugin<H> {
                     let rb = &mut bodies[cand.body];
                     write_state(rb, &s, &cand.local_com, false);
                     self.remember(cand.body, rb, &s);
+                }
+                if has_grounds {
+                    self.turned_end(bodies, colliders, cand, &step);
                 }
                 continue;
             }
@@ -1056,6 +1066,7 @@ impl<H> ImpactPlugin<H> {
                     write_state(rb, &s, &cand.local_com, false);
                     self.remember(cand.body, rb, &s);
                 }
+                self.turned_end(bodies, colliders, cand, &step);
                 continue;
             }
             let mut next = first;
@@ -1332,18 +1343,69 @@ impl<H> ImpactPlugin<H> {
         true
     }
 
-    /// After the step, for a ball spinning fast about its centre on a resting pair. rapier's
-    /// solver moves a contact point with the body it belongs to, as a material point, over
-    /// the step; a ball's contact point stays at its bottom however it spins, so a fast-
-    /// spinning ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at
-    /// 5-15 m/s, spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz;
-    /// `tests/scene_resting.rs`). When the ball, touching nothing but grounds, ends the step
-    /// deeper than the resting gap, it is moved out of the ground, its velocities kept.
-    fn sunk_ball_end(
+    /// After a step the search found clear, for a body whose rotation moves its surface (not
+    /// a ball about its centre): the search flies it torque-free, rapier's integrator turns
+    /// it its own way (and `Exact` mode keeps rapier's rotation), and for a fast tumble the
+    /// two part by centimetres at the corners (a 0.9 m rod at 21 rad/s, 30 Hz: 6 cm deep,
+    /// no event). The step-end fallback (`step_end`) then resolves what rapier's end pose
+    /// holds in the ground.
+    fn turned_end(
         &mut self,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         cand: &Candidate,
+        step: &StepData,
+    ) {
+        if !cand.turns_surface {
+            return;
+        }
+        let Some(rb) = bodies.get(cand.body) else {
+            return;
+        };
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let grounds: SmallList<GroundGeom> = cand
+            .impact_grounds
+            .iter()
+            .filter_map(|i| {
+                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
+                gg.skip = geom
+                    .parts
+                    .iter()
+                    .map(|part| part.handle)
+                    .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
+                    .collect();
+                Some(gg)
+            })
+            .collect();
+        let inertia = Inertia::of(rb);
+        self.step_end(
+            bodies,
+            colliders,
+            cand.body,
+            &cand.local_com,
+            &geom,
+            &grounds,
+            &inertia,
+            step,
+            false,
+        );
+    }
+
+    /// After the step, for a body turning fast on resting pairs (`ground_indices`) and not
+    /// resolved by [`Self::swing_end`]. rapier's solver moves a contact point with the body
+    /// it belongs to, as a material point, over the step; a ball's contact point stays at its
+    /// bottom however it spins, so a fast-spinning ball is under-supported and rides low
+    /// (rapier alone: a 0.1 m ball sliding at 5-15 m/s, spun up by friction to 20 rad/s,
+    /// 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz; `tests/scene_resting.rs`), and a fast-turning
+    /// box's contact points lag its faces likewise. When the body, touching nothing but
+    /// grounds, ends the step deeper than the resting gap, it is moved out of the ground,
+    /// its velocities kept.
+    fn sunk_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        ground_indices: &[usize],
         step: &StepData,
     ) {
         if self.prev_coupled.contains(&cand.body) {
@@ -1353,8 +1415,7 @@ impl<H> ImpactPlugin<H> {
             return;
         };
         let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds: SmallList<GroundGeom> = cand
-            .spinning_ball
+        let grounds: SmallList<GroundGeom> = ground_indices
             .iter()
             .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
             .collect();
