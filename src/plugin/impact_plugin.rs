@@ -991,23 +991,34 @@ impl<H> ImpactPlugin<H> {
                 continue;
             }
             let geom = body_geom(rb, colliders, &cand.local_com);
-            let grounds: SmallList<GroundGeom> = cand
-                .impact_grounds
-                .iter()
-                .filter_map(|i| {
-                    let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                    // Pairs the user's filter refused are no contact for the plugin.
-                    gg.skip = geom
-                        .parts
-                        .iter()
-                        .map(|part| part.handle)
-                        .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
-                        .collect();
-                    Some(gg)
-                })
-                .collect();
+            let grounds = self.impact_ground_geoms(cand, &geom, colliders, &step);
             let inertia = Inertia::of(rb);
-            if mode == TimingMode::Step || !free {
+            // In-step resolution from the start-of-step state, unless the body touched
+            // something else (or the mode is `Step`), or rapier's CCD cut its motion short
+            // before the first impact: then the step-end fallback.
+            let first = (mode != TimingMode::Step && free).then(|| {
+                if cand.closing {
+                    first_impact(
+                        &geom,
+                        &grounds,
+                        &cand.flight,
+                        &cand.start,
+                        0.0,
+                        0.0,
+                        step.dt,
+                    )
+                } else {
+                    Search::Clear
+                }
+            });
+            let first = first.filter(|f| {
+                let t_first = match f {
+                    Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
+                    Search::Clear => step.dt,
+                };
+                self.ccd_consistent(rb, cand, t_first, step.dt, &step)
+            });
+            let Some(first) = first else {
                 self.step_end(
                     bodies,
                     colliders,
@@ -1020,39 +1031,7 @@ impl<H> ImpactPlugin<H> {
                     false,
                 );
                 continue;
-            }
-            // In-step resolution from the start-of-step state.
-            let first = if cand.closing {
-                first_impact(
-                    &geom,
-                    &grounds,
-                    &cand.flight,
-                    &cand.start,
-                    0.0,
-                    0.0,
-                    step.dt,
-                )
-            } else {
-                Search::Clear
             };
-            let t_first = match &first {
-                Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
-                Search::Clear => step.dt,
-            };
-            if !self.ccd_consistent(rb, cand, t_first, step.dt, &step) {
-                self.step_end(
-                    bodies,
-                    colliders,
-                    cand.body,
-                    &cand.local_com,
-                    &geom,
-                    &grounds,
-                    &inertia,
-                    &step,
-                    false,
-                );
-                continue;
-            }
             if let Search::Clear = first {
                 if mode == TimingMode::Exact {
                     let end = cand.flight.advance(&cand.start, step.dt);
@@ -1214,12 +1193,7 @@ impl<H> ImpactPlugin<H> {
         let Some(rb) = bodies.get(body) else {
             return;
         };
-        let mut s = State {
-            com: vec_to_na(rb.center_of_mass()),
-            rot: rot_to_na(*rb.rotation()),
-            v: vec_to_na(rb.linvel()),
-            w: vec_to_na(rb.angvel()),
-        };
+        let mut s = rapier_state(rb);
         let t = step.dt;
         let mut changed = false;
         for k in 0..self.config.max_impacts_per_step {
@@ -1295,12 +1269,7 @@ impl<H> ImpactPlugin<H> {
             .iter()
             .filter_map(|(i, _)| ground_geom(&step.grounds[*i], colliders))
             .collect();
-        let end = State {
-            com: vec_to_na(rb.center_of_mass()),
-            rot: rot_to_na(*rb.rotation()),
-            v: vec_to_na(rb.linvel()),
-            w: vec_to_na(rb.angvel()),
-        };
+        let end = rapier_state(rb);
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return false;
         };
@@ -1343,6 +1312,30 @@ impl<H> ImpactPlugin<H> {
         true
     }
 
+    /// The geometry of a candidate's `Impact` grounds, without the pairs the user's filter
+    /// refused (no contact for the plugin).
+    fn impact_ground_geoms<'a>(
+        &self,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        colliders: &'a ColliderSet,
+        step: &StepData,
+    ) -> SmallList<GroundGeom<'a>> {
+        cand.impact_grounds
+            .iter()
+            .filter_map(|i| {
+                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
+                gg.skip = geom
+                    .parts
+                    .iter()
+                    .map(|part| part.handle)
+                    .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
+                    .collect();
+                Some(gg)
+            })
+            .collect()
+    }
+
     /// After a step the search found clear, for a body whose rotation moves its surface (not
     /// a ball about its centre): the search flies it torque-free, rapier's integrator turns
     /// it its own way (and `Exact` mode keeps rapier's rotation), and for a fast tumble the
@@ -1363,20 +1356,7 @@ impl<H> ImpactPlugin<H> {
             return;
         };
         let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds: SmallList<GroundGeom> = cand
-            .impact_grounds
-            .iter()
-            .filter_map(|i| {
-                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                gg.skip = geom
-                    .parts
-                    .iter()
-                    .map(|part| part.handle)
-                    .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
-                    .collect();
-                Some(gg)
-            })
-            .collect();
+        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
         let inertia = Inertia::of(rb);
         self.step_end(
             bodies,
@@ -1419,12 +1399,7 @@ impl<H> ImpactPlugin<H> {
             .iter()
             .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
             .collect();
-        let mut end = State {
-            com: vec_to_na(rb.center_of_mass()),
-            rot: rot_to_na(*rb.rotation()),
-            v: vec_to_na(rb.linvel()),
-            w: vec_to_na(rb.angvel()),
-        };
+        let mut end = rapier_state(rb);
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
@@ -1466,12 +1441,7 @@ impl<H> ImpactPlugin<H> {
         if grounds.is_empty() {
             return;
         }
-        let end = State {
-            com: vec_to_na(com),
-            rot: rot_to_na(*rb.rotation()),
-            v: vec_to_na(rb.linvel()),
-            w: vec_to_na(rb.angvel()),
-        };
+        let end = rapier_state(rb);
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
@@ -1677,12 +1647,7 @@ fn snapshot(
     shadow: Option<&Shadow>,
 ) -> (State, Flight, Vector3<f64>) {
     let local_com = vec_to_na(rb.local_center_of_mass());
-    let mut state = State {
-        com: vec_to_na(rb.center_of_mass()),
-        rot: rot_to_na(*rb.rotation()),
-        v: vec_to_na(rb.linvel()),
-        w: vec_to_na(rb.angvel()),
-    };
+    let mut state = rapier_state(rb);
     if let Some(sh) = shadow {
         if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
             state.com = sh.com;
@@ -1746,6 +1711,16 @@ fn body_geom<'a>(
         });
     }
     BodyGeom { parts, radius }
+}
+
+/// The body's state as rapier holds it, in `f64`.
+fn rapier_state(rb: &RigidBody) -> State {
+    State {
+        com: vec_to_na(rb.center_of_mass()),
+        rot: rot_to_na(*rb.rotation()),
+        v: vec_to_na(rb.linvel()),
+        w: vec_to_na(rb.angvel()),
+    }
 }
 
 /// Is the part a ball centred on the body's centre of mass (it cannot swing about a
