@@ -702,9 +702,10 @@ impl Flow {
     }
 }
 
-/// `z + h * sum(c_i k_i)` over the stages `i` listed with their coefficients `c_i`.
+/// `z + h * sum(c_i k_i)` over the stages `i` listed with their coefficients `c_i` (the
+/// step's twelve, or the dense output's sixteen).
 #[inline(always)]
-fn stage<const N: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k: &[Z; 12]) -> Z {
+fn stage<const N: usize, const M: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k: &[Z; M]) -> Z {
     let mut out = *z;
     for j in 0..4 {
         let mut acc = 0.0;
@@ -755,9 +756,9 @@ impl Dense {
         let mut ext = [[0.0; 4]; 16];
         ext[..12].copy_from_slice(k);
         ext[12] = *k_new;
-        ext[13] = flow.rate(&stage_ext(z, h, &A14, &ext));
-        ext[14] = flow.rate(&stage_ext(z, h, &A15, &ext));
-        ext[15] = flow.rate(&stage_ext(z, h, &A16, &ext));
+        ext[13] = flow.rate(&stage(z, h, &A14, &ext));
+        ext[14] = flow.rate(&stage(z, h, &A15, &ext));
+        ext[15] = flow.rate(&stage(z, h, &A16, &ext));
         let mut f = [[0.0; 4]; 7];
         for j in 0..4 {
             let dz = z_new[j] - z[j];
@@ -774,20 +775,6 @@ impl Dense {
         }
         Self { f }
     }
-}
-
-/// `z + h * sum(c_i k_i)` over the extended stages.
-#[inline(always)]
-fn stage_ext<const N: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k: &[Z; 16]) -> Z {
-    let mut out = *z;
-    for j in 0..4 {
-        let mut acc = 0.0;
-        for &(i, ci) in c {
-            acc += ci * k[i][j];
-        }
-        out[j] += h * acc;
-    }
-    out
 }
 
 /// The dense-output polynomial with coefficients `f` at `x`, and its derivative in `x`.

@@ -324,23 +324,28 @@ fn ball_plane_contact(
             let p = pose_g
                 .inverse_transform_point(&nalgebra::Point3::from(centre))
                 .coords;
-            // The face the centre is furthest out of, relative to the half extents (as
-            // `plane_contact_on` picks it).
-            let axis = (0..3)
-                .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
-                .unwrap_or(1);
+            let (axis, nl) = cuboid_face(&p, &half);
             let tol = 1e-6 * (1.0 + centre.norm());
             if !(0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol) {
                 return Some(None);
             }
-            let mut nl = Vector3::zeros();
-            nl[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
             (pose_g.rotation * nl, p[axis].abs() - half[axis] - radius)
         }
         _ => return None,
     };
     let support = centre - n * radius;
     Some(Some((height - skins, n, support - n * part.skin)))
+}
+
+/// The face of a cuboid of half extents `half` that a point `p` (in the cuboid's frame) is
+/// furthest out of, relative to the half extents: its axis and outward unit normal.
+fn cuboid_face(p: &Vector3<f64>, half: &Vector3<f64>) -> (usize, Vector3<f64>) {
+    let axis = (0..3)
+        .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
+        .unwrap_or(1);
+    let mut n = Vector3::zeros();
+    n[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
+    (axis, n)
 }
 
 /// The mesh or heightfield triangles under the world point `p` at time `t`: the closest
@@ -401,11 +406,7 @@ fn plane_contact_on(
             let p = pose_g
                 .inverse_transform_point(&nalgebra::Point3::from(body_point))
                 .coords;
-            let axis = (0..3)
-                .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
-                .ok_or(None)?;
-            let mut nl = Vector3::zeros();
-            nl[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
+            let (axis, nl) = cuboid_face(&p, &half);
             (local(nl), at(nl * half[axis]), Face::Rect { axis, half })
         }
         TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
@@ -536,12 +537,8 @@ fn flat_throughout(
             let com = to_local(s.com);
             let r_o = travel + 2.0 * (origin_w - s.com).norm();
             let half = vec_to_na(cb.half_extents);
-            // The face plane_contact_on picks: the largest |p_i| / half_i.
-            let axis = (0..3)
-                .max_by(|i, j| {
-                    (origin[*i].abs() / half[*i]).total_cmp(&(origin[*j].abs() / half[*j]))
-                })
-                .unwrap_or(0);
+            // The face plane_contact_on picks.
+            let (axis, _) = cuboid_face(&origin, &half);
             let lead = (origin[axis].abs() - r_o) / half[axis];
             lead > 0.0
                 && (0..3).filter(|i| *i != axis).all(|i| {
