@@ -134,18 +134,37 @@ struct Candidate {
     /// Some pair with an `impact_grounds` ground may meet in the step (else the search from
     /// the start state would find it clear: see `geometry::cannot_close`).
     closing: bool,
-    /// Resting pairs of a body turning fast enough that another of its points could reach
-    /// the ground in the step (a box tipping off its edge, a capsule swinging down at a
-    /// wall): each ground's index (in `StepData::grounds`) and the resting contact point in
-    /// the body's frame (from its centre of mass). Checked after the step (see
-    /// `ImpactPlugin::swing_end`).
-    swing: SmallList<(usize, Vector3<f64>)>,
-    /// The grounds of resting pairs of a ball spinning fast about its centre (see
-    /// `ImpactPlugin::sunk_end`).
-    spinning_ball: SmallList<usize>,
+    /// Resting pairs of a body turning fast enough that a point of it could go deeper than
+    /// the resting gap in the step (a box tipping off its edge, a capsule swinging down at a
+    /// wall, a ball spun fast): each ground's index (in `StepData::grounds`) and the resting
+    /// contact point in the body's frame (from its centre of mass). Checked after the step
+    /// (see `ImpactPlugin::resting_end`).
+    turning_resting: SmallList<(usize, Vector3<f64>)>,
     /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `ImpactPlugin::turned_end`.
+    /// `ImpactPlugin::resting_end` and `ImpactPlugin::turned_end`.
     turns_surface: bool,
+}
+
+impl Candidate {
+    /// A body that no ground can reach in the step (only its flight, in `Exact` mode).
+    fn flying(
+        body: RigidBodyHandle,
+        start: State,
+        flight: Flight,
+        local_com: Vector3<f64>,
+    ) -> Self {
+        Self {
+            body,
+            start,
+            flight,
+            local_com,
+            impact_grounds: SmallList::Empty,
+            touched: false,
+            closing: false,
+            turning_resting: SmallList::Empty,
+            turns_surface: false,
+        }
+    }
 }
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -601,18 +620,8 @@ impl<H> ImpactPlugin<H> {
             match surely_far(rb, colliders, g_len, params.dt, margin, &step.grounds) {
                 Some(true) if self.config.timing == TimingMode::Exact => {
                     let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
-                    step.candidates.push(Candidate {
-                        body: handle,
-                        start,
-                        flight,
-                        local_com,
-                        impact_grounds: SmallList::Empty,
-                        touched: false,
-                        closing: false,
-                        swing: SmallList::Empty,
-                        spinning_ball: SmallList::Empty,
-                        turns_surface: false,
-                    });
+                    step.candidates
+                        .push(Candidate::flying(handle, start, flight, local_com));
                 }
                 Some(false) => handles.push(handle),
                 Some(true) | None => {}
@@ -643,18 +652,8 @@ impl<H> ImpactPlugin<H> {
                 .collect();
             if near.is_empty() {
                 if self.config.timing == TimingMode::Exact {
-                    step.candidates.push(Candidate {
-                        body: handle,
-                        start,
-                        flight,
-                        local_com,
-                        impact_grounds: SmallList::Empty,
-                        touched: false,
-                        closing: false,
-                        swing: SmallList::Empty,
-                        spinning_ball: SmallList::Empty,
-                        turns_surface: false,
-                    });
+                    step.candidates
+                        .push(Candidate::flying(handle, start, flight, local_com));
                 }
                 continue;
             }
@@ -667,12 +666,11 @@ impl<H> ImpactPlugin<H> {
             let mut touched = false;
             let mut impact_grounds = SmallList::Empty;
             let mut closing = false;
-            let mut swing = SmallList::Empty;
-            let mut spinning_ball = SmallList::Empty;
-            // How much deeper than a resting contact point another point of the body can go
-            // in the step by turning about it (not for a ball turning about its centre).
-            // (From the state after any `Step` impulse applied above.)
-            let can_swing = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
+            let mut turning_resting = SmallList::Empty;
+            // How far a point of the body can move relative to a resting contact point in the
+            // step by turning (for a ball about its centre: how fast rapier's contact point
+            // slides off its bottom). From the state after any `Step` impulse applied above.
+            let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
             let turning_reach = |s: &State| flight.max_angular_speed(s) * 2.0 * geom.radius * dt;
             for (gi, gg) in &ground_geoms {
                 let mut any_impact = false;
@@ -768,26 +766,19 @@ impl<H> ImpactPlugin<H> {
                                         state = after;
                                         touched = true;
                                         self.events.push(event);
-                                        // A pair touching the ground (within rapier's
-                                        // prediction distance, so in its manifold) goes on
-                                        // in rapier's solver with e = 0: the bounced point
-                                        // leaves the ground, and the body's other points
-                                        // resting on it stay held. Out of the solver (the
-                                        // first version, when the point separated faster
-                                        // than the resting speed), a box rocking on two
-                                        // edges had no support under the other one, fell
-                                        // onto it, was bounced at the step's end, and never
-                                        // came to rest: 12 448 events in 20 000 steps of the
-                                        // long run (f64), 180 now. A corner the impulse
-                                        // swings down is the swing check's (`swing_end`).
-                                        // A pair further off has no manifold point in
-                                        // rapier: out of its solver, with the step-end
-                                        // fallback.
+                                        // Out of rapier's solver unless the point leaves
+                                        // slower than the resting speed. Keeping a touching
+                                        // pair in the solver (e = 0) after the impulse let
+                                        // boxes rocking on two edges come to rest, but a box
+                                        // bounced at 10 m/s and left in the solver was
+                                        // pressed 17 cm into the ground by a ball 135 times
+                                        // its mass landing on it in the same step (240 Hz):
+                                        // reverted, the rocking reported (issue 5).
                                         let un2 = n.dot(
                                             &(super::geometry::body_velocity_at(&state, &point)
                                                 - gg.velocity_at(&point, 0.0)),
                                         );
-                                        if dist <= step.prediction || un2 <= step.resting_speed {
+                                        if un2 <= step.resting_speed {
                                             Role::Resting
                                         } else {
                                             Role::Impact
@@ -801,12 +792,8 @@ impl<H> ImpactPlugin<H> {
                         }
                     };
                     if role == Role::Resting && turning_reach(&state) > step.resting_gap {
-                        if !can_swing {
-                            if !spinning_ball.contains(gi) {
-                                spinning_ball.push(*gi);
-                            }
-                        } else if let Some((_, _, p)) = contact0 {
-                            swing.push((*gi, state.rot.inverse() * (p - state.com)));
+                        if let Some((_, _, p)) = contact0 {
+                            turning_resting.push((*gi, state.rot.inverse() * (p - state.com)));
                         }
                     }
                     any_impact |= role == Role::Impact && reachable;
@@ -841,8 +828,7 @@ impl<H> ImpactPlugin<H> {
                 write_state(&mut bodies[handle], &state, &local_com, true);
             }
             if !impact_grounds.is_empty()
-                || !swing.is_empty()
-                || !spinning_ball.is_empty()
+                || !turning_resting.is_empty()
                 || self.config.timing == TimingMode::Exact
             {
                 step.candidates.push(Candidate {
@@ -853,9 +839,8 @@ impl<H> ImpactPlugin<H> {
                     impact_grounds,
                     touched,
                     closing,
-                    swing,
-                    spinning_ball,
-                    turns_surface: can_swing,
+                    turning_resting,
+                    turns_surface,
                 });
             }
         }
@@ -945,15 +930,11 @@ impl<H> ImpactPlugin<H> {
                 .impact_grounds
                 .iter()
                 .any(|i| colliders.get(step.grounds[*i].handle).is_some());
-            if !has_grounds && !cand.swing.is_empty() {
-                if self.swing_end(bodies, colliders, cand, &step) {
-                    continue;
-                }
-                let grounds: SmallList<usize> = cand.swing.iter().map(|(i, _)| *i).collect();
-                self.sunk_end(bodies, colliders, cand, &grounds, &step);
-            }
-            if !has_grounds && !cand.spinning_ball.is_empty() {
-                self.sunk_end(bodies, colliders, cand, &cand.spinning_ball, &step);
+            if !has_grounds
+                && !cand.turning_resting.is_empty()
+                && self.resting_end(bodies, colliders, cand, &step)
+            {
+                continue;
             }
             let rb = &bodies[cand.body];
             let free = !touches_other(rb, narrow_phase)
@@ -1201,6 +1182,13 @@ impl<H> ImpactPlugin<H> {
                 break;
             };
             if hit.dist > 0.0 || hit.un >= 0.0 {
+                // A point deeper than the resting gap that already leaves the ground: it
+                // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
+                // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
+                if hit.dist < -step.resting_gap {
+                    s.com -= hit.normal * hit.dist;
+                    changed = true;
+                }
                 break;
             }
             let part = &geom.parts[hit.part];
@@ -1229,31 +1217,35 @@ impl<H> ImpactPlugin<H> {
             self.events.push(event);
             changed = true;
         }
-        // A point deeper than the resting gap that already leaves the ground: it swung
-        // through it inside the step (a box tumbling at 15 rad/s and 20 m/s at 30 Hz ended
-        // 9.2 mm deep, rising). Moved out, its velocity kept.
-        if let Some(hit) = closest(geom, grounds, &s, t, 0.0) {
-            if hit.dist < -step.resting_gap && hit.un >= 0.0 {
-                s.com -= hit.normal * hit.dist;
-                changed = true;
-            }
-        }
         if changed {
             write_state(&mut bodies[body], &s, local_com, true);
         }
     }
 
     /// After the step, for a body whose ground pairs were all resting (rapier's) while it
-    /// turned fast: rapier's contact manifold, made at the step's start, holds only the
-    /// points near the ground then, so a point swinging down from higher up (a box tipping
-    /// off its edge, a capsule's end at a wall) can end the step deep in the ground, still
-    /// approaching (issue 5: 8-13 mm at 30-60 Hz, rapier alone 5.3 cm). When the deepest
-    /// point is deeper than the resting gap and approaches faster than a fall through it,
-    /// while the resting contact point itself does not (the body turned about it, rather
-    /// than being pushed into the ground by a body on it: a heavy box on a light one, see
-    /// the pressed roles), it is resolved as a step-end impact (`step_end`, pushed out).
-    /// Returns whether it was.
-    fn swing_end(
+    /// turned fast. Two ways rapier's resting contact lets it end the step deep:
+    /// - rapier's contact manifold, made at the step's start, holds only the points near the
+    ///   ground then, so a point swinging down from higher up (a box tipping off its edge, a
+    ///   capsule's end at a wall) can end the step deep in the ground, still approaching
+    ///   (issue 5: 8-13 mm at 30-60 Hz, rapier alone 5.3 cm). When the deepest point is deeper
+    ///   than the resting gap and approaches faster than a fall through it, while the resting
+    ///   contact point itself does not (the body turned about it, rather than being pushed
+    ///   into the ground by a body on it: a heavy box on a light one, see the pressed roles),
+    ///   it is resolved as a step-end impact (`step_end`, pushed out). Slower, on a body
+    ///   touching nothing but grounds, it is settled (`e = 0`) and moved out (a box that took a
+    ///   `Step` impulse at one corner while its spin brought another down: 11.7 mm deep at
+    ///   30 Hz, approaching at 0.14 m/s); a body touching another is left to rapier then:
+    ///   pushing it out fights the body on it;
+    /// - rapier's solver moves a contact point with its body over the step, as a material
+    ///   point; a ball's contact point stays at its bottom however it spins, so a fast-spinning
+    ///   ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at 5-15 m/s,
+    ///   spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz), and a
+    ///   fast-turning box's contact points lag its faces likewise. A body, touching nothing but
+    ///   grounds, left deeper than the resting gap otherwise is moved out of the ground, its
+    ///   velocities kept.
+    ///
+    /// Returns whether a step-end impact resolved it.
+    fn resting_end(
         &mut self,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
@@ -1264,52 +1256,55 @@ impl<H> ImpactPlugin<H> {
             return false;
         };
         let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds: SmallList<GroundGeom> = cand
-            .swing
+        // Each ground once (a body of several colliders lists it per collider).
+        let listed = &cand.turning_resting;
+        let grounds: SmallList<GroundGeom> = listed
             .iter()
-            .filter_map(|(i, _)| ground_geom(&step.grounds[*i], colliders))
+            .enumerate()
+            .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
+            .filter_map(|(_, (i, _))| ground_geom(&step.grounds[*i], colliders))
             .collect();
-        let end = rapier_state(rb);
+        let mut end = rapier_state(rb);
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return false;
         };
-        // Slower than a fall through the gap, and touching nothing but grounds: settled
-        // (e = 0) and moved out (a box that took a `Step` impulse at one corner while its
-        // spin brought another down: 11.7 mm deep at 30 Hz, approaching at 0.14 m/s). A body
-        // touching another is left to rapier then: pushing it out fights the body on it.
-        let slow = hit.un >= -step.pressed_speed;
-        if !(hit.dist < -step.resting_gap && hit.un < 0.0)
-            || (slow && self.prev_coupled.contains(&cand.body))
-        {
+        if hit.dist >= -step.resting_gap {
             return false;
         }
-        // The resting contact's material point, now.
-        let pivot_pushed = cand.swing.iter().any(|(i, local)| {
-            let gm = &step.grounds[*i];
-            if gm.handle != grounds[hit.ground].handle {
-                return false;
+        let coupled = self.prev_coupled.contains(&cand.body);
+        if cand.turns_surface && hit.un < 0.0 {
+            let slow = hit.un >= -step.pressed_speed;
+            // The resting contact's material point, now.
+            let pivot_pushed = listed.iter().any(|(i, local)| {
+                if step.grounds[*i].handle != grounds[hit.ground].handle {
+                    return false;
+                }
+                let p = end.com + end.rot * local;
+                let u = super::geometry::body_velocity_at(&end, &p)
+                    - grounds[hit.ground].velocity_at(&p, step.dt);
+                hit.normal.dot(&u) < -step.pressed_speed
+            });
+            if !(pivot_pushed || slow && coupled) {
+                let inertia = Inertia::of(rb);
+                self.step_end(
+                    bodies,
+                    colliders,
+                    cand.body,
+                    &cand.local_com,
+                    &geom,
+                    &grounds,
+                    &inertia,
+                    step,
+                    slow,
+                );
+                return true;
             }
-            let p = end.com + end.rot * local;
-            let u = super::geometry::body_velocity_at(&end, &p)
-                - grounds[hit.ground].velocity_at(&p, step.dt);
-            hit.normal.dot(&u) < -step.pressed_speed
-        });
-        if pivot_pushed {
-            return false;
         }
-        let inertia = Inertia::of(rb);
-        self.step_end(
-            bodies,
-            colliders,
-            cand.body,
-            &cand.local_com,
-            &geom,
-            &grounds,
-            &inertia,
-            step,
-            slow,
-        );
-        true
+        if !coupled {
+            end.com -= hit.normal * hit.dist;
+            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
+        }
+        false
     }
 
     /// The geometry of a candidate's `Impact` grounds, without the pairs the user's filter
@@ -1369,44 +1364,6 @@ impl<H> ImpactPlugin<H> {
             step,
             false,
         );
-    }
-
-    /// After the step, for a body turning fast on resting pairs (`ground_indices`) and not
-    /// resolved by [`Self::swing_end`]. rapier's solver moves a contact point with the body
-    /// it belongs to, as a material point, over the step; a ball's contact point stays at its
-    /// bottom however it spins, so a fast-spinning ball is under-supported and rides low
-    /// (rapier alone: a 0.1 m ball sliding at 5-15 m/s, spun up by friction to 20 rad/s,
-    /// 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz; `tests/scene_resting.rs`), and a fast-turning
-    /// box's contact points lag its faces likewise. When the body, touching nothing but
-    /// grounds, ends the step deeper than the resting gap, it is moved out of the ground,
-    /// its velocities kept.
-    fn sunk_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        ground_indices: &[usize],
-        step: &StepData,
-    ) {
-        if self.prev_coupled.contains(&cand.body) {
-            return;
-        }
-        let Some(rb) = bodies.get(cand.body) else {
-            return;
-        };
-        let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds: SmallList<GroundGeom> = ground_indices
-            .iter()
-            .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
-            .collect();
-        let mut end = rapier_state(rb);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return;
-        };
-        if hit.dist < -step.resting_gap {
-            end.com -= hit.normal * hit.dist;
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
-        }
     }
 
     /// After the step, for a body asleep at its start and woken inside it (by a body hitting
