@@ -4,11 +4,12 @@
 //! in a random timing mode and dt (1/30 to 1/240), on a half-space ground; 90 steps each.
 //! Asserted at every step: no panic, all finite, no impact gaining kinetic energy (relative
 //! 1e-9), friction in the cone, and no body deeper below the ground than rapier's allowed
-//! linear error plus one step's travel of its fastest point (no tunnelling). The strict bound
-//! (allowed linear error alone) still fails, rarely, for fast-spinning bodies, a reported
-//! limitation: set `RAPIER_IMPACT_STRICT_PENETRATION=1` to assert it (1 000 cases pass in most
-//! runs; 5 000 found a 0.1 m ball beside a 0.37 m ball spinning at 55 rad/s, Step mode at
-//! 30 Hz, 11 mm deep).
+//! linear error for every body touching nothing but the ground, and, for a body another one
+//! pushed in the last second (rapier's solver holds that push), no deeper than the allowed
+//! error plus one step's travel of the fastest point (no tunnelling). The strict bound for
+//! every body is a reported limitation: set `RAPIER_IMPACT_STRICT_PENETRATION=1` to assert
+//! it (30 000 cases found a box struck downwards at 2.1 m/s by a ball, 5.4 mm deep, Step mode
+//! at 30 Hz).
 //!
 //! Cases: 1 000 by default; set `RAPIER_IMPACT_PROPTEST_CASES` for more.
 
@@ -118,6 +119,9 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
     let strict = std::env::var("RAPIER_IMPACT_STRICT_PENETRATION").is_ok();
     let allowed = wide(world.integration_parameters.allowed_linear_error());
     let dt = 1.0 / hz;
+    // The last step each body touched another one (rapier's contact graph).
+    let mut last_touched: std::collections::HashMap<RigidBodyHandle, usize> = Default::default();
+    let memory = hz as usize;
     for k in 0..90 {
         // The fastest material point of any body at the start of the step (m/s).
         let fastest = world
@@ -138,10 +142,32 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
         for ev in p.events() {
             check_event(ev, &mut stats, &label);
         }
-        // Known limit (reported): a fast-rotating box can end a step deeper than rapier's
-        // allowed error; it never goes deeper than one step's travel of its fastest point.
-        let depth = penetration(&world, 0.0);
-        prop_assert_le(depth, allowed + fastest * dt + 1e-6, &label, k);
+        for (h, rb) in world.bodies.iter() {
+            if !rb.is_dynamic() {
+                continue;
+            }
+            if touches_a_body(&world, h) {
+                last_touched.insert(h, k);
+            }
+            let depth = rb
+                .colliders()
+                .iter()
+                .map(|c| -wide(world.colliders[*c].compute_aabb().mins.y))
+                .fold(f64::NEG_INFINITY, f64::max);
+            // A body touching nothing but the ground stays within rapier's allowed error. A
+            // body another one pushed in the last second is held by rapier's solver (a box
+            // struck downwards at 2.1 m/s by a ball went 5.4 mm deep, Step mode at 30 Hz):
+            // it never goes deeper than one step's travel of the fastest point (no
+            // tunnelling); `RAPIER_IMPACT_STRICT_PENETRATION=1` asserts the allowed error
+            // for it too.
+            let pushed = last_touched.get(&h).is_some_and(|at| k - at < memory);
+            let bound = if pushed {
+                allowed + fastest * dt + 1e-6
+            } else {
+                allowed + penetration_rounding(0.0)
+            };
+            prop_assert_le(depth, bound, &label, k, pushed);
+        }
     }
 }
 
@@ -159,10 +185,15 @@ fn b_radius(world: &PhysicsWorld, rb: &RigidBody) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn prop_assert_le(depth: f64, bound: f64, label: &str, k: usize) {
+fn prop_assert_le(depth: f64, bound: f64, label: &str, k: usize, pushed: bool) {
+    let why = if pushed {
+        "a step's travel (pushed by another body)"
+    } else {
+        "rapier's allowed linear error (touching only the ground)"
+    };
     assert!(
         depth <= bound,
-        "{label}: step {k}: {depth:e} m below the ground, more than a step's travel ({bound:e} m)"
+        "{label}: step {k}: {depth:e} m below the ground, more than {why} ({bound:e} m)"
     );
 }
 

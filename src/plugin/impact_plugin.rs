@@ -185,6 +185,8 @@ struct StepData {
     resting_gap: f64,
     /// `sqrt(2 |g| resting_gap)`: below it, a body touching other bodies is not bounced.
     pressed_speed: f64,
+    /// The unit direction of gravity (zero without gravity).
+    down: Vector3<f64>,
     prediction: f64,
     roles: HandleMap<PairKey, Role>,
     grounds: Vec<GroundMotion>,
@@ -368,6 +370,9 @@ pub struct ImpactPlugin<H = ()> {
     /// Bodies that, in the last step, had a solver contact with something other than a
     /// ground (another body, a wall) or a joint: their resting ground pairs are pressed.
     prev_coupled: HandleSet<RigidBodyHandle>,
+    /// Of `prev_coupled`, the bodies with a joint or pushed along gravity by something other
+    /// than a ground (a body lying on them): moving them out of the ground fights the load.
+    prev_loaded: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
 }
 
@@ -398,6 +403,7 @@ impl<H> ImpactPlugin<H> {
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
             prev_coupled: HandleSet::default(),
+            prev_loaded: HandleSet::default(),
             events: Vec::new(),
         })
     }
@@ -587,6 +593,7 @@ impl<H> ImpactPlugin<H> {
             prediction: to_f64(params.prediction_distance()),
             ..Default::default()
         };
+        step.down = g.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
         step.pressed_speed = (2.0 * g.norm() * step.resting_gap)
             .sqrt()
             .max(step.resting_speed);
@@ -767,13 +774,13 @@ impl<H> ImpactPlugin<H> {
                                         touched = true;
                                         self.events.push(event);
                                         // Out of rapier's solver unless the point leaves
-                                        // slower than the resting speed. Keeping a touching
-                                        // pair in the solver (e = 0) after the impulse let
-                                        // boxes rocking on two edges come to rest, but a box
-                                        // bounced at 10 m/s and left in the solver was
-                                        // pressed 17 cm into the ground by a ball 135 times
-                                        // its mass landing on it in the same step (240 Hz):
-                                        // reverted, the rocking reported (issue 5).
+                                        // slower than the resting speed. (Keeping a touching
+                                        // pair in the solver after the impulse let a box
+                                        // bounced at 10 m/s be pressed 17 cm into the ground
+                                        // by a ball 135 times its mass landing on it in the
+                                        // same step, 240 Hz. Boxes rocking on two edges, each
+                                        // bounced in turn at the step's start and end, come
+                                        // to rest by `cap_energy` instead.)
                                         let un2 = n.dot(
                                             &(super::geometry::body_velocity_at(&state, &point)
                                                 - gg.velocity_at(&point, 0.0)),
@@ -872,6 +879,7 @@ impl<H> ImpactPlugin<H> {
         step.active = false;
         self.prev_roles = std::mem::take(&mut step.roles);
         self.prev_coupled.clear();
+        self.prev_loaded.clear();
         for (key, role) in &self.prev_roles {
             if !matches!(role, Role::Resting | Role::Impact) {
                 continue;
@@ -885,11 +893,14 @@ impl<H> ImpactPlugin<H> {
             let Some(rb) = bodies.get(bh) else {
                 continue;
             };
-            if impulse_joints.attached_joints(bh).next().is_some()
-                || multibody_joints.rigid_body_link(bh).is_some()
-                || touches_non_ground(rb, narrow_phase, &self.grounds)
-            {
+            let jointed = impulse_joints.attached_joints(bh).next().is_some()
+                || multibody_joints.rigid_body_link(bh).is_some();
+            let contact = non_ground_contact(rb, narrow_phase, &self.grounds, &step.down);
+            if jointed || contact.is_some() {
                 self.prev_coupled.insert(bh);
+            }
+            if jointed || contact == Some(true) {
+                self.prev_loaded.insert(bh);
             }
         }
         // The grounds' actual motion over the step.
@@ -1000,17 +1011,7 @@ impl<H> ImpactPlugin<H> {
                 self.ccd_consistent(rb, cand, t_first, step.dt, &step)
             });
             let Some(first) = first else {
-                self.step_end(
-                    bodies,
-                    colliders,
-                    cand.body,
-                    &cand.local_com,
-                    &geom,
-                    &grounds,
-                    &inertia,
-                    &step,
-                    false,
-                );
+                self.end_fallback(bodies, colliders, cand, &geom, &grounds, &step, false);
                 continue;
             };
             if let Search::Clear = first {
@@ -1036,6 +1037,7 @@ impl<H> ImpactPlugin<H> {
             // Where the flight stops short of the step's end, if it does.
             let mut stop: Option<State> = None;
             let mut count = 0usize;
+            let events = self.events.len();
             loop {
                 let (t, s, hit) = match next {
                     Search::Clear => break,
@@ -1099,10 +1101,20 @@ impl<H> ImpactPlugin<H> {
                 next = first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
             }
             let mut end = stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0));
-            // Safety net: never leave the body inside a ground.
+            // Safety net: never leave the body inside a ground, nor let the lift add energy
+            // (a cube pivoting on a corner through the step's last allowed impact, lifted
+            // out at its end: +3.2e-4 of a throw's energy, `cap_energy`).
             if let Some(h) = closest(&geom, &grounds, &end, step.dt, 0.0) {
                 if h.dist < 0.0 {
                     end.com -= h.normal * h.dist;
+                    let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
+                    if elastic && self.may_cap_energy(cand, &grounds) {
+                        if let Some(capped) =
+                            capped_energy(&cand.start, &end, &cand.flight, &inertia)
+                        {
+                            end = capped;
+                        }
+                    }
                 }
             }
             let rb = &mut bodies[cand.body];
@@ -1153,6 +1165,78 @@ impl<H> ImpactPlugin<H> {
         // a body up to about a prediction distance before the contact.
         let slack = (cand.flight.accel.norm() * dt * dt + step.prediction) / len2.sqrt() + 1e-3;
         fraction >= t_first / dt - slack
+    }
+
+    /// The step-end fallback (`step_end`) for a candidate, then the energy cap
+    /// (`cap_energy`).
+    #[allow(clippy::too_many_arguments)]
+    fn end_fallback(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        step: &StepData,
+        settle: bool,
+    ) {
+        let Some(rb) = bodies.get(cand.body) else {
+            return;
+        };
+        let inertia = Inertia::of(rb);
+        let events = self.events.len();
+        self.step_end(
+            bodies,
+            colliders,
+            cand.body,
+            &cand.local_com,
+            geom,
+            grounds,
+            &inertia,
+            step,
+            settle,
+        );
+        let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
+        if elastic {
+            self.cap_energy(bodies, cand, grounds, &inertia);
+        }
+    }
+
+    /// A body moved out of the ground by position at the step's end gains the potential
+    /// energy of the lift: its end state is deeper than any state of a true flight (a corner
+    /// swung or a ball rode into the ground), and moving it out keeps the speed it gathered
+    /// getting there. Repeated every step, that lift fed a box rocking on its corners at
+    /// the step rate for ever (`Step` mode, 60 Hz: 60 bounces a second), and it is the
+    /// energy a tumbling cube gained over its throw. So, for a body that nothing but fixed
+    /// grounds touched in the step, with no joint and no restitution above 1, the end
+    /// state's mechanical energy in its constant force field (`Flight::accel`) is held to
+    /// the start's (see `capped_energy`).
+    fn cap_energy(
+        &self,
+        bodies: &mut RigidBodySet,
+        cand: &Candidate,
+        grounds: &[GroundGeom],
+        inertia: &Inertia,
+    ) {
+        if !self.may_cap_energy(cand, grounds) {
+            return;
+        }
+        let Some(rb) = bodies.get_mut(cand.body) else {
+            return;
+        };
+        if let Some(capped) = capped_energy(&cand.start, &rapier_state(rb), &cand.flight, inertia) {
+            rb.set_linvel(vec_from_na(&capped.v), true);
+            rb.set_angvel(vec_from_na(&capped.w), true);
+        }
+    }
+
+    /// Nothing but fixed grounds touched the candidate in the step (no body, wall or joint:
+    /// `prev_coupled` is this step's by now), so its energy can only have been lost.
+    fn may_cap_energy(&self, cand: &Candidate, grounds: &[GroundGeom]) -> bool {
+        !self.prev_coupled.contains(&cand.body)
+            && grounds
+                .iter()
+                .all(|g| g.v == Vector3::zeros() && g.w == Vector3::zeros())
     }
 
     /// The `StepEnd` fallback on rapier's end-of-step state: each ground contact still
@@ -1240,9 +1324,11 @@ impl<H> ImpactPlugin<H> {
     ///   point; a ball's contact point stays at its bottom however it spins, so a fast-spinning
     ///   ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at 5-15 m/s,
     ///   spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz), and a
-    ///   fast-turning box's contact points lag its faces likewise. A body, touching nothing but
-    ///   grounds, left deeper than the resting gap otherwise is moved out of the ground, its
-    ///   velocities kept.
+    ///   fast-turning box's contact points lag its faces likewise. A body left deeper than the
+    ///   resting gap otherwise, with nothing lying on it (`prev_loaded`: two balls sliding
+    ///   side by side at 20 m/s, spun at 20 rad/s, had gone 14-22 mm deep at 30 Hz), is
+    ///   moved out of the ground; a ball's speed into the ground is removed, other bodies'
+    ///   velocities are kept. The lift's energy is capped (`cap_energy`).
     ///
     /// Returns whether a step-end impact resolved it.
     fn resting_end(
@@ -1285,24 +1371,27 @@ impl<H> ImpactPlugin<H> {
                 hit.normal.dot(&u) < -step.pressed_speed
             });
             if !(pivot_pushed || slow && coupled) {
-                let inertia = Inertia::of(rb);
-                self.step_end(
-                    bodies,
-                    colliders,
-                    cand.body,
-                    &cand.local_com,
-                    &geom,
-                    &grounds,
-                    &inertia,
-                    step,
-                    slow,
-                );
+                self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, slow);
                 return true;
             }
         }
-        if !coupled {
+        // A body that nothing loads (balls side by side, a box at a wall) is moved out; a
+        // body something lies on is left to rapier, whose solver holds the load.
+        if !self.prev_loaded.contains(&cand.body) {
             end.com -= hit.normal * hit.dist;
+            // A ball riding low sinks on: rapier's under-supporting contact let gravity build
+            // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
+            // which kept would take it deeper next step. Its contact is frictionless through
+            // the centre here, so removing that speed is an `e = 0` normal impulse.
+            if !cand.turns_surface {
+                let vn = hit.normal.dot(&end.v);
+                if vn < 0.0 {
+                    end.v -= hit.normal * vn;
+                }
+            }
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
+            let inertia = Inertia::of(&bodies[cand.body]);
+            self.cap_energy(bodies, cand, &grounds, &inertia);
         }
         false
     }
@@ -1352,18 +1441,7 @@ impl<H> ImpactPlugin<H> {
         };
         let geom = body_geom(rb, colliders, &cand.local_com);
         let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
-        let inertia = Inertia::of(rb);
-        self.step_end(
-            bodies,
-            colliders,
-            cand.body,
-            &cand.local_com,
-            &geom,
-            &grounds,
-            &inertia,
-            step,
-            false,
-        );
+        self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, false);
     }
 
     /// After the step, for a body asleep at its start and woken inside it (by a body hitting
@@ -1721,31 +1799,78 @@ fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
 
 /// Does the body have a contact in rapier's solver this step with a collider that is not a
 /// ground (another body, a wall)?
-fn touches_non_ground(
+/// Does the body have a solver contact with something other than a ground (another body, a
+/// wall)? `Some(true)` when one of them pushes it within 60 degrees of `down` (lies on it),
+/// `Some(false)` when all push it sideways or up (balls side by side, a wall), `None` without
+/// such a contact. Without gravity (`down` zero) every such contact loads it.
+fn non_ground_contact(
     rb: &RigidBody,
     narrow_phase: &NarrowPhase,
     grounds: &HandleMap<ColliderHandle, GroundEntry>,
-) -> bool {
-    rb.colliders().iter().any(|ch| {
-        narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            let other = if pair.collider1 == *ch {
-                pair.collider2
+    down: &Vector3<f64>,
+) -> Option<bool> {
+    let mut found = None;
+    for ch in rb.colliders() {
+        for pair in narrow_phase.contact_pairs_with(*ch) {
+            let (other, first) = if pair.collider1 == *ch {
+                (pair.collider2, true)
             } else {
-                pair.collider1
+                (pair.collider1, false)
             };
-            !grounds.contains_key(&other)
-                && pair.solver_manifolds().iter().any(|m| {
-                    m.data
-                        .solver_flags
-                        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                        && !m.data.solver_contacts.is_empty()
-                })
-        })
-    })
+            if grounds.contains_key(&other) {
+                continue;
+            }
+            for m in pair.solver_manifolds() {
+                if !m
+                    .data
+                    .solver_flags
+                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                    || m.data.solver_contacts.is_empty()
+                {
+                    continue;
+                }
+                // rapier pushes the first collider's body along -normal, the second's along
+                // +normal.
+                let normal = vec_to_na(m.data.normal);
+                let push = if first { -normal } else { normal };
+                if *down == Vector3::zeros() || push.dot(down) > 0.5 {
+                    return Some(true);
+                }
+                found = Some(false);
+            }
+        }
+    }
+    found
 }
 
 /// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
 /// the translation and linear velocity only, keeping rapier's rotation.
+/// `end` with its velocities scaled down by one factor (directions kept) so that its
+/// mechanical energy `1/2 m v^2 + 1/2 w.I w - m a.x` (`a` the flight's constant acceleration)
+/// is no more than `start`'s, or `None` when it already is. When even the potential energy
+/// exceeds the start's energy, the body is left at rest.
+fn capped_energy(start: &State, end: &State, flight: &Flight, inertia: &Inertia) -> Option<State> {
+    let energy = |s: &State| {
+        let velocity = crate::model::BodyVelocity {
+            linear: s.v,
+            angular: s.w,
+        };
+        let kinetic = inertia.body_at(&s.rot).kinetic_energy(&velocity);
+        (kinetic, kinetic - inertia.mass * flight.accel.dot(&s.com))
+    };
+    let (_, start_total) = energy(start);
+    let (end_kinetic, end_total) = energy(end);
+    if !(end_total > start_total && end_kinetic > 0.0) {
+        return None;
+    }
+    let scale = ((end_kinetic - (end_total - start_total)).max(0.0) / end_kinetic).sqrt();
+    Some(State {
+        v: end.v * scale,
+        w: end.w * scale,
+        ..*end
+    })
+}
+
 fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
     if full {
         let translation = s.com - s.rot * local_com;
@@ -1760,4 +1885,92 @@ fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bo
         rb.set_translation(vec_from_na(&translation), true);
     }
     rb.set_linvel(vec_from_na(&s.v), true);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
+
+    /// A 0.3 x 0.2 x 0.1 m brick (density 1): its inertia, and the flight under gravity.
+    fn brick() -> (Inertia, Flight) {
+        let mut world = crate::rapier::prelude::PhysicsWorld::default();
+        let (handle, _) = world.insert(
+            RigidBodyBuilder::dynamic(),
+            ColliderBuilder::cuboid(0.15, 0.1, 0.05),
+        );
+        let flight = Flight {
+            accel: Vector3::new(0.0, -9.81, 0.0),
+            linear_damping: 0.0,
+            angular_damping: 0.0,
+            gyro: None,
+        };
+        (Inertia::of(&world.bodies[handle]), flight)
+    }
+
+    fn total_energy(s: &State, inertia: &Inertia, flight: &Flight) -> f64 {
+        let velocity = crate::model::BodyVelocity {
+            linear: s.v,
+            angular: s.w,
+        };
+        inertia.body_at(&s.rot).kinetic_energy(&velocity) - inertia.mass * flight.accel.dot(&s.com)
+    }
+
+    #[test]
+    fn a_lift_that_adds_energy_is_paid_from_the_speeds() {
+        let (inertia, flight) = brick();
+        let rot = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7);
+        let start = State {
+            com: Vector3::new(0.0, 0.1, 0.0),
+            rot,
+            v: Vector3::new(0.5, -0.2, 0.1),
+            w: Vector3::new(1.0, 2.0, -3.0),
+        };
+        // Pushed 4 mm up at the end with the start's velocities: more energy than at start.
+        let end = State {
+            com: Vector3::new(0.01, 0.104, 0.0),
+            ..start
+        };
+        let capped = capped_energy(&start, &end, &flight, &inertia).expect("energy was gained");
+        let (e0, e1) = (
+            total_energy(&start, &inertia, &flight),
+            total_energy(&capped, &inertia, &flight),
+        );
+        assert!((e1 - e0).abs() <= 1e-12 * e0.abs(), "{e0} -> {e1}");
+        // One factor for both velocities, below 1; the pose untouched.
+        let k = capped.v.norm() / end.v.norm();
+        assert!(k < 1.0 && k > 0.0);
+        assert!((capped.v - end.v * k).norm() < 1e-15 && (capped.w - end.w * k).norm() < 1e-14);
+        assert_eq!((capped.com, capped.rot), (end.com, end.rot));
+    }
+
+    #[test]
+    fn a_state_without_gain_is_left_alone_and_a_lift_beyond_the_energy_stops_the_body() {
+        let (inertia, flight) = brick();
+        let start = State {
+            com: Vector3::new(0.0, 0.1, 0.0),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::new(0.0, -0.3, 0.0),
+            w: Vector3::zeros(),
+        };
+        // Lower and as fast: energy lost.
+        let lower = State {
+            com: Vector3::new(0.0, 0.09, 0.0),
+            ..start
+        };
+        assert_eq!(capped_energy(&start, &lower, &flight, &inertia), None);
+        // Lifted 1 cm: more than 1/2 v^2 / g = 4.6 mm can pay for.
+        let lifted = State {
+            com: Vector3::new(0.0, 0.11, 0.0),
+            ..start
+        };
+        let capped = capped_energy(&start, &lifted, &flight, &inertia).unwrap();
+        assert_eq!((capped.v, capped.w), (Vector3::zeros(), Vector3::zeros()));
+        // At rest and lifted: nothing to scale, nothing done.
+        let resting = State {
+            v: Vector3::zeros(),
+            ..lifted
+        };
+        assert_eq!(capped_energy(&start, &resting, &flight, &inertia), None);
+    }
 }

@@ -168,6 +168,25 @@ pub fn deepest_body(world: &PhysicsWorld, ground_y: f64) -> (f64, Option<RigidBo
     deepest
 }
 
+/// Does the body touch another dynamic body in rapier's contact graph?
+pub fn touches_a_body(world: &PhysicsWorld, body: RigidBodyHandle) -> bool {
+    world.bodies[body].colliders().iter().any(|c| {
+        world.narrow_phase.contact_pairs_with(*c).any(|pair| {
+            let other = if pair.collider1 == *c {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            pair.has_any_active_contact()
+                && world
+                    .colliders
+                    .get(other)
+                    .and_then(|co| co.parent())
+                    .is_some_and(|p| world.bodies[p].is_dynamic())
+        })
+    })
+}
+
 /// Checks one impact event: finite, a pushing normal impulse, friction inside the cone, and
 /// no kinetic-energy gain when `e <= 1` (on a fixed ground).
 pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {
