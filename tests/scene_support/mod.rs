@@ -296,6 +296,17 @@ pub fn step_checked(
 /// Returns the mass ratio and the stats; their `max_penetration` is the deepest the boxes went
 /// below the ground.
 pub fn mass_ratio_run(drop_height: f64, timing: Option<TimingMode>, label: &str) -> (f64, Stats) {
+    mass_ratio_run_with(drop_height, timing, 0, label)
+}
+
+/// [`mass_ratio_run`] with the light box in dominance group `light_dominance` (the heavy box
+/// stays in group 0).
+pub fn mass_ratio_run_with(
+    drop_height: f64,
+    timing: Option<TimingMode>,
+    light_dominance: i8,
+    label: &str,
+) -> (f64, Stats) {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
@@ -304,7 +315,9 @@ pub fn mass_ratio_run(drop_height: f64, timing: Option<TimingMode>, label: &str)
             .friction(0.5),
     );
     let (light, _) = world.insert(
-        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.1, 0.0)),
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 0.1, 0.0))
+            .dominance_group(light_dominance),
         ColliderBuilder::cuboid(1.0, 0.1, 1.0)
             .density(1e-2)
             .restitution(0.5),
