@@ -6,6 +6,8 @@
 //! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
 //!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its
 //!   collision events, but neither its solver nor its restitution pass sees the pair;
+//! - role `Rolling` (a ball sliding on a level fixed ground): the same; the plugin moves the
+//!   ball in closed form after the step;
 //! - role `Resting` (or a pair the plugin did not see coming): rapier's solver keeps it (the
 //!   user's filter still decides, when the colliders ask for it), and
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
@@ -66,7 +68,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
             .managed_pair(bodies, colliders, context.collider1, context.collider2)
             .map(|key| self.role(&key));
         match managed {
-            Some(Role::Impact) => Some(SolverFlags::empty()),
+            Some(Role::Impact | Role::Rolling) => Some(SolverFlags::empty()),
             // Resting (in rapier's solver), refused by the user, or not managed: the user's
             // filter when the colliders ask for it, as rapier would.
             _ => {
@@ -94,7 +96,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
             .managed_pair(bodies, colliders, c1, c2)
             .map(|key| (key, self.role(&key)));
         match managed {
-            Some((_, Role::Impact)) => {}
+            Some((_, Role::Impact | Role::Rolling)) => {}
             Some((key, Role::Resting)) => {
                 // The user's contact modification first (a conveyor ground, a one-way
                 // platform), then the plugin's: no bounce by rapier.

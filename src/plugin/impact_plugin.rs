@@ -14,7 +14,7 @@
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{ImpactEvent, ImpactTiming};
-use super::flight::{Flight, Gyro, State};
+use super::flight::{Flight, Gyro, Rolling, State};
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, landing_point,
@@ -74,6 +74,9 @@ pub(crate) enum Role {
     Impact,
     /// In rapier's solver with zero restitution: a resting, rolling or sliding contact.
     Resting,
+    /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
+    /// moved in closed form after the step (`flight::Rolling`, `ImpactPlugin::rolling_end`).
+    Rolling,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,
     /// Refused by the user's filter (`None`, or no rigid impulses): no ground contact for
@@ -143,6 +146,9 @@ struct Candidate {
     /// Its rotation moves its surface (it is not a single ball about its centre): see
     /// `ImpactPlugin::resting_end` and `ImpactPlugin::turned_end`.
     turns_surface: bool,
+    /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
+    /// `StepData::grounds`) and the motion. `start` then touches the ground.
+    rolling: Option<(usize, Rolling)>,
 }
 
 impl Candidate {
@@ -163,6 +169,7 @@ impl Candidate {
             closing: false,
             turning_resting: SmallList::Empty,
             turns_surface: false,
+            rolling: None,
         }
     }
 }
@@ -373,6 +380,9 @@ pub struct ImpactPlugin<H = ()> {
     /// Of `prev_coupled`, the bodies with a joint or pushed along gravity by something other
     /// than a ground (a body lying on them): moving them out of the ground fights the load.
     prev_loaded: HandleSet<RigidBodyHandle>,
+    /// Bodies with a joint or near something other than a ground (a pair in rapier's narrow
+    /// phase, touching or not) in the last step: a superset of `prev_coupled`.
+    prev_crowded: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
 }
 
@@ -404,6 +414,7 @@ impl<H> ImpactPlugin<H> {
             prev_roles: HandleMap::default(),
             prev_coupled: HandleSet::default(),
             prev_loaded: HandleSet::default(),
+            prev_crowded: HandleSet::default(),
             events: Vec::new(),
         })
     }
@@ -674,6 +685,7 @@ impl<H> ImpactPlugin<H> {
             let mut impact_grounds = SmallList::Empty;
             let mut closing = false;
             let mut turning_resting = SmallList::Empty;
+            let mut rolling = None;
             // How far a point of the body can move relative to a resting contact point in the
             // step by turning (for a ball about its centre: how fast rapier's contact point
             // slides off its bottom). From the state after any `Step` impulse applied above.
@@ -694,7 +706,7 @@ impl<H> ImpactPlugin<H> {
                     // A pair beyond reach cannot touch in this step: out of the solver, and
                     // no search after the step.
                     let reachable = matches!(found, Ok(Some(_)));
-                    let role = match found {
+                    let mut role = match found {
                         // parry cannot query this pair: rapier keeps it, restitution included.
                         Err(_) => Role::Rapier,
                         Ok(None) => Role::Impact,
@@ -709,7 +721,10 @@ impl<H> ImpactPlugin<H> {
                             // Hysteresis: a pair rapier held at rest last step shows the
                             // normal speed rapier's solver leaves at rest (up to g dt and more
                             // for a fast-rolling ball): it stays resting unless clearly hit.
-                            let was_resting = prev_roles.get(&key) == Some(&Role::Resting);
+                            let was_resting = matches!(
+                                prev_roles.get(&key),
+                                Some(&Role::Resting | &Role::Rolling)
+                            );
                             let limit = if was_resting {
                                 (4.0 * step.resting_speed).max(2.0 * g.norm() * dt)
                             } else {
@@ -798,6 +813,41 @@ impl<H> ImpactPlugin<H> {
                             }
                         }
                     };
+                    // A ball sliding on a level fixed ground, alone on it: the closed form
+                    // instead of rapier's resting contact, which turns the contact point with
+                    // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
+                    // three closed-form rolling times).
+                    if role == Role::Resting && ground_geoms.len() == 1 && !turns_surface {
+                        // Within the resting gap of it (a `Step` impulse can leave a ball
+                        // resting on its way down, up to a step's travel above the ground).
+                        if let Some((dist, n, _)) =
+                            contact0.filter(|(dist, ..)| dist.abs() <= step.resting_gap)
+                        {
+                            let friction =
+                                self.material_of(colliders, part.handle, gg.handle).friction;
+                            let on_ground = State {
+                                com: state.com - n * dist,
+                                v: state.v - n * n.dot(&state.v),
+                                ..state
+                            };
+                            if let Some(motion) = self.rolling_of(
+                                bodies,
+                                colliders,
+                                handle,
+                                part,
+                                gg,
+                                &flight,
+                                &n,
+                                friction,
+                                &on_ground,
+                                step.resting_speed,
+                            ) {
+                                role = Role::Rolling;
+                                rolling = Some((*gi, motion));
+                                state = on_ground;
+                            }
+                        }
+                    }
                     if role == Role::Resting && turning_reach(&state) > step.resting_gap {
                         if let Some((_, _, p)) = contact0 {
                             turning_resting.push((*gi, state.rot.inverse() * (p - state.com)));
@@ -836,6 +886,7 @@ impl<H> ImpactPlugin<H> {
             }
             if !impact_grounds.is_empty()
                 || !turning_resting.is_empty()
+                || rolling.is_some()
                 || self.config.timing == TimingMode::Exact
             {
                 step.candidates.push(Candidate {
@@ -848,6 +899,7 @@ impl<H> ImpactPlugin<H> {
                     closing,
                     turning_resting,
                     turns_surface,
+                    rolling,
                 });
             }
         }
@@ -880,14 +932,15 @@ impl<H> ImpactPlugin<H> {
         self.prev_roles = std::mem::take(&mut step.roles);
         self.prev_coupled.clear();
         self.prev_loaded.clear();
+        self.prev_crowded.clear();
         for (key, role) in &self.prev_roles {
-            if !matches!(role, Role::Resting | Role::Impact) {
+            if !matches!(role, Role::Resting | Role::Impact | Role::Rolling) {
                 continue;
             }
             let Some(bh) = colliders.get(key.0).and_then(|co| co.parent()) else {
                 continue;
             };
-            if self.prev_coupled.contains(&bh) {
+            if self.prev_crowded.contains(&bh) {
                 continue;
             }
             let Some(rb) = bodies.get(bh) else {
@@ -895,12 +948,15 @@ impl<H> ImpactPlugin<H> {
             };
             let jointed = impulse_joints.attached_joints(bh).next().is_some()
                 || multibody_joints.rigid_body_link(bh).is_some();
-            let contact = non_ground_contact(rb, narrow_phase, &self.grounds, &step.down);
-            if jointed || contact.is_some() {
+            let contacts = non_ground_contacts(rb, narrow_phase, &self.grounds, &step.down);
+            if jointed || contacts.touching {
                 self.prev_coupled.insert(bh);
             }
-            if jointed || contact == Some(true) {
+            if jointed || contacts.loaded {
                 self.prev_loaded.insert(bh);
+            }
+            if jointed || contacts.near {
+                self.prev_crowded.insert(bh);
             }
         }
         // The grounds' actual motion over the step.
@@ -935,6 +991,20 @@ impl<H> ImpactPlugin<H> {
                 .get(cand.body)
                 .is_some_and(|rb| self.manages(cand.body, rb) && !rb.is_sleeping())
             {
+                continue;
+            }
+            if let Some((ground, motion)) = &cand.rolling {
+                let jointed = impulse_joints.attached_joints(cand.body).next().is_some()
+                    || multibody_joints.rigid_body_link(cand.body).is_some();
+                self.rolling_end(
+                    bodies,
+                    colliders,
+                    cand,
+                    *ground,
+                    motion,
+                    jointed || touches_other(&bodies[cand.body], narrow_phase),
+                    &step,
+                );
                 continue;
             }
             let has_grounds = cand
@@ -1488,6 +1558,100 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
+    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
+    /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
+    /// speed), when it applies: a fixed ground, gravity (and any constant force) along `-n`,
+    /// no damping, torque or contact modification by the user, isotropic inertia with no
+    /// locked axis, nothing but grounds near it last step, and a ball that slips (faster than
+    /// 1 mm/s) or rolls faster than the resting speed (slower, it is rapier's, which brings
+    /// it to rest and to sleep).
+    #[allow(clippy::too_many_arguments)]
+    fn rolling_of(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        handle: RigidBodyHandle,
+        part: &BodyPart,
+        gg: &GroundGeom,
+        flight: &Flight,
+        n: &Vector3<f64>,
+        friction: f64,
+        on_ground: &State,
+        resting_speed: f64,
+    ) -> Option<Rolling> {
+        let rb = &bodies[handle];
+        let ball = part.shape.as_ball()?;
+        let radius = to_f64(ball.radius) + part.skin + gg.skin;
+        let an = flight.accel.dot(n);
+        let level = (flight.accel - n * an).norm() <= 1e-9 * flight.accel.norm();
+        let user_modifies = (self.user_flags(colliders, part.handle)
+            | self.user_flags(colliders, gg.handle))
+        .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
+        let still = gg.v == Vector3::zeros() && gg.w == Vector3::zeros();
+        let plain = flight.linear_damping == 0.0
+            && flight.angular_damping == 0.0
+            && rb.user_torque() == Vector::ZERO;
+        if !(an < 0.0 && level && still && plain)
+            || user_modifies
+            || self.prev_crowded.contains(&handle)
+        {
+            return None;
+        }
+        let slip = on_ground.v - radius * on_ground.w.cross(n);
+        if slip.norm() <= 1e-3 && on_ground.v.norm() <= resting_speed {
+            return None;
+        }
+        let inertia_ratio = Inertia::of(rb).ball_ratio(radius)?;
+        Some(Rolling {
+            normal: *n,
+            radius,
+            inertia_ratio,
+            friction,
+            accel: flight.accel,
+        })
+    }
+
+    /// After the step, for a ball sliding on a level ground (`Role::Rolling`): its closed-form
+    /// motion over the step from the start (which touches the ground), if nothing else touched
+    /// it and it still touches the same ground plane at the end; rapier flew it (the pair was
+    /// out of its solver), so a ball that ran off the ground's edge keeps rapier's fall. A
+    /// ball that something else touched in the step (another body hit it, a wall) or that has
+    /// a joint is resolved at the step end instead (`e = 0`, moved out of the ground).
+    #[allow(clippy::too_many_arguments)]
+    fn rolling_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        ground: usize,
+        motion: &Rolling,
+        touched: bool,
+        step: &StepData,
+    ) {
+        let Some(gg) = ground_geom(&step.grounds[ground], colliders) else {
+            return;
+        };
+        let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
+        let grounds = [gg];
+        if touched {
+            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
+            return;
+        }
+        let end = motion.advance(&cand.start, step.dt);
+        let still_on =
+            closest(&geom, &grounds, &end, step.dt, step.resting_gap).is_some_and(|hit| {
+                hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
+                    && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9
+            });
+        if still_on {
+            let rb = &mut bodies[cand.body];
+            write_state(rb, &end, &cand.local_com, true);
+            if self.config.timing == TimingMode::Exact {
+                self.remember(cand.body, rb, &end);
+            }
+        }
+    }
+
     /// The material of a body collider against a ground collider.
     fn material_of(
         &self,
@@ -1799,17 +1963,27 @@ fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
 
 /// Does the body have a contact in rapier's solver this step with a collider that is not a
 /// ground (another body, a wall)?
-/// Does the body have a solver contact with something other than a ground (another body, a
-/// wall)? `Some(true)` when one of them pushes it within 60 degrees of `down` (lies on it),
-/// `Some(false)` when all push it sideways or up (balls side by side, a wall), `None` without
-/// such a contact. Without gravity (`down` zero) every such contact loads it.
-fn non_ground_contact(
+/// What touches a body besides its grounds, from rapier's contact graph after a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct NonGround {
+    /// A pair with something other than a ground (another body, a wall) in the narrow phase
+    /// (their bounding boxes overlap, touching or not).
+    near: bool,
+    /// Such a pair with solver contacts.
+    touching: bool,
+    /// One of those contacts pushes the body within 60 degrees of `down` (something lies on
+    /// it), or any does without gravity (`down` zero). Balls side by side or a wall push it
+    /// sideways or up.
+    loaded: bool,
+}
+
+fn non_ground_contacts(
     rb: &RigidBody,
     narrow_phase: &NarrowPhase,
     grounds: &HandleMap<ColliderHandle, GroundEntry>,
     down: &Vector3<f64>,
-) -> Option<bool> {
-    let mut found = None;
+) -> NonGround {
+    let mut found = NonGround::default();
     for ch in rb.colliders() {
         for pair in narrow_phase.contact_pairs_with(*ch) {
             let (other, first) = if pair.collider1 == *ch {
@@ -1820,6 +1994,7 @@ fn non_ground_contact(
             if grounds.contains_key(&other) {
                 continue;
             }
+            found.near = true;
             for m in pair.solver_manifolds() {
                 if !m
                     .data
@@ -1829,14 +2004,15 @@ fn non_ground_contact(
                 {
                     continue;
                 }
+                found.touching = true;
                 // rapier pushes the first collider's body along -normal, the second's along
                 // +normal.
                 let normal = vec_to_na(m.data.normal);
                 let push = if first { -normal } else { normal };
                 if *down == Vector3::zeros() || push.dot(down) > 0.5 {
-                    return Some(true);
+                    found.loaded = true;
+                    return found;
                 }
-                found = Some(false);
             }
         }
     }

@@ -40,6 +40,17 @@ impl Inertia {
         }
     }
 
+    /// `I / (m r^2)` for a body of isotropic inertia (to 1e-12) with no locked rotation axis
+    /// (a ball about its centre) and contact radius `radius`, else `None`.
+    pub fn ball_ratio(&self, radius: f64) -> Option<f64> {
+        let inv = self.inv_principal.diagonal();
+        let (lo, hi) = (inv.min(), inv.max());
+        let isotropic = lo > 0.0 && hi.is_finite() && hi - lo <= 1e-12 * hi;
+        let ratio = 1.0 / (hi * self.mass * radius * radius);
+        (isotropic && !self.locked.contains(&true) && ratio.is_finite() && ratio > 0.0)
+            .then_some(ratio)
+    }
+
     /// The model's body at orientation `rot`: `I_w^-1 = R diag(1/I) R^T`, with the rows and
     /// columns of locked axes zeroed (what rapier's solver uses).
     pub fn body_at(&self, rot: &UnitQuaternion<f64>) -> Body {
