@@ -278,6 +278,58 @@ fn a_ball_with_backspin_comes_back_at_the_closed_form_speed() {
     }
 }
 
+/// Billiards: a ball rolling at 2 m/s into a ball at rest on the table. Each rolls in closed
+/// form while alone; the step they first come near each other, the rolling one flew without
+/// its ground in rapier's step (its pair was out of the solver) and is put back on the ground
+/// with no event; the collision is rapier's. No ground event at all, no body deeper than the
+/// allowed error (1.5 mm, on rapier's resting contact while the two balls are near each
+/// other), and the struck ball moves off.
+#[test]
+fn a_rolling_ball_strikes_a_ball_at_rest_without_ground_events() {
+    let (r, v0, mu) = (0.028, 2.0, 0.2);
+    for timing in MODES {
+        let label = format!("billiards {timing:?}");
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(up()).friction(real(mu)),
+        );
+        let ball = |world: &mut PhysicsWorld, x: f64, v: f64| {
+            world
+                .insert(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(real(x), real(r), 0.0))
+                        .linvel(Vector::new(real(v), 0.0, 0.0))
+                        .angvel(Vector::new(0.0, 0.0, real(-v / r))),
+                    ColliderBuilder::ball(real(r))
+                        .friction(real(mu))
+                        .restitution(0.95),
+                )
+                .0
+        };
+        let cue = ball(&mut world, 0.0, v0);
+        let object = ball(&mut world, 0.5, 0.0);
+        let mut p = plugin_on(&world, ground, timing);
+        let mut stats = Stats::new();
+        for _ in 0..60 {
+            step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
+            assert!(p.events().is_empty(), "{label}: {:?}", p.events());
+        }
+        let (vc, vo) = (
+            wide(world.bodies[cue].linvel().x),
+            wide(world.bodies[object].linvel().x),
+        );
+        println!(
+            "{label}: cue {vc:.4} m/s, object ball {vo:.4} m/s; {}",
+            stats.summary()
+        );
+        assert!(
+            vo > 0.5 * v0,
+            "{label}: the object ball did not move off: {vo}"
+        );
+    }
+}
+
 /// A ball rolling off the edge of a table (a cuboid ground, top at 0.75 m) onto the floor
 /// (a half-space ground): the closed-form rolling holds it on the table's top face only; past
 /// the edge it falls (rapier's contact with the edge, then free flight) and lands on the
@@ -306,12 +358,22 @@ fn a_ball_rolling_off_a_table_falls_from_its_edge() {
         p.add_ground(&world.bodies, &world.colliders, table)
             .unwrap();
         let mut stats = Stats::new();
+        let allowed = wide(world.integration_parameters.allowed_linear_error());
         let mut floor_impacts = 0;
         for k in 0..120 {
             step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
             floor_impacts += p.events().iter().filter(|e| e.ground == floor).count();
             let rb = &world.bodies[ball];
             let (x, y) = (wide(rb.translation().x), wide(rb.translation().y));
+            // Over the table, never into it (rapier's fall kept while the ball meets the
+            // edge would take it g dt^2 / 2 in).
+            if x < half {
+                assert!(
+                    y >= top + r - allowed,
+                    "{label}: step {k}: {} m into the table",
+                    top + r - y
+                );
+            }
             // Beyond the edge by more than its radius, the ball no longer touches the
             // table: it must be below its rolling height (it falls from the edge).
             if x > half + r + 1e-9 {
@@ -496,18 +558,19 @@ fn a_box_woken_by_a_rolling_ball_does_not_drop_into_the_ground() {
 /// when the check skipped any ball touching another).
 #[test]
 fn a_ball_sliding_fast_does_not_ride_low() {
-    let scene = |world: &mut PhysicsWorld, speed: f64| {
+    // Two balls side by side, touching: neither is alone on the ground, so neither slides in
+    // closed form (`Role::Rolling`, which gives a lone ball no depth at all, checked last).
+    const PAIR: [f64; 2] = [-0.1, 0.1];
+    let scene = |world: &mut PhysicsWorld, speed: f64, xs: &[f64]| {
         world.integration_parameters.dt = real(1.0 / 30.0);
         let (_, ground) = world.insert(
             RigidBodyBuilder::fixed(),
             ColliderBuilder::halfspace(up()).friction(1.26),
         );
-        // Two balls side by side, touching: neither is alone on the ground, so neither
-        // slides in closed form (`Role::Rolling`, which gives a lone ball no depth at all).
-        for x in [-0.1, 0.1] {
+        for x in xs {
             world.insert(
                 RigidBodyBuilder::dynamic()
-                    .translation(Vector::new(x, 0.1, 0.0))
+                    .translation(Vector::new(real(*x), 0.1, 0.0))
                     .linvel(Vector::new(0.0, 0.0, real(-speed))),
                 ColliderBuilder::ball(0.1).friction(0.0),
             );
@@ -516,7 +579,7 @@ fn a_ball_sliding_fast_does_not_ride_low() {
     };
     for speed in [5.0, 15.0] {
         let mut alone = PhysicsWorld::default();
-        scene(&mut alone, speed);
+        scene(&mut alone, speed, &PAIR);
         let allowed = wide(alone.integration_parameters.allowed_linear_error());
         let mut rapier_depth: f64 = 0.0;
         for _ in 0..60 {
@@ -528,7 +591,7 @@ fn a_ball_sliding_fast_does_not_ride_low() {
         for timing in MODES {
             let label = format!("sliding at {speed} m/s, {timing:?}");
             let mut world = PhysicsWorld::default();
-            let ground = scene(&mut world, speed);
+            let ground = scene(&mut world, speed, &PAIR);
             let mut p = plugin_on(&world, ground, timing);
             let mut stats = Stats::new();
             for _ in 0..60 {
@@ -536,6 +599,24 @@ fn a_ball_sliding_fast_does_not_ride_low() {
             }
             println!("{label}: {}", stats.summary());
             assert_eq!(stats.bounces, 0, "{label}: bounced");
+        }
+        // One ball alone slides in closed form: no depth at all.
+        for timing in MODES {
+            let label = format!("alone sliding at {speed} m/s, {timing:?}");
+            let mut world = PhysicsWorld::default();
+            let ground = scene(&mut world, speed, &[0.0]);
+            let mut p = plugin_on(&world, ground, timing);
+            let mut stats = Stats::new();
+            for _ in 0..60 {
+                step_checked(&mut world, &mut p, 0.0, &mut stats, &label);
+            }
+            println!("{label}: {}", stats.summary());
+            assert!(
+                stats.max_penetration <= 1e-6,
+                "{label}: {}",
+                stats.summary()
+            );
+            assert_eq!(stats.events, 0, "{label}: {}", stats.summary());
         }
     }
 }

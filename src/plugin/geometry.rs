@@ -508,7 +508,7 @@ fn close_tolerance(radius: f64) -> f64 {
 /// whose face the direct query picks stays picked and under the body wherever it goes (the
 /// part's origin within `travel` plus its offset turning, the support point within `radius`
 /// of the centre of mass). The part must have a support map.
-fn flat_throughout(
+pub(crate) fn flat_throughout(
     part: &BodyPart,
     ground: &GroundGeom,
     s: &State,

@@ -17,7 +17,7 @@ use super::events::{ImpactEvent, ImpactTiming};
 use super::flight::{Flight, Gyro, Rolling, State};
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
-    first_impact, landing_point,
+    first_impact, flat_throughout, landing_point,
 };
 use super::hook_flags::HookedBody;
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
@@ -72,7 +72,8 @@ pub(crate) type HandleSet<K> = HashSet<K, BuildHasherDefault<HandleHasher>>;
 pub(crate) enum Role {
     /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
     Impact,
-    /// In rapier's solver with zero restitution: a resting, rolling or sliding contact.
+    /// In rapier's solver with zero restitution: a resting contact, or a body rolling or
+    /// sliding that `Rolling` does not take.
     Resting,
     /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
     /// moved in closed form after the step (`flight::Rolling`, `ImpactPlugin::rolling_end`).
@@ -383,6 +384,9 @@ pub struct ImpactPlugin<H = ()> {
     /// Bodies with a joint or near something other than a ground (a pair in rapier's narrow
     /// phase, touching or not) in the last step: a superset of `prev_coupled`.
     prev_crowded: HandleSet<RigidBodyHandle>,
+    /// Managed bodies asleep at the start of the last step: their neighbours were not
+    /// measured (see `prev_crowded`) when they wake.
+    prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
 }
 
@@ -415,6 +419,7 @@ impl<H> ImpactPlugin<H> {
             prev_coupled: HandleSet::default(),
             prev_loaded: HandleSet::default(),
             prev_crowded: HandleSet::default(),
+            prev_asleep: HandleSet::default(),
             events: Vec::new(),
         })
     }
@@ -817,6 +822,16 @@ impl<H> ImpactPlugin<H> {
                     // instead of rapier's resting contact, which turns the contact point with
                     // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
                     // three closed-form rolling times).
+                    // Its crowding (`prev_crowded`) was measured after the last step if the
+                    // pair had a role then. A body just woken was not measured: a pile woken
+                    // by a hit would lose its ground support for a step. A body new to the
+                    // plugin (just created, or first near the ground) has nothing to go on
+                    // either; it is taken, and if something touches it in the step,
+                    // `rolling_end` puts it back on the ground.
+                    let known = matches!(
+                        prev_roles.get(&key),
+                        Some(Role::Resting | Role::Impact | Role::Rolling)
+                    ) || !self.prev_asleep.contains(&handle);
                     if role == Role::Resting && ground_geoms.len() == 1 && !turns_surface {
                         // Within the resting gap of it (a `Step` impulse can leave a ball
                         // resting on its way down, up to a step's travel above the ground).
@@ -831,16 +846,8 @@ impl<H> ImpactPlugin<H> {
                                 ..state
                             };
                             if let Some(motion) = self.rolling_of(
-                                bodies,
-                                colliders,
-                                handle,
-                                part,
-                                gg,
-                                &flight,
-                                &n,
-                                friction,
-                                &on_ground,
-                                step.resting_speed,
+                                bodies, colliders, handle, part, gg, &flight, &n, friction,
+                                &on_ground, &step, known,
                             ) {
                                 role = Role::Rolling;
                                 rolling = Some((*gi, motion));
@@ -933,6 +940,7 @@ impl<H> ImpactPlugin<H> {
         self.prev_coupled.clear();
         self.prev_loaded.clear();
         self.prev_crowded.clear();
+        let mut seen = HandleSet::default();
         for (key, role) in &self.prev_roles {
             if !matches!(role, Role::Resting | Role::Impact | Role::Rolling) {
                 continue;
@@ -940,7 +948,8 @@ impl<H> ImpactPlugin<H> {
             let Some(bh) = colliders.get(key.0).and_then(|co| co.parent()) else {
                 continue;
             };
-            if self.prev_crowded.contains(&bh) {
+            // Once per body (a body lists a pair per collider and ground).
+            if !seen.insert(bh) {
                 continue;
             }
             let Some(rb) = bodies.get(bh) else {
@@ -974,6 +983,8 @@ impl<H> ImpactPlugin<H> {
                 }
             }
         }
+        self.prev_asleep.clear();
+        self.prev_asleep.extend(step.asleep.iter().copied());
         for handle in &step.asleep {
             if bodies
                 .get(*handle)
@@ -994,17 +1005,14 @@ impl<H> ImpactPlugin<H> {
                 continue;
             }
             if let Some((ground, motion)) = &cand.rolling {
-                let jointed = impulse_joints.attached_joints(cand.body).next().is_some()
-                    || multibody_joints.rigid_body_link(cand.body).is_some();
-                self.rolling_end(
-                    bodies,
-                    colliders,
-                    cand,
-                    *ground,
-                    motion,
-                    jointed || touches_other(&bodies[cand.body], narrow_phase),
-                    &step,
-                );
+                let rb = &bodies[cand.body];
+                // Something else acted on it in the step: a contact, a joint, or rapier's CCD
+                // stopping it short (against a thin body).
+                let disturbed = impulse_joints.attached_joints(cand.body).next().is_some()
+                    || multibody_joints.rigid_body_link(cand.body).is_some()
+                    || touches_other(rb, narrow_phase)
+                    || !self.ccd_consistent(rb, cand, step.dt, step.dt, &step);
+                self.rolling_end(bodies, colliders, cand, *ground, motion, disturbed, &step);
                 continue;
             }
             let has_grounds = cand
@@ -1178,7 +1186,9 @@ impl<H> ImpactPlugin<H> {
                 if h.dist < 0.0 {
                     end.com -= h.normal * h.dist;
                     let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-                    if elastic && self.may_cap_energy(cand, &grounds) {
+                    if elastic
+                        && self.may_cap_energy(&bodies[cand.body], colliders, cand, &step.grounds)
+                    {
                         if let Some(capped) =
                             capped_energy(&cand.start, &end, &cand.flight, &inertia)
                         {
@@ -1255,7 +1265,7 @@ impl<H> ImpactPlugin<H> {
         };
         let inertia = Inertia::of(rb);
         let events = self.events.len();
-        self.step_end(
+        let moved = self.step_end(
             bodies,
             colliders,
             cand.body,
@@ -1267,8 +1277,8 @@ impl<H> ImpactPlugin<H> {
             settle,
         );
         let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-        if elastic {
-            self.cap_energy(bodies, cand, grounds, &inertia);
+        if moved && elastic {
+            self.cap_energy(bodies, colliders, cand, &inertia, step);
         }
     }
 
@@ -1284,16 +1294,18 @@ impl<H> ImpactPlugin<H> {
     fn cap_energy(
         &self,
         bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
         cand: &Candidate,
-        grounds: &[GroundGeom],
         inertia: &Inertia,
+        step: &StepData,
     ) {
-        if !self.may_cap_energy(cand, grounds) {
+        if !bodies
+            .get(cand.body)
+            .is_some_and(|rb| self.may_cap_energy(rb, colliders, cand, &step.grounds))
+        {
             return;
         }
-        let Some(rb) = bodies.get_mut(cand.body) else {
-            return;
-        };
+        let rb = &mut bodies[cand.body];
         if let Some(capped) = capped_energy(&cand.start, &rapier_state(rb), &cand.flight, inertia) {
             rb.set_linvel(vec_from_na(&capped.v), true);
             rb.set_angvel(vec_from_na(&capped.w), true);
@@ -1302,16 +1314,41 @@ impl<H> ImpactPlugin<H> {
 
     /// Nothing but fixed grounds touched the candidate in the step (no body, wall or joint:
     /// `prev_coupled` is this step's by now), so its energy can only have been lost.
-    fn may_cap_energy(&self, cand: &Candidate, grounds: &[GroundGeom]) -> bool {
-        !self.prev_coupled.contains(&cand.body)
-            && grounds
-                .iter()
-                .all(|g| g.v == Vector3::zeros() && g.w == Vector3::zeros())
+    fn may_cap_energy(
+        &self,
+        rb: &RigidBody,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        grounds: &[GroundMotion],
+    ) -> bool {
+        if self.prev_coupled.contains(&cand.body) || rb.user_torque() != Vector::ZERO {
+            return false;
+        }
+        let modifies = |c| {
+            self.user_flags(colliders, c)
+                .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+        };
+        // Every ground pair of the body: a still ground, the plugin's role, no contact
+        // modification of the user's (a conveyor ground puts energy in).
+        rb.colliders().iter().all(|ch| {
+            !modifies(*ch)
+                && grounds
+                    .iter()
+                    .all(|gm| match self.prev_roles.get(&(*ch, gm.handle)) {
+                        None | Some(Role::User) => true,
+                        Some(Role::Rapier) => false,
+                        Some(_) => {
+                            gm.v == Vector3::zeros()
+                                && gm.w == Vector3::zeros()
+                                && !modifies(gm.handle)
+                        }
+                    })
+        })
     }
 
     /// The `StepEnd` fallback on rapier's end-of-step state: each ground contact still
     /// touching and approaching gets its impulse (with `e = 0` if `settle`), and the body is
-    /// moved out of the ground.
+    /// moved out of the ground. Returns whether it changed the body's state.
     #[allow(clippy::too_many_arguments)]
     fn step_end(
         &mut self,
@@ -1324,9 +1361,9 @@ impl<H> ImpactPlugin<H> {
         inertia: &Inertia,
         step: &StepData,
         settle: bool,
-    ) {
+    ) -> bool {
         let Some(rb) = bodies.get(body) else {
-            return;
+            return false;
         };
         let mut s = rapier_state(rb);
         let t = step.dt;
@@ -1374,6 +1411,7 @@ impl<H> ImpactPlugin<H> {
         if changed {
             write_state(&mut bodies[body], &s, local_com, true);
         }
+        changed
     }
 
     /// After the step, for a body whose ground pairs were all resting (rapier's) while it
@@ -1461,7 +1499,7 @@ impl<H> ImpactPlugin<H> {
             }
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
             let inertia = Inertia::of(&bodies[cand.body]);
-            self.cap_energy(bodies, cand, &grounds, &inertia);
+            self.cap_energy(bodies, colliders, cand, &inertia, step);
         }
         false
     }
@@ -1560,7 +1598,9 @@ impl<H> ImpactPlugin<H> {
 
     /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
     /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
-    /// speed), when it applies: a fixed ground, gravity (and any constant force) along `-n`,
+    /// speed), when it applies: a ground at rest whose one flat face (a half-space, or a
+    /// cuboid's face the ball stays over: `flat_throughout`) is all it can meet in the step,
+    /// a pair whose crowding was measured last step (`known`), gravity (and any constant force) along `-n`,
     /// no damping, torque or contact modification by the user, isotropic inertia with no
     /// locked axis, nothing but grounds near it last step, and a ball that slips (faster than
     /// 1 mm/s) or rolls faster than the resting speed (slower, it is rapier's, which brings
@@ -1577,7 +1617,8 @@ impl<H> ImpactPlugin<H> {
         n: &Vector3<f64>,
         friction: f64,
         on_ground: &State,
-        resting_speed: f64,
+        step: &StepData,
+        known: bool,
     ) -> Option<Rolling> {
         let rb = &bodies[handle];
         let ball = part.shape.as_ball()?;
@@ -1591,14 +1632,22 @@ impl<H> ImpactPlugin<H> {
         let plain = flight.linear_damping == 0.0
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
-        if !(an < 0.0 && level && still && plain)
+        if !(an < 0.0 && level && still && plain && known)
+            || !(friction.is_finite() && friction >= 0.0)
             || user_modifies
             || self.prev_crowded.contains(&handle)
         {
             return None;
         }
         let slip = on_ground.v - radius * on_ground.w.cross(n);
-        if slip.norm() <= 1e-3 && on_ground.v.norm() <= resting_speed {
+        if slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed {
+            return None;
+        }
+        // The ground's one flat face under the ball for the whole step (a half-space, or a
+        // cuboid's face the ball stays over): a mesh's or heightfield's other triangles, or a
+        // cuboid's edge, could be met inside the step, out of rapier's solver.
+        let travel = (on_ground.v.norm() + on_ground.w.norm() * radius) * step.dt;
+        if !flat_throughout(part, gg, on_ground, travel, radius) {
             return None;
         }
         let inertia_ratio = Inertia::of(rb).ball_ratio(radius)?;
@@ -1612,11 +1661,15 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// After the step, for a ball sliding on a level ground (`Role::Rolling`): its closed-form
-    /// motion over the step from the start (which touches the ground), if nothing else touched
-    /// it and it still touches the same ground plane at the end; rapier flew it (the pair was
-    /// out of its solver), so a ball that ran off the ground's edge keeps rapier's fall. A
-    /// ball that something else touched in the step (another body hit it, a wall) or that has
-    /// a joint is resolved at the step end instead (`e = 0`, moved out of the ground).
+    /// motion over the step from the start (which touches the ground), if nothing else acted
+    /// on it (`disturbed`) and it still touches the same ground plane at the end. Otherwise
+    /// rapier's state stands, in which the ball flew without its ground (the pair was out of
+    /// its solver) and so fell by up to `|g| dt^2 / 2` while pushed by whatever touched it:
+    /// - moving into the ground no faster than that fall (`|a.n| dt`, plus the resting
+    ///   speed), it is put back on the ground with no speed into it, as rapier's resting
+    ///   contact would have held it, and no event (a ball rolling up to another);
+    /// - faster (something pushed it down), it is resolved at the step end (`step_end`,
+    ///   `e = 0`, moved out).
     #[allow(clippy::too_many_arguments)]
     fn rolling_end(
         &mut self,
@@ -1625,7 +1678,7 @@ impl<H> ImpactPlugin<H> {
         cand: &Candidate,
         ground: usize,
         motion: &Rolling,
-        touched: bool,
+        disturbed: bool,
         step: &StepData,
     ) {
         let Some(gg) = ground_geom(&step.grounds[ground], colliders) else {
@@ -1633,22 +1686,35 @@ impl<H> ImpactPlugin<H> {
         };
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
         let grounds = [gg];
-        if touched {
-            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
-            return;
-        }
-        let end = motion.advance(&cand.start, step.dt);
-        let still_on =
-            closest(&geom, &grounds, &end, step.dt, step.resting_gap).is_some_and(|hit| {
+        if !disturbed {
+            let end = motion.advance(&cand.start, step.dt);
+            let on = closest(&geom, &grounds, &end, step.dt, step.resting_gap);
+            if on.is_some_and(|hit| {
                 hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
                     && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9
-            });
-        if still_on {
-            let rb = &mut bodies[cand.body];
-            write_state(rb, &end, &cand.local_com, true);
-            if self.config.timing == TimingMode::Exact {
-                self.remember(cand.body, rb, &end);
+            }) {
+                let rb = &mut bodies[cand.body];
+                write_state(rb, &end, &cand.local_com, true);
+                if self.config.timing == TimingMode::Exact {
+                    self.remember(cand.body, rb, &end);
+                }
+                return;
             }
+        }
+        let mut end = rapier_state(&bodies[cand.body]);
+        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
+            return;
+        };
+        let fall = -motion.accel.dot(&motion.normal) * step.dt + step.resting_speed;
+        if hit.un >= -fall {
+            end.com -= hit.normal * hit.dist;
+            let vn = hit.normal.dot(&end.v);
+            if vn < 0.0 {
+                end.v -= hit.normal * vn;
+            }
+            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
+        } else {
+            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
         }
     }
 
@@ -1961,8 +2027,6 @@ fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
     })
 }
 
-/// Does the body have a contact in rapier's solver this step with a collider that is not a
-/// ground (another body, a wall)?
 /// What touches a body besides its grounds, from rapier's contact graph after a step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct NonGround {
@@ -1977,6 +2041,8 @@ struct NonGround {
     loaded: bool,
 }
 
+/// The body's pairs with colliders that are not grounds, in rapier's narrow phase after a step
+/// (see [`NonGround`]).
 fn non_ground_contacts(
     rb: &RigidBody,
     narrow_phase: &NarrowPhase,
@@ -2019,12 +2085,12 @@ fn non_ground_contacts(
     found
 }
 
-/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
-/// the translation and linear velocity only, keeping rapier's rotation.
 /// `end` with its velocities scaled down by one factor (directions kept) so that its
 /// mechanical energy `1/2 m v^2 + 1/2 w.I w - m a.x` (`a` the flight's constant acceleration)
-/// is no more than `start`'s, or `None` when it already is. When even the potential energy
-/// exceeds the start's energy, the body is left at rest.
+/// is no more than `start`'s, or `None` when it already is (within the rounding of the
+/// potential at rapier's precision, so that `f32` positions far from the origin do not
+/// drain a slow body). When even the potential energy exceeds the start's energy, the body
+/// is left at rest.
 fn capped_energy(start: &State, end: &State, flight: &Flight, inertia: &Inertia) -> Option<State> {
     let energy = |s: &State| {
         let velocity = crate::model::BodyVelocity {
@@ -2036,7 +2102,11 @@ fn capped_energy(start: &State, end: &State, flight: &Flight, inertia: &Inertia)
     };
     let (_, start_total) = energy(start);
     let (end_kinetic, end_total) = energy(end);
-    if !(end_total > start_total && end_kinetic > 0.0) {
+    let rounding = inertia.mass
+        * flight.accel.norm()
+        * to_f64(Real::EPSILON)
+        * (1.0 + start.com.norm() + end.com.norm());
+    if !(end_total > start_total + rounding && end_kinetic > 0.0) {
         return None;
     }
     let scale = ((end_kinetic - (end_total - start_total)).max(0.0) / end_kinetic).sqrt();
@@ -2047,6 +2117,8 @@ fn capped_energy(start: &State, end: &State, flight: &Flight, inertia: &Inertia)
     })
 }
 
+/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
+/// the translation and linear velocity only, keeping rapier's rotation.
 fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
     if full {
         let translation = s.com - s.rot * local_com;
