@@ -838,16 +838,14 @@ impl<H> ImpactPlugin<H> {
                         if let Some((dist, n, _)) =
                             contact0.filter(|(dist, ..)| dist.abs() <= step.resting_gap)
                         {
-                            let friction =
-                                self.material_of(colliders, part.handle, gg.handle).friction;
                             let on_ground = State {
                                 com: state.com - n * dist,
                                 v: state.v - n * n.dot(&state.v),
                                 ..state
                             };
                             if let Some(motion) = self.rolling_of(
-                                bodies, colliders, handle, part, gg, &flight, &n, friction,
-                                &on_ground, &step, known,
+                                bodies, colliders, handle, part, gg, &flight, &n, &on_ground,
+                                &step, known,
                             ) {
                                 role = Role::Rolling;
                                 rolling = Some((*gi, motion));
@@ -1615,11 +1613,14 @@ impl<H> ImpactPlugin<H> {
         gg: &GroundGeom,
         flight: &Flight,
         n: &Vector3<f64>,
-        friction: f64,
         on_ground: &State,
         step: &StepData,
         known: bool,
     ) -> Option<Rolling> {
+        // The cheap refusals first: most resting balls are at rest or crowded.
+        if !known || self.prev_crowded.contains(&handle) {
+            return None;
+        }
         let rb = &bodies[handle];
         let ball = part.shape.as_ball()?;
         let radius = to_f64(ball.radius) + part.skin + gg.skin;
@@ -1632,15 +1633,15 @@ impl<H> ImpactPlugin<H> {
         let plain = flight.linear_damping == 0.0
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
-        if !(an < 0.0 && level && still && plain && known)
-            || !(friction.is_finite() && friction >= 0.0)
+        let slip = on_ground.v - radius * on_ground.w.cross(n);
+        if !(an < 0.0 && level && still && plain)
+            || slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed
             || user_modifies
-            || self.prev_crowded.contains(&handle)
         {
             return None;
         }
-        let slip = on_ground.v - radius * on_ground.w.cross(n);
-        if slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed {
+        let friction = self.material_of(colliders, part.handle, gg.handle).friction;
+        if !(friction.is_finite() && friction >= 0.0) {
             return None;
         }
         // The ground's one flat face under the ball for the whole step (a half-space, or a
