@@ -375,17 +375,12 @@ pub struct ImpactPlugin<H = ()> {
     shadows: HandleMap<RigidBodyHandle, Shadow>,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
-    /// Bodies that, in the last step, had a solver contact with something other than a
-    /// ground (another body, a wall) or a joint: their resting ground pairs are pressed.
-    prev_coupled: HandleSet<RigidBodyHandle>,
-    /// Of `prev_coupled`, the bodies with a joint or pushed along gravity by something other
-    /// than a ground (a body lying on them): moving them out of the ground fights the load.
-    prev_loaded: HandleSet<RigidBodyHandle>,
-    /// Bodies with a joint or near something other than a ground (a pair in rapier's narrow
-    /// phase, touching or not) in the last step: a superset of `prev_coupled`.
-    prev_crowded: HandleSet<RigidBodyHandle>,
+    /// What touched each managed body near a ground in the last step besides its grounds
+    /// (another body, a wall, a joint: see `NonGround`), by body; a body absent touched
+    /// nothing. Decides the pressed roles, the push-outs, the energy cap and `Rolling`.
+    prev_neighbours: HandleMap<RigidBodyHandle, NonGround>,
     /// Managed bodies asleep at the start of the last step: their neighbours were not
-    /// measured (see `prev_crowded`) when they wake.
+    /// measured (see `prev_neighbours`) when they wake.
     prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
 }
@@ -416,9 +411,7 @@ impl<H> ImpactPlugin<H> {
             hook_stamp: 0,
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
-            prev_coupled: HandleSet::default(),
-            prev_loaded: HandleSet::default(),
-            prev_crowded: HandleSet::default(),
+            prev_neighbours: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
         })
@@ -622,7 +615,6 @@ impl<H> ImpactPlugin<H> {
         let prev_roles = std::mem::take(&mut self.prev_roles);
         // About as many pairs as last step: no rehashing while the map grows.
         step.roles.reserve(prev_roles.len());
-        let prev_coupled = std::mem::take(&mut self.prev_coupled);
         // The awake managed bodies that may reach a ground. A body surely far from every
         // ground needs no snapshot, inertia or geometry (only its flight in `Exact` mode); a
         // body without collider is skipped.
@@ -748,7 +740,7 @@ impl<H> ImpactPlugin<H> {
                             // gap), 0.31 m/s at 5 mm), such a body's bounce would rise less
                             // than the gap and could only be resolved at the step end,
                             // against rapier's solver: resting too.
-                            let coupled = prev_coupled.contains(&handle);
+                            let coupled = self.neighbours(handle).touching;
                             let pressed = coupled && (was_resting || arrival <= step.pressed_speed);
                             if dist <= step.resting_gap && (arrival <= limit || pressed) {
                                 Role::Resting
@@ -822,22 +814,23 @@ impl<H> ImpactPlugin<H> {
                     // instead of rapier's resting contact, which turns the contact point with
                     // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
                     // three closed-form rolling times).
-                    // Its crowding (`prev_crowded`) was measured after the last step if the
-                    // pair had a role then. A body just woken was not measured: a pile woken
-                    // by a hit would lose its ground support for a step. A body new to the
-                    // plugin (just created, or first near the ground) has nothing to go on
-                    // either; it is taken, and if something touches it in the step,
-                    // `rolling_end` puts it back on the ground.
-                    let known = matches!(
-                        prev_roles.get(&key),
-                        Some(Role::Resting | Role::Impact | Role::Rolling)
-                    ) || !self.prev_asleep.contains(&handle);
                     if role == Role::Resting && ground_geoms.len() == 1 && !turns_surface {
                         // Within the resting gap of it (a `Step` impulse can leave a ball
                         // resting on its way down, up to a step's travel above the ground).
                         if let Some((dist, n, _)) =
                             contact0.filter(|(dist, ..)| dist.abs() <= step.resting_gap)
                         {
+                            // Its neighbours (`prev_neighbours`) were measured after the last
+                            // step if the pair had a role then. A body just woken was not
+                            // measured: a pile woken by a hit would lose its ground support
+                            // for a step. A body new to the plugin (just created, or first
+                            // near the ground) has nothing to go on either; it is taken, and
+                            // if something touches it in the step, `rolling_end` puts it back
+                            // on the ground.
+                            let known = matches!(
+                                prev_roles.get(&key),
+                                Some(Role::Resting | Role::Impact | Role::Rolling)
+                            ) || !self.prev_asleep.contains(&handle);
                             let on_ground = State {
                                 com: state.com - n * dist,
                                 v: state.v - n * n.dot(&state.v),
@@ -935,10 +928,7 @@ impl<H> ImpactPlugin<H> {
         }
         step.active = false;
         self.prev_roles = std::mem::take(&mut step.roles);
-        self.prev_coupled.clear();
-        self.prev_loaded.clear();
-        self.prev_crowded.clear();
-        let mut seen = HandleSet::default();
+        self.prev_neighbours.clear();
         for (key, role) in &self.prev_roles {
             if !matches!(role, Role::Resting | Role::Impact | Role::Rolling) {
                 continue;
@@ -947,7 +937,7 @@ impl<H> ImpactPlugin<H> {
                 continue;
             };
             // Once per body (a body lists a pair per collider and ground).
-            if !seen.insert(bh) {
+            if self.prev_neighbours.contains_key(&bh) {
                 continue;
             }
             let Some(rb) = bodies.get(bh) else {
@@ -955,16 +945,12 @@ impl<H> ImpactPlugin<H> {
             };
             let jointed = impulse_joints.attached_joints(bh).next().is_some()
                 || multibody_joints.rigid_body_link(bh).is_some();
-            let contacts = non_ground_contacts(rb, narrow_phase, &self.grounds, &step.down);
-            if jointed || contacts.touching {
-                self.prev_coupled.insert(bh);
-            }
-            if jointed || contacts.loaded {
-                self.prev_loaded.insert(bh);
-            }
-            if jointed || contacts.near {
-                self.prev_crowded.insert(bh);
-            }
+            let found = if jointed {
+                NonGround::JOINTED
+            } else {
+                non_ground_contacts(rb, narrow_phase, &self.grounds, &step.down)
+            };
+            self.prev_neighbours.insert(bh, found);
         }
         // The grounds' actual motion over the step.
         for gm in &mut step.grounds {
@@ -1285,10 +1271,10 @@ impl<H> ImpactPlugin<H> {
     /// swung or a ball rode into the ground), and moving it out keeps the speed it gathered
     /// getting there. Repeated every step, that lift fed a box rocking on its corners at
     /// the step rate for ever (`Step` mode, 60 Hz: 60 bounces a second), and it is the
-    /// energy a tumbling cube gained over its throw. So, for a body that nothing but fixed
-    /// grounds touched in the step, with no joint and no restitution above 1, the end
-    /// state's mechanical energy in its constant force field (`Flight::accel`) is held to
-    /// the start's (see `capped_energy`).
+    /// energy a tumbling cube gained over its throw. So, for a body whose energy can only
+    /// have been lost (`may_cap_energy`; the callers also require no restitution above 1),
+    /// the end state's mechanical energy in its constant force field (`Flight::accel`) is
+    /// held to the start's (see `capped_energy`).
     fn cap_energy(
         &self,
         bodies: &mut RigidBodySet,
@@ -1310,8 +1296,10 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
-    /// Nothing but fixed grounds touched the candidate in the step (no body, wall or joint:
-    /// `prev_coupled` is this step's by now), so its energy can only have been lost.
+    /// Nothing but still grounds touched the candidate in the step (no body, wall or joint:
+    /// `prev_neighbours` is this step's by now), through the plugin's pairs with no contact
+    /// modification of the user's, and no user torque acted: its energy can only have been
+    /// lost.
     fn may_cap_energy(
         &self,
         rb: &RigidBody,
@@ -1319,7 +1307,7 @@ impl<H> ImpactPlugin<H> {
         cand: &Candidate,
         grounds: &[GroundMotion],
     ) -> bool {
-        if self.prev_coupled.contains(&cand.body) || rb.user_torque() != Vector::ZERO {
+        if self.neighbours(cand.body).touching || rb.user_torque() != Vector::ZERO {
             return false;
         }
         let modifies = |c| {
@@ -1390,7 +1378,7 @@ impl<H> ImpactPlugin<H> {
                 material: self.material_of(colliders, part.handle, gg.handle),
                 // A body that touched another body or a wall in the step: no bounce slower
                 // than a fall through the resting gap (see the pressed roles).
-                resting_speed: if self.prev_coupled.contains(&body) {
+                resting_speed: if self.neighbours(body).touching {
                     step.pressed_speed
                 } else {
                     step.resting_speed
@@ -1431,7 +1419,7 @@ impl<H> ImpactPlugin<H> {
     ///   ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at 5-15 m/s,
     ///   spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz), and a
     ///   fast-turning box's contact points lag its faces likewise. A body left deeper than the
-    ///   resting gap otherwise, with nothing lying on it (`prev_loaded`: two balls sliding
+    ///   resting gap otherwise, with nothing lying on it (`NonGround::loaded`: two balls sliding
     ///   side by side at 20 m/s, spun at 20 rad/s, had gone 14-22 mm deep at 30 Hz), is
     ///   moved out of the ground; a ball's speed into the ground is removed, other bodies'
     ///   velocities are kept. The lift's energy is capped (`cap_energy`).
@@ -1463,7 +1451,7 @@ impl<H> ImpactPlugin<H> {
         if hit.dist >= -step.resting_gap {
             return false;
         }
-        let coupled = self.prev_coupled.contains(&cand.body);
+        let neighbours = self.neighbours(cand.body);
         if cand.turns_surface && hit.un < 0.0 {
             let slow = hit.un >= -step.pressed_speed;
             // The resting contact's material point, now.
@@ -1476,25 +1464,18 @@ impl<H> ImpactPlugin<H> {
                     - grounds[hit.ground].velocity_at(&p, step.dt);
                 hit.normal.dot(&u) < -step.pressed_speed
             });
-            if !(pivot_pushed || slow && coupled) {
+            if !(pivot_pushed || slow && neighbours.touching) {
                 self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, slow);
                 return true;
             }
         }
         // A body that nothing loads (balls side by side, a box at a wall) is moved out; a
         // body something lies on is left to rapier, whose solver holds the load.
-        if !self.prev_loaded.contains(&cand.body) {
-            end.com -= hit.normal * hit.dist;
+        if !neighbours.loaded {
             // A ball riding low sinks on: rapier's under-supporting contact let gravity build
             // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
-            // which kept would take it deeper next step. Its contact is frictionless through
-            // the centre here, so removing that speed is an `e = 0` normal impulse.
-            if !cand.turns_surface {
-                let vn = hit.normal.dot(&end.v);
-                if vn < 0.0 {
-                    end.v -= hit.normal * vn;
-                }
-            }
+            // which kept would take it deeper next step: removed for a ball.
+            put_on_ground(&mut end, &hit, !cand.turns_surface);
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
             let inertia = Inertia::of(&bodies[cand.body]);
             self.cap_energy(bodies, colliders, cand, &inertia, step);
@@ -1618,7 +1599,7 @@ impl<H> ImpactPlugin<H> {
         known: bool,
     ) -> Option<Rolling> {
         // The cheap refusals first: most resting balls are at rest or crowded.
-        if !known || self.prev_crowded.contains(&handle) {
+        if !known || self.neighbours(handle).near {
             return None;
         }
         let rb = &bodies[handle];
@@ -1629,12 +1610,11 @@ impl<H> ImpactPlugin<H> {
         let user_modifies = (self.user_flags(colliders, part.handle)
             | self.user_flags(colliders, gg.handle))
         .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
-        let still = gg.v == Vector3::zeros() && gg.w == Vector3::zeros();
         let plain = flight.linear_damping == 0.0
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
         let slip = on_ground.v - radius * on_ground.w.cross(n);
-        if !(an < 0.0 && level && still && plain)
+        if !(an < 0.0 && level && plain)
             || slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed
             || user_modifies
         {
@@ -1708,15 +1688,16 @@ impl<H> ImpactPlugin<H> {
         };
         let fall = -motion.accel.dot(&motion.normal) * step.dt + step.resting_speed;
         if hit.un >= -fall {
-            end.com -= hit.normal * hit.dist;
-            let vn = hit.normal.dot(&end.v);
-            if vn < 0.0 {
-                end.v -= hit.normal * vn;
-            }
+            put_on_ground(&mut end, &hit, true);
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
         } else {
             self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
         }
+    }
+
+    /// What touched the body besides its grounds in the last step (see `prev_neighbours`).
+    fn neighbours(&self, body: RigidBodyHandle) -> NonGround {
+        self.prev_neighbours.get(&body).copied().unwrap_or_default()
     }
 
     /// The material of a body collider against a ground collider.
@@ -2040,6 +2021,26 @@ struct NonGround {
     /// it), or any does without gravity (`down` zero). Balls side by side or a wall push it
     /// sideways or up.
     loaded: bool,
+}
+
+impl NonGround {
+    /// A body with a joint: treated as touched, loaded and crowded.
+    const JOINTED: Self = Self {
+        near: true,
+        touching: true,
+        loaded: true,
+    };
+}
+
+/// `s` moved out of the ground along `hit`'s normal and, if `stop`, without its speed into
+/// the ground: what a resting contact holds a ball at (for a ball, an `e = 0` frictionless
+/// normal impulse, through its centre).
+fn put_on_ground(s: &mut State, hit: &super::geometry::Hit, stop: bool) {
+    s.com -= hit.normal * hit.dist;
+    let vn = hit.normal.dot(&s.v);
+    if stop && vn < 0.0 {
+        s.v -= hit.normal * vn;
+    }
 }
 
 /// The body's pairs with colliders that are not grounds, in rapier's narrow phase after a step
