@@ -7,20 +7,31 @@
 //! ```
 //!
 //! Flags (each has a default; `--help` lists them): `--count N` (balls, 500), `--steps S`
-//! (600), `--mode rapier|step|toi|exact` (exact), `--restitution E` (0.7), `--friction MU`
-//! (0.5), `--dt DT` (s, 1/60), `--seed N` (the layout's jitter, 1), `--f64` (needs
-//! `--features f64`), `--csv PATH` (trace of the first ball).
+//! (600), `--mode rapier|step|toi|exact` (exact), `--scene bouncing|idle|pile` (bouncing),
+//! `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5), `--dt DT` (s, 1/60),
+//! `--seed N` (the layout's jitter, 1), `--f64` (needs `--features f64`), `--csv PATH` (trace
+//! of the first ball).
 //!
-//! The balls (radius 5 cm) start on a grid of 20 x 20 per layer, 15 cm apart, layers 15 cm
-//! apart from 1 m up, each position jittered by up to 2 cm; they fall, bounce on a half-space
-//! ground, and collide with each other (rapier's contacts) as they pile up. Timing covers the
-//! steps only, not the set-up.
+//! Scenes (balls of radius 5 cm, each start position jittered by up to 2 cm):
+//! - `bouncing`: a grid of 20 x 20 balls per layer, 15 cm apart, layers 15 cm apart from 1 m
+//!   up; they fall, bounce on the ground, and collide with each other (rapier's contacts).
+//! - `idle`: the same grid 50 m up, launched upwards at `g T / 2` (`T` the whole run), so
+//!   that every ball rises and falls back to its start height at the run's end: no ball is
+//!   within reach of the ground, and no two touch, for the whole run.
+//! - `pile`: 10 x 10 balls per layer, 11 cm apart, dropped into a walled box 1.2 m wide (the
+//!   walls are fixed cuboids, 2 m high); they come to rest on each other.
+//!
+//! The ground is a half-space at y = 0, or with `--tiles N` (N > 0) an N x N floor of fixed
+//! cuboid tiles (0.5 m thick, top at y = 0) covering 8 m x 8 m about the origin, marked with
+//! `set_all_fixed_colliders_ground(true)` (the pile's walls are then ground too). Timing covers
+//! the steps only, not the set-up; whole-process figures (`/usr/bin/time`) cover everything.
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Rng, TraceCsv, flag, real, wide};
+use common::{Args, CSV, F64, MODE, Mode, Rng, TraceCsv, flag, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactPlugin};
 use std::time::Instant;
 
 const ABOUT: &str = "N balls raining on a ground: milliseconds per step, with the plugin or \
@@ -31,6 +42,18 @@ fn main() {
         flag("--count", "N", "500", "number of balls"),
         flag("--steps", "S", "600", "number of steps"),
         MODE,
+        flag(
+            "--scene",
+            "bouncing|idle|pile",
+            "bouncing",
+            "the scene (see the docs)",
+        ),
+        flag(
+            "--tiles",
+            "N",
+            "0",
+            "0: a half-space ground; N > 0: an N x N floor of fixed cuboid tiles",
+        ),
         flag(
             "--restitution",
             "E",
@@ -53,9 +76,25 @@ fn main() {
     let dt = args.positive("--dt");
     let mut rng = Rng::new(args.count("--seed", 0));
 
+    let scene = args.choice("--scene");
+    let tiles = args.count("--tiles", 0);
+
     let mut world = common::world(dt);
-    let ground = common::ground(&mut world, e, mu);
-    let (radius, spacing, per_row) = (0.05, 0.15, 20u64);
+    let ground = floor(&mut world, tiles, e, mu);
+    let (radius, spacing, per_row, bottom) = match scene.as_str() {
+        "pile" => {
+            walls(&mut world, 0.6, 2.0, e, mu);
+            (0.05, 0.11, 10u64, 0.3)
+        }
+        "idle" => (0.05, 0.15, 20u64, 50.0),
+        _ => (0.05, 0.15, 20u64, 1.0),
+    };
+    // Idle: up at g T / 2, back at the start height when the run ends.
+    let launch = if scene == "idle" {
+        0.5 * wide(-world.gravity.y) * steps as f64 * dt
+    } else {
+        0.0
+    };
     let mut first = None;
     for i in 0..count {
         let (layer, cell) = (i / (per_row * per_row), i % (per_row * per_row));
@@ -63,22 +102,33 @@ fn main() {
         let centre = 0.5 * (per_row - 1) as f64 * spacing;
         let p = [
             col as f64 * spacing - centre + rng.range(-0.02, 0.02),
-            1.0 + layer as f64 * spacing + rng.range(-0.02, 0.02),
+            bottom + layer as f64 * spacing + rng.range(-0.02, 0.02),
             row as f64 * spacing - centre + rng.range(-0.02, 0.02),
         ];
         let (h, _) = world.insert(
-            RigidBodyBuilder::dynamic().translation(Vector::new(
-                real(p[0]),
-                real(p[1]),
-                real(p[2]),
-            )),
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(real(p[0]), real(p[1]), real(p[2])))
+                .linvel(Vector::new(0.0, real(launch), 0.0)),
             ColliderBuilder::ball(real(radius))
                 .restitution(real(e))
                 .friction(real(mu)),
         );
         first.get_or_insert(h);
     }
-    let mut plugin = common::plugin(mode, Law::Guarded, &mut world, ground);
+    let mut plugin = match (mode, ground) {
+        (Mode::Plugin(timing), None) => {
+            let mut p = ImpactPlugin::new(ImpactConfig {
+                law: Law::Guarded,
+                timing,
+                ..Default::default()
+            })
+            .expect("the default configuration is valid");
+            p.set_all_fixed_colliders_ground(true);
+            Some(p)
+        }
+        (_, Some(ground)) => common::plugin(mode, Law::Guarded, &mut world, ground),
+        (Mode::Rapier, None) => None,
+    };
     let mut csv = args
         .path("--csv")
         .map(|p| TraceCsv::create(&p, first.expect("--count >= 1")));
@@ -117,7 +167,7 @@ fn main() {
         .filter(|(_, rb)| rb.is_dynamic() && wide(rb.translation().y) < 0.0)
         .count();
     println!(
-        "many_balls: {count} balls, {steps} steps of {dt:.7} s, mode {}, precision {}",
+        "many_balls: {count} balls, {steps} steps of {dt:.7} s, scene {scene}, tiles {tiles}, mode {}, precision {}",
         mode.name(),
         common::PRECISION
     );
@@ -129,4 +179,52 @@ fn main() {
         "{:>12.4} {median:>12.4} {max:>12.4} {impacts:>10} {asleep:>8} {below:>14}",
         total / steps as f64
     );
+}
+
+/// The ground: a half-space at y = 0 (its handle, marked by `common::plugin`), or (`tiles` >
+/// 0) a floor of `tiles` x `tiles` fixed cuboids, top at y = 0, over 8 m x 8 m (`None`: the
+/// plugin marks every fixed collider).
+fn floor(world: &mut PhysicsWorld, tiles: u64, e: f64, mu: f64) -> Option<ColliderHandle> {
+    if tiles == 0 {
+        return Some(common::ground(world, e, mu));
+    }
+    let side = 8.0;
+    let half = 0.5 * side / tiles as f64;
+    let body = world.bodies.insert(RigidBodyBuilder::fixed());
+    for i in 0..tiles {
+        for k in 0..tiles {
+            let at = |n: u64| -0.5 * side + (2 * n + 1) as f64 * half;
+            world.colliders.insert_with_parent(
+                ColliderBuilder::cuboid(real(half), 0.25, real(half))
+                    .translation(Vector::new(real(at(i)), -0.25, real(at(k))))
+                    .restitution(real(e))
+                    .friction(real(mu)),
+                body,
+                &mut world.bodies,
+            );
+        }
+    }
+    None
+}
+
+/// Four fixed walls, `height` m high and 5 cm thick, around the square of half-width `half`
+/// (m) about the origin (not ground, unless every fixed collider is).
+fn walls(world: &mut PhysicsWorld, half: f64, height: f64, e: f64, mu: f64) {
+    let body = world.bodies.insert(RigidBodyBuilder::fixed());
+    let t = 0.025;
+    for (x, z, hx, hz) in [
+        (half + t, 0.0, t, half + 2.0 * t),
+        (-half - t, 0.0, t, half + 2.0 * t),
+        (0.0, half + t, half, t),
+        (0.0, -half - t, half, t),
+    ] {
+        world.colliders.insert_with_parent(
+            ColliderBuilder::cuboid(real(hx), real(0.5 * height), real(hz))
+                .translation(Vector::new(real(x), real(0.5 * height), real(z)))
+                .restitution(real(e))
+                .friction(real(mu)),
+            body,
+            &mut world.bodies,
+        );
+    }
 }
