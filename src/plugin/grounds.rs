@@ -4,7 +4,8 @@
 //! at each step (see `hook_flags.rs`).
 
 use super::config::{ConfigError, GroundMaterial};
-use super::impact_plugin::{GroundEntry, ImpactPlugin};
+use super::ground_index::GroundEntry;
+use super::impact_plugin::ImpactPlugin;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 
 impl<H> ImpactPlugin<H> {

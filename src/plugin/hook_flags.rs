@@ -59,13 +59,16 @@ impl<H> ImpactPlugin<H> {
         });
         if !unmanaged {
             for c in self.grounds.keys() {
-                if let Some(co) = colliders.get_mut(*c) {
-                    let flags = co.active_hooks();
-                    if !flags.contains(PLUGIN_HOOKS) {
-                        // New, or the user set the flags since the last step: theirs now.
-                        self.flagged_grounds.insert(*c, flags);
-                        co.set_active_hooks(flags | PLUGIN_HOOKS);
-                    }
+                // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
+                // and narrow phase updates, which for every ground every step cost more
+                // than the rest of the plugin on a floor of 4 096 tiles.
+                let Some(flags) = colliders.get(*c).map(|co| co.active_hooks()) else {
+                    continue;
+                };
+                if !flags.contains(PLUGIN_HOOKS) {
+                    // New, or the user set the flags since the last step: theirs now.
+                    self.flagged_grounds.insert(*c, flags);
+                    set_flags(colliders, *c, flags | PLUGIN_HOOKS);
                 }
             }
         }
@@ -175,20 +178,31 @@ fn flag_body(entry: &mut HookedBody, rb: &RigidBody, colliders: &mut ColliderSet
         }
     }
     for (c, user) in entry.colliders.iter_mut() {
-        if let Some(co) = colliders.get_mut(*c) {
-            let flags = co.active_hooks();
-            if !flags.contains(PLUGIN_HOOKS) {
-                // New, or the user set the flags since the last step: theirs now.
-                *user = flags;
-                co.set_active_hooks(flags | PLUGIN_HOOKS);
-            }
+        let Some(flags) = colliders.get(*c).map(|co| co.active_hooks()) else {
+            continue;
+        };
+        if !flags.contains(PLUGIN_HOOKS) {
+            // New, or the user set the flags since the last step: theirs now.
+            *user = flags;
+            set_flags(colliders, *c, flags | PLUGIN_HOOKS);
         }
     }
 }
 
 /// The user's flags back on a collider, if it still exists.
 fn restore(colliders: &mut ColliderSet, c: ColliderHandle, user: ActiveHooks) {
-    if let Some(co) = colliders.get_mut(c) {
-        co.set_active_hooks(user);
+    set_flags(colliders, c, user);
+}
+
+/// Sets a collider's hook flags where they differ (a mutable access queues the collider for
+/// rapier's updates).
+fn set_flags(colliders: &mut ColliderSet, c: ColliderHandle, flags: ActiveHooks) {
+    if colliders
+        .get(c)
+        .is_some_and(|co| co.active_hooks() != flags)
+    {
+        if let Some(co) = colliders.get_mut(c) {
+            co.set_active_hooks(flags);
+        }
     }
 }

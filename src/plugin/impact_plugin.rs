@@ -19,53 +19,19 @@ use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, flat_throughout, landing_point,
 };
+use super::ground_index::{GroundEntry, GroundIndex, GroundMotion, slot_of};
+use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookedBody;
 use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
 use crate::model::Material;
 use crate::rapier::math::{Pose, Real, Vector};
-use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
+use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
     LockedAxes, MultibodyJointSet, NarrowPhase, PairFilterContext, PhysicsHooks, PhysicsWorld,
-    RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,
+    RigidBody, RigidBodyHandle, RigidBodySet, SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use std::collections::{HashMap, HashSet};
-use std::hash::{BuildHasherDefault, Hasher};
-
-/// A small multiplicative hasher for handle keys (looked up in every hook call): the
-/// default SipHash is several times slower and its DoS resistance is not needed here.
-#[derive(Default)]
-pub(crate) struct HandleHasher(u64);
-
-impl Hasher for HandleHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.write_u64(u64::from(*b));
-        }
-    }
-
-    fn write_u32(&mut self, i: u32) {
-        self.write_u64(u64::from(i));
-    }
-
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-
-    fn write_usize(&mut self, i: usize) {
-        self.write_u64(i as u64);
-    }
-}
-
-/// Hash map keyed by rapier handles.
-pub(crate) type HandleMap<K, V> = HashMap<K, V, BuildHasherDefault<HandleHasher>>;
-/// Hash set of rapier handles.
-pub(crate) type HandleSet<K> = HashSet<K, BuildHasherDefault<HandleHasher>>;
 
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,52 +51,14 @@ pub(crate) enum Role {
     User,
 }
 
-/// A registered ground collider.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct GroundEntry {
-    /// Material override.
-    pub material: Option<Material>,
-    /// Marked by the all-fixed-colliders mode rather than by the user.
-    pub automatic: bool,
-}
-
-/// A ground's motion over the step: start pose of its centre-of-mass frame, velocities.
-#[derive(Clone, Copy, Debug)]
-struct GroundMotion {
-    handle: ColliderHandle,
-    body: Option<RigidBodyHandle>,
-    com0: Vector3<f64>,
-    rot0: UnitQuaternion<f64>,
-    local: Isometry3<f64>,
-    v: Vector3<f64>,
-    w: Vector3<f64>,
-    /// World AABB over the step (start and predicted end).
-    aabb: Aabb,
-    /// A half-space ground that does not turn in the step: its world outward normal `n` and
-    /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
-    /// half-space an AABB as large as the number range, which every body meets.)
-    plane: Option<(Vector, Real)>,
-}
-
-impl GroundMotion {
-    /// Does the ground miss the axis-aligned cube `centre ± half` over the whole step?
-    fn misses_cube(&self, centre: Vector, half: Real) -> bool {
-        let (lo, hi) = (centre - Vector::splat(half), centre + Vector::splat(half));
-        if hi.cmplt(self.aabb.mins).any() || lo.cmpgt(self.aabb.maxs).any() {
-            return true;
-        }
-        // The cube's lowest point along n is `n·centre - half |n|_1`.
-        self.plane
-            .is_some_and(|(n, d)| n.dot(centre) - half * n.abs().element_sum() > d)
-    }
-}
-
 /// A managed body's start-of-step snapshot.
 struct Candidate {
     body: RigidBodyHandle,
     start: State,
     flight: Flight,
     local_com: Vector3<f64>,
+    /// Indices (in `StepData::grounds`) of the grounds its swept bounding sphere meets.
+    near: SmallList<usize>,
     /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
     impact_grounds: SmallList<usize>,
     /// Step mode: impulses were applied at the start.
@@ -165,6 +93,7 @@ impl Candidate {
             start,
             flight,
             local_com,
+            near: SmallList::Empty,
             impact_grounds: SmallList::Empty,
             touched: false,
             closing: false,
@@ -205,17 +134,13 @@ struct StepData {
 }
 
 /// What the hooks ask for every ground pair inside rapier's step, by collider index instead
-/// of hashing: the grounds and the roles as they are at the end of
-/// [`ImpactPlugin::before_step`]. The roles do not change until
-/// [`ImpactPlugin::after_step`]; a ground registration made in between invalidates the ground
-/// table (the map answers then).
+/// of hashing: the roles as they are at the end of [`ImpactPlugin::before_step`] (they do not
+/// change until [`ImpactPlugin::after_step`]), and the user's hook flags on the managed
+/// bodies' colliders. (The grounds' table is the ground index's.)
 #[derive(Default)]
 struct Lookup {
     /// `roles` holds what `StepData::roles` holds.
     roles_built: bool,
-    /// `grounds` holds what `ImpactPlugin::grounds` holds.
-    grounds_valid: bool,
-    grounds: Vec<Option<(ColliderHandle, GroundEntry)>>,
     /// By body collider index: one of its pairs, and whether it has others (then in
     /// `StepData::roles`).
     roles: Vec<Option<RoleSlot>>,
@@ -231,43 +156,26 @@ struct RoleSlot {
     more: bool,
 }
 
-/// A collider handle's index in its arena.
-fn slot_of(c: ColliderHandle) -> usize {
-    c.into_raw_parts().0 as usize
-}
-
 impl Lookup {
     fn build(
-        grounds: &HandleMap<ColliderHandle, GroundEntry>,
         roles: &HandleMap<PairKey, Role>,
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
-        flagged_grounds: &HandleMap<ColliderHandle, ActiveHooks>,
     ) -> Self {
         let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
             it.map(slot_of).max().map_or(0, |m| m + 1)
         };
         let mut out = Self {
             roles_built: true,
-            grounds_valid: true,
-            grounds: vec![None; len(&mut grounds.keys().copied())],
             roles: vec![None; len(&mut roles.keys().map(|k| k.0))],
             user_flags: vec![
                 None;
                 len(&mut hooked
                     .values()
-                    .flat_map(|e| e.colliders.iter().map(|(c, _)| *c))
-                    .chain(flagged_grounds.keys().copied()))
+                    .flat_map(|e| e.colliders.iter().map(|(c, _)| *c)))
             ],
         };
-        let flagged = hooked
-            .values()
-            .flat_map(|e| e.colliders.iter().copied())
-            .chain(flagged_grounds.iter().map(|(c, u)| (*c, *u)));
-        for (c, user) in flagged {
+        for (c, user) in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
             out.user_flags[slot_of(c)] = Some((c, user));
-        }
-        for (h, entry) in grounds {
-            out.grounds[slot_of(*h)] = Some((*h, *entry));
         }
         for ((body, ground), role) in roles {
             let slot = &mut out.roles[slot_of(*body)];
@@ -383,6 +291,8 @@ pub struct ImpactPlugin<H = ()> {
     /// measured (see `prev_neighbours`) when they wake.
     prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
+    /// The grounds' motions over the step and the BVH that finds those near a body.
+    ground_index: GroundIndex,
 }
 
 impl ImpactPlugin<()> {
@@ -414,6 +324,7 @@ impl<H> ImpactPlugin<H> {
             prev_neighbours: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
+            ground_index: GroundIndex::default(),
         })
     }
 
@@ -490,14 +401,9 @@ impl<H> ImpactPlugin<H> {
 
     /// The ground entry of a collider, `None` when it is not a ground.
     pub(crate) fn ground_entry(&self, c: ColliderHandle) -> Option<&GroundEntry> {
-        let lookup = &self.step.lookup;
-        if lookup.grounds_valid {
-            return match lookup.grounds.get(slot_of(c)) {
-                Some(Some((h, entry))) if *h == c => Some(entry),
-                _ => None,
-            };
-        }
-        self.grounds.get(&c)
+        self.ground_index
+            .entry(c)
+            .unwrap_or_else(|()| self.grounds.get(&c))
     }
 
     /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
@@ -511,7 +417,7 @@ impl<H> ImpactPlugin<H> {
 
     /// A ground was marked, unmarked or given a material: the hooks' ground table is stale.
     pub(crate) fn grounds_changed(&mut self) {
-        self.step.lookup.grounds_valid = false;
+        self.ground_index.invalidate();
     }
 
     /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
@@ -610,7 +516,10 @@ impl<H> ImpactPlugin<H> {
             self.step = step;
             return;
         }
-        step.grounds = self.ground_motions(bodies, colliders, dt, step.resting_gap);
+        self.ground_index
+            .refresh(&self.grounds, bodies, colliders, dt, step.resting_gap);
+        // Lent to the step; given back at its end (`Self::after_step`).
+        step.grounds = std::mem::take(&mut self.ground_index.motions);
         let shadows = std::mem::take(&mut self.shadows);
         let prev_roles = std::mem::take(&mut self.prev_roles);
         // About as many pairs as last step: no rehashing while the map grows.
@@ -632,7 +541,15 @@ impl<H> ImpactPlugin<H> {
                 step.asleep.push(handle);
                 continue;
             }
-            match surely_far(rb, colliders, g_len, params.dt, margin, &step.grounds) {
+            match surely_far(
+                rb,
+                colliders,
+                g_len,
+                params.dt,
+                margin,
+                &self.ground_index,
+                &step.grounds,
+            ) {
                 Some(true) if self.config.timing == TimingMode::Exact => {
                     let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
                     step.candidates
@@ -658,13 +575,9 @@ impl<H> ImpactPlugin<H> {
                 vec_from_na(&start.com),
                 Vector::splat(super::convert::to_real(geom.radius + reach)),
             );
-            let near: SmallList<usize> = step
-                .grounds
-                .iter()
-                .enumerate()
-                .filter(|(_, g)| !g.misses_cube(sphere.center(), sphere.half_extents().x))
-                .map(|(i, _)| i)
-                .collect();
+            let near =
+                self.ground_index
+                    .near(&step.grounds, sphere.center(), sphere.half_extents().x);
             if near.is_empty() {
                 if self.config.timing == TimingMode::Exact {
                     step.candidates
@@ -892,6 +805,7 @@ impl<H> ImpactPlugin<H> {
                     start: state,
                     flight,
                     local_com,
+                    near,
                     impact_grounds,
                     touched,
                     closing,
@@ -902,12 +816,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         self.update_hook_flags(&near_bodies, unmanaged, bodies, colliders);
-        step.lookup = Lookup::build(
-            &self.grounds,
-            &step.roles,
-            &self.hooked,
-            &self.flagged_grounds,
-        );
+        step.lookup = Lookup::build(&step.roles, &self.hooked);
         self.step = step;
     }
 
@@ -953,7 +862,8 @@ impl<H> ImpactPlugin<H> {
             self.prev_neighbours.insert(bh, found);
         }
         // The grounds' actual motion over the step.
-        for gm in &mut step.grounds {
+        for i in self.ground_index.moving() {
+            let gm = &mut step.grounds[*i];
             if let Some(bh) = gm.body {
                 if let Some(rb) = bodies.get(bh) {
                     if !rb.is_fixed() {
@@ -1188,6 +1098,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
+        self.ground_index.motions = std::mem::take(&mut step.grounds);
     }
 
     /// Keeps the `f64` state of a body just written in `Exact` mode.
@@ -1314,13 +1225,13 @@ impl<H> ImpactPlugin<H> {
             self.user_flags(colliders, c)
                 .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
         };
-        // Every ground pair of the body: a still ground, the plugin's role, no contact
-        // modification of the user's (a conveyor ground puts energy in).
+        // Every ground pair of the body (only the grounds near it have one): a still ground,
+        // the plugin's role, no contact modification of the user's (a conveyor ground puts
+        // energy in).
         rb.colliders().iter().all(|ch| {
             !modifies(*ch)
-                && grounds
-                    .iter()
-                    .all(|gm| match self.prev_roles.get(&(*ch, gm.handle)) {
+                && cand.near.iter().map(|i| &grounds[*i]).all(|gm| {
+                    match self.prev_roles.get(&(*ch, gm.handle)) {
                         None | Some(Role::User) => true,
                         Some(Role::Rapier) => false,
                         Some(_) => {
@@ -1328,7 +1239,8 @@ impl<H> ImpactPlugin<H> {
                                 && gm.w == Vector3::zeros()
                                 && !modifies(gm.handle)
                         }
-                    })
+                    }
+                })
         })
     }
 
@@ -1554,11 +1466,11 @@ impl<H> ImpactPlugin<H> {
         }
         let com = rb.center_of_mass();
         let half = super::convert::to_real(geom.radius + step.resting_gap);
-        let grounds: SmallList<GroundGeom> = step
-            .grounds
+        let grounds: SmallList<GroundGeom> = self
+            .ground_index
+            .near(&step.grounds, com, half)
             .iter()
-            .filter(|g| !g.misses_cube(com, half))
-            .filter_map(|g| ground_geom(g, colliders))
+            .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
             .collect();
         if grounds.is_empty() {
             return;
@@ -1716,102 +1628,6 @@ impl<H> ImpactPlugin<H> {
             }),
         }
     }
-
-    /// The grounds' start-of-step poses, predicted velocities and swept AABBs.
-    fn ground_motions(
-        &self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        dt: f64,
-        gap: f64,
-    ) -> Vec<GroundMotion> {
-        let mut out = Vec::with_capacity(self.grounds.len());
-        for handle in self.grounds.keys() {
-            let Some(co) = colliders.get(*handle) else {
-                continue;
-            };
-            if !co.is_enabled() || co.is_sensor() {
-                continue;
-            }
-            let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
-            let loosen = super::convert::to_real(gap + to_f64(co.contact_skin()));
-            let mut aabb = co.compute_aabb().loosened(loosen);
-            // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
-            let half_space = co.shape().as_halfspace();
-            let plane_at = |pose: &Pose| {
-                half_space.map(|hs| {
-                    let n = pose.rotation * hs.normal;
-                    (n, n.dot(pose.translation) + loosen)
-                })
-            };
-            let motion = match parent {
-                Some((_, rb)) if rb.is_dynamic() => continue,
-                Some((bh, rb)) if !rb.is_fixed() => {
-                    let frame0 = pose_to_na(rb.position());
-                    let local_com = vec_to_na(rb.local_center_of_mass());
-                    let com0 = (frame0 * nalgebra::Point3::from(local_com)).coords;
-                    let (v, w) = if rb.body_type() == RigidBodyType::KinematicPositionBased {
-                        let frame1 = pose_to_na(rb.next_position());
-                        let com1 = (frame1 * nalgebra::Point3::from(local_com)).coords;
-                        (
-                            (com1 - com0) / dt,
-                            (frame1.rotation * frame0.rotation.inverse()).scaled_axis() / dt,
-                        )
-                    } else {
-                        (vec_to_na(rb.linvel()), vec_to_na(rb.angvel()))
-                    };
-                    let local_frame = Isometry3::from_parts(
-                        Translation3::from(-local_com),
-                        UnitQuaternion::identity(),
-                    ) * co
-                        .position_wrt_parent()
-                        .map_or(Isometry3::identity(), pose_to_na);
-                    let end = Isometry3::from_parts(
-                        Translation3::from(com0 + v * dt),
-                        UnitQuaternion::from_scaled_axis(w * dt) * frame0.rotation,
-                    ) * local_frame;
-                    let end_pose = super::convert::pose_from_na(&end);
-                    aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
-                    // A turning half-space sweeps too much for one plane: AABB only.
-                    let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
-                        (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => {
-                            Some((n, d0.max(d1)))
-                        }
-                        _ => None,
-                    };
-                    GroundMotion {
-                        handle: *handle,
-                        body: Some(bh),
-                        com0,
-                        rot0: frame0.rotation,
-                        local: local_frame,
-                        v,
-                        w,
-                        aabb,
-                        plane,
-                    }
-                }
-                _ => {
-                    let pose = pose_to_na(co.position());
-                    GroundMotion {
-                        handle: *handle,
-                        body: None,
-                        com0: pose.translation.vector,
-                        rot0: pose.rotation,
-                        local: Isometry3::identity(),
-                        v: Vector3::zeros(),
-                        w: Vector3::zeros(),
-                        aabb,
-                        plane: plane_at(co.position()),
-                    }
-                }
-            };
-            out.push(motion);
-        }
-        // Deterministic order, whatever the hash map's.
-        out.sort_by_key(|g| g.handle.into_raw_parts());
-        out
-    }
 }
 
 /// The cheap test before any snapshot or geometry, in rapier's precision from what rapier
@@ -1825,6 +1641,7 @@ fn surely_far(
     gravity: Real,
     dt: Real,
     margin: Real,
+    index: &GroundIndex,
     grounds: &[GroundMotion],
 ) -> Option<bool> {
     let local_com = rb.local_center_of_mass();
@@ -1868,7 +1685,7 @@ fn surely_far(
     if !half.is_finite() || !com.is_finite() {
         return Some(false);
     }
-    Some(grounds.iter().all(|g| g.misses_cube(com, half)))
+    Some(!index.any_near(grounds, com, half))
 }
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,

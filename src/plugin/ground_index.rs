@@ -1,0 +1,439 @@
+//! The grounds as a step sees them, and which of them a body may meet.
+//!
+//! Contract:
+//! - reads the registry (which colliders are ground) and rapier's bodies and colliders;
+//!   writes nothing of rapier's;
+//! - [`GroundIndex::refresh`], once per step before anything asks: every ground's pose over
+//!   the step ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless
+//!   or on a fixed body) is computed once and kept until its collider's pose, shape or flags
+//!   change (one comparison per ground and step); a ground on a kinematic body is computed
+//!   afresh each step;
+//! - [`GroundIndex::near`]: the grounds whose swept AABB meets a cube, from a BVH over the
+//!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
+//!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
+//!   cube and the log of their number, never with the number of grounds;
+//! - the motions are in a deterministic order (by collider handle), and an index into
+//!   [`GroundIndex::motions`] names a ground for the whole step.
+
+use super::convert::{pose_from_na, pose_to_na, to_f64, to_real, vec_to_na};
+use super::geometry::SmallList;
+use crate::model::Material;
+use crate::rapier::math::{Pose, Real, Vector};
+use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
+use crate::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
+use crate::rapier::prelude::{
+    Collider, ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet, RigidBodyType,
+};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
+use super::handles::HandleHasher;
+
+/// A registered ground collider.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GroundEntry {
+    /// Material override.
+    pub material: Option<Material>,
+    /// Marked by the all-fixed-colliders mode rather than by the user.
+    pub automatic: bool,
+}
+
+/// A ground's motion over the step: start pose of its centre-of-mass frame, velocities.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GroundMotion {
+    pub handle: ColliderHandle,
+    /// The kinematic body it rides, if it moves.
+    pub body: Option<RigidBodyHandle>,
+    pub com0: Vector3<f64>,
+    pub rot0: UnitQuaternion<f64>,
+    pub local: Isometry3<f64>,
+    pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
+    /// World AABB over the step (start and predicted end), loosened by the resting gap and
+    /// the collider's contact skin.
+    pub aabb: Aabb,
+    /// A half-space ground that does not turn in the step: its world outward normal `n` and
+    /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
+    /// half-space an AABB as large as the number range, which every body meets.)
+    pub plane: Option<(Vector, Real)>,
+}
+
+impl GroundMotion {
+    /// Does the ground miss the axis-aligned cube `centre ± half` over the whole step?
+    pub fn misses_cube(&self, centre: Vector, half: Real) -> bool {
+        let (lo, hi) = (centre - Vector::splat(half), centre + Vector::splat(half));
+        if hi.cmplt(self.aabb.mins).any() || lo.cmpgt(self.aabb.maxs).any() {
+            return true;
+        }
+        // The cube's lowest point along n is `n·centre - half |n|_1`.
+        self.plane
+            .is_some_and(|(n, d)| n.dot(centre) - half * n.abs().element_sum() > d)
+    }
+
+    /// Is the ground still over the step (parentless or on a fixed body)?
+    pub fn is_still(&self) -> bool {
+        self.body.is_none()
+    }
+}
+
+/// What a still ground's motion was computed from: if any of it changes, it is computed
+/// again.
+#[derive(Clone, Copy, PartialEq)]
+struct Basis {
+    pose: Pose,
+    /// The collider's shape, by address (rapier replaces the shared shape on `set_shape`).
+    shape: *const (),
+    skin: Real,
+    /// Enabled, not a sensor, and its parent (if any) fixed.
+    solid_still: bool,
+}
+
+// SAFETY of `Send`/`Sync`: `shape` is only ever compared, never dereferenced.
+unsafe impl Send for Basis {}
+unsafe impl Sync for Basis {}
+
+impl Basis {
+    fn of(co: &Collider, bodies: &RigidBodySet) -> Self {
+        let parent_fixed = co
+            .parent()
+            .is_none_or(|p| bodies.get(p).is_some_and(|rb| rb.is_fixed()));
+        Self {
+            pose: *co.position(),
+            shape: co.shape() as *const _ as *const (),
+            skin: co.contact_skin(),
+            solid_still: co.is_enabled() && !co.is_sensor() && parent_fixed,
+        }
+    }
+}
+
+/// Where a ground sits in the index.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Place {
+    /// Not queried this step (disabled, a sensor, on a dynamic body, or removed).
+    Absent,
+    /// A leaf of the BVH (still and bounded).
+    Tree,
+    /// In the short list tested one by one (a half-space, or moving).
+    Listed,
+}
+
+/// Every ground's motion over the step and a BVH to find those near a body (see the module's
+/// contract).
+#[derive(Default)]
+pub(crate) struct GroundIndex {
+    /// By index: the ground's motion this step (meaningful where `places` is not `Absent`).
+    pub motions: Vec<GroundMotion>,
+    places: Vec<Place>,
+    bases: Vec<Option<Basis>>,
+    /// Indices of the `Listed` grounds.
+    listed: Vec<usize>,
+    /// Indices of the grounds on kinematic bodies (recomputed every step).
+    moving: Vec<usize>,
+    tree: Bvh,
+    /// The registry changed since the last rebuild.
+    stale: bool,
+    /// The step length and loosening the motions were computed with.
+    dt: f64,
+    gap: f64,
+    /// By collider slot: the ground's handle and entry, for the hooks' lookups.
+    by_slot: Vec<Option<(ColliderHandle, GroundEntry)>>,
+}
+
+/// A collider handle's index in its arena.
+pub(crate) fn slot_of(c: ColliderHandle) -> usize {
+    c.into_raw_parts().0 as usize
+}
+
+type Registry = HashMap<ColliderHandle, GroundEntry, BuildHasherDefault<HandleHasher>>;
+
+impl GroundIndex {
+    /// The registry changed (a ground marked, unmarked, or given a material): rebuilt at the
+    /// next [`Self::refresh`]; until then [`Self::entry`] answers `None` (ask the registry).
+    pub fn invalidate(&mut self) {
+        self.stale = true;
+    }
+
+    /// The ground entry of a collider from the table built with the index, or `Err(())` when
+    /// the table is stale (the registry must answer).
+    #[inline]
+    pub fn entry(&self, c: ColliderHandle) -> Result<Option<&GroundEntry>, ()> {
+        if self.stale {
+            return Err(());
+        }
+        Ok(match self.by_slot.get(slot_of(c)) {
+            Some(Some((h, entry))) if *h == c => Some(entry),
+            _ => None,
+        })
+    }
+
+    /// Brings every ground's motion to this step (see the module's contract).
+    pub fn refresh(
+        &mut self,
+        registry: &Registry,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        dt: f64,
+        gap: f64,
+    ) {
+        let complete = self.motions.len() == self.bases.len();
+        if self.stale || !complete || dt != self.dt || gap != self.gap {
+            self.rebuild(registry, bodies, colliders, dt, gap);
+            return;
+        }
+        for i in 0..self.bases.len() {
+            let handle = self.motions[i].handle;
+            let now = colliders.get(handle).map(|co| Basis::of(co, bodies));
+            let Some(before) = self.bases[i] else {
+                // A ground on a kinematic or dynamic body: recomputed below if moving.
+                if now.is_some_and(|b| b.solid_still) {
+                    // Its body became fixed.
+                    self.rebuild(registry, bodies, colliders, dt, gap);
+                    return;
+                }
+                continue;
+            };
+            if now == Some(before) {
+                continue;
+            }
+            // A still ground moved, changed shape, or left: computed again; a change of
+            // where it belongs rebuilds the index (rare: a body type switched, a collider
+            // disabled or removed).
+            let motion = colliders
+                .get(handle)
+                .and_then(|co| motion_of(handle, co, bodies, dt, gap));
+            match (motion, now) {
+                (Some(m), Some(b)) if b.solid_still && m.plane.is_none() && m.is_still() => {
+                    self.motions[i] = m;
+                    self.bases[i] = Some(b);
+                    if self.places[i] == Place::Tree {
+                        self.tree.remove(i as u32);
+                    }
+                    self.tree.insert(m.aabb, i as u32);
+                    self.places[i] = Place::Tree;
+                }
+                (Some(m), Some(b))
+                    if b.solid_still && m.is_still() && self.places[i] == Place::Listed =>
+                {
+                    self.motions[i] = m;
+                    self.bases[i] = Some(b);
+                }
+                _ => {
+                    self.rebuild(registry, bodies, colliders, dt, gap);
+                    return;
+                }
+            }
+        }
+        for k in 0..self.moving.len() {
+            let i = self.moving[k];
+            let handle = self.motions[i].handle;
+            match colliders
+                .get(handle)
+                .and_then(|co| motion_of(handle, co, bodies, dt, gap))
+            {
+                Some(m) if !m.is_still() => self.motions[i] = m,
+                _ => {
+                    self.rebuild(registry, bodies, colliders, dt, gap);
+                    return;
+                }
+            }
+        }
+    }
+
+    fn rebuild(
+        &mut self,
+        registry: &Registry,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        dt: f64,
+        gap: f64,
+    ) {
+        let mut handles: Vec<ColliderHandle> = registry.keys().copied().collect();
+        // Deterministic order, whatever the hash map's.
+        handles.sort_by_key(|h| h.into_raw_parts());
+        self.motions.clear();
+        self.places.clear();
+        self.bases.clear();
+        self.listed.clear();
+        self.moving.clear();
+        let mut leaves = Vec::new();
+        for handle in handles {
+            let co = colliders.get(handle);
+            let motion = co.and_then(|co| motion_of(handle, co, bodies, dt, gap));
+            let i = self.motions.len();
+            let (motion, place) = match motion {
+                Some(m) if m.is_still() && m.plane.is_none() => {
+                    leaves.push((i, m.aabb));
+                    (m, Place::Tree)
+                }
+                Some(m) => {
+                    self.listed.push(i);
+                    if !m.is_still() {
+                        self.moving.push(i);
+                    }
+                    (m, Place::Listed)
+                }
+                None => (absent(handle), Place::Absent),
+            };
+            let basis = co
+                .map(|co| Basis::of(co, bodies))
+                .filter(|b| b.solid_still || place == Place::Absent);
+            self.motions.push(motion);
+            self.places.push(place);
+            // Absent grounds keep what they were computed from too, so that a change (the
+            // collider enabled again) is seen.
+            self.bases.push(basis);
+        }
+        // parry 0.31's `Bvh::from_iter` indexes its leaf table by position for one or two
+        // leaves (it panics when their indices are not 0 and 1): those are inserted.
+        self.tree = if leaves.len() > 2 {
+            Bvh::from_iter(BvhBuildStrategy::Binned, leaves)
+        } else {
+            let mut tree = Bvh::new();
+            for (i, aabb) in leaves {
+                tree.insert(aabb, i as u32);
+            }
+            tree
+        };
+        let len = registry.keys().map(|h| slot_of(*h) + 1).max().unwrap_or(0);
+        self.by_slot.clear();
+        self.by_slot.resize(len, None);
+        for (h, entry) in registry {
+            self.by_slot[slot_of(*h)] = Some((*h, *entry));
+        }
+        self.stale = false;
+        self.dt = dt;
+        self.gap = gap;
+    }
+
+    /// The grounds on kinematic bodies (their motion is measured again after the step).
+    pub fn moving(&self) -> &[usize] {
+        &self.moving
+    }
+
+    /// Does any ground's swept AABB meet the cube `centre ± half`?
+    pub fn any_near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> bool {
+        let cube = Aabb::from_half_extents(centre, Vector::splat(half));
+        self.listed
+            .iter()
+            .any(|i| !motions[*i].misses_cube(centre, half))
+            || self.tree.intersect_aabb(&cube).next().is_some()
+    }
+
+    /// The indices of the grounds whose swept AABB meets the cube `centre ± half`, in
+    /// increasing order.
+    pub fn near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
+        let cube = Aabb::from_half_extents(centre, Vector::splat(half));
+        let mut out: SmallList<usize> = self
+            .listed
+            .iter()
+            .copied()
+            .filter(|i| !motions[*i].misses_cube(centre, half))
+            .collect();
+        for leaf in self.tree.intersect_aabb(&cube) {
+            out.push(leaf as usize);
+        }
+        if out.len() > 1 {
+            out.sort_unstable();
+        }
+        out
+    }
+}
+
+/// The place-holder motion of a ground not queried this step.
+fn absent(handle: ColliderHandle) -> GroundMotion {
+    GroundMotion {
+        handle,
+        body: None,
+        com0: Vector3::zeros(),
+        rot0: UnitQuaternion::identity(),
+        local: Isometry3::identity(),
+        v: Vector3::zeros(),
+        w: Vector3::zeros(),
+        aabb: Aabb::new_invalid(),
+        plane: None,
+    }
+}
+
+/// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
+/// would not collide with it this step (disabled, a sensor) or it is on a dynamic body.
+fn motion_of(
+    handle: ColliderHandle,
+    co: &Collider,
+    bodies: &RigidBodySet,
+    dt: f64,
+    gap: f64,
+) -> Option<GroundMotion> {
+    if !co.is_enabled() || co.is_sensor() {
+        return None;
+    }
+    let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
+    let loosen = to_real(gap + to_f64(co.contact_skin()));
+    let mut aabb = co.compute_aabb().loosened(loosen);
+    // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
+    let half_space = co.shape().as_halfspace();
+    let plane_at = |pose: &Pose| {
+        half_space.map(|hs| {
+            let n = pose.rotation * hs.normal;
+            (n, n.dot(pose.translation) + loosen)
+        })
+    };
+    match parent {
+        Some((_, rb)) if rb.is_dynamic() => None,
+        Some((bh, rb)) if !rb.is_fixed() => {
+            let frame0 = pose_to_na(rb.position());
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            let com0 = (frame0 * Point3::from(local_com)).coords;
+            let (v, w) = if rb.body_type() == RigidBodyType::KinematicPositionBased {
+                let frame1 = pose_to_na(rb.next_position());
+                let com1 = (frame1 * Point3::from(local_com)).coords;
+                (
+                    (com1 - com0) / dt,
+                    (frame1.rotation * frame0.rotation.inverse()).scaled_axis() / dt,
+                )
+            } else {
+                (vec_to_na(rb.linvel()), vec_to_na(rb.angvel()))
+            };
+            let local_frame =
+                Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
+                    * co.position_wrt_parent()
+                        .map_or(Isometry3::identity(), pose_to_na);
+            let end = Isometry3::from_parts(
+                Translation3::from(com0 + v * dt),
+                UnitQuaternion::from_scaled_axis(w * dt) * frame0.rotation,
+            ) * local_frame;
+            let end_pose = pose_from_na(&end);
+            aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
+            // A turning half-space sweeps too much for one plane: AABB only.
+            let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
+                (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => Some((n, d0.max(d1))),
+                _ => None,
+            };
+            Some(GroundMotion {
+                handle,
+                body: Some(bh),
+                com0,
+                rot0: frame0.rotation,
+                local: local_frame,
+                v,
+                w,
+                aabb,
+                plane,
+            })
+        }
+        _ => {
+            let pose = pose_to_na(co.position());
+            Some(GroundMotion {
+                handle,
+                body: None,
+                com0: pose.translation.vector,
+                rot0: pose.rotation,
+                local: Isometry3::identity(),
+                v: Vector3::zeros(),
+                w: Vector3::zeros(),
+                aabb,
+                plane: plane_at(co.position()),
+            })
+        }
+    }
+}
