@@ -13,8 +13,9 @@
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
 //!   platform), then sets its restitution to 0 (and the ground's friction override, if any):
 //!   the plugin owns every bounce off a ground;
-//! - role `User` (the user's filter refused the pair in `before_step`): the user's hook and
-//!   rapier have it, unchanged, and the plugin resolves no impact for it;
+//! - role `Filtered` (rapier would not solve the pair, or the user's filter refused it in
+//!   `before_step`): the user's hook and rapier have it, unchanged, and the plugin resolves
+//!   no impact for it;
 //! - every other pair goes to the user's hook unchanged, exactly when the colliders' own
 //!   hook flags (those the user set, before the plugin added its own) ask for it; otherwise
 //!   rapier's default applies.
@@ -112,7 +113,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     }
                 }
             }
-            Some((_, Role::Rapier | Role::User)) | None => {
+            Some((_, Role::Rapier | Role::Filtered)) | None => {
                 let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);

@@ -14,6 +14,7 @@
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{ImpactEvent, ImpactTiming};
+use super::filter;
 use super::flight::{Flight, Gyro, Rolling, State};
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
@@ -46,9 +47,11 @@ pub(crate) enum Role {
     Rolling,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,
-    /// Refused by the user's filter (`None`, or no rigid impulses): no ground contact for
-    /// the plugin; rapier and the user's hook have the pair, unchanged.
-    User,
+    /// A pair rapier would not solve (collision or solver groups, active collision types,
+    /// a joint that disables the bodies' contacts: `filter.rs`) or that the user's filter
+    /// refuses (`None`, or no rigid impulses): no ground contact for the plugin; rapier and
+    /// the user's hook have the pair, unchanged.
+    Filtered,
 }
 
 /// A managed body's start-of-step snapshot.
@@ -251,7 +254,7 @@ impl Lookup {
 /// let params = IntegrationParameters::default();
 /// let gravity = Vector::new(0.0, -9.81, 0.0);
 /// for _ in 0..60 {
-///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders);
+///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders, &impulse_joints, &multibody_joints);
 ///     pipeline.step(
 ///         gravity, &params, &mut islands, &mut broad_phase, &mut narrow_phase,
 ///         &mut bodies, &mut colliders, &mut impulse_joints, &mut multibody_joints,
@@ -465,6 +468,8 @@ impl<H> ImpactPlugin<H> {
             &world.integration_parameters,
             &mut world.bodies,
             &mut world.colliders,
+            &world.impulse_joints,
+            &world.multibody_joints,
         );
         world.step_with_events(&*self, events);
         self.after_step(
@@ -477,14 +482,18 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Prepares a step: call it right before rapier's `PhysicsPipeline::step` with the same
-    /// gravity and parameters. Clears the events, reads the managed bodies near a ground, and
-    /// in `Step` mode applies the impulses of the contacts that close in this step.
+    /// gravity, parameters and sets. Clears the events, reads the managed bodies near a
+    /// ground, and in `Step` mode applies the impulses of the contacts that close in this
+    /// step. The joints are read for rapier's pair filtering (a joint can disable its bodies'
+    /// contacts).
     pub fn before_step(
         &mut self,
         gravity: Vector,
         params: &IntegrationParameters,
         bodies: &mut RigidBodySet,
         colliders: &mut ColliderSet,
+        impulse_joints: &ImpulseJointSet,
+        multibody_joints: &MultibodyJointSet,
     ) where
         H: PhysicsHooks,
     {
@@ -601,14 +610,28 @@ impl<H> ImpactPlugin<H> {
             // slides off its bottom). From the state after any `Step` impulse applied above.
             let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
             let turning_reach = |s: &State| flight.max_angular_speed(s) * 2.0 * geom.radius * dt;
+            let jointed = impulse_joints.attached_joints(handle).next().is_some()
+                || multibody_joints.rigid_body_link(handle).is_some();
             for (gi, gg) in &ground_geoms {
                 let mut any_impact = false;
                 // No pair of the body with this ground can meet in the step.
                 let mut clear = true;
                 for part in &geom.parts {
                     let key = (part.handle, gg.handle);
-                    if self.user_refuses(bodies, colliders, key) {
-                        step.roles.insert(key, Role::User);
+                    let joint_filtered = jointed
+                        && colliders[key.1].parent().is_some_and(|ground_body| {
+                            filter::joint_disables_contacts(
+                                impulse_joints,
+                                multibody_joints,
+                                handle,
+                                ground_body,
+                            )
+                        });
+                    if joint_filtered
+                        || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+                        || self.user_refuses(bodies, colliders, key)
+                    {
+                        step.roles.insert(key, Role::Filtered);
                         continue;
                     }
                     let found = contact_checked(part, gg, &state, 0.0, reach);
@@ -1232,7 +1255,7 @@ impl<H> ImpactPlugin<H> {
             !modifies(*ch)
                 && cand.near.iter().map(|i| &grounds[*i]).all(|gm| {
                     match self.prev_roles.get(&(*ch, gm.handle)) {
-                        None | Some(Role::User) => true,
+                        None | Some(Role::Filtered) => true,
                         Some(Role::Rapier) => false,
                         Some(_) => {
                             gm.v == Vector3::zeros()
@@ -1354,7 +1377,7 @@ impl<H> ImpactPlugin<H> {
             .iter()
             .enumerate()
             .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
-            .filter_map(|(_, (i, _))| ground_geom(&step.grounds[*i], colliders))
+            .filter_map(|(_, (i, _))| self.pair_geom(&step.grounds[*i], &geom, colliders))
             .collect();
         let mut end = rapier_state(rb);
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
@@ -1395,8 +1418,8 @@ impl<H> ImpactPlugin<H> {
         false
     }
 
-    /// The geometry of a candidate's `Impact` grounds, without the pairs the user's filter
-    /// refused (no contact for the plugin).
+    /// The geometry of a candidate's `Impact` grounds, without its `Filtered` pairs (no
+    /// contact for the plugin).
     fn impact_ground_geoms<'a>(
         &self,
         cand: &Candidate,
@@ -1406,17 +1429,26 @@ impl<H> ImpactPlugin<H> {
     ) -> SmallList<GroundGeom<'a>> {
         cand.impact_grounds
             .iter()
-            .filter_map(|i| {
-                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                gg.skip = geom
-                    .parts
-                    .iter()
-                    .map(|part| part.handle)
-                    .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::User))
-                    .collect();
-                Some(gg)
-            })
+            .filter_map(|i| self.pair_geom(&step.grounds[*i], geom, colliders))
             .collect()
+    }
+
+    /// A ground's geometry for the queries of a body whose pairs have roles this step, its
+    /// `Filtered` pairs skipped.
+    fn pair_geom<'a>(
+        &self,
+        gm: &GroundMotion,
+        geom: &BodyGeom,
+        colliders: &'a ColliderSet,
+    ) -> Option<GroundGeom<'a>> {
+        let mut gg = ground_geom(gm, colliders)?;
+        gg.skip = geom
+            .parts
+            .iter()
+            .map(|part| part.handle)
+            .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::Filtered))
+            .collect();
+        Some(gg)
     }
 
     /// After a step the search found clear, for a body whose rotation moves its surface (not
@@ -1470,7 +1502,17 @@ impl<H> ImpactPlugin<H> {
             .ground_index
             .near(&step.grounds, com, half)
             .iter()
-            .filter_map(|i| ground_geom(&step.grounds[*i], colliders))
+            .filter_map(|i| {
+                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
+                let ground = &colliders[gg.handle];
+                gg.skip = geom
+                    .parts
+                    .iter()
+                    .map(|part| part.handle)
+                    .filter(|h| !filter::rapier_solves(bodies, &colliders[*h], ground))
+                    .collect();
+                Some(gg)
+            })
             .collect();
         if grounds.is_empty() {
             return;

@@ -6,6 +6,7 @@
 mod config;
 mod convert;
 mod events;
+mod filter;
 mod flight;
 mod geometry;
 mod ground_index;

@@ -1,0 +1,71 @@
+//! rapier's own pair filtering, asked of every pair the plugin could resolve: a pair that
+//! rapier would not solve is never the plugin's.
+//!
+//! Contract: reads two colliders, their bodies and the joints; writes nothing; answers
+//! whether rapier 0.36's narrow phase would give the pair rigid impulses, before any hook
+//! (`src/geometry/narrow_phase/pair_update.rs` in rapier, whose CCD applies the same tests):
+//! - both colliders enabled, neither a sensor, and their bodies enabled (rapier disables a
+//!   disabled body's colliders at the start of its step);
+//! - the active collision types of one of the two colliders accept the pair of body types;
+//! - the collision groups accept each other;
+//! - the solver groups accept each other (otherwise rapier computes contacts and events but
+//!   applies no impulse);
+//! - no joint between the two bodies disables their contacts (checked after the step, where
+//!   the joints are known: [`joint_disables_contacts`]).
+//!
+//! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately, where the
+//! colliders' hook flags ask for it, as rapier would.
+
+use crate::rapier::prelude::{
+    Collider, ImpulseJointSet, MultibodyJointSet, RigidBodyHandle, RigidBodySet, RigidBodyType,
+};
+
+/// Would rapier solve the pair of colliders, before the hooks and the joints? (See the
+/// module's contract.)
+pub(crate) fn rapier_solves(bodies: &RigidBodySet, a: &Collider, b: &Collider) -> bool {
+    if !(a.is_enabled() && b.is_enabled()) || a.is_sensor() || b.is_sensor() {
+        return false;
+    }
+    let kind = |co: &Collider| match co.parent().and_then(|p| bodies.get(p)) {
+        Some(rb) => (rb.is_enabled(), rb.body_type()),
+        None => (true, RigidBodyType::Fixed),
+    };
+    let ((enabled_a, type_a), (enabled_b, type_b)) = (kind(a), kind(b));
+    enabled_a
+        && enabled_b
+        && (a.active_collision_types().test(type_a, type_b)
+            || b.active_collision_types().test(type_a, type_b))
+        && a.collision_groups().test(b.collision_groups())
+        && a.solver_groups().test(b.solver_groups())
+}
+
+/// Does a joint between the two bodies disable their contacts (an impulse joint, or a link
+/// of one multibody, as rapier tests them)?
+pub(crate) fn joint_disables_contacts(
+    impulse_joints: &ImpulseJointSet,
+    multibody_joints: &MultibodyJointSet,
+    a: RigidBodyHandle,
+    b: RigidBodyHandle,
+) -> bool {
+    if impulse_joints
+        .joints_between(a, b)
+        .any(|(_, joint)| !joint.data.contacts_enabled)
+    {
+        return true;
+    }
+    let (Some(link_a), Some(link_b)) = (
+        multibody_joints.rigid_body_link(a),
+        multibody_joints.rigid_body_link(b),
+    ) else {
+        return false;
+    };
+    if link_a.multibody != link_b.multibody {
+        return false;
+    }
+    multibody_joints
+        .get_multibody(link_a.multibody)
+        .is_some_and(|mb| !mb.self_contacts_enabled())
+        || multibody_joints
+            .joint_between(a, b)
+            .is_some_and(|(_, _, link)| !link.joint.data.contacts_enabled)
+}
