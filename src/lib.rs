@@ -33,7 +33,8 @@ pub mod model;
 pub mod plugin;
 
 pub use plugin::{
-    ConfigError, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming,
+    TimingMode,
 };
 
 /// Long-form documentation: the model's derivation and the integration guide.

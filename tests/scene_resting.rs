@@ -608,6 +608,15 @@ fn a_ball_sliding_fast_does_not_ride_low() {
                         stats.summary()
                     );
                     assert_eq!(stats.events, 0, "{label}: {}", stats.summary());
+                    assert_eq!(stats.corrections, 0, "{label}: {}", stats.summary());
+                } else {
+                    // Side by side, each push-out is an event, and the state it reports is
+                    // what was written (`check_written`, in `step_checked`).
+                    assert!(
+                        stats.corrections > 0 && stats.checked_writes > 0,
+                        "{label}: the push-outs must be reported: {}",
+                        stats.summary()
+                    );
                 }
             }
         }

@@ -1,4 +1,5 @@
-//! What the plugin reports after each step: one [`ImpactEvent`] per resolved impact.
+//! What the plugin reports after each step: one [`ImpactEvent`] per change it made to a
+//! body (an impact, or a correction of rapier's end-of-step state; see [`EventKind`]).
 
 use crate::model::{Fallback, Law, Regime};
 use crate::rapier::math::Vector;
@@ -18,10 +19,35 @@ pub enum ImpactTiming {
     StepEnd,
 }
 
-/// One ground impact resolved by the model in the last step. World frame, y-up or not: the
-/// frame is rapier's.
+/// What changed a body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EventKind {
+    /// A ground impact resolved by the model: an impulse at the contact point.
+    Impact,
+    /// Right after a settled in-step impact (`settled`), the body's remaining speed into the
+    /// ground removed (an `e = 0` normal impulse through its centre of mass), so that it rests.
+    Settle,
+    /// The body moved out of the ground along the normal at the end of the step (rapier's
+    /// resting contact, or its integrator, left it deeper than the resting gap); for a ball,
+    /// also its speed into the ground removed.
+    PushOut,
+    /// The body's velocities scaled down by one factor, so that a push-out does not add
+    /// energy: its mechanical energy is held to the step start's.
+    EnergyCap,
+}
+
+/// One change the plugin made to a body in the last step: a ground impact resolved by the
+/// model, or a correction ([`EventKind`]). World frame, y-up or not: the frame is rapier's.
+///
+/// `ke_after` is the kinetic energy of the state the change left; where it is the last
+/// change in the step and no flight follows (`timing` `StepEnd`), that state is what was
+/// written into rapier. For the corrections (`kind` not `Impact`), `regime` is `Separating`,
+/// `law` `Consistent`, `contact_points` 0, `restitution` and `friction` 0, `settled` true, and `impulse` the
+/// change of linear momentum (zero for a change of pose only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImpactEvent {
+    /// What changed the body.
+    pub kind: EventKind,
     /// The body that hit the ground.
     pub body: RigidBodyHandle,
     /// The body's collider that touched.

@@ -13,7 +13,7 @@
 
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
-use super::events::{ImpactEvent, ImpactTiming};
+use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
 use super::flight::{Flight, Gyro, Rolling, State};
 use super::geometry::{
@@ -23,7 +23,7 @@ use super::geometry::{
 use super::ground_index::{GroundEntry, GroundIndex, GroundMotion, slot_of};
 use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookedBody;
-use super::resolve::{ImpactInput, Inertia, PairKey, material, resolve};
+use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
 use crate::model::Material;
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::Aabb;
@@ -1084,7 +1084,23 @@ impl<H> ImpactPlugin<H> {
                     }
                     let vn = hit.normal.dot(&seg.v);
                     if vn < 0.0 {
+                        let before = seg;
                         seg.v -= hit.normal * vn;
+                        let site = Site {
+                            body: cand.body,
+                            collider: part.handle,
+                            ground: gg.handle,
+                            normal: hit.normal,
+                            point,
+                        };
+                        self.events.push(correction(
+                            EventKind::Settle,
+                            &site,
+                            &inertia,
+                            &before,
+                            &seg,
+                            t,
+                        ));
                     }
                     break;
                 }
@@ -1101,7 +1117,18 @@ impl<H> ImpactPlugin<H> {
             // out at its end: +3.2e-4 of a throw's energy, `cap_energy`).
             if let Some(h) = closest(&geom, &grounds, &end, step.dt, 0.0) {
                 if h.dist < 0.0 {
+                    let before = end;
                     end.com -= h.normal * h.dist;
+                    let site = Site {
+                        body: cand.body,
+                        collider: geom.parts[h.part].handle,
+                        ground: grounds[h.ground].handle,
+                        normal: h.normal,
+                        point: h.point - h.normal * h.dist,
+                    };
+                    let pushed =
+                        correction(EventKind::PushOut, &site, &inertia, &before, &end, step.dt);
+                    self.events.push(pushed);
                     let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
                     if elastic
                         && self.may_cap_energy(&bodies[cand.body], colliders, cand, &step.grounds)
@@ -1109,6 +1136,14 @@ impl<H> ImpactPlugin<H> {
                         if let Some(capped) =
                             capped_energy(&cand.start, &end, &cand.flight, &inertia)
                         {
+                            self.events.push(correction(
+                                EventKind::EnergyCap,
+                                &site,
+                                &inertia,
+                                &end,
+                                &capped,
+                                step.dt,
+                            ));
                             end = capped;
                         }
                     }
@@ -1210,7 +1245,7 @@ impl<H> ImpactPlugin<H> {
     /// the end state's mechanical energy in its constant force field (`Flight::accel`) is
     /// held to the start's (see `capped_energy`).
     fn cap_energy(
-        &self,
+        &mut self,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         cand: &Candidate,
@@ -1224,9 +1259,28 @@ impl<H> ImpactPlugin<H> {
             return;
         }
         let rb = &mut bodies[cand.body];
-        if let Some(capped) = capped_energy(&cand.start, &rapier_state(rb), &cand.flight, inertia) {
+        let end = rapier_state(rb);
+        // Only after a push-out, which reported where it was.
+        let Some(site) = self
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.body == cand.body)
+            .map(Site::of)
+        else {
+            return;
+        };
+        if let Some(capped) = capped_energy(&cand.start, &end, &cand.flight, inertia) {
             rb.set_linvel(vec_from_na(&capped.v), true);
             rb.set_angvel(vec_from_na(&capped.w), true);
+            self.events.push(correction(
+                EventKind::EnergyCap,
+                &site,
+                inertia,
+                &end,
+                &capped,
+                step.dt,
+            ));
         }
     }
 
@@ -1298,8 +1352,24 @@ impl<H> ImpactPlugin<H> {
                 // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
                 // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
                 if hit.dist < -step.resting_gap {
+                    let before = s;
                     s.com -= hit.normal * hit.dist;
                     changed = true;
+                    let site = Site {
+                        body,
+                        collider: geom.parts[hit.part].handle,
+                        ground: grounds[hit.ground].handle,
+                        normal: hit.normal,
+                        point: hit.point - hit.normal * hit.dist,
+                    };
+                    self.events.push(correction(
+                        EventKind::PushOut,
+                        &site,
+                        inertia,
+                        &before,
+                        &s,
+                        t,
+                    ));
                 }
                 break;
             }
@@ -1410,9 +1480,13 @@ impl<H> ImpactPlugin<H> {
             // A ball riding low sinks on: rapier's under-supporting contact let gravity build
             // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
             // which kept would take it deeper next step: removed for a ball.
-            put_on_ground(&mut end, &hit, !cand.turns_surface);
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
             let inertia = Inertia::of(&bodies[cand.body]);
+            let before = end;
+            put_on_ground(&mut end, &hit, !cand.turns_surface);
+            self.report_push_out(
+                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
+            );
+            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
             self.cap_energy(bodies, colliders, cand, &inertia, step);
         }
         false
@@ -1642,11 +1716,50 @@ impl<H> ImpactPlugin<H> {
         };
         let fall = -motion.accel.dot(&motion.normal) * step.dt + step.resting_speed;
         if hit.un >= -fall {
+            let before = end;
             put_on_ground(&mut end, &hit, true);
+            let inertia = Inertia::of(&bodies[cand.body]);
+            self.report_push_out(
+                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
+            );
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
         } else {
             self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
         }
+    }
+
+    /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it
+    /// changed nothing.
+    #[allow(clippy::too_many_arguments)]
+    fn report_push_out(
+        &mut self,
+        body: RigidBodyHandle,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        hit: &super::geometry::Hit,
+        inertia: &Inertia,
+        before: &State,
+        after: &State,
+        step: &StepData,
+    ) {
+        if before.com == after.com && before.v == after.v {
+            return;
+        }
+        let site = Site {
+            body,
+            collider: geom.parts[hit.part].handle,
+            ground: grounds[hit.ground].handle,
+            normal: hit.normal,
+            point: hit.point - hit.normal * hit.dist,
+        };
+        self.events.push(correction(
+            EventKind::PushOut,
+            &site,
+            inertia,
+            before,
+            after,
+            step.dt,
+        ));
     }
 
     /// What touched the body besides its grounds in the last step (see `prev_neighbours`).

@@ -18,5 +18,5 @@ mod impact_plugin;
 mod resolve;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
-pub use events::{ImpactEvent, ImpactTiming};
+pub use events::{EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;

@@ -3,10 +3,12 @@
 //! state and an [`ImpactEvent`]. No impulse algebra here: the model does it.
 
 use super::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
-use super::events::{ImpactEvent, ImpactTiming};
+use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::flight::State;
 use super::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
-use crate::model::{self, Body, BodyVelocity, Contact, Law, Material};
+use crate::model::{
+    self, Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, ModelError,
+};
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
 };
@@ -152,13 +154,24 @@ pub(crate) fn resolve(
         linear: s.v,
         angular: s.w,
     };
-    let impact = model::resolve(input.law, &body, &velocity, &contact, &material).ok()?;
+    let impact = match model::resolve(input.law, &body, &velocity, &contact, &material) {
+        Ok(impact) => impact,
+        // The document's slip law has no solution here (eq. 19's denominator <= 0, the
+        // Painleve-like jam): rather than leave the body at the contact with its approach
+        // velocity, the consistent law resolves it, and the event says so.
+        Err(ModelError::Jam { .. }) => Impact {
+            fallback: Some(Fallback::Jam),
+            ..model::resolve(Law::Consistent, &body, &velocity, &contact, &material).ok()?
+        },
+        Err(_) => return None,
+    };
     let after = State {
         v: impact.velocity.linear,
         w: impact.velocity.angular,
         ..*s
     };
     let event = ImpactEvent {
+        kind: EventKind::Impact,
         body: input.body,
         collider: geom.parts[hit.part].handle,
         ground: ground.handle,
@@ -181,6 +194,78 @@ pub(crate) fn resolve(
         ke_after: impact.ke_after,
     };
     Some((after, event))
+}
+
+/// Where a correction happened: the body, its collider and the ground, the contact normal
+/// (from the ground into the body) and point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Site {
+    pub body: RigidBodyHandle,
+    pub collider: ColliderHandle,
+    pub ground: ColliderHandle,
+    pub normal: Vector3<f64>,
+    pub point: Vector3<f64>,
+}
+
+impl Site {
+    /// The site of an event already reported.
+    pub fn of(e: &ImpactEvent) -> Self {
+        Self {
+            body: e.body,
+            collider: e.collider,
+            ground: e.ground,
+            normal: super::convert::vec_to_na(e.normal),
+            point: super::convert::vec_to_na(e.point),
+        }
+    }
+}
+
+/// The event of a correction (`kind` not `Impact`) at the step's end (`time`) that took the
+/// body from `before` to `after`.
+pub(crate) fn correction(
+    kind: EventKind,
+    site: &Site,
+    inertia: &Inertia,
+    before: &State,
+    after: &State,
+    time: f64,
+) -> ImpactEvent {
+    let energy = |s: &State| {
+        inertia.body_at(&s.rot).kinetic_energy(&BodyVelocity {
+            linear: s.v,
+            angular: s.w,
+        })
+    };
+    let impulse = (after.v - before.v) * inertia.mass;
+    let normal_impulse = impulse.dot(&site.normal);
+    let approach = -site.normal.dot(&body_velocity_at(before, &site.point));
+    ImpactEvent {
+        kind,
+        body: site.body,
+        collider: site.collider,
+        ground: site.ground,
+        time,
+        timing: if kind == EventKind::Settle {
+            ImpactTiming::InStep
+        } else {
+            ImpactTiming::StepEnd
+        },
+        point: vec_from_na(&site.point),
+        normal: vec_from_na(&site.normal),
+        contact_points: 0,
+        approach_speed: approach.max(0.0),
+        impulse: vec_from_na(&impulse),
+        normal_impulse,
+        tangent_impulse: vec_from_na(&(impulse - site.normal * normal_impulse)),
+        regime: model::Regime::Separating,
+        law: Law::Consistent,
+        fallback: None,
+        settled: true,
+        restitution: 0.0,
+        friction: 0.0,
+        ke_before: energy(before),
+        ke_after: energy(after),
+    }
 }
 
 /// The collider handle pair key of a body collider and a ground collider.

@@ -14,7 +14,9 @@
 
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
+use rapier_impact::{
+    EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode,
+};
 use std::hash::{DefaultHasher, Hash, Hasher};
 
 pub const G: f64 = 9.81;
@@ -99,6 +101,10 @@ pub struct Stats {
     /// Impact events, and those not `settled` (bounces).
     pub events: usize,
     pub bounces: usize,
+    /// Correction events (push-outs, settles, energy caps).
+    pub corrections: usize,
+    /// Step-end writes checked against their event (`check_written`).
+    pub checked_writes: usize,
     /// Largest `|P_t| / (mu P_n)` over the events with friction (<= 1 inside the cone).
     pub worst_cone_ratio: f64,
 }
@@ -113,12 +119,14 @@ impl Stats {
 
     pub fn summary(&self) -> String {
         format!(
-            "steps {}, max penetration {:.3e} m, worst impact KE change {:+.3e} (relative), events {} (bounces {}), worst |Pt|/(mu Pn) {:.6}",
+            "steps {}, max penetration {:.3e} m, worst impact KE change {:+.3e} (relative), events {} (bounces {}), corrections {} (writes checked {}), worst |Pt|/(mu Pn) {:.6}",
             self.steps,
             self.max_penetration,
             self.worst_energy_change,
             self.events,
             self.bounces,
+            self.corrections,
+            self.checked_writes,
             self.worst_cone_ratio
         )
     }
@@ -187,8 +195,10 @@ pub fn touches_a_body(world: &PhysicsWorld, body: RigidBodyHandle) -> bool {
     })
 }
 
-/// Checks one impact event: finite, a pushing normal impulse, friction inside the cone, and
-/// no kinetic-energy gain when `e <= 1` (on a fixed ground).
+/// Checks one event: finite, a pushing normal impulse (an energy cap scales the velocity
+/// along its own direction, so its momentum change may point anywhere), friction inside the
+/// cone, and no kinetic-energy gain when `e <= 1` (on a fixed ground); a correction (push-out,
+/// settle, energy cap) never gains kinetic energy.
 pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {
     let nums = [
         ev.time,
@@ -205,9 +215,17 @@ pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {
         "{label}: non-finite event {ev:?}"
     );
     assert!(
-        ev.normal_impulse >= 0.0,
+        ev.normal_impulse >= 0.0 || ev.kind == EventKind::EnergyCap,
         "{label}: pulling normal impulse {ev:?}"
     );
+    if ev.kind != EventKind::Impact {
+        assert!(
+            ev.ke_after <= ev.ke_before,
+            "{label}: a correction gained kinetic energy {ev:?}"
+        );
+        stats.corrections += 1;
+        return;
+    }
     stats.events += 1;
     if !ev.settled {
         stats.bounces += 1;
@@ -262,6 +280,7 @@ pub fn check_step(
     for ev in events {
         check_event(ev, stats, label);
     }
+    check_written(world, events, stats, label);
     let (depth, body) = deepest_body(world, ground_y);
     stats.max_penetration = stats.max_penetration.max(depth);
     if depth > allowed + penetration_rounding(ground_y.abs()) {
@@ -274,6 +293,32 @@ pub fn check_step(
             rb.map(|rb| rb.linvel()),
             rb.map(|rb| rb.angvel()),
         );
+    }
+}
+
+/// Every change is reported, and the last one's after-state is what was written: for each
+/// body whose last event of the step is at the step's end (no flight follows it), its kinetic
+/// energy as rapier now holds it equals the event's `ke_after`, to the rounding of rapier's
+/// precision.
+pub fn check_written(world: &PhysicsWorld, events: &[ImpactEvent], stats: &mut Stats, label: &str) {
+    for (k, ev) in events.iter().enumerate() {
+        let last = !events[k + 1..].iter().any(|later| later.body == ev.body);
+        if !last || ev.timing != rapier_impact::ImpactTiming::StepEnd {
+            continue;
+        }
+        let Some(rb) = world.bodies.get(ev.body) else {
+            continue;
+        };
+        let written = wide(rb.kinetic_energy());
+        let rounding = if F64 { 1e-12 } else { 1e-5 };
+        assert!(
+            (written - ev.ke_after).abs() <= rounding * written.max(ev.ke_after) + 1e-12,
+            "{label}: step {}: body {:?} was written with KE {written:e} J, its last event says {:e} J: {ev:?}",
+            stats.steps,
+            ev.body,
+            ev.ke_after
+        );
+        stats.checked_writes += 1;
     }
 }
 
