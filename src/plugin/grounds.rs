@@ -147,8 +147,14 @@ impl<H> ImpactPlugin<H> {
             let new: Vec<ColliderHandle> = colliders
                 .iter()
                 .filter(|(h, co)| {
-                    !self.grounds.contains_key(h)
-                        && !self.unmarked.contains(h)
+                    // The index's table first: a hash lookup per collider per step cost as
+                    // much as the rest of the plugin on a floor of 4 096 tiles.
+                    let marked = self
+                        .ground_index
+                        .entry(*h)
+                        .map_or_else(|()| self.grounds.contains_key(h), |e| e.is_some());
+                    !marked
+                        && (self.unmarked.is_empty() || !self.unmarked.contains(h))
                         && co
                             .parent()
                             .is_none_or(|p| bodies.get(p).is_some_and(|rb| rb.is_fixed()))

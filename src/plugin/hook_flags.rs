@@ -48,15 +48,19 @@ impl<H> ImpactPlugin<H> {
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
     ) {
-        // Grounds: flagged in the first arrangement, and never once unmarked.
+        // Grounds: flagged in the first arrangement, and never once unmarked. Which grounds
+        // keep their flags changes only with the registry or the arrangement.
         let grounds = &self.grounds;
-        self.flagged_grounds.retain(|c, user| {
-            let keep = !unmanaged && grounds.contains_key(c);
-            if !keep {
-                restore(colliders, *c, *user);
-            }
-            keep
-        });
+        if unmanaged || self.flags_registry_stale {
+            self.flagged_grounds.retain(|c, user| {
+                let keep = !unmanaged && grounds.contains_key(c);
+                if !keep {
+                    restore(colliders, *c, *user);
+                }
+                keep
+            });
+        }
+        self.flags_registry_stale = false;
         if !unmanaged {
             for c in self.grounds.keys() {
                 // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad

@@ -283,6 +283,8 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) flagged_grounds: HandleMap<ColliderHandle, ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     pub(crate) hook_stamp: u64,
+    /// A ground was unmarked since the grounds' hook flags were last put in place.
+    pub(crate) flags_registry_stale: bool,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
@@ -295,7 +297,7 @@ pub struct ImpactPlugin<H = ()> {
     prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
     /// The grounds' motions over the step and the BVH that finds those near a body.
-    ground_index: GroundIndex,
+    pub(crate) ground_index: GroundIndex,
 }
 
 impl ImpactPlugin<()> {
@@ -322,6 +324,7 @@ impl<H> ImpactPlugin<H> {
             hooked: HandleMap::default(),
             flagged_grounds: HandleMap::default(),
             hook_stamp: 0,
+            flags_registry_stale: true,
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
             prev_neighbours: HandleMap::default(),
@@ -421,6 +424,7 @@ impl<H> ImpactPlugin<H> {
     /// A ground was marked, unmarked or given a material: the hooks' ground table is stale.
     pub(crate) fn grounds_changed(&mut self) {
         self.ground_index.invalidate();
+        self.flags_registry_stale = true;
     }
 
     /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
