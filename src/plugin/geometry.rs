@@ -110,6 +110,9 @@ pub(crate) struct GroundGeom<'a> {
     pub v: Vector3<f64>,
     /// Ground angular velocity (rad/s).
     pub w: Vector3<f64>,
+    /// The collider's world pose at the start of the step (`pose_at(0)`, kept because a
+    /// still ground is asked for it in every query).
+    pub pose0: Isometry3<f64>,
     /// Body colliders that have no contact with this ground for the plugin (the user's
     /// filter refused the pair).
     pub skip: Vec<ColliderHandle>,
@@ -122,7 +125,10 @@ impl GroundGeom<'_> {
 
     /// The collider's world pose at time `t` of the step.
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
-        // A ground that does not turn (every fixed one): no rotation to compose.
+        if self.v == Vector3::zeros() && self.w == Vector3::zeros() {
+            return self.pose0;
+        }
+        // A ground that does not turn: no rotation to compose.
         let rot = if self.w == Vector3::zeros() {
             self.rot0
         } else {

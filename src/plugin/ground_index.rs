@@ -28,7 +28,7 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
-use super::handles::HandleHasher;
+use super::handles::{HandleHasher, slot_of};
 
 /// A registered ground collider.
 #[derive(Clone, Copy, Debug)]
@@ -138,11 +138,6 @@ pub(crate) struct GroundIndex {
     gap: f64,
     /// By collider slot: the ground's handle and entry, for the hooks' lookups.
     by_slot: Vec<Option<(ColliderHandle, GroundEntry)>>,
-}
-
-/// A collider handle's index in its arena.
-pub(crate) fn slot_of(c: ColliderHandle) -> usize {
-    c.into_raw_parts().0 as usize
 }
 
 type Registry = HashMap<ColliderHandle, GroundEntry, BuildHasherDefault<HandleHasher>>;

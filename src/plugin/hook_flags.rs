@@ -128,7 +128,7 @@ impl<H> ImpactPlugin<H> {
             // Not flagged by the plugin, or the user has set new flags since.
             return flags;
         }
-        if let Some(user) = self.flagged_grounds.get(&c) {
+        if let Some(user) = self.flagged_grounds.get(c) {
             return *user;
         }
         co.parent()
@@ -141,7 +141,7 @@ impl<H> ImpactPlugin<H> {
     /// the wrapped hook. Use it to go on without the plugin: otherwise the flags it left make
     /// rapier call the next hook for pairs the user never asked about.
     pub fn detach(mut self, colliders: &mut ColliderSet) -> H {
-        for (c, user) in &self.flagged_grounds {
+        for (c, user) in self.flagged_grounds.iter() {
             restore(colliders, *c, *user);
         }
         for entry in self.hooked.values() {

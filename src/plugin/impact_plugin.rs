@@ -20,8 +20,8 @@ use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, flat_throughout, landing_point,
 };
-use super::ground_index::{GroundEntry, GroundIndex, GroundMotion, slot_of};
-use super::handles::{HandleMap, HandleSet};
+use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
+use super::handles::{HandleMap, HandleSet, SlotTable, slot_of};
 use super::hook_flags::HookedBody;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
 use crate::model::Material;
@@ -134,6 +134,33 @@ struct StepData {
     /// Managed bodies asleep at the start of the step (see `ImpactPlugin::woken_end`).
     asleep: Vec<RigidBodyHandle>,
     lookup: Lookup,
+}
+
+/// rapier's contact graph and joints, as the step's decisions read them.
+#[derive(Clone, Copy)]
+struct Sets<'a> {
+    narrow_phase: &'a NarrowPhase,
+    impulse_joints: &'a ImpulseJointSet,
+    multibody_joints: &'a MultibodyJointSet,
+}
+
+/// The step's data in `after_step`, with rapier's sets after its step.
+struct EndOfStep<'a> {
+    data: StepData,
+    sets: Sets<'a>,
+}
+
+impl std::ops::Deref for EndOfStep<'_> {
+    type Target = StepData;
+    fn deref(&self) -> &StepData {
+        &self.data
+    }
+}
+
+impl std::ops::DerefMut for EndOfStep<'_> {
+    fn deref_mut(&mut self) -> &mut StepData {
+        &mut self.data
+    }
 }
 
 /// What the hooks ask for every ground pair inside rapier's step, by collider index instead
@@ -254,7 +281,7 @@ impl Lookup {
 /// let params = IntegrationParameters::default();
 /// let gravity = Vector::new(0.0, -9.81, 0.0);
 /// for _ in 0..60 {
-///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders, &impulse_joints, &multibody_joints);
+///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
 ///     pipeline.step(
 ///         gravity, &params, &mut islands, &mut broad_phase, &mut narrow_phase,
 ///         &mut bodies, &mut colliders, &mut impulse_joints, &mut multibody_joints,
@@ -280,7 +307,7 @@ pub struct ImpactPlugin<H = ()> {
     /// Managed bodies whose colliders carry the plugin's hook flags (see `hook_flags.rs`).
     pub(crate) hooked: HandleMap<RigidBodyHandle, HookedBody>,
     /// Grounds carrying the plugin's hook flags, with the flags the user had set.
-    pub(crate) flagged_grounds: HandleMap<ColliderHandle, ActiveHooks>,
+    pub(crate) flagged_grounds: SlotTable<ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     pub(crate) hook_stamp: u64,
     /// A ground was unmarked since the grounds' hook flags were last put in place.
@@ -291,7 +318,6 @@ pub struct ImpactPlugin<H = ()> {
     /// What touched each managed body near a ground in the last step besides its grounds
     /// (another body, a wall, a joint: see `NonGround`), by body; a body absent touched
     /// nothing. Decides the pressed roles, the push-outs, the energy cap and `Rolling`.
-    prev_neighbours: HandleMap<RigidBodyHandle, NonGround>,
     /// Managed bodies asleep at the start of the last step: their neighbours were not
     /// measured (see `prev_neighbours`) when they wake.
     prev_asleep: HandleSet<RigidBodyHandle>,
@@ -322,12 +348,11 @@ impl<H> ImpactPlugin<H> {
             user_hooks,
             step: StepData::default(),
             hooked: HandleMap::default(),
-            flagged_grounds: HandleMap::default(),
+            flagged_grounds: SlotTable::default(),
             hook_stamp: 0,
             flags_registry_stale: true,
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
-            prev_neighbours: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
             ground_index: GroundIndex::default(),
@@ -381,7 +406,7 @@ impl<H> ImpactPlugin<H> {
             && mass > 0.0
             && mass.is_finite()
             && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
-            && !self.excluded.contains(&handle)
+            && (self.excluded.is_empty() || !self.excluded.contains(&handle))
     }
 
     /// The role of a managed pair in the current step (`Resting` when unknown: a pair the
@@ -472,6 +497,7 @@ impl<H> ImpactPlugin<H> {
             &world.integration_parameters,
             &mut world.bodies,
             &mut world.colliders,
+            &world.narrow_phase,
             &world.impulse_joints,
             &world.multibody_joints,
         );
@@ -490,18 +516,26 @@ impl<H> ImpactPlugin<H> {
     /// ground, and in `Step` mode applies the impulses of the contacts that close in this
     /// step. The joints are read for rapier's pair filtering (a joint can disable its bodies'
     /// contacts).
+    // The sets rapier's own `PhysicsPipeline::step` takes, which has the same allowance.
+    #[allow(clippy::too_many_arguments)]
     pub fn before_step(
         &mut self,
         gravity: Vector,
         params: &IntegrationParameters,
         bodies: &mut RigidBodySet,
         colliders: &mut ColliderSet,
+        narrow_phase: &NarrowPhase,
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
     ) where
         H: PhysicsHooks,
     {
         self.events.clear();
+        let sets = Sets {
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        };
         // The hooks' tables are rebuilt at the end.
         self.step.lookup = Lookup::default();
         self.sync_grounds(bodies, colliders);
@@ -658,9 +692,15 @@ impl<H> ImpactPlugin<H> {
                             // Hysteresis: a pair rapier held at rest last step shows the
                             // normal speed rapier's solver leaves at rest (up to g dt and more
                             // for a fast-rolling ball): it stays resting unless clearly hit.
-                            let was_resting = matches!(
-                                prev_roles.get(&key),
-                                Some(&Role::Resting | &Role::Rolling)
+                            let prev_role = prev_roles.get(&key);
+                            let was_resting =
+                                matches!(prev_role, Some(&Role::Resting | &Role::Rolling));
+                            // The plugin had the pair last step: what touched the body
+                            // then is known (a body new near the ground has nothing to go
+                            // on).
+                            let measured = matches!(
+                                prev_role,
+                                Some(&Role::Resting | &Role::Impact | &Role::Rolling)
                             );
                             let limit = if was_resting {
                                 (4.0 * step.resting_speed).max(2.0 * g.norm() * dt)
@@ -680,9 +720,14 @@ impl<H> ImpactPlugin<H> {
                             // gap), 0.31 m/s at 5 mm), such a body's bounce would rise less
                             // than the gap and could only be resolved at the step end,
                             // against rapier's solver: resting too.
-                            let coupled = self.neighbours(handle).touching;
-                            let pressed = coupled && (was_resting || arrival <= step.pressed_speed);
-                            if dist <= step.resting_gap && (arrival <= limit || pressed) {
+                            // Asked only where it decides (rarely: most resting pairs are
+                            // slow), and only of a body measured after the last step.
+                            let pressed = || {
+                                (was_resting || arrival <= step.pressed_speed)
+                                    && measured
+                                    && self.neighbours(handle, rb, &sets, &step.down).touching
+                            };
+                            if dist <= step.resting_gap && (arrival <= limit || pressed()) {
                                 Role::Resting
                             } else if self.config.timing == TimingMode::Step
                                 && closes_within(dist, un, n.dot(&(flight.accel)), dt)
@@ -778,7 +823,7 @@ impl<H> ImpactPlugin<H> {
                             };
                             if let Some(motion) = self.rolling_of(
                                 bodies, colliders, handle, part, gg, &flight, &n, &on_ground,
-                                &step, known,
+                                &step, known, &sets,
                             ) {
                                 role = Role::Rolling;
                                 rolling = Some((*gi, motion));
@@ -858,39 +903,24 @@ impl<H> ImpactPlugin<H> {
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
     ) {
-        let mut step = std::mem::take(&mut self.step);
+        let sets = Sets {
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        };
+        let mut step = EndOfStep {
+            data: std::mem::take(&mut self.step),
+            sets,
+        };
         if !step.active {
             return;
         }
         step.active = false;
         self.prev_roles = std::mem::take(&mut step.roles);
-        self.prev_neighbours.clear();
-        for (key, role) in &self.prev_roles {
-            if !matches!(role, Role::Resting | Role::Impact | Role::Rolling) {
-                continue;
-            }
-            let Some(bh) = colliders.get(key.0).and_then(|co| co.parent()) else {
-                continue;
-            };
-            // Once per body (a body lists a pair per collider and ground).
-            if self.prev_neighbours.contains_key(&bh) {
-                continue;
-            }
-            let Some(rb) = bodies.get(bh) else {
-                continue;
-            };
-            let jointed = impulse_joints.attached_joints(bh).next().is_some()
-                || multibody_joints.rigid_body_link(bh).is_some();
-            let found = if jointed {
-                NonGround::JOINTED
-            } else {
-                non_ground_contacts(rb, narrow_phase, &self.grounds, &step.down)
-            };
-            self.prev_neighbours.insert(bh, found);
-        }
         // The grounds' actual motion over the step.
+        let dt = step.dt;
         for i in self.ground_index.moving() {
-            let gm = &mut step.grounds[*i];
+            let gm = &mut step.data.grounds[*i];
             if let Some(bh) = gm.body {
                 if let Some(rb) = bodies.get(bh) {
                     if !rb.is_fixed() {
@@ -898,8 +928,8 @@ impl<H> ImpactPlugin<H> {
                         let com1 =
                             end * nalgebra::Point3::from(vec_to_na(rb.local_center_of_mass()));
                         let rot1 = end.rotation;
-                        gm.v = (com1.coords - gm.com0) / step.dt;
-                        gm.w = (rot1 * gm.rot0.inverse()).scaled_axis() / step.dt;
+                        gm.v = (com1.coords - gm.com0) / dt;
+                        gm.w = (rot1 * gm.rot0.inverse()).scaled_axis() / dt;
                     }
                 }
             }
@@ -1134,9 +1164,7 @@ impl<H> ImpactPlugin<H> {
                         correction(EventKind::PushOut, &site, &inertia, &before, &end, step.dt);
                     self.events.push(pushed);
                     let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-                    if elastic
-                        && self.may_cap_energy(&bodies[cand.body], colliders, cand, &step.grounds)
-                    {
+                    if elastic && self.may_cap_energy(&bodies[cand.body], colliders, cand, &step) {
                         if let Some(capped) =
                             capped_energy(&cand.start, &end, &cand.flight, &inertia)
                         {
@@ -1160,7 +1188,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
-        self.ground_index.motions = std::mem::take(&mut step.grounds);
+        self.ground_index.motions = std::mem::take(&mut step.data.grounds);
     }
 
     /// Keeps the `f64` state of a body just written in `Exact` mode.
@@ -1214,7 +1242,7 @@ impl<H> ImpactPlugin<H> {
         cand: &Candidate,
         geom: &BodyGeom,
         grounds: &[GroundGeom],
-        step: &StepData,
+        step: &EndOfStep,
         settle: bool,
     ) {
         let Some(rb) = bodies.get(cand.body) else {
@@ -1254,11 +1282,11 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         cand: &Candidate,
         inertia: &Inertia,
-        step: &StepData,
+        step: &EndOfStep,
     ) {
         if !bodies
             .get(cand.body)
-            .is_some_and(|rb| self.may_cap_energy(rb, colliders, cand, &step.grounds))
+            .is_some_and(|rb| self.may_cap_energy(rb, colliders, cand, step))
         {
             return;
         }
@@ -1297,9 +1325,14 @@ impl<H> ImpactPlugin<H> {
         rb: &RigidBody,
         colliders: &ColliderSet,
         cand: &Candidate,
-        grounds: &[GroundMotion],
+        step: &EndOfStep,
     ) -> bool {
-        if self.neighbours(cand.body).touching || rb.user_torque() != Vector::ZERO {
+        let grounds = &step.grounds;
+        if rb.user_torque() != Vector::ZERO
+            || self
+                .neighbours(cand.body, rb, &step.sets, &step.down)
+                .touching
+        {
             return false;
         }
         let modifies = |c| {
@@ -1338,7 +1371,7 @@ impl<H> ImpactPlugin<H> {
         geom: &BodyGeom,
         grounds: &[GroundGeom],
         inertia: &Inertia,
-        step: &StepData,
+        step: &EndOfStep,
         settle: bool,
     ) -> bool {
         let Some(rb) = bodies.get(body) else {
@@ -1387,7 +1420,10 @@ impl<H> ImpactPlugin<H> {
                 material: self.material_of(colliders, part.handle, gg.handle),
                 // A body that touched another body or a wall in the step: no bounce slower
                 // than a fall through the resting gap (see the pressed roles).
-                resting_speed: if self.neighbours(body).touching {
+                resting_speed: if self
+                    .neighbours(body, &bodies[body], &step.sets, &step.down)
+                    .touching
+                {
                     step.pressed_speed
                 } else {
                     step.resting_speed
@@ -1439,7 +1475,7 @@ impl<H> ImpactPlugin<H> {
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         cand: &Candidate,
-        step: &StepData,
+        step: &EndOfStep,
     ) -> bool {
         let Some(rb) = bodies.get(cand.body) else {
             return false;
@@ -1460,7 +1496,7 @@ impl<H> ImpactPlugin<H> {
         if hit.dist >= -step.resting_gap {
             return false;
         }
-        let neighbours = self.neighbours(cand.body);
+        let neighbours = self.neighbours(cand.body, rb, &step.sets, &step.down);
         if cand.turns_surface && hit.un < 0.0 {
             let slow = hit.un >= -step.pressed_speed;
             // The resting contact's material point, now.
@@ -1540,7 +1576,7 @@ impl<H> ImpactPlugin<H> {
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         cand: &Candidate,
-        step: &StepData,
+        step: &EndOfStep,
     ) {
         if !cand.turns_surface {
             return;
@@ -1566,7 +1602,7 @@ impl<H> ImpactPlugin<H> {
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         handle: RigidBodyHandle,
-        step: &StepData,
+        step: &EndOfStep,
     ) {
         let rb = &bodies[handle];
         let local_com = vec_to_na(rb.local_center_of_mass());
@@ -1629,12 +1665,12 @@ impl<H> ImpactPlugin<H> {
         on_ground: &State,
         step: &StepData,
         known: bool,
+        sets: &Sets,
     ) -> Option<Rolling> {
-        // The cheap refusals first: most resting balls are at rest or crowded.
-        if !known || self.neighbours(handle).near {
+        let rb = &bodies[handle];
+        if !known {
             return None;
         }
-        let rb = &bodies[handle];
         let ball = part.shape.as_ball()?;
         let radius = to_f64(ball.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
@@ -1650,6 +1686,10 @@ impl<H> ImpactPlugin<H> {
             || slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed
             || user_modifies
         {
+            return None;
+        }
+        // After the cheap refusals (most resting balls are at rest): the contact graph.
+        if self.neighbours(handle, rb, sets, &step.down).near {
             return None;
         }
         let friction = self.material_of(colliders, part.handle, gg.handle).friction;
@@ -1692,7 +1732,7 @@ impl<H> ImpactPlugin<H> {
         ground: usize,
         motion: &Rolling,
         disturbed: bool,
-        step: &StepData,
+        step: &EndOfStep,
     ) {
         let Some(gg) = ground_geom(&step.grounds[ground], colliders) else {
             return;
@@ -1766,9 +1806,28 @@ impl<H> ImpactPlugin<H> {
         ));
     }
 
-    /// What touched the body besides its grounds in the last step (see `prev_neighbours`).
-    fn neighbours(&self, body: RigidBodyHandle) -> NonGround {
-        self.prev_neighbours.get(&body).copied().unwrap_or_default()
+    /// What touches the body besides its grounds in rapier's contact graph as the last
+    /// step left it (the same graph between `after_step` and the next `before_step`): asked
+    /// only where a decision needs it, so a step costs nothing for the bodies that need none.
+    fn neighbours(
+        &self,
+        body: RigidBodyHandle,
+        rb: &RigidBody,
+        sets: &Sets,
+        down: &Vector3<f64>,
+    ) -> NonGround {
+        let jointed = sets.impulse_joints.attached_joints(body).next().is_some()
+            || sets.multibody_joints.rigid_body_link(body).is_some();
+        if jointed {
+            return NonGround::JOINTED;
+        }
+        non_ground_contacts(
+            rb,
+            sets.narrow_phase,
+            &self.ground_index,
+            &self.grounds,
+            down,
+        )
     }
 
     /// The material of a body collider against a ground collider.
@@ -1966,6 +2025,7 @@ fn ground_geom<'a>(gm: &GroundMotion, colliders: &'a ColliderSet) -> Option<Grou
         local: gm.local,
         v: gm.v,
         w: gm.w,
+        pose0: Isometry3::from_parts(Translation3::from(gm.com0), gm.rot0) * gm.local,
         skip: Vec::new(),
     })
 }
@@ -2024,9 +2084,15 @@ fn put_on_ground(s: &mut State, hit: &super::geometry::Hit, stop: bool) {
 fn non_ground_contacts(
     rb: &RigidBody,
     narrow_phase: &NarrowPhase,
+    index: &GroundIndex,
     grounds: &HandleMap<ColliderHandle, GroundEntry>,
     down: &Vector3<f64>,
 ) -> NonGround {
+    let is_ground = |c: &ColliderHandle| {
+        index
+            .entry(*c)
+            .map_or_else(|()| grounds.contains_key(c), |e| e.is_some())
+    };
     let mut found = NonGround::default();
     for ch in rb.colliders() {
         for pair in narrow_phase.contact_pairs_with(*ch) {
@@ -2035,7 +2101,7 @@ fn non_ground_contacts(
             } else {
                 (pair.collider1, false)
             };
-            if grounds.contains_key(&other) {
+            if is_ground(&other) {
                 continue;
             }
             found.near = true;
