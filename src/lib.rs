@@ -30,6 +30,7 @@ pub use parry3d as parry;
 pub use parry3d_f64 as parry;
 
 pub mod model;
+mod motion;
 pub mod plugin;
 
 pub use plugin::{

@@ -4,7 +4,7 @@
 //! All arithmetic is `f64`; poses are rounded to rapier's precision only to call parry.
 
 use super::convert::{pose_from_na, to_f64, vec_to_na};
-use super::flight::{Flight, State};
+use crate::motion::{Flight, State};
 use crate::parry::query;
 use crate::parry::shape::{PolygonalFeature, Shape, Triangle};
 use crate::rapier::prelude::ColliderHandle;

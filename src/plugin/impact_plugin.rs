@@ -15,7 +15,6 @@ use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
-use super::flight::{Flight, Gyro, Rolling, State};
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, flat_throughout, landing_point,
@@ -25,6 +24,7 @@ use super::handles::{HandleMap, HandleSet, SlotTable, slot_of};
 use super::hook_flags::HookedBody;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
 use crate::model::Material;
+use crate::motion::{Flight, Gyro, Rolling, State};
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
@@ -43,7 +43,7 @@ pub(crate) enum Role {
     /// sliding that `Rolling` does not take.
     Resting,
     /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
-    /// moved in closed form after the step (`flight::Rolling`, `ImpactPlugin::rolling_end`).
+    /// moved in closed form after the step (`motion::Rolling`, `ImpactPlugin::rolling_end`).
     Rolling,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,

@@ -7,7 +7,6 @@ mod config;
 mod convert;
 mod events;
 mod filter;
-mod flight;
 mod geometry;
 mod ground_index;
 mod grounds;

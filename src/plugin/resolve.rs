@@ -4,11 +4,11 @@
 
 use super::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
-use super::flight::State;
 use super::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::model::{
     self, Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, ModelError,
 };
+use crate::motion::State;
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
 };
