@@ -22,6 +22,7 @@ use super::geometry::{
 use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
 use super::handles::{HandleMap, HandleSet, SlotTable, slot_of};
 use super::hook_flags::HookedBody;
+use super::policy::{DeepResting, LOADED_COS, Policy, ROLLING_MIN_SLIP};
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
 use crate::model::Material;
 use crate::motion::{Flight, Gyro, Rolling, State};
@@ -121,13 +122,10 @@ struct Shadow {
 struct StepData {
     active: bool,
     dt: f64,
-    resting_speed: f64,
-    resting_gap: f64,
-    /// `sqrt(2 |g| resting_gap)`: below it, a body touching other bodies is not bounced.
-    pressed_speed: f64,
+    /// The step's thresholds.
+    policy: Policy,
     /// The unit direction of gravity (zero without gravity).
     down: Vector3<f64>,
-    prediction: f64,
     roles: HandleMap<PairKey, Role>,
     grounds: Vec<GroundMotion>,
     candidates: Vec<Candidate>,
@@ -544,27 +542,27 @@ impl<H> ImpactPlugin<H> {
         let mut step = StepData {
             active: dt > 0.0,
             dt,
-            resting_speed: self
-                .config
-                .resting_speed
-                .unwrap_or((0.5 * g.norm() * dt).max(1e-3)),
-            resting_gap: self
-                .config
-                .resting_gap
-                .unwrap_or(to_f64(params.allowed_linear_error())),
-            prediction: to_f64(params.prediction_distance()),
+            policy: Policy::new(
+                &self.config,
+                g.norm(),
+                dt,
+                to_f64(params.allowed_linear_error()),
+                to_f64(params.prediction_distance()),
+            ),
+            down: g.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
             ..Default::default()
         };
-        step.down = g.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
-        step.pressed_speed = (2.0 * g.norm() * step.resting_gap)
-            .sqrt()
-            .max(step.resting_speed);
         if !step.active {
             self.step = step;
             return;
         }
-        self.ground_index
-            .refresh(&self.grounds, bodies, colliders, dt, step.resting_gap);
+        self.ground_index.refresh(
+            &self.grounds,
+            bodies,
+            colliders,
+            dt,
+            step.policy.resting_gap,
+        );
         // Lent to the step; given back at its end (`Self::after_step`).
         step.grounds = std::mem::take(&mut self.ground_index.motions);
         let shadows = std::mem::take(&mut self.shadows);
@@ -574,7 +572,7 @@ impl<H> ImpactPlugin<H> {
         // The awake managed bodies that may reach a ground. A body surely far from every
         // ground needs no snapshot, inertia or geometry (only its flight in `Exact` mode); a
         // body without collider is skipped.
-        let margin = super::convert::to_real(step.resting_gap.max(step.prediction));
+        let margin = super::convert::to_real(step.policy.resting_gap.max(step.policy.prediction));
         let g_len = gravity.length();
         let mut handles: Vec<RigidBodyHandle> = Vec::new();
         // A dynamic body the plugin does not manage decides where the hook flags go.
@@ -617,7 +615,7 @@ impl<H> ImpactPlugin<H> {
             // The cheap test: the bounding sphere swept over the step against ground AABBs.
             let speed =
                 flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
-            let reach = speed * dt + step.resting_gap.max(step.prediction);
+            let reach = speed * dt + step.policy.resting_gap.max(step.policy.prediction);
             let sphere = Aabb::from_half_extents(
                 vec_from_na(&start.com),
                 Vector::splat(super::convert::to_real(geom.radius + reach)),
@@ -702,11 +700,6 @@ impl<H> ImpactPlugin<H> {
                                 prev_role,
                                 Some(&Role::Resting | &Role::Impact | &Role::Rolling)
                             );
-                            let limit = if was_resting {
-                                (4.0 * step.resting_speed).max(2.0 * g.norm() * dt)
-                            } else {
-                                step.resting_speed
-                            };
                             // A pressed contact: a resting pair of a body that also
                             // touched another body (or a wall, or had a joint) last step
                             // approaches only because something pushes it (a box dropped
@@ -715,19 +708,13 @@ impl<H> ImpactPlugin<H> {
                             // it out and bounce it at the step end against the solver
                             // (issue 5: 125-ball pile never settling, a 1e6 mass ratio
                             // sinking twice as deep as rapier alone). rapier keeps it,
-                            // with e = 0.
-                            // Also slower than a fall through the resting gap (sqrt(2 g
-                            // gap), 0.31 m/s at 5 mm), such a body's bounce would rise less
-                            // than the gap and could only be resolved at the step end,
-                            // against rapier's solver: resting too.
-                            // Asked only where it decides (rarely: most resting pairs are
-                            // slow), and only of a body measured after the last step.
+                            // with e = 0 (`Policy::rests`). What touched the body is asked
+                            // only where it decides (rarely: most resting pairs are slow),
+                            // and only of a body measured after the last step.
                             let pressed = || {
-                                (was_resting || arrival <= step.pressed_speed)
-                                    && measured
-                                    && self.neighbours(handle, rb, &sets, &step.down).touching
+                                measured && self.neighbours(handle, rb, &sets, &step.down).touching
                             };
-                            if dist <= step.resting_gap && (arrival <= limit || pressed()) {
+                            if step.policy.rests(dist, arrival, was_resting, pressed) {
                                 Role::Resting
                             } else if self.config.timing == TimingMode::Step
                                 && closes_within(dist, un, n.dot(&(flight.accel)), dt)
@@ -760,7 +747,7 @@ impl<H> ImpactPlugin<H> {
                                     inertia: &inertia,
                                     law: self.config.law,
                                     material: self.material_of(colliders, part.handle, gg.handle),
-                                    resting_speed: step.resting_speed,
+                                    resting_speed: step.policy.resting_speed,
                                     force_settle: false,
                                     timing: ImpactTiming::StepStart,
                                 };
@@ -782,7 +769,7 @@ impl<H> ImpactPlugin<H> {
                                             &(super::geometry::body_velocity_at(&state, &point)
                                                 - gg.velocity_at(&point, 0.0)),
                                         );
-                                        if un2 <= step.resting_speed {
+                                        if un2 <= step.policy.resting_speed {
                                             Role::Resting
                                         } else {
                                             Role::Impact
@@ -803,7 +790,7 @@ impl<H> ImpactPlugin<H> {
                         // Within the resting gap of it (a `Step` impulse can leave a ball
                         // resting on its way down, up to a step's travel above the ground).
                         if let Some((dist, n, _)) =
-                            contact0.filter(|(dist, ..)| dist.abs() <= step.resting_gap)
+                            contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
                         {
                             // Its neighbours (`prev_neighbours`) were measured after the last
                             // step if the pair had a role then. A body just woken was not
@@ -831,7 +818,7 @@ impl<H> ImpactPlugin<H> {
                             }
                         }
                     }
-                    if role == Role::Resting && turning_reach(&state) > step.resting_gap {
+                    if role == Role::Resting && turning_reach(&state) > step.policy.resting_gap {
                         if let Some((_, _, p)) = contact0 {
                             turning_resting.push((*gi, state.rot.inverse() * (p - state.com)));
                         }
@@ -1087,7 +1074,7 @@ impl<H> ImpactPlugin<H> {
                     inertia: &inertia,
                     law: self.config.law,
                     material: self.material_of(colliders, part.handle, gg.handle),
-                    resting_speed: step.resting_speed,
+                    resting_speed: step.policy.resting_speed,
                     force_settle: count + 1 >= self.config.max_impacts_per_step,
                     timing: ImpactTiming::InStep,
                 };
@@ -1110,7 +1097,7 @@ impl<H> ImpactPlugin<H> {
                 // holding gravity there lifted the cube for the rest of the step (dice seed
                 // 4, f64 Exact 60 Hz: +3.0e-3 of the throw's energy). It flies on, with
                 // gravity, to its next impact.
-                if settled && hit.normal.dot(&seg.v) <= step.resting_speed {
+                if settled && hit.normal.dot(&seg.v) <= step.policy.resting_speed {
                     // Resting from here: gravity into the ground is held by the contact.
                     let an = hit.normal.dot(&flight.accel);
                     if an < 0.0 {
@@ -1228,7 +1215,8 @@ impl<H> ImpactPlugin<H> {
         let fraction = actual.dot(&exact) / len2;
         // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops
         // a body up to about a prediction distance before the contact.
-        let slack = (cand.flight.accel.norm() * dt * dt + step.prediction) / len2.sqrt() + 1e-3;
+        let slack =
+            (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
         fraction >= t_first / dt - slack
     }
 
@@ -1388,7 +1376,7 @@ impl<H> ImpactPlugin<H> {
                 // A point deeper than the resting gap that already leaves the ground: it
                 // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
                 // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
-                if hit.dist < -step.resting_gap {
+                if hit.dist < -step.policy.resting_gap {
                     let before = s;
                     s.com -= hit.normal * hit.dist;
                     changed = true;
@@ -1424,9 +1412,9 @@ impl<H> ImpactPlugin<H> {
                     .neighbours(body, &bodies[body], &step.sets, &step.down)
                     .touching
                 {
-                    step.pressed_speed
+                    step.policy.pressed_speed
                 } else {
-                    step.resting_speed
+                    step.policy.resting_speed
                 },
                 force_settle: settle || k + 1 >= self.config.max_impacts_per_step,
                 timing: ImpactTiming::StepEnd,
@@ -1493,30 +1481,37 @@ impl<H> ImpactPlugin<H> {
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return false;
         };
-        if hit.dist >= -step.resting_gap {
+        if hit.dist >= -step.policy.resting_gap {
             return false;
         }
         let neighbours = self.neighbours(cand.body, rb, &step.sets, &step.down);
-        if cand.turns_surface && hit.un < 0.0 {
-            let slow = hit.un >= -step.pressed_speed;
-            // The resting contact's material point, now.
-            let pivot_pushed = listed.iter().any(|(i, local)| {
+        // The resting contact's material point, now.
+        let pivot_pushed = || {
+            listed.iter().any(|(i, local)| {
                 if step.grounds[*i].handle != grounds[hit.ground].handle {
                     return false;
                 }
                 let p = end.com + end.rot * local;
                 let u = super::geometry::body_velocity_at(&end, &p)
                     - grounds[hit.ground].velocity_at(&p, step.dt);
-                hit.normal.dot(&u) < -step.pressed_speed
-            });
-            if !(pivot_pushed || slow && neighbours.touching) {
-                self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, slow);
-                return true;
-            }
+                hit.normal.dot(&u) < -step.policy.pressed_speed
+            })
+        };
+        let decision = step.policy.deep_resting_body(
+            hit.dist,
+            hit.un,
+            cand.turns_surface,
+            pivot_pushed,
+            neighbours.touching,
+            neighbours.loaded,
+        );
+        if let DeepResting::Resolve { settle } = decision {
+            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, settle);
+            return true;
         }
         // A body that nothing loads (balls side by side, a box at a wall) is moved out; a
         // body something lies on is left to rapier, whose solver holds the load.
-        if !neighbours.loaded {
+        if decision == DeepResting::PushOut {
             // A ball riding low sinks on: rapier's under-supporting contact let gravity build
             // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
             // which kept would take it deeper next step: removed for a ball.
@@ -1611,7 +1606,7 @@ impl<H> ImpactPlugin<H> {
             return;
         }
         let com = rb.center_of_mass();
-        let half = super::convert::to_real(geom.radius + step.resting_gap);
+        let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
         let grounds: SmallList<GroundGeom> = self
             .ground_index
             .near(&step.grounds, com, half)
@@ -1635,7 +1630,7 @@ impl<H> ImpactPlugin<H> {
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
-        if hit.dist < -step.resting_gap && hit.un < 0.0 {
+        if hit.dist < -step.policy.resting_gap && hit.un < 0.0 {
             let inertia = Inertia::of(rb);
             self.step_end(
                 bodies, colliders, handle, &local_com, &geom, &grounds, &inertia, step, true,
@@ -1683,7 +1678,7 @@ impl<H> ImpactPlugin<H> {
             && rb.user_torque() == Vector::ZERO;
         let slip = on_ground.v - radius * on_ground.w.cross(n);
         if !(an < 0.0 && level && plain)
-            || slip.norm() <= 1e-3 && on_ground.v.norm() <= step.resting_speed
+            || slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed
             || user_modifies
         {
             return None;
@@ -1741,7 +1736,7 @@ impl<H> ImpactPlugin<H> {
         let grounds = [gg];
         if !disturbed {
             let end = motion.advance(&cand.start, step.dt);
-            let on = closest(&geom, &grounds, &end, step.dt, step.resting_gap);
+            let on = closest(&geom, &grounds, &end, step.dt, step.policy.resting_gap);
             if on.is_some_and(|hit| {
                 hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
                     && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9
@@ -1758,7 +1753,7 @@ impl<H> ImpactPlugin<H> {
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
-        let fall = -motion.accel.dot(&motion.normal) * step.dt + step.resting_speed;
+        let fall = -motion.accel.dot(&motion.normal) * step.dt + step.policy.resting_speed;
         if hit.un >= -fall {
             let before = end;
             put_on_ground(&mut end, &hit, true);
@@ -2119,7 +2114,7 @@ fn non_ground_contacts(
                 // +normal.
                 let normal = vec_to_na(m.data.normal);
                 let push = if first { -normal } else { normal };
-                if *down == Vector3::zeros() || push.dot(down) > 0.5 {
+                if *down == Vector3::zeros() || push.dot(down) > LOADED_COS {
                     found.loaded = true;
                     return found;
                 }

@@ -14,6 +14,7 @@ mod handles;
 mod hook_flags;
 mod hooks;
 mod impact_plugin;
+mod policy;
 mod resolve;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
