@@ -19,7 +19,8 @@
 //! they ask for it.
 
 use super::geometry::SmallList;
-use super::impact_plugin::ImpactPlugin;
+use super::handles::{HandleMap, SlotTable};
+use super::registry::Registry;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
 };
@@ -33,16 +34,34 @@ pub(crate) const PLUGIN_HOOKS: ActiveHooks =
 pub(crate) struct HookedBody {
     /// Each flagged collider with the flags the user had set on it.
     pub colliders: SmallList<(ColliderHandle, ActiveHooks)>,
-    /// The step (`ImpactPlugin::hook_stamp`) that last needed the flags.
+    /// The step (`HookFlags::stamp`) that last needed the flags.
     stamp: u64,
 }
 
-impl<H> ImpactPlugin<H> {
+/// Where the plugin's hook flags are, and the user's flags they replaced.
+#[derive(Default)]
+pub(crate) struct HookFlags {
+    /// Managed bodies whose colliders carry the plugin's hook flags.
+    hooked: HandleMap<RigidBodyHandle, HookedBody>,
+    /// Grounds carrying the plugin's hook flags, with the flags the user had set.
+    grounds: SlotTable<ActiveHooks>,
+    /// Counts the steps, to find the hooked bodies no step needs any more.
+    stamp: u64,
+}
+
+impl HookFlags {
+    /// The managed bodies whose colliders carry the plugin's flags.
+    pub fn hooked(&self) -> &HandleMap<RigidBodyHandle, HookedBody> {
+        &self.hooked
+    }
+
     /// Puts the flags where this step needs them (see the module's documentation):
     /// `near` are the managed bodies that can reach a ground in the step, `unmanaged`
     /// whether the world holds a dynamic, enabled body the plugin does not manage.
-    pub(crate) fn update_hook_flags(
+    /// `registry.flags_stale` is read here and cleared by the caller.
+    pub fn update(
         &mut self,
+        registry: &Registry,
         near: &[RigidBodyHandle],
         unmanaged: bool,
         bodies: &RigidBodySet,
@@ -50,9 +69,9 @@ impl<H> ImpactPlugin<H> {
     ) {
         // Grounds: flagged in the first arrangement, and never once unmarked. Which grounds
         // keep their flags changes only with the registry or the arrangement.
-        let grounds = &self.grounds;
-        if unmanaged || self.flags_registry_stale {
-            self.flagged_grounds.retain(|c, user| {
+        let grounds = &registry.grounds;
+        if unmanaged || registry.flags_stale {
+            self.grounds.retain(|c, user| {
                 let keep = !unmanaged && grounds.contains_key(c);
                 if !keep {
                     restore(colliders, *c, *user);
@@ -60,9 +79,8 @@ impl<H> ImpactPlugin<H> {
                 keep
             });
         }
-        self.flags_registry_stale = false;
         if !unmanaged {
-            for c in self.grounds.keys() {
+            for c in registry.grounds.keys() {
                 // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
                 // and narrow phase updates, which for every ground every step cost more
                 // than the rest of the plugin on a floor of 4 096 tiles.
@@ -71,14 +89,14 @@ impl<H> ImpactPlugin<H> {
                 };
                 if !flags.contains(PLUGIN_HOOKS) {
                     // New, or the user set the flags since the last step: theirs now.
-                    self.flagged_grounds.insert(*c, flags);
+                    self.grounds.insert(*c, flags);
                     set_flags(colliders, *c, flags | PLUGIN_HOOKS);
                 }
             }
         }
         // Bodies: flagged in the second.
-        self.hook_stamp = self.hook_stamp.wrapping_add(1);
-        let stamp = self.hook_stamp;
+        self.stamp = self.stamp.wrapping_add(1);
+        let stamp = self.stamp;
         if unmanaged {
             for handle in near {
                 let Some(rb) = bodies.get(*handle) else {
@@ -100,7 +118,7 @@ impl<H> ImpactPlugin<H> {
             if unmanaged
                 && bodies
                     .get(*handle)
-                    .is_some_and(|rb| rb.is_sleeping() && self.manages(*handle, rb))
+                    .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
             {
                 entry.stamp = stamp;
                 return true;
@@ -115,11 +133,7 @@ impl<H> ImpactPlugin<H> {
 
     /// The hook flags the user set on a collider (those rapier would have seen without the
     /// plugin).
-    pub(crate) fn recorded_user_flags(
-        &self,
-        colliders: &ColliderSet,
-        c: ColliderHandle,
-    ) -> ActiveHooks {
+    pub fn recorded_user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
         let Some(co) = colliders.get(c) else {
             return ActiveHooks::empty();
         };
@@ -128,7 +142,7 @@ impl<H> ImpactPlugin<H> {
             // Not flagged by the plugin, or the user has set new flags since.
             return flags;
         }
-        if let Some(user) = self.flagged_grounds.get(c) {
+        if let Some(user) = self.grounds.get(c) {
             return *user;
         }
         co.parent()
@@ -137,11 +151,9 @@ impl<H> ImpactPlugin<H> {
             .map_or(flags, |(_, user)| *user)
     }
 
-    /// Takes the plugin's hook flags off every collider (the user's flags back) and returns
-    /// the wrapped hook. Use it to go on without the plugin: otherwise the flags it left make
-    /// rapier call the next hook for pairs the user never asked about.
-    pub fn detach(mut self, colliders: &mut ColliderSet) -> H {
-        for (c, user) in self.flagged_grounds.iter() {
+    /// Takes the plugin's hook flags off every collider: the user's flags back.
+    pub fn restore_all(&mut self, colliders: &mut ColliderSet) {
+        for (c, user) in self.grounds.iter() {
             restore(colliders, *c, *user);
         }
         for entry in self.hooked.values() {
@@ -150,7 +162,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         self.hooked.clear();
-        self.user_hooks
+        self.grounds = SlotTable::default();
     }
 }
 

@@ -21,46 +21,9 @@
 //!   rapier's default applies.
 
 use super::impact_plugin::{ImpactPlugin, Role};
-use super::resolve::PairKey;
 use crate::rapier::prelude::{
-    ActiveHooks, ColliderHandle, ColliderSet, ContactModificationContext, PairFilterContext,
-    PhysicsHooks, RigidBodySet, SolverFlags,
+    ActiveHooks, ContactModificationContext, PairFilterContext, PhysicsHooks, SolverFlags,
 };
-
-impl<H> ImpactPlugin<H> {
-    /// `Some((body collider, ground collider))` when the pair is a managed body against a
-    /// ground.
-    fn managed_pair(
-        &self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        c1: ColliderHandle,
-        c2: ColliderHandle,
-    ) -> Option<PairKey> {
-        let (body, ground) = match (
-            self.ground_entry(c1).is_some(),
-            self.ground_entry(c2).is_some(),
-        ) {
-            (true, false) => (c2, c1),
-            (false, true) => (c1, c2),
-            _ => return None,
-        };
-        if let Some(parent) = colliders.get(ground)?.parent() {
-            if bodies.get(parent).is_none_or(|rb| rb.is_dynamic()) {
-                return None;
-            }
-        }
-        let parent = colliders.get(body)?.parent()?;
-        let rb = bodies.get(parent)?;
-        self.manages(parent, rb).then_some((body, ground))
-    }
-
-    /// The hook flags the user asked for on a collider.
-    pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
-        self.step_user_flags(c)
-            .unwrap_or_else(|| self.recorded_user_flags(colliders, c))
-    }
-}
 
 impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
@@ -105,7 +68,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);
                 }
-                let over = self.ground_entry(key.1).and_then(|g| g.material);
+                let over = self.registry.entry(key.1).and_then(|g| g.material);
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {

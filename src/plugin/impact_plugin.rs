@@ -11,6 +11,7 @@
 //!   start-of-step state (or at the step end as a fallback), integrates free flight exactly
 //!   in `Exact` mode, writes poses and velocities back (woken up) and moves the colliders.
 
+use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
@@ -20,9 +21,10 @@ use super::geometry::{
     first_impact, flat_throughout, landing_point,
 };
 use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
-use super::handles::{HandleMap, HandleSet, SlotTable, slot_of};
-use super::hook_flags::HookedBody;
+use super::handles::{HandleMap, HandleSet, slot_of};
+use super::hook_flags::{HookFlags, HookedBody};
 use super::policy::{DeepResting, LOADED_COS, Policy, ROLLING_MIN_SLIP};
+use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
 use crate::model::Material;
 use crate::motion::{Flight, Gyro, Rolling, State};
@@ -294,22 +296,12 @@ impl Lookup {
 /// ```
 pub struct ImpactPlugin<H = ()> {
     pub(crate) config: ImpactConfig,
-    pub(crate) grounds: HandleMap<ColliderHandle, GroundEntry>,
-    pub(crate) all_fixed: bool,
-    /// Colliders unmarked by [`Self::remove_ground`]: the all-fixed mode leaves them alone
-    /// until [`Self::add_ground`] marks them again.
-    pub(crate) unmarked: HandleSet<ColliderHandle>,
-    pub(crate) excluded: HandleSet<RigidBodyHandle>,
+    /// The grounds, the managed bodies and the ground index.
+    pub(crate) registry: Registry,
     pub(crate) user_hooks: H,
     step: StepData,
-    /// Managed bodies whose colliders carry the plugin's hook flags (see `hook_flags.rs`).
-    pub(crate) hooked: HandleMap<RigidBodyHandle, HookedBody>,
-    /// Grounds carrying the plugin's hook flags, with the flags the user had set.
-    pub(crate) flagged_grounds: SlotTable<ActiveHooks>,
-    /// Counts the steps, to find the hooked bodies no step needs any more.
-    pub(crate) hook_stamp: u64,
-    /// A ground was unmarked since the grounds' hook flags were last put in place.
-    pub(crate) flags_registry_stale: bool,
+    /// Where the plugin's hook flags are (see `hook_flags.rs`).
+    pub(crate) flags: HookFlags,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
@@ -320,8 +312,6 @@ pub struct ImpactPlugin<H = ()> {
     /// measured (see `prev_neighbours`) when they wake.
     prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
-    /// The grounds' motions over the step and the BVH that finds those near a body.
-    pub(crate) ground_index: GroundIndex,
 }
 
 impl ImpactPlugin<()> {
@@ -339,21 +329,17 @@ impl<H> ImpactPlugin<H> {
         config.validate()?;
         Ok(Self {
             config,
-            grounds: HandleMap::default(),
-            all_fixed: false,
-            unmarked: HandleSet::default(),
-            excluded: HandleSet::default(),
+            registry: Registry {
+                flags_stale: true,
+                ..Default::default()
+            },
             user_hooks,
             step: StepData::default(),
-            hooked: HandleMap::default(),
-            flagged_grounds: SlotTable::default(),
-            hook_stamp: 0,
-            flags_registry_stale: true,
+            flags: HookFlags::default(),
             shadows: HandleMap::default(),
             prev_roles: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
-            ground_index: GroundIndex::default(),
         })
     }
 
@@ -386,25 +372,77 @@ impl<H> ImpactPlugin<H> {
 
     /// Leaves `body` to rapier entirely: its ground contacts are rapier's, bounce included.
     pub fn exclude_body(&mut self, body: RigidBodyHandle) {
-        self.excluded.insert(body);
+        self.registry.excluded.insert(body);
     }
 
     /// Undoes [`Self::exclude_body`].
     pub fn include_body(&mut self, body: RigidBodyHandle) {
-        self.excluded.remove(&body);
+        self.registry.excluded.remove(&body);
     }
 
-    /// Is the body's ground contact resolved by the plugin? Dynamic, enabled, with a
-    /// positive finite mass, no locked translation, not a soft-body frame, not excluded.
-    pub(crate) fn manages(&self, handle: RigidBodyHandle, rb: &RigidBody) -> bool {
-        let mass = to_f64(rb.mass());
-        rb.is_dynamic()
-            && rb.is_enabled()
-            && !rb.is_soft_frame()
-            && mass > 0.0
-            && mass.is_finite()
-            && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
-            && (self.excluded.is_empty() || !self.excluded.contains(&handle))
+    /// Marks one collider as ground, with the materials rapier combines from the colliders.
+    ///
+    /// The collider must exist and be parentless, or attached to a fixed or kinematic body.
+    /// Its hook flags are the user's: the plugin adds its own at each step where needed and
+    /// hands the user's to the wrapped hook.
+    pub fn add_ground(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        collider: ColliderHandle,
+    ) -> Result<(), ConfigError> {
+        self.registry.add_ground(bodies, colliders, collider)
+    }
+
+    /// Marks one collider as ground with its own material, which replaces the coefficients
+    /// rapier would combine (validated here).
+    pub fn add_ground_with_material(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        collider: ColliderHandle,
+        material: GroundMaterial,
+    ) -> Result<(), ConfigError> {
+        self.registry
+            .add_ground_with_material(bodies, colliders, collider, material)
+    }
+
+    /// Marks every collider of a fixed or kinematic body as ground.
+    pub fn add_ground_body(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        body: RigidBodyHandle,
+    ) -> Result<(), ConfigError> {
+        self.registry.add_ground_body(bodies, colliders, body)
+    }
+
+    /// Sets or clears (`None`) the material override of a ground.
+    pub fn set_ground_material(
+        &mut self,
+        collider: ColliderHandle,
+        material: Option<GroundMaterial>,
+    ) -> Result<(), ConfigError> {
+        self.registry.set_ground_material(collider, material)
+    }
+
+    /// Makes a ground an ordinary collider again. Returns whether it was a ground. The
+    /// all-fixed mode ([`Self::set_all_fixed_colliders_ground`]) does not mark it again;
+    /// [`Self::add_ground`] does.
+    pub fn remove_ground(&mut self, collider: ColliderHandle) -> bool {
+        self.registry.remove_ground(collider)
+    }
+
+    /// Every fixed collider (parentless, or on a fixed body) is ground, including those
+    /// added later; checked at each [`Self::before_step`]. Turning it off unmarks the
+    /// colliders it marked.
+    pub fn set_all_fixed_colliders_ground(&mut self, enabled: bool) {
+        self.registry.set_all_fixed_colliders_ground(enabled);
+    }
+
+    /// Is this collider a ground?
+    pub fn is_ground(&self, collider: ColliderHandle) -> bool {
+        self.registry.is_ground(collider)
     }
 
     /// The role of a managed pair in the current step (`Resting` when unknown: a pair the
@@ -428,11 +466,45 @@ impl<H> ImpactPlugin<H> {
         self.step.roles.get(key).copied().unwrap_or(Role::Resting)
     }
 
-    /// The ground entry of a collider, `None` when it is not a ground.
-    pub(crate) fn ground_entry(&self, c: ColliderHandle) -> Option<&GroundEntry> {
-        self.ground_index
-            .entry(c)
-            .unwrap_or_else(|()| self.grounds.get(&c))
+    /// The hook flags the user asked for on a collider.
+    pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
+        self.step_user_flags(c)
+            .unwrap_or_else(|| self.flags.recorded_user_flags(colliders, c))
+    }
+
+    /// `Some((body collider, ground collider))` when the pair is a managed body against a
+    /// ground.
+    pub(crate) fn managed_pair(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<PairKey> {
+        let (body, ground) = match (
+            self.registry.entry(c1).is_some(),
+            self.registry.entry(c2).is_some(),
+        ) {
+            (true, false) => (c2, c1),
+            (false, true) => (c1, c2),
+            _ => return None,
+        };
+        if let Some(parent) = colliders.get(ground)?.parent() {
+            if bodies.get(parent).is_none_or(|rb| rb.is_dynamic()) {
+                return None;
+            }
+        }
+        let parent = colliders.get(body)?.parent()?;
+        let rb = bodies.get(parent)?;
+        self.registry.manages(parent, rb).then_some((body, ground))
+    }
+
+    /// Takes the plugin's hook flags off every collider (the user's flags back) and returns
+    /// the wrapped hook. Use it to go on without the plugin: otherwise the flags it left make
+    /// rapier call the next hook for pairs the user never asked about.
+    pub fn detach(mut self, colliders: &mut ColliderSet) -> H {
+        self.flags.restore_all(colliders);
+        self.user_hooks
     }
 
     /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
@@ -442,12 +514,6 @@ impl<H> ImpactPlugin<H> {
             Some(Some((h, user))) if *h == c => Some(*user),
             _ => None,
         }
-    }
-
-    /// A ground was marked, unmarked or given a material: the hooks' ground table is stale.
-    pub(crate) fn grounds_changed(&mut self) {
-        self.ground_index.invalidate();
-        self.flags_registry_stale = true;
     }
 
     /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
@@ -536,7 +602,7 @@ impl<H> ImpactPlugin<H> {
         };
         // The hooks' tables are rebuilt at the end.
         self.step.lookup = Lookup::default();
-        self.sync_grounds(bodies, colliders);
+        self.registry.sync(bodies, colliders);
         let dt = to_f64(params.dt);
         let g = vec_to_na(gravity);
         let mut step = StepData {
@@ -556,15 +622,15 @@ impl<H> ImpactPlugin<H> {
             self.step = step;
             return;
         }
-        self.ground_index.refresh(
-            &self.grounds,
+        self.registry.index.refresh(
+            &self.registry.grounds,
             bodies,
             colliders,
             dt,
             step.policy.resting_gap,
         );
         // Lent to the step; given back at its end (`Self::after_step`).
-        step.grounds = std::mem::take(&mut self.ground_index.motions);
+        step.grounds = std::mem::take(&mut self.registry.index.motions);
         let shadows = std::mem::take(&mut self.shadows);
         let prev_roles = std::mem::take(&mut self.prev_roles);
         // About as many pairs as last step: no rehashing while the map grows.
@@ -578,7 +644,7 @@ impl<H> ImpactPlugin<H> {
         // A dynamic body the plugin does not manage decides where the hook flags go.
         let mut unmanaged = false;
         for (handle, rb) in bodies.iter() {
-            if !self.manages(handle, rb) {
+            if !self.registry.manages(handle, rb) {
                 unmanaged |= rb.is_dynamic() && rb.is_enabled();
                 continue;
             }
@@ -592,7 +658,7 @@ impl<H> ImpactPlugin<H> {
                 g_len,
                 params.dt,
                 margin,
-                &self.ground_index,
+                &self.registry.index,
                 &step.grounds,
             ) {
                 Some(true) if self.config.timing == TimingMode::Exact => {
@@ -604,7 +670,7 @@ impl<H> ImpactPlugin<H> {
                 Some(true) | None => {}
             }
         }
-        let mut near_bodies = Vec::with_capacity(self.hooked.len());
+        let mut near_bodies = Vec::with_capacity(self.flags.hooked().len());
         for handle in handles {
             let rb = &bodies[handle];
             let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
@@ -621,7 +687,8 @@ impl<H> ImpactPlugin<H> {
                 Vector::splat(super::convert::to_real(geom.radius + reach)),
             );
             let near =
-                self.ground_index
+                self.registry
+                    .index
                     .near(&step.grounds, sphere.center(), sphere.half_extents().x);
             if near.is_empty() {
                 if self.config.timing == TimingMode::Exact {
@@ -874,8 +941,10 @@ impl<H> ImpactPlugin<H> {
                 });
             }
         }
-        self.update_hook_flags(&near_bodies, unmanaged, bodies, colliders);
-        step.lookup = Lookup::build(&step.roles, &self.hooked);
+        self.flags
+            .update(&self.registry, &near_bodies, unmanaged, bodies, colliders);
+        self.registry.flags_stale = false;
+        step.lookup = Lookup::build(&step.roles, self.flags.hooked());
         self.step = step;
     }
 
@@ -906,7 +975,7 @@ impl<H> ImpactPlugin<H> {
         self.prev_roles = std::mem::take(&mut step.roles);
         // The grounds' actual motion over the step.
         let dt = step.dt;
-        for i in self.ground_index.moving() {
+        for i in self.registry.index.moving() {
             let gm = &mut step.data.grounds[*i];
             if let Some(bh) = gm.body {
                 if let Some(rb) = bodies.get(bh) {
@@ -926,7 +995,7 @@ impl<H> ImpactPlugin<H> {
         for handle in &step.asleep {
             if bodies
                 .get(*handle)
-                .is_some_and(|rb| !rb.is_sleeping() && self.manages(*handle, rb))
+                .is_some_and(|rb| !rb.is_sleeping() && self.registry.manages(*handle, rb))
             {
                 self.woken_end(bodies, colliders, *handle, &step);
             }
@@ -938,7 +1007,7 @@ impl<H> ImpactPlugin<H> {
             // step in `Exact` mode (a box resting flat went 6.9 mm into the ground at 30 Hz).
             if !bodies
                 .get(cand.body)
-                .is_some_and(|rb| self.manages(cand.body, rb) && !rb.is_sleeping())
+                .is_some_and(|rb| self.registry.manages(cand.body, rb) && !rb.is_sleeping())
             {
                 continue;
             }
@@ -1175,7 +1244,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
-        self.ground_index.motions = std::mem::take(&mut step.data.grounds);
+        self.registry.index.motions = std::mem::take(&mut step.data.grounds);
     }
 
     /// Keeps the `f64` state of a body just written in `Exact` mode.
@@ -1608,7 +1677,8 @@ impl<H> ImpactPlugin<H> {
         let com = rb.center_of_mass();
         let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
         let grounds: SmallList<GroundGeom> = self
-            .ground_index
+            .registry
+            .index
             .near(&step.grounds, com, half)
             .iter()
             .filter_map(|i| {
@@ -1819,8 +1889,8 @@ impl<H> ImpactPlugin<H> {
         non_ground_contacts(
             rb,
             sets.narrow_phase,
-            &self.ground_index,
-            &self.grounds,
+            &self.registry.index,
+            &self.registry.grounds,
             down,
         )
     }
@@ -1832,7 +1902,7 @@ impl<H> ImpactPlugin<H> {
         body: ColliderHandle,
         ground: ColliderHandle,
     ) -> Material {
-        let over = self.grounds.get(&ground).and_then(|g| g.material);
+        let over = self.registry.grounds.get(&ground).and_then(|g| g.material);
         match (colliders.get(body), colliders.get(ground)) {
             (Some(b), Some(g)) => material(b, g, over),
             _ => over.unwrap_or(Material {

@@ -9,12 +9,12 @@ mod events;
 mod filter;
 mod geometry;
 mod ground_index;
-mod grounds;
 mod handles;
 mod hook_flags;
 mod hooks;
 mod impact_plugin;
 mod policy;
+mod registry;
 mod resolve;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};

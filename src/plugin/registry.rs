@@ -1,14 +1,37 @@
-//! Ground registration: which colliders are ground, and their optional material.
+//! Which colliders are ground (and their material overrides), and which bodies the plugin
+//! manages.
 //!
-//! Marking a ground changes nothing in the collider set: the plugin's hook flags are put on
-//! at each step (see `hook_flags.rs`).
+//! Contract: the only state here is what the user registered (grounds, the all-fixed mode,
+//! exclusions) and the ground index built from it; marking a ground changes nothing in the
+//! collider set (the plugin's hook flags are put on at each step, `hook_flags.rs`). Every
+//! registration is validated at the call that makes it ([`ConfigError`]).
 
 use super::config::{ConfigError, GroundMaterial};
-use super::ground_index::GroundEntry;
-use super::impact_plugin::ImpactPlugin;
-use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+use super::convert::to_f64;
+use super::ground_index::{GroundEntry, GroundIndex};
+use super::handles::{HandleMap, HandleSet};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
+};
 
-impl<H> ImpactPlugin<H> {
+/// The grounds and the managed bodies (see the module's contract).
+#[derive(Default)]
+pub(crate) struct Registry {
+    pub grounds: HandleMap<ColliderHandle, GroundEntry>,
+    /// Every fixed collider is ground ([`crate::ImpactPlugin::set_all_fixed_colliders_ground`]).
+    pub all_fixed: bool,
+    /// Colliders unmarked by `remove_ground`: the all-fixed mode leaves them alone until
+    /// `add_ground` marks them again.
+    pub unmarked: HandleSet<ColliderHandle>,
+    /// Bodies left to rapier entirely.
+    pub excluded: HandleSet<RigidBodyHandle>,
+    /// The grounds' motions over the step and the BVH that finds those near a body.
+    pub index: GroundIndex,
+    /// A ground was unmarked since the grounds' hook flags were last put in place.
+    pub flags_stale: bool,
+}
+
+impl Registry {
     /// Marks one collider as ground, with the materials rapier combines from the colliders.
     ///
     /// The collider must exist and be parentless, or attached to a fixed or kinematic body.
@@ -66,7 +89,7 @@ impl<H> ImpactPlugin<H> {
         if let Some(m) = &material {
             m.validate()?;
         }
-        self.grounds_changed();
+        self.changed();
         let entry = self
             .grounds
             .get_mut(&collider)
@@ -83,8 +106,8 @@ impl<H> ImpactPlugin<H> {
         self.unmark(collider)
     }
 
-    fn unmark(&mut self, collider: ColliderHandle) -> bool {
-        self.grounds_changed();
+    pub fn unmark(&mut self, collider: ColliderHandle) -> bool {
+        self.changed();
         self.grounds.remove(&collider).is_some()
     }
 
@@ -111,14 +134,14 @@ impl<H> ImpactPlugin<H> {
         self.grounds.contains_key(&collider)
     }
 
-    fn insert_ground(
+    pub fn insert_ground(
         &mut self,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
         collider: ColliderHandle,
         material: Option<GroundMaterial>,
     ) -> Result<(), ConfigError> {
-        self.grounds_changed();
+        self.changed();
         let co = colliders
             .get(collider)
             .ok_or(ConfigError::NotACollider(collider))?;
@@ -140,7 +163,7 @@ impl<H> ImpactPlugin<H> {
 
     /// Keeps the registry in step with the sets: forgets removed colliders, marks new fixed
     /// colliders in all-fixed mode.
-    pub(crate) fn sync_grounds(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
+    pub fn sync(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
         self.unmarked.retain(|h| colliders.get(*h).is_some());
         if self.all_fixed {
@@ -150,7 +173,7 @@ impl<H> ImpactPlugin<H> {
                     // The index's table first: a hash lookup per collider per step cost as
                     // much as the rest of the plugin on a floor of 4 096 tiles.
                     let marked = self
-                        .ground_index
+                        .index
                         .entry(*h)
                         .map_or_else(|()| self.grounds.contains_key(h), |e| e.is_some());
                     !marked
@@ -162,7 +185,7 @@ impl<H> ImpactPlugin<H> {
                 .map(|(h, _)| h)
                 .collect();
             if !new.is_empty() {
-                self.grounds_changed();
+                self.changed();
             }
             for h in new {
                 self.grounds.insert(
@@ -174,5 +197,33 @@ impl<H> ImpactPlugin<H> {
                 );
             }
         }
+    }
+
+    /// A ground was marked, unmarked or given a material: the index and the hooks' ground
+    /// table are stale.
+    pub fn changed(&mut self) {
+        self.index.invalidate();
+        self.flags_stale = true;
+    }
+
+    /// The ground entry of a collider, `None` when it is not a ground.
+    #[inline]
+    pub fn entry(&self, c: ColliderHandle) -> Option<&GroundEntry> {
+        self.index
+            .entry(c)
+            .unwrap_or_else(|()| self.grounds.get(&c))
+    }
+
+    /// Is the body's ground contact resolved by the plugin? Dynamic, enabled, with a
+    /// positive finite mass, no locked translation, not a soft-body frame, not excluded.
+    pub fn manages(&self, handle: RigidBodyHandle, rb: &RigidBody) -> bool {
+        let mass = to_f64(rb.mass());
+        rb.is_dynamic()
+            && rb.is_enabled()
+            && !rb.is_soft_frame()
+            && mass > 0.0
+            && mass.is_finite()
+            && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
+            && (self.excluded.is_empty() || !self.excluded.contains(&handle))
     }
 }
