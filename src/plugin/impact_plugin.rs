@@ -11,31 +11,37 @@
 //!   start-of-step state (or at the step end as a fallback), integrates free flight exactly
 //!   in `Exact` mode, writes poses and velocities back (woken up) and moves the colliders.
 
+use super::commit::{Shadow, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
-use super::convert::{pose_to_na, rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
+use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, flat_throughout, landing_point,
 };
-use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
+use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::{HookFlags, HookedBody};
-use super::policy::{DeepResting, LOADED_COS, Policy, ROLLING_MIN_SLIP};
+use super::observe::{
+    NonGround, body_geom, centred_ball, ground_geom, non_ground_contacts, rapier_state, snapshot,
+    surely_far, touches_other,
+};
+use super::policy::{DeepResting, Policy, ROLLING_MIN_SLIP};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
+use super::settle::{capped_energy, put_on_ground};
 use crate::model::Material;
-use crate::motion::{Flight, Gyro, Rolling, State};
-use crate::rapier::math::{Pose, Real, Vector};
+use crate::motion::{Flight, Rolling, State};
+use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
-    LockedAxes, MultibodyJointSet, NarrowPhase, PairFilterContext, PhysicsHooks, PhysicsWorld,
-    RigidBody, RigidBodyHandle, RigidBodySet, SolverFlags,
+    MultibodyJointSet, NarrowPhase, PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBody,
+    RigidBodyHandle, RigidBodySet, SolverFlags,
 };
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,16 +114,6 @@ impl Candidate {
             rolling: None,
         }
     }
-}
-
-/// Exact-mode `f64` state of a body as last written, so the next step continues from it
-/// rather than from its rounding.
-#[derive(Clone, Copy, Debug)]
-struct Shadow {
-    com: Vector3<f64>,
-    v: Vector3<f64>,
-    written_translation: Vector,
-    written_linvel: Vector,
 }
 
 #[derive(Default)]
@@ -1249,15 +1245,7 @@ impl<H> ImpactPlugin<H> {
 
     /// Keeps the `f64` state of a body just written in `Exact` mode.
     fn remember(&mut self, handle: RigidBodyHandle, rb: &RigidBody, s: &State) {
-        self.shadows.insert(
-            handle,
-            Shadow {
-                com: s.com,
-                v: s.v,
-                written_translation: rb.translation(),
-                written_linvel: rb.linvel(),
-            },
-        );
+        self.shadows.insert(handle, Shadow::of(rb, s));
     }
 
     /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
@@ -1913,64 +1901,6 @@ impl<H> ImpactPlugin<H> {
     }
 }
 
-/// The cheap test before any snapshot or geometry, in rapier's precision from what rapier
-/// holds: `Some(true)` when the body's swept bounding sphere, grown beyond the one
-/// [`ImpactPlugin::before_step`] tests (speed bounds over the step, a relative `1e-4` for
-/// rounding and the `f64` shadow), misses every ground's AABB, so that test would find no
-/// ground near either; `None` when the body has no collider to query (as [`body_geom`]).
-fn surely_far(
-    rb: &RigidBody,
-    colliders: &ColliderSet,
-    gravity: Real,
-    dt: Real,
-    margin: Real,
-    index: &GroundIndex,
-    grounds: &[GroundMotion],
-) -> Option<bool> {
-    let local_com = rb.local_center_of_mass();
-    let mut radius: Option<Real> = None;
-    for ch in rb.colliders() {
-        let Some(co) = colliders.get(*ch) else {
-            continue;
-        };
-        if !co.is_enabled() || co.is_sensor() {
-            continue;
-        }
-        let bs = co.shape().compute_local_bounding_sphere();
-        let center = match co.position_wrt_parent() {
-            Some(pose) if bs.center == Vector::ZERO => pose.translation,
-            Some(pose) => pose.transform_point(bs.center),
-            None => bs.center,
-        };
-        let r = (center - local_com).length() + bs.radius + co.contact_skin();
-        radius = Some(radius.map_or(r, |x| x.max(r)));
-    }
-    let radius = radius?;
-    let com = rb.center_of_mass();
-    let (v, w, force) = (rb.linvel(), rb.angvel(), rb.user_force());
-    let mut accel = gravity * rb.gravity_scale().abs();
-    if force != Vector::ZERO {
-        accel += force.length() / rb.mass();
-    }
-    let mut speed = v.length() + accel * dt;
-    if w != Vector::ZERO {
-        // Torque-free motion speeds an anisotropic body's spin up by at most I_max / I_min.
-        let inv = rb.mass_properties().local_mprops.inv_principal_inertia;
-        let spin_up = if inv.is_finite() && inv.min_element() > 0.0 {
-            1.02 * inv.max_element() / inv.min_element()
-        } else {
-            1.0
-        };
-        speed += spin_up * w.length() * radius;
-    }
-    let half = (radius + speed * dt + margin) * 1.0001
-        + 1e-4 * (1.0 + com.abs().max_element() + local_com.length());
-    if !half.is_finite() || !com.is_finite() {
-        return Some(false);
-    }
-    Some(!index.any_near(grounds, com, half))
-}
-
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
 /// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
 fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
@@ -1983,351 +1913,4 @@ fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
         return t > 0.0 && t < dt && at(t) <= 0.0;
     }
     false
-}
-
-/// The start-of-step state of a body: its `f64` shadow if rapier still holds exactly what
-/// the plugin wrote, else rapier's values.
-fn snapshot(
-    rb: &RigidBody,
-    gravity: Vector3<f64>,
-    dt: f64,
-    shadow: Option<&Shadow>,
-) -> (State, Flight, Vector3<f64>) {
-    let local_com = vec_to_na(rb.local_center_of_mass());
-    let mut state = rapier_state(rb);
-    if let Some(sh) = shadow {
-        if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
-            state.com = sh.com;
-            state.v = sh.v;
-        }
-    }
-    let mass = to_f64(rb.mass());
-    let flight = Flight {
-        accel: gravity * to_f64(rb.gravity_scale()) + vec_to_na(rb.user_force()) / mass,
-        linear_damping: to_f64(rb.linear_damping()).max(0.0),
-        angular_damping: to_f64(rb.angular_damping()).max(0.0),
-        gyro: gyro_of(rb, dt),
-    };
-    (state, flight, local_com)
-}
-
-/// The torque-free rotation of a body, as rapier treats it: `None` (constant-axis spin)
-/// when rapier's gyroscopic forces are off for the body (it then keeps `w` constant in
-/// flight), a rotation axis is locked, or the inertia is isotropic.
-fn gyro_of(rb: &RigidBody, dt: f64) -> Option<Gyro> {
-    if !rb.gyroscopic_forces_enabled() || rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED) {
-        return None;
-    }
-    let mp = &rb.mass_properties().local_mprops;
-    let inv = vec_to_na(mp.inv_principal_inertia);
-    Gyro::new(
-        inv.map(|x| 1.0 / x),
-        rot_to_na(mp.principal_inertia_local_frame),
-        dt,
-    )
-}
-
-/// The body's enabled, non-sensor colliders in its centre-of-mass frame.
-fn body_geom<'a>(
-    rb: &RigidBody,
-    colliders: &'a ColliderSet,
-    local_com: &Vector3<f64>,
-) -> BodyGeom<'a> {
-    let mut parts = SmallList::Empty;
-    let mut radius: f64 = 0.0;
-    for ch in rb.colliders() {
-        let Some(co) = colliders.get(*ch) else {
-            continue;
-        };
-        if !co.is_enabled() || co.is_sensor() {
-            continue;
-        }
-        let local =
-            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
-                * co.position_wrt_parent()
-                    .map_or(Isometry3::identity(), pose_to_na);
-        let bs = co.shape().compute_local_bounding_sphere();
-        let center = local * nalgebra::Point3::from(vec_to_na(bs.center));
-        let skin = to_f64(co.contact_skin());
-        radius = radius.max(center.coords.norm() + to_f64(bs.radius) + skin);
-        parts.push(BodyPart {
-            handle: *ch,
-            shape: co.shape(),
-            local,
-            skin,
-        });
-    }
-    BodyGeom { parts, radius }
-}
-
-/// The body's state as rapier holds it, in `f64`.
-fn rapier_state(rb: &RigidBody) -> State {
-    State {
-        com: vec_to_na(rb.center_of_mass()),
-        rot: rot_to_na(*rb.rotation()),
-        v: vec_to_na(rb.linvel()),
-        w: vec_to_na(rb.angvel()),
-    }
-}
-
-/// Is the part a ball centred on the body's centre of mass (it cannot swing about a
-/// contact)?
-fn centred_ball(part: &BodyPart) -> bool {
-    part.shape.as_ball().is_some_and(|b| {
-        part.local.translation.vector.norm() <= 1e-9 * super::convert::to_f64(b.radius)
-    })
-}
-
-/// A ground's geometry for the queries, if its collider still exists.
-fn ground_geom<'a>(gm: &GroundMotion, colliders: &'a ColliderSet) -> Option<GroundGeom<'a>> {
-    let co = colliders.get(gm.handle)?;
-    Some(GroundGeom {
-        handle: gm.handle,
-        shape: co.shape(),
-        skin: to_f64(co.contact_skin()),
-        com0: gm.com0,
-        rot0: gm.rot0,
-        local: gm.local,
-        v: gm.v,
-        w: gm.w,
-        pose0: Isometry3::from_parts(Translation3::from(gm.com0), gm.rot0) * gm.local,
-        skip: Vec::new(),
-    })
-}
-
-/// Does the body have a contact in rapier's solver this step (other than the pairs taken
-/// from it)?
-fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
-    rb.colliders().iter().any(|ch| {
-        narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            pair.solver_manifolds().iter().any(|m| {
-                m.data
-                    .solver_flags
-                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                    && !m.data.solver_contacts.is_empty()
-            })
-        })
-    })
-}
-
-/// What touches a body besides its grounds, from rapier's contact graph after a step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct NonGround {
-    /// A pair with something other than a ground (another body, a wall) in the narrow phase
-    /// (their bounding boxes overlap, touching or not).
-    near: bool,
-    /// Such a pair with solver contacts.
-    touching: bool,
-    /// One of those contacts pushes the body within 60 degrees of `down` (something lies on
-    /// it), or any does without gravity (`down` zero). Balls side by side or a wall push it
-    /// sideways or up.
-    loaded: bool,
-}
-
-impl NonGround {
-    /// A body with a joint: treated as touched, loaded and crowded.
-    const JOINTED: Self = Self {
-        near: true,
-        touching: true,
-        loaded: true,
-    };
-}
-
-/// `s` moved out of the ground along `hit`'s normal and, if `stop`, without its speed into
-/// the ground: what a resting contact holds a ball at (for a ball, an `e = 0` frictionless
-/// normal impulse, through its centre).
-fn put_on_ground(s: &mut State, hit: &super::geometry::Hit, stop: bool) {
-    s.com -= hit.normal * hit.dist;
-    let vn = hit.normal.dot(&s.v);
-    if stop && vn < 0.0 {
-        s.v -= hit.normal * vn;
-    }
-}
-
-/// The body's pairs with colliders that are not grounds, in rapier's narrow phase after a step
-/// (see [`NonGround`]).
-fn non_ground_contacts(
-    rb: &RigidBody,
-    narrow_phase: &NarrowPhase,
-    index: &GroundIndex,
-    grounds: &HandleMap<ColliderHandle, GroundEntry>,
-    down: &Vector3<f64>,
-) -> NonGround {
-    let is_ground = |c: &ColliderHandle| {
-        index
-            .entry(*c)
-            .map_or_else(|()| grounds.contains_key(c), |e| e.is_some())
-    };
-    let mut found = NonGround::default();
-    for ch in rb.colliders() {
-        for pair in narrow_phase.contact_pairs_with(*ch) {
-            let (other, first) = if pair.collider1 == *ch {
-                (pair.collider2, true)
-            } else {
-                (pair.collider1, false)
-            };
-            if is_ground(&other) {
-                continue;
-            }
-            found.near = true;
-            for m in pair.solver_manifolds() {
-                if !m
-                    .data
-                    .solver_flags
-                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                    || m.data.solver_contacts.is_empty()
-                {
-                    continue;
-                }
-                found.touching = true;
-                // rapier pushes the first collider's body along -normal, the second's along
-                // +normal.
-                let normal = vec_to_na(m.data.normal);
-                let push = if first { -normal } else { normal };
-                if *down == Vector3::zeros() || push.dot(down) > LOADED_COS {
-                    found.loaded = true;
-                    return found;
-                }
-            }
-        }
-    }
-    found
-}
-
-/// `end` with its velocities scaled down by one factor (directions kept) so that its
-/// mechanical energy `1/2 m v^2 + 1/2 w.I w - m a.x` (`a` the flight's constant acceleration)
-/// is no more than `start`'s, or `None` when it already is (within the rounding of the
-/// potential at rapier's precision, so that `f32` positions far from the origin do not
-/// drain a slow body). When even the potential energy exceeds the start's energy, the body
-/// is left at rest.
-fn capped_energy(start: &State, end: &State, flight: &Flight, inertia: &Inertia) -> Option<State> {
-    let energy = |s: &State| {
-        let velocity = crate::model::BodyVelocity {
-            linear: s.v,
-            angular: s.w,
-        };
-        let kinetic = inertia.body_at(&s.rot).kinetic_energy(&velocity);
-        (kinetic, kinetic - inertia.mass * flight.accel.dot(&s.com))
-    };
-    let (_, start_total) = energy(start);
-    let (end_kinetic, end_total) = energy(end);
-    let rounding = inertia.mass
-        * flight.accel.norm()
-        * to_f64(Real::EPSILON)
-        * (1.0 + start.com.norm() + end.com.norm());
-    if !(end_total > start_total + rounding && end_kinetic > 0.0) {
-        return None;
-    }
-    let scale = ((end_kinetic - (end_total - start_total)).max(0.0) / end_kinetic).sqrt();
-    Some(State {
-        v: end.v * scale,
-        w: end.w * scale,
-        ..*end
-    })
-}
-
-/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
-/// the translation and linear velocity only, keeping rapier's rotation.
-fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
-    if full {
-        let translation = s.com - s.rot * local_com;
-        rb.set_position(
-            Pose::from_parts(vec_from_na(&translation), rot_from_na(&s.rot)),
-            true,
-        );
-        rb.set_angvel(vec_from_na(&s.w), true);
-    } else {
-        let rot = rot_to_na(*rb.rotation());
-        let translation = s.com - rot * local_com;
-        rb.set_translation(vec_from_na(&translation), true);
-    }
-    rb.set_linvel(vec_from_na(&s.v), true);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::rapier::prelude::{ColliderBuilder, RigidBodyBuilder};
-
-    /// A 0.3 x 0.2 x 0.1 m brick (density 1): its inertia, and the flight under gravity.
-    fn brick() -> (Inertia, Flight) {
-        let mut world = crate::rapier::prelude::PhysicsWorld::default();
-        let (handle, _) = world.insert(
-            RigidBodyBuilder::dynamic(),
-            ColliderBuilder::cuboid(0.15, 0.1, 0.05),
-        );
-        let flight = Flight {
-            accel: Vector3::new(0.0, -9.81, 0.0),
-            linear_damping: 0.0,
-            angular_damping: 0.0,
-            gyro: None,
-        };
-        (Inertia::of(&world.bodies[handle]), flight)
-    }
-
-    fn total_energy(s: &State, inertia: &Inertia, flight: &Flight) -> f64 {
-        let velocity = crate::model::BodyVelocity {
-            linear: s.v,
-            angular: s.w,
-        };
-        inertia.body_at(&s.rot).kinetic_energy(&velocity) - inertia.mass * flight.accel.dot(&s.com)
-    }
-
-    #[test]
-    fn a_lift_that_adds_energy_is_paid_from_the_speeds() {
-        let (inertia, flight) = brick();
-        let rot = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7);
-        let start = State {
-            com: Vector3::new(0.0, 0.1, 0.0),
-            rot,
-            v: Vector3::new(0.5, -0.2, 0.1),
-            w: Vector3::new(1.0, 2.0, -3.0),
-        };
-        // Pushed 4 mm up at the end with the start's velocities: more energy than at start.
-        let end = State {
-            com: Vector3::new(0.01, 0.104, 0.0),
-            ..start
-        };
-        let capped = capped_energy(&start, &end, &flight, &inertia).expect("energy was gained");
-        let (e0, e1) = (
-            total_energy(&start, &inertia, &flight),
-            total_energy(&capped, &inertia, &flight),
-        );
-        assert!((e1 - e0).abs() <= 1e-12 * e0.abs(), "{e0} -> {e1}");
-        // One factor for both velocities, below 1; the pose untouched.
-        let k = capped.v.norm() / end.v.norm();
-        assert!(k < 1.0 && k > 0.0);
-        assert!((capped.v - end.v * k).norm() < 1e-15 && (capped.w - end.w * k).norm() < 1e-14);
-        assert_eq!((capped.com, capped.rot), (end.com, end.rot));
-    }
-
-    #[test]
-    fn a_state_without_gain_is_left_alone_and_a_lift_beyond_the_energy_stops_the_body() {
-        let (inertia, flight) = brick();
-        let start = State {
-            com: Vector3::new(0.0, 0.1, 0.0),
-            rot: UnitQuaternion::identity(),
-            v: Vector3::new(0.0, -0.3, 0.0),
-            w: Vector3::zeros(),
-        };
-        // Lower and as fast: energy lost.
-        let lower = State {
-            com: Vector3::new(0.0, 0.09, 0.0),
-            ..start
-        };
-        assert_eq!(capped_energy(&start, &lower, &flight, &inertia), None);
-        // Lifted 1 cm: more than 1/2 v^2 / g = 4.6 mm can pay for.
-        let lifted = State {
-            com: Vector3::new(0.0, 0.11, 0.0),
-            ..start
-        };
-        let capped = capped_energy(&start, &lifted, &flight, &inertia).unwrap();
-        assert_eq!((capped.v, capped.w), (Vector3::zeros(), Vector3::zeros()));
-        // At rest and lifted: nothing to scale, nothing done.
-        let resting = State {
-            v: Vector3::zeros(),
-            ..lifted
-        };
-        assert_eq!(capped_energy(&start, &resting, &flight, &inertia), None);
-    }
 }

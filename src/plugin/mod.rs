@@ -3,6 +3,7 @@
 //! events. The only module that touches rapier types; the impulses come from
 //! [`crate::model`]. See [`crate::docs::integration`].
 
+mod commit;
 mod config;
 mod convert;
 mod events;
@@ -13,9 +14,11 @@ mod handles;
 mod hook_flags;
 mod hooks;
 mod impact_plugin;
+mod observe;
 mod policy;
 mod registry;
 mod resolve;
+mod settle;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
 pub use events::{EventKind, ImpactEvent, ImpactTiming};

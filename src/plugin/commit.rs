@@ -1,0 +1,53 @@
+//! Commit: the one place the step writes a body's state into rapier, and what the plugin
+//! remembers of what it wrote.
+//!
+//! Contract: [`write_state`] sets a body's pose and velocities (woken up) from an `f64` state;
+//! [`Shadow`] keeps, for `Exact` mode, the `f64` state behind what was written, so that the
+//! next step continues from it rather than from its rounding to rapier's precision, as long
+//! as rapier still holds exactly what was written.
+
+use super::convert::{rot_from_na, rot_to_na, vec_from_na};
+use crate::motion::State;
+use crate::rapier::math::{Pose, Vector};
+use crate::rapier::prelude::RigidBody;
+use nalgebra::Vector3;
+
+/// Exact-mode `f64` state of a body as last written, so the next step continues from it
+/// rather than from its rounding.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shadow {
+    pub com: Vector3<f64>,
+    pub v: Vector3<f64>,
+    pub written_translation: Vector,
+    pub written_linvel: Vector,
+}
+
+impl Shadow {
+    /// The shadow of the state `s` just written into `rb`.
+    pub fn of(rb: &RigidBody, s: &State) -> Self {
+        Self {
+            com: s.com,
+            v: s.v,
+            written_translation: rb.translation(),
+            written_linvel: rb.linvel(),
+        }
+    }
+}
+
+/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
+/// the translation and linear velocity only, keeping rapier's rotation.
+pub(crate) fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
+    if full {
+        let translation = s.com - s.rot * local_com;
+        rb.set_position(
+            Pose::from_parts(vec_from_na(&translation), rot_from_na(&s.rot)),
+            true,
+        );
+        rb.set_angvel(vec_from_na(&s.w), true);
+    } else {
+        let rot = rot_to_na(*rb.rotation());
+        let translation = s.com - rot * local_com;
+        rb.set_translation(vec_from_na(&translation), true);
+    }
+    rb.set_linvel(vec_from_na(&s.v), true);
+}

@@ -1,0 +1,280 @@
+//! Observe: what the step reads of rapier, in `f64`, before anything is decided or written.
+//!
+//! Contract: every function here reads rapier's sets (and the plugin's own memory of what it
+//! wrote, [`Shadow`]) and writes nothing. A body's start-of-step state and flight
+//! ([`snapshot`]), its colliders in its centre-of-mass frame ([`body_geom`]), a ground's
+//! geometry for the queries ([`ground_geom`]), the cheap far-from-every-ground test
+//! ([`surely_far`]), and what touches a body besides its grounds in rapier's contact graph
+//! ([`non_ground_contacts`], [`touches_other`]).
+
+use super::commit::Shadow;
+use super::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
+use super::geometry::{BodyGeom, BodyPart, GroundGeom, SmallList};
+use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
+use super::handles::HandleMap;
+use super::policy::LOADED_COS;
+use crate::motion::{Flight, Gyro, State};
+use crate::rapier::math::{Real, Vector};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, LockedAxes, NarrowPhase, RigidBody, SolverFlags,
+};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+/// The cheap test before any snapshot or geometry, in rapier's precision from what rapier
+/// holds: `Some(true)` when the body's swept bounding sphere, grown beyond the one
+/// [`ImpactPlugin::before_step`] tests (speed bounds over the step, a relative `1e-4` for
+/// rounding and the `f64` shadow), misses every ground's AABB, so that test would find no
+/// ground near either; `None` when the body has no collider to query (as [`body_geom`]).
+pub(crate) fn surely_far(
+    rb: &RigidBody,
+    colliders: &ColliderSet,
+    gravity: Real,
+    dt: Real,
+    margin: Real,
+    index: &GroundIndex,
+    grounds: &[GroundMotion],
+) -> Option<bool> {
+    let local_com = rb.local_center_of_mass();
+    let mut radius: Option<Real> = None;
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        if !co.is_enabled() || co.is_sensor() {
+            continue;
+        }
+        let bs = co.shape().compute_local_bounding_sphere();
+        let center = match co.position_wrt_parent() {
+            Some(pose) if bs.center == Vector::ZERO => pose.translation,
+            Some(pose) => pose.transform_point(bs.center),
+            None => bs.center,
+        };
+        let r = (center - local_com).length() + bs.radius + co.contact_skin();
+        radius = Some(radius.map_or(r, |x| x.max(r)));
+    }
+    let radius = radius?;
+    let com = rb.center_of_mass();
+    let (v, w, force) = (rb.linvel(), rb.angvel(), rb.user_force());
+    let mut accel = gravity * rb.gravity_scale().abs();
+    if force != Vector::ZERO {
+        accel += force.length() / rb.mass();
+    }
+    let mut speed = v.length() + accel * dt;
+    if w != Vector::ZERO {
+        // Torque-free motion speeds an anisotropic body's spin up by at most I_max / I_min.
+        let inv = rb.mass_properties().local_mprops.inv_principal_inertia;
+        let spin_up = if inv.is_finite() && inv.min_element() > 0.0 {
+            1.02 * inv.max_element() / inv.min_element()
+        } else {
+            1.0
+        };
+        speed += spin_up * w.length() * radius;
+    }
+    let half = (radius + speed * dt + margin) * 1.0001
+        + 1e-4 * (1.0 + com.abs().max_element() + local_com.length());
+    if !half.is_finite() || !com.is_finite() {
+        return Some(false);
+    }
+    Some(!index.any_near(grounds, com, half))
+}
+
+/// The start-of-step state of a body: its `f64` shadow if rapier still holds exactly what
+/// the plugin wrote, else rapier's values.
+pub(crate) fn snapshot(
+    rb: &RigidBody,
+    gravity: Vector3<f64>,
+    dt: f64,
+    shadow: Option<&Shadow>,
+) -> (State, Flight, Vector3<f64>) {
+    let local_com = vec_to_na(rb.local_center_of_mass());
+    let mut state = rapier_state(rb);
+    if let Some(sh) = shadow {
+        if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
+            state.com = sh.com;
+            state.v = sh.v;
+        }
+    }
+    let mass = to_f64(rb.mass());
+    let flight = Flight {
+        accel: gravity * to_f64(rb.gravity_scale()) + vec_to_na(rb.user_force()) / mass,
+        linear_damping: to_f64(rb.linear_damping()).max(0.0),
+        angular_damping: to_f64(rb.angular_damping()).max(0.0),
+        gyro: gyro_of(rb, dt),
+    };
+    (state, flight, local_com)
+}
+
+/// The torque-free rotation of a body, as rapier treats it: `None` (constant-axis spin)
+/// when rapier's gyroscopic forces are off for the body (it then keeps `w` constant in
+/// flight), a rotation axis is locked, or the inertia is isotropic.
+pub(crate) fn gyro_of(rb: &RigidBody, dt: f64) -> Option<Gyro> {
+    if !rb.gyroscopic_forces_enabled() || rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED) {
+        return None;
+    }
+    let mp = &rb.mass_properties().local_mprops;
+    let inv = vec_to_na(mp.inv_principal_inertia);
+    Gyro::new(
+        inv.map(|x| 1.0 / x),
+        rot_to_na(mp.principal_inertia_local_frame),
+        dt,
+    )
+}
+
+/// The body's enabled, non-sensor colliders in its centre-of-mass frame.
+pub(crate) fn body_geom<'a>(
+    rb: &RigidBody,
+    colliders: &'a ColliderSet,
+    local_com: &Vector3<f64>,
+) -> BodyGeom<'a> {
+    let mut parts = SmallList::Empty;
+    let mut radius: f64 = 0.0;
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        if !co.is_enabled() || co.is_sensor() {
+            continue;
+        }
+        let local =
+            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
+                * co.position_wrt_parent()
+                    .map_or(Isometry3::identity(), pose_to_na);
+        let bs = co.shape().compute_local_bounding_sphere();
+        let center = local * nalgebra::Point3::from(vec_to_na(bs.center));
+        let skin = to_f64(co.contact_skin());
+        radius = radius.max(center.coords.norm() + to_f64(bs.radius) + skin);
+        parts.push(BodyPart {
+            handle: *ch,
+            shape: co.shape(),
+            local,
+            skin,
+        });
+    }
+    BodyGeom { parts, radius }
+}
+
+/// The body's state as rapier holds it, in `f64`.
+pub(crate) fn rapier_state(rb: &RigidBody) -> State {
+    State {
+        com: vec_to_na(rb.center_of_mass()),
+        rot: rot_to_na(*rb.rotation()),
+        v: vec_to_na(rb.linvel()),
+        w: vec_to_na(rb.angvel()),
+    }
+}
+
+/// Is the part a ball centred on the body's centre of mass (it cannot swing about a
+/// contact)?
+pub(crate) fn centred_ball(part: &BodyPart) -> bool {
+    part.shape.as_ball().is_some_and(|b| {
+        part.local.translation.vector.norm() <= 1e-9 * crate::plugin::convert::to_f64(b.radius)
+    })
+}
+
+/// A ground's geometry for the queries, if its collider still exists.
+pub(crate) fn ground_geom<'a>(
+    gm: &GroundMotion,
+    colliders: &'a ColliderSet,
+) -> Option<GroundGeom<'a>> {
+    let co = colliders.get(gm.handle)?;
+    Some(GroundGeom {
+        handle: gm.handle,
+        shape: co.shape(),
+        skin: to_f64(co.contact_skin()),
+        com0: gm.com0,
+        rot0: gm.rot0,
+        local: gm.local,
+        v: gm.v,
+        w: gm.w,
+        pose0: Isometry3::from_parts(Translation3::from(gm.com0), gm.rot0) * gm.local,
+        skip: Vec::new(),
+    })
+}
+
+/// Does the body have a contact in rapier's solver this step (other than the pairs taken
+/// from it)?
+pub(crate) fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
+    rb.colliders().iter().any(|ch| {
+        narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            pair.solver_manifolds().iter().any(|m| {
+                m.data
+                    .solver_flags
+                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                    && !m.data.solver_contacts.is_empty()
+            })
+        })
+    })
+}
+
+/// What touches a body besides its grounds, from rapier's contact graph after a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct NonGround {
+    /// A pair with something other than a ground (another body, a wall) in the narrow phase
+    /// (their bounding boxes overlap, touching or not).
+    pub near: bool,
+    /// Such a pair with solver contacts.
+    pub touching: bool,
+    /// One of those contacts pushes the body within 60 degrees of `down` (something lies on
+    /// it), or any does without gravity (`down` zero). Balls side by side or a wall push it
+    /// sideways or up.
+    pub loaded: bool,
+}
+
+impl NonGround {
+    /// A body with a joint: treated as touched, loaded and crowded.
+    pub const JOINTED: Self = Self {
+        near: true,
+        touching: true,
+        loaded: true,
+    };
+}
+
+/// The body's pairs with colliders that are not grounds, in rapier's narrow phase after a step
+/// (see [`NonGround`]).
+pub(crate) fn non_ground_contacts(
+    rb: &RigidBody,
+    narrow_phase: &NarrowPhase,
+    index: &GroundIndex,
+    grounds: &HandleMap<ColliderHandle, GroundEntry>,
+    down: &Vector3<f64>,
+) -> NonGround {
+    let is_ground = |c: &ColliderHandle| {
+        index
+            .entry(*c)
+            .map_or_else(|()| grounds.contains_key(c), |e| e.is_some())
+    };
+    let mut found = NonGround::default();
+    for ch in rb.colliders() {
+        for pair in narrow_phase.contact_pairs_with(*ch) {
+            let (other, first) = if pair.collider1 == *ch {
+                (pair.collider2, true)
+            } else {
+                (pair.collider1, false)
+            };
+            if is_ground(&other) {
+                continue;
+            }
+            found.near = true;
+            for m in pair.solver_manifolds() {
+                if !m
+                    .data
+                    .solver_flags
+                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                    || m.data.solver_contacts.is_empty()
+                {
+                    continue;
+                }
+                found.touching = true;
+                // rapier pushes the first collider's body along -normal, the second's along
+                // +normal.
+                let normal = vec_to_na(m.data.normal);
+                let push = if first { -normal } else { normal };
+                if *down == Vector3::zeros() || push.dot(down) > LOADED_COS {
+                    found.loaded = true;
+                    return found;
+                }
+            }
+        }
+    }
+    found
+}
