@@ -20,7 +20,8 @@
 //!   hook flags (those the user set, before the plugin added its own) ask for it; otherwise
 //!   rapier's default applies.
 
-use super::impact_plugin::{ImpactPlugin, Role};
+use super::impact_plugin::ImpactPlugin;
+use super::plan::Role;
 use crate::rapier::prelude::{
     ActiveHooks, ContactModificationContext, PairFilterContext, PhysicsHooks, SolverFlags,
 };

@@ -21,18 +21,17 @@ use super::geometry::{
     BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
     first_impact, flat_throughout, landing_point,
 };
-use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet, slot_of};
-use super::hook_flags::{HookFlags, HookedBody};
+use super::hook_flags::HookFlags;
+use super::install::Lookup;
 use super::observe::{
-    NonGround, body_geom, centred_ball, ground_geom, non_ground_contacts, rapier_state, snapshot,
-    surely_far, touches_other,
+    Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot, surely_far, touches_other,
 };
-use super::policy::{DeepResting, Policy, ROLLING_MIN_SLIP};
+use super::plan::{Candidate, EndOfStep, Role, StepData, closes_within};
+use super::policy::{Policy, ROLLING_MIN_SLIP};
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, material, resolve};
-use super::settle::{capped_energy, put_on_ground};
-use crate::model::Material;
+use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
+use super::settle::{Settle, capped_energy};
 use crate::motion::{Flight, Rolling, State};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
@@ -42,184 +41,6 @@ use crate::rapier::prelude::{
     RigidBodyHandle, RigidBodySet, SolverFlags,
 };
 use nalgebra::Vector3;
-
-/// What the plugin does with a body-ground collider pair during the step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Role {
-    /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
-    Impact,
-    /// In rapier's solver with zero restitution: a resting contact, or a body rolling or
-    /// sliding that `Rolling` does not take.
-    Resting,
-    /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
-    /// moved in closed form after the step (`motion::Rolling`, `ImpactPlugin::rolling_end`).
-    Rolling,
-    /// Left to rapier unchanged, bounce included: parry cannot query the pair.
-    Rapier,
-    /// A pair rapier would not solve (collision or solver groups, active collision types,
-    /// a joint that disables the bodies' contacts: `filter.rs`) or that the user's filter
-    /// refuses (`None`, or no rigid impulses): no ground contact for the plugin; rapier and
-    /// the user's hook have the pair, unchanged.
-    Filtered,
-}
-
-/// A managed body's start-of-step snapshot.
-struct Candidate {
-    body: RigidBodyHandle,
-    start: State,
-    flight: Flight,
-    local_com: Vector3<f64>,
-    /// Indices (in `StepData::grounds`) of the grounds its swept bounding sphere meets.
-    near: SmallList<usize>,
-    /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
-    impact_grounds: SmallList<usize>,
-    /// Step mode: impulses were applied at the start.
-    touched: bool,
-    /// Some pair with an `impact_grounds` ground may meet in the step (else the search from
-    /// the start state would find it clear: see `geometry::cannot_close`).
-    closing: bool,
-    /// Resting pairs of a body turning fast enough that a point of it could go deeper than
-    /// the resting gap in the step (a box tipping off its edge, a capsule swinging down at a
-    /// wall, a ball spun fast): each ground's index (in `StepData::grounds`) and the resting
-    /// contact point in the body's frame (from its centre of mass). Checked after the step
-    /// (see `ImpactPlugin::resting_end`).
-    turning_resting: SmallList<(usize, Vector3<f64>)>,
-    /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `ImpactPlugin::resting_end` and `ImpactPlugin::turned_end`.
-    turns_surface: bool,
-    /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
-    /// `StepData::grounds`) and the motion. `start` then touches the ground.
-    rolling: Option<(usize, Rolling)>,
-}
-
-impl Candidate {
-    /// A body that no ground can reach in the step (only its flight, in `Exact` mode).
-    fn flying(
-        body: RigidBodyHandle,
-        start: State,
-        flight: Flight,
-        local_com: Vector3<f64>,
-    ) -> Self {
-        Self {
-            body,
-            start,
-            flight,
-            local_com,
-            near: SmallList::Empty,
-            impact_grounds: SmallList::Empty,
-            touched: false,
-            closing: false,
-            turning_resting: SmallList::Empty,
-            turns_surface: false,
-            rolling: None,
-        }
-    }
-}
-
-#[derive(Default)]
-struct StepData {
-    active: bool,
-    dt: f64,
-    /// The step's thresholds.
-    policy: Policy,
-    /// The unit direction of gravity (zero without gravity).
-    down: Vector3<f64>,
-    roles: HandleMap<PairKey, Role>,
-    grounds: Vec<GroundMotion>,
-    candidates: Vec<Candidate>,
-    /// Managed bodies asleep at the start of the step (see `ImpactPlugin::woken_end`).
-    asleep: Vec<RigidBodyHandle>,
-    lookup: Lookup,
-}
-
-/// rapier's contact graph and joints, as the step's decisions read them.
-#[derive(Clone, Copy)]
-struct Sets<'a> {
-    narrow_phase: &'a NarrowPhase,
-    impulse_joints: &'a ImpulseJointSet,
-    multibody_joints: &'a MultibodyJointSet,
-}
-
-/// The step's data in `after_step`, with rapier's sets after its step.
-struct EndOfStep<'a> {
-    data: StepData,
-    sets: Sets<'a>,
-}
-
-impl std::ops::Deref for EndOfStep<'_> {
-    type Target = StepData;
-    fn deref(&self) -> &StepData {
-        &self.data
-    }
-}
-
-impl std::ops::DerefMut for EndOfStep<'_> {
-    fn deref_mut(&mut self) -> &mut StepData {
-        &mut self.data
-    }
-}
-
-/// What the hooks ask for every ground pair inside rapier's step, by collider index instead
-/// of hashing: the roles as they are at the end of [`ImpactPlugin::before_step`] (they do not
-/// change until [`ImpactPlugin::after_step`]), and the user's hook flags on the managed
-/// bodies' colliders. (The grounds' table is the ground index's.)
-#[derive(Default)]
-struct Lookup {
-    /// `roles` holds what `StepData::roles` holds.
-    roles_built: bool,
-    /// By body collider index: one of its pairs, and whether it has others (then in
-    /// `StepData::roles`).
-    roles: Vec<Option<RoleSlot>>,
-    /// By collider index: the hook flags the user set on a collider the plugin flagged.
-    user_flags: Vec<Option<(ColliderHandle, ActiveHooks)>>,
-}
-
-#[derive(Clone, Copy)]
-struct RoleSlot {
-    body: ColliderHandle,
-    ground: ColliderHandle,
-    role: Role,
-    more: bool,
-}
-
-impl Lookup {
-    fn build(
-        roles: &HandleMap<PairKey, Role>,
-        hooked: &HandleMap<RigidBodyHandle, HookedBody>,
-    ) -> Self {
-        let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
-            it.map(slot_of).max().map_or(0, |m| m + 1)
-        };
-        let mut out = Self {
-            roles_built: true,
-            roles: vec![None; len(&mut roles.keys().map(|k| k.0))],
-            user_flags: vec![
-                None;
-                len(&mut hooked
-                    .values()
-                    .flat_map(|e| e.colliders.iter().map(|(c, _)| *c)))
-            ],
-        };
-        for (c, user) in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
-            out.user_flags[slot_of(c)] = Some((c, user));
-        }
-        for ((body, ground), role) in roles {
-            let slot = &mut out.roles[slot_of(*body)];
-            match slot {
-                Some(first) => first.more = true,
-                None => {
-                    *slot = Some(RoleSlot {
-                        body: *body,
-                        ground: *ground,
-                        role: *role,
-                        more: false,
-                    })
-                }
-            }
-        }
-        out
-    }
-}
 
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
 /// and the per-step driver.
@@ -460,6 +281,18 @@ impl<H> ImpactPlugin<H> {
             }
         }
         self.step.roles.get(key).copied().unwrap_or(Role::Resting)
+    }
+
+    /// The end-of-step stage's view of the plugin.
+    fn settle(&mut self) -> Settle<'_> {
+        Settle {
+            config: &self.config,
+            registry: &self.registry,
+            flags: &self.flags,
+            roles: &self.prev_roles,
+            events: &mut self.events,
+            shadows: &mut self.shadows,
+        }
     }
 
     /// The hook flags the user asked for on a collider.
@@ -775,7 +608,9 @@ impl<H> ImpactPlugin<H> {
                             // only where it decides (rarely: most resting pairs are slow),
                             // and only of a body measured after the last step.
                             let pressed = || {
-                                measured && self.neighbours(handle, rb, &sets, &step.down).touching
+                                measured
+                                    && neighbours(handle, rb, &sets, &self.registry, &step.down)
+                                        .touching
                             };
                             if step.policy.rests(dist, arrival, was_resting, pressed) {
                                 Role::Resting
@@ -809,7 +644,11 @@ impl<H> ImpactPlugin<H> {
                                     body: handle,
                                     inertia: &inertia,
                                     law: self.config.law,
-                                    material: self.material_of(colliders, part.handle, gg.handle),
+                                    material: self.registry.material_of(
+                                        colliders,
+                                        part.handle,
+                                        gg.handle,
+                                    ),
                                     resting_speed: step.policy.resting_speed,
                                     force_settle: false,
                                     timing: ImpactTiming::StepStart,
@@ -993,7 +832,7 @@ impl<H> ImpactPlugin<H> {
                 .get(*handle)
                 .is_some_and(|rb| !rb.is_sleeping() && self.registry.manages(*handle, rb))
             {
-                self.woken_end(bodies, colliders, *handle, &step);
+                self.settle().woken_end(bodies, colliders, *handle, &step);
             }
         }
         let mode = self.config.timing;
@@ -1015,7 +854,8 @@ impl<H> ImpactPlugin<H> {
                     || multibody_joints.rigid_body_link(cand.body).is_some()
                     || touches_other(rb, narrow_phase)
                     || !self.ccd_consistent(rb, cand, step.dt, step.dt, &step);
-                self.rolling_end(bodies, colliders, cand, *ground, motion, disturbed, &step);
+                self.settle()
+                    .rolling_end(bodies, colliders, cand, *ground, motion, disturbed, &step);
                 continue;
             }
             let has_grounds = cand
@@ -1024,7 +864,7 @@ impl<H> ImpactPlugin<H> {
                 .any(|i| colliders.get(step.grounds[*i].handle).is_some());
             if !has_grounds
                 && !cand.turning_resting.is_empty()
-                && self.resting_end(bodies, colliders, cand, &step)
+                && self.settle().resting_end(bodies, colliders, cand, &step)
             {
                 continue;
             }
@@ -1056,15 +896,17 @@ impl<H> ImpactPlugin<H> {
                     };
                     let rb = &mut bodies[cand.body];
                     write_state(rb, &s, &cand.local_com, false);
-                    self.remember(cand.body, rb, &s);
+                    self.settle().remember(cand.body, rb, &s);
                 }
                 if has_grounds {
-                    self.turned_end(bodies, colliders, cand, &step);
+                    self.settle().turned_end(bodies, colliders, cand, &step);
                 }
                 continue;
             }
             let geom = body_geom(rb, colliders, &cand.local_com);
-            let grounds = self.impact_ground_geoms(cand, &geom, colliders, &step);
+            let grounds = self
+                .settle()
+                .impact_ground_geoms(cand, &geom, colliders, &step);
             let inertia = Inertia::of(rb);
             // In-step resolution from the start-of-step state, unless the body touched
             // something else (or the mode is `Step`), or rapier's CCD cut its motion short
@@ -1092,7 +934,8 @@ impl<H> ImpactPlugin<H> {
                 self.ccd_consistent(rb, cand, t_first, step.dt, &step)
             });
             let Some(first) = first else {
-                self.end_fallback(bodies, colliders, cand, &geom, &grounds, &step, false);
+                self.settle()
+                    .end_fallback(bodies, colliders, cand, &geom, &grounds, &step, false);
                 continue;
             };
             if let Search::Clear = first {
@@ -1106,9 +949,9 @@ impl<H> ImpactPlugin<H> {
                     };
                     let rb = &mut bodies[cand.body];
                     write_state(rb, &s, &cand.local_com, false);
-                    self.remember(cand.body, rb, &s);
+                    self.settle().remember(cand.body, rb, &s);
                 }
-                self.turned_end(bodies, colliders, cand, &step);
+                self.settle().turned_end(bodies, colliders, cand, &step);
                 continue;
             }
             let mut next = first;
@@ -1138,7 +981,7 @@ impl<H> ImpactPlugin<H> {
                     body: cand.body,
                     inertia: &inertia,
                     law: self.config.law,
-                    material: self.material_of(colliders, part.handle, gg.handle),
+                    material: self.registry.material_of(colliders, part.handle, gg.handle),
                     resting_speed: step.policy.resting_speed,
                     force_settle: count + 1 >= self.config.max_impacts_per_step,
                     timing: ImpactTiming::InStep,
@@ -1216,7 +1059,11 @@ impl<H> ImpactPlugin<H> {
                         correction(EventKind::PushOut, &site, &inertia, &before, &end, step.dt);
                     self.events.push(pushed);
                     let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-                    if elastic && self.may_cap_energy(&bodies[cand.body], colliders, cand, &step) {
+                    if elastic
+                        && self
+                            .settle()
+                            .may_cap_energy(&bodies[cand.body], colliders, cand, &step)
+                    {
                         if let Some(capped) =
                             capped_energy(&cand.start, &end, &cand.flight, &inertia)
                         {
@@ -1236,464 +1083,11 @@ impl<H> ImpactPlugin<H> {
             let rb = &mut bodies[cand.body];
             write_state(rb, &end, &cand.local_com, true);
             if mode == TimingMode::Exact {
-                self.remember(cand.body, rb, &end);
+                self.settle().remember(cand.body, rb, &end);
             }
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
-    }
-
-    /// Keeps the `f64` state of a body just written in `Exact` mode.
-    fn remember(&mut self, handle: RigidBodyHandle, rb: &RigidBody, s: &State) {
-        self.shadows.insert(handle, Shadow::of(rb, s));
-    }
-
-    /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
-    /// first ground impact at `t_first`? If rapier clamped it earlier, something other than
-    /// a ground stopped it, and re-integrating its flight would undo that.
-    fn ccd_consistent(
-        &self,
-        rb: &RigidBody,
-        cand: &Candidate,
-        t_first: f64,
-        dt: f64,
-        step: &StepData,
-    ) -> bool {
-        if !rb.is_ccd_active() {
-            return true;
-        }
-        let free_end = cand.flight.advance(&cand.start, dt).com;
-        let exact = free_end - cand.start.com;
-        let len2 = exact.norm_squared();
-        if len2 < 1e-24 {
-            return true;
-        }
-        let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
-        let fraction = actual.dot(&exact) / len2;
-        // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops
-        // a body up to about a prediction distance before the contact.
-        let slack =
-            (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
-        fraction >= t_first / dt - slack
-    }
-
-    /// The step-end fallback (`step_end`) for a candidate, then the energy cap
-    /// (`cap_energy`).
-    #[allow(clippy::too_many_arguments)]
-    fn end_fallback(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        geom: &BodyGeom,
-        grounds: &[GroundGeom],
-        step: &EndOfStep,
-        settle: bool,
-    ) {
-        let Some(rb) = bodies.get(cand.body) else {
-            return;
-        };
-        let inertia = Inertia::of(rb);
-        let events = self.events.len();
-        let moved = self.step_end(
-            bodies,
-            colliders,
-            cand.body,
-            &cand.local_com,
-            geom,
-            grounds,
-            &inertia,
-            step,
-            settle,
-        );
-        let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-        if moved && elastic {
-            self.cap_energy(bodies, colliders, cand, &inertia, step);
-        }
-    }
-
-    /// A body moved out of the ground by position at the step's end gains the potential
-    /// energy of the lift: its end state is deeper than any state of a true flight (a corner
-    /// swung or a ball rode into the ground), and moving it out keeps the speed it gathered
-    /// getting there. Repeated every step, that lift fed a box rocking on its corners at
-    /// the step rate for ever (`Step` mode, 60 Hz: 60 bounces a second), and it is the
-    /// energy a tumbling cube gained over its throw. So, for a body whose energy can only
-    /// have been lost (`may_cap_energy`; the callers also require no restitution above 1),
-    /// the end state's mechanical energy in its constant force field (`Flight::accel`) is
-    /// held to the start's (see `capped_energy`).
-    fn cap_energy(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        inertia: &Inertia,
-        step: &EndOfStep,
-    ) {
-        if !bodies
-            .get(cand.body)
-            .is_some_and(|rb| self.may_cap_energy(rb, colliders, cand, step))
-        {
-            return;
-        }
-        let rb = &mut bodies[cand.body];
-        let end = rapier_state(rb);
-        // Only after a push-out, which reported where it was.
-        let Some(site) = self
-            .events
-            .iter()
-            .rev()
-            .find(|e| e.body == cand.body)
-            .map(Site::of)
-        else {
-            return;
-        };
-        if let Some(capped) = capped_energy(&cand.start, &end, &cand.flight, inertia) {
-            rb.set_linvel(vec_from_na(&capped.v), true);
-            rb.set_angvel(vec_from_na(&capped.w), true);
-            self.events.push(correction(
-                EventKind::EnergyCap,
-                &site,
-                inertia,
-                &end,
-                &capped,
-                step.dt,
-            ));
-        }
-    }
-
-    /// Nothing but still grounds touched the candidate in the step (no body, wall or joint:
-    /// `prev_neighbours` is this step's by now), through the plugin's pairs with no contact
-    /// modification of the user's, and no user torque acted: its energy can only have been
-    /// lost.
-    fn may_cap_energy(
-        &self,
-        rb: &RigidBody,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        step: &EndOfStep,
-    ) -> bool {
-        let grounds = &step.grounds;
-        if rb.user_torque() != Vector::ZERO
-            || self
-                .neighbours(cand.body, rb, &step.sets, &step.down)
-                .touching
-        {
-            return false;
-        }
-        let modifies = |c| {
-            self.user_flags(colliders, c)
-                .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
-        };
-        // Every ground pair of the body (only the grounds near it have one): a still ground,
-        // the plugin's role, no contact modification of the user's (a conveyor ground puts
-        // energy in).
-        rb.colliders().iter().all(|ch| {
-            !modifies(*ch)
-                && cand.near.iter().map(|i| &grounds[*i]).all(|gm| {
-                    match self.prev_roles.get(&(*ch, gm.handle)) {
-                        None | Some(Role::Filtered) => true,
-                        Some(Role::Rapier) => false,
-                        Some(_) => {
-                            gm.v == Vector3::zeros()
-                                && gm.w == Vector3::zeros()
-                                && !modifies(gm.handle)
-                        }
-                    }
-                })
-        })
-    }
-
-    /// The `StepEnd` fallback on rapier's end-of-step state: each ground contact still
-    /// touching and approaching gets its impulse (with `e = 0` if `settle`), and the body is
-    /// moved out of the ground. Returns whether it changed the body's state.
-    #[allow(clippy::too_many_arguments)]
-    fn step_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        body: RigidBodyHandle,
-        local_com: &Vector3<f64>,
-        geom: &BodyGeom,
-        grounds: &[GroundGeom],
-        inertia: &Inertia,
-        step: &EndOfStep,
-        settle: bool,
-    ) -> bool {
-        let Some(rb) = bodies.get(body) else {
-            return false;
-        };
-        let mut s = rapier_state(rb);
-        let t = step.dt;
-        let mut changed = false;
-        for k in 0..self.config.max_impacts_per_step {
-            let Some(hit) = closest(geom, grounds, &s, t, 0.0) else {
-                break;
-            };
-            if hit.dist > 0.0 || hit.un >= 0.0 {
-                // A point deeper than the resting gap that already leaves the ground: it
-                // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
-                // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
-                if hit.dist < -step.policy.resting_gap {
-                    let before = s;
-                    s.com -= hit.normal * hit.dist;
-                    changed = true;
-                    let site = Site {
-                        body,
-                        collider: geom.parts[hit.part].handle,
-                        ground: grounds[hit.ground].handle,
-                        normal: hit.normal,
-                        point: hit.point - hit.normal * hit.dist,
-                    };
-                    self.events.push(correction(
-                        EventKind::PushOut,
-                        &site,
-                        inertia,
-                        &before,
-                        &s,
-                        t,
-                    ));
-                }
-                break;
-            }
-            let part = &geom.parts[hit.part];
-            let gg = &grounds[hit.ground];
-            let (point, points) = landing_point(part, gg, &s, t, &hit, self.config.flat_tolerance);
-            let input = ImpactInput {
-                body,
-                inertia,
-                law: self.config.law,
-                material: self.material_of(colliders, part.handle, gg.handle),
-                // A body that touched another body or a wall in the step: no bounce slower
-                // than a fall through the resting gap (see the pressed roles).
-                resting_speed: if self
-                    .neighbours(body, &bodies[body], &step.sets, &step.down)
-                    .touching
-                {
-                    step.policy.pressed_speed
-                } else {
-                    step.policy.resting_speed
-                },
-                force_settle: settle || k + 1 >= self.config.max_impacts_per_step,
-                timing: ImpactTiming::StepEnd,
-            };
-            let Some((after, event)) = resolve(&input, geom, gg, &s, t, &hit, point, points) else {
-                break;
-            };
-            s = after;
-            s.com -= hit.normal * hit.dist;
-            self.events.push(event);
-            changed = true;
-        }
-        if changed {
-            write_state(&mut bodies[body], &s, local_com, true);
-        }
-        changed
-    }
-
-    /// After the step, for a body whose ground pairs were all resting (rapier's) while it
-    /// turned fast. Two ways rapier's resting contact lets it end the step deep:
-    /// - rapier's contact manifold, made at the step's start, holds only the points near the
-    ///   ground then, so a point swinging down from higher up (a box tipping off its edge, a
-    ///   capsule's end at a wall) can end the step deep in the ground, still approaching
-    ///   (issue 5: 8-13 mm at 30-60 Hz, rapier alone 5.3 cm). When the deepest point is deeper
-    ///   than the resting gap and approaches faster than a fall through it, while the resting
-    ///   contact point itself does not (the body turned about it, rather than being pushed
-    ///   into the ground by a body on it: a heavy box on a light one, see the pressed roles),
-    ///   it is resolved as a step-end impact (`step_end`, pushed out). Slower, on a body
-    ///   touching nothing but grounds, it is settled (`e = 0`) and moved out (a box that took a
-    ///   `Step` impulse at one corner while its spin brought another down: 11.7 mm deep at
-    ///   30 Hz, approaching at 0.14 m/s); a body touching another is left to rapier then:
-    ///   pushing it out fights the body on it;
-    /// - rapier's solver moves a contact point with its body over the step, as a material
-    ///   point; a ball's contact point stays at its bottom however it spins, so a fast-spinning
-    ///   ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at 5-15 m/s,
-    ///   spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz), and a
-    ///   fast-turning box's contact points lag its faces likewise. A body left deeper than the
-    ///   resting gap otherwise, with nothing lying on it (`NonGround::loaded`: two balls sliding
-    ///   side by side at 20 m/s, spun at 20 rad/s, had gone 14-22 mm deep at 30 Hz), is
-    ///   moved out of the ground; a ball's speed into the ground is removed, other bodies'
-    ///   velocities are kept. The lift's energy is capped (`cap_energy`).
-    ///
-    /// Returns whether a step-end impact resolved it.
-    fn resting_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        step: &EndOfStep,
-    ) -> bool {
-        let Some(rb) = bodies.get(cand.body) else {
-            return false;
-        };
-        let geom = body_geom(rb, colliders, &cand.local_com);
-        // Each ground once (a body of several colliders lists it per collider).
-        let listed = &cand.turning_resting;
-        let grounds: SmallList<GroundGeom> = listed
-            .iter()
-            .enumerate()
-            .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
-            .filter_map(|(_, (i, _))| self.pair_geom(&step.grounds[*i], &geom, colliders))
-            .collect();
-        let mut end = rapier_state(rb);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return false;
-        };
-        if hit.dist >= -step.policy.resting_gap {
-            return false;
-        }
-        let neighbours = self.neighbours(cand.body, rb, &step.sets, &step.down);
-        // The resting contact's material point, now.
-        let pivot_pushed = || {
-            listed.iter().any(|(i, local)| {
-                if step.grounds[*i].handle != grounds[hit.ground].handle {
-                    return false;
-                }
-                let p = end.com + end.rot * local;
-                let u = super::geometry::body_velocity_at(&end, &p)
-                    - grounds[hit.ground].velocity_at(&p, step.dt);
-                hit.normal.dot(&u) < -step.policy.pressed_speed
-            })
-        };
-        let decision = step.policy.deep_resting_body(
-            hit.dist,
-            hit.un,
-            cand.turns_surface,
-            pivot_pushed,
-            neighbours.touching,
-            neighbours.loaded,
-        );
-        if let DeepResting::Resolve { settle } = decision {
-            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, settle);
-            return true;
-        }
-        // A body that nothing loads (balls side by side, a box at a wall) is moved out; a
-        // body something lies on is left to rapier, whose solver holds the load.
-        if decision == DeepResting::PushOut {
-            // A ball riding low sinks on: rapier's under-supporting contact let gravity build
-            // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
-            // which kept would take it deeper next step: removed for a ball.
-            let inertia = Inertia::of(&bodies[cand.body]);
-            let before = end;
-            put_on_ground(&mut end, &hit, !cand.turns_surface);
-            self.report_push_out(
-                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
-            );
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
-            self.cap_energy(bodies, colliders, cand, &inertia, step);
-        }
-        false
-    }
-
-    /// The geometry of a candidate's `Impact` grounds, without its `Filtered` pairs (no
-    /// contact for the plugin).
-    fn impact_ground_geoms<'a>(
-        &self,
-        cand: &Candidate,
-        geom: &BodyGeom,
-        colliders: &'a ColliderSet,
-        step: &StepData,
-    ) -> SmallList<GroundGeom<'a>> {
-        cand.impact_grounds
-            .iter()
-            .filter_map(|i| self.pair_geom(&step.grounds[*i], geom, colliders))
-            .collect()
-    }
-
-    /// A ground's geometry for the queries of a body whose pairs have roles this step, its
-    /// `Filtered` pairs skipped.
-    fn pair_geom<'a>(
-        &self,
-        gm: &GroundMotion,
-        geom: &BodyGeom,
-        colliders: &'a ColliderSet,
-    ) -> Option<GroundGeom<'a>> {
-        let mut gg = ground_geom(gm, colliders)?;
-        gg.skip = geom
-            .parts
-            .iter()
-            .map(|part| part.handle)
-            .filter(|h| self.prev_roles.get(&(*h, gg.handle)) == Some(&Role::Filtered))
-            .collect();
-        Some(gg)
-    }
-
-    /// After a step the search found clear, for a body whose rotation moves its surface (not
-    /// a ball about its centre): the search flies it torque-free, rapier's integrator turns
-    /// it its own way (and `Exact` mode keeps rapier's rotation), and for a fast tumble the
-    /// two part by centimetres at the corners (a 0.9 m rod at 21 rad/s, 30 Hz: 6 cm deep,
-    /// no event). The step-end fallback (`step_end`) then resolves what rapier's end pose
-    /// holds in the ground.
-    fn turned_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        step: &EndOfStep,
-    ) {
-        if !cand.turns_surface {
-            return;
-        }
-        let Some(rb) = bodies.get(cand.body) else {
-            return;
-        };
-        let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
-        self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, false);
-    }
-
-    /// After the step, for a body asleep at its start and woken inside it (by a body hitting
-    /// it): rapier solves the woken body without its ground contacts for that step (they
-    /// were not updated while it slept), so a box resting on the ground falls by gravity
-    /// for a step, into the ground (rapier alone, box resting flat, woken by a rolling ball:
-    /// 8.8 mm deep at 30 Hz, pushed out over the next steps; in a scene of tumbling boxes,
-    /// 6.9 mm). If a point ends deeper than the resting gap and approaching, the contact is
-    /// resolved at the step end with `e = 0` (what a resting contact would have done) and
-    /// the body moved out of the ground.
-    fn woken_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        handle: RigidBodyHandle,
-        step: &EndOfStep,
-    ) {
-        let rb = &bodies[handle];
-        let local_com = vec_to_na(rb.local_center_of_mass());
-        let geom = body_geom(rb, colliders, &local_com);
-        if geom.parts.is_empty() {
-            return;
-        }
-        let com = rb.center_of_mass();
-        let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
-        let grounds: SmallList<GroundGeom> = self
-            .registry
-            .index
-            .near(&step.grounds, com, half)
-            .iter()
-            .filter_map(|i| {
-                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                let ground = &colliders[gg.handle];
-                gg.skip = geom
-                    .parts
-                    .iter()
-                    .map(|part| part.handle)
-                    .filter(|h| !filter::rapier_solves(bodies, &colliders[*h], ground))
-                    .collect();
-                Some(gg)
-            })
-            .collect();
-        if grounds.is_empty() {
-            return;
-        }
-        let end = rapier_state(rb);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return;
-        };
-        if hit.dist < -step.policy.resting_gap && hit.un < 0.0 {
-            let inertia = Inertia::of(rb);
-            self.step_end(
-                bodies, colliders, handle, &local_com, &geom, &grounds, &inertia, step, true,
-            );
-        }
     }
 
     /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
@@ -1742,10 +1136,13 @@ impl<H> ImpactPlugin<H> {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): the contact graph.
-        if self.neighbours(handle, rb, sets, &step.down).near {
+        if neighbours(handle, rb, sets, &self.registry, &step.down).near {
             return None;
         }
-        let friction = self.material_of(colliders, part.handle, gg.handle).friction;
+        let friction = self
+            .registry
+            .material_of(colliders, part.handle, gg.handle)
+            .friction;
         if !(friction.is_finite() && friction >= 0.0) {
             return None;
         }
@@ -1766,151 +1163,32 @@ impl<H> ImpactPlugin<H> {
         })
     }
 
-    /// After the step, for a ball sliding on a level ground (`Role::Rolling`): its closed-form
-    /// motion over the step from the start (which touches the ground), if nothing else acted
-    /// on it (`disturbed`) and it still touches the same ground plane at the end. Otherwise
-    /// rapier's state stands, in which the ball flew without its ground (the pair was out of
-    /// its solver) and so fell by up to `|g| dt^2 / 2` while pushed by whatever touched it:
-    /// - moving into the ground no faster than that fall (`|a.n| dt`, plus the resting
-    ///   speed), it is put back on the ground with no speed into it, as rapier's resting
-    ///   contact would have held it, and no event (a ball rolling up to another);
-    /// - faster (something pushed it down), it is resolved at the step end (`step_end`,
-    ///   `e = 0`, moved out).
-    #[allow(clippy::too_many_arguments)]
-    fn rolling_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        ground: usize,
-        motion: &Rolling,
-        disturbed: bool,
-        step: &EndOfStep,
-    ) {
-        let Some(gg) = ground_geom(&step.grounds[ground], colliders) else {
-            return;
-        };
-        let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
-        let grounds = [gg];
-        if !disturbed {
-            let end = motion.advance(&cand.start, step.dt);
-            let on = closest(&geom, &grounds, &end, step.dt, step.policy.resting_gap);
-            if on.is_some_and(|hit| {
-                hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
-                    && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9
-            }) {
-                let rb = &mut bodies[cand.body];
-                write_state(rb, &end, &cand.local_com, true);
-                if self.config.timing == TimingMode::Exact {
-                    self.remember(cand.body, rb, &end);
-                }
-                return;
-            }
-        }
-        let mut end = rapier_state(&bodies[cand.body]);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return;
-        };
-        let fall = -motion.accel.dot(&motion.normal) * step.dt + step.policy.resting_speed;
-        if hit.un >= -fall {
-            let before = end;
-            put_on_ground(&mut end, &hit, true);
-            let inertia = Inertia::of(&bodies[cand.body]);
-            self.report_push_out(
-                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
-            );
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
-        } else {
-            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
-        }
-    }
-
-    /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it
-    /// changed nothing.
-    #[allow(clippy::too_many_arguments)]
-    fn report_push_out(
-        &mut self,
-        body: RigidBodyHandle,
-        geom: &BodyGeom,
-        grounds: &[GroundGeom],
-        hit: &super::geometry::Hit,
-        inertia: &Inertia,
-        before: &State,
-        after: &State,
-        step: &StepData,
-    ) {
-        if before.com == after.com && before.v == after.v {
-            return;
-        }
-        let site = Site {
-            body,
-            collider: geom.parts[hit.part].handle,
-            ground: grounds[hit.ground].handle,
-            normal: hit.normal,
-            point: hit.point - hit.normal * hit.dist,
-        };
-        self.events.push(correction(
-            EventKind::PushOut,
-            &site,
-            inertia,
-            before,
-            after,
-            step.dt,
-        ));
-    }
-
-    /// What touches the body besides its grounds in rapier's contact graph as the last
-    /// step left it (the same graph between `after_step` and the next `before_step`): asked
-    /// only where a decision needs it, so a step costs nothing for the bodies that need none.
-    fn neighbours(
+    /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
+    /// first ground impact at `t_first`? If rapier clamped it earlier, something other than
+    /// a ground stopped it, and re-integrating its flight would undo that.
+    fn ccd_consistent(
         &self,
-        body: RigidBodyHandle,
         rb: &RigidBody,
-        sets: &Sets,
-        down: &Vector3<f64>,
-    ) -> NonGround {
-        let jointed = sets.impulse_joints.attached_joints(body).next().is_some()
-            || sets.multibody_joints.rigid_body_link(body).is_some();
-        if jointed {
-            return NonGround::JOINTED;
+        cand: &Candidate,
+        t_first: f64,
+        dt: f64,
+        step: &StepData,
+    ) -> bool {
+        if !rb.is_ccd_active() {
+            return true;
         }
-        non_ground_contacts(
-            rb,
-            sets.narrow_phase,
-            &self.registry.index,
-            &self.registry.grounds,
-            down,
-        )
-    }
-
-    /// The material of a body collider against a ground collider.
-    fn material_of(
-        &self,
-        colliders: &ColliderSet,
-        body: ColliderHandle,
-        ground: ColliderHandle,
-    ) -> Material {
-        let over = self.registry.grounds.get(&ground).and_then(|g| g.material);
-        match (colliders.get(body), colliders.get(ground)) {
-            (Some(b), Some(g)) => material(b, g, over),
-            _ => over.unwrap_or(Material {
-                restitution: 0.0,
-                friction: 0.0,
-            }),
+        let free_end = cand.flight.advance(&cand.start, dt).com;
+        let exact = free_end - cand.start.com;
+        let len2 = exact.norm_squared();
+        if len2 < 1e-24 {
+            return true;
         }
+        let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
+        let fraction = actual.dot(&exact) / len2;
+        // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops
+        // a body up to about a prediction distance before the contact.
+        let slack =
+            (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
+        fraction >= t_first / dt - slack
     }
-}
-
-/// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
-/// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
-fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
-    let at = |t: f64| dist + un * t + 0.5 * an * t * t;
-    if at(0.0) <= 0.0 || at(dt) <= 0.0 {
-        return true;
-    }
-    if an > 0.0 {
-        let t = -un / an;
-        return t > 0.0 && t < dt && at(t) <= 0.0;
-    }
-    false
 }

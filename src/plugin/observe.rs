@@ -13,10 +13,12 @@ use super::geometry::{BodyGeom, BodyPart, GroundGeom, SmallList};
 use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
 use super::handles::HandleMap;
 use super::policy::LOADED_COS;
+use super::registry::Registry;
 use crate::motion::{Flight, Gyro, State};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, LockedAxes, NarrowPhase, RigidBody, SolverFlags,
+    ColliderHandle, ColliderSet, ImpulseJointSet, LockedAxes, MultibodyJointSet, NarrowPhase,
+    RigidBody, RigidBodyHandle, SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -277,4 +279,36 @@ pub(crate) fn non_ground_contacts(
         }
     }
     found
+}
+
+/// rapier's contact graph and joints, as the step's decisions read them.
+#[derive(Clone, Copy)]
+pub(crate) struct Sets<'a> {
+    pub narrow_phase: &'a NarrowPhase,
+    pub impulse_joints: &'a ImpulseJointSet,
+    pub multibody_joints: &'a MultibodyJointSet,
+}
+
+/// What touches the body besides its grounds in rapier's contact graph as the last
+/// step left it (the same graph between `after_step` and the next `before_step`): asked
+/// only where a decision needs it, so a step costs nothing for the bodies that need none.
+pub(crate) fn neighbours(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    sets: &Sets,
+    registry: &Registry,
+    down: &Vector3<f64>,
+) -> NonGround {
+    let jointed = sets.impulse_joints.attached_joints(body).next().is_some()
+        || sets.multibody_joints.rigid_body_link(body).is_some();
+    if jointed {
+        return NonGround::JOINTED;
+    }
+    non_ground_contacts(
+        rb,
+        sets.narrow_phase,
+        &registry.index,
+        &registry.grounds,
+        down,
+    )
 }

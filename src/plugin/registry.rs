@@ -10,6 +10,8 @@ use super::config::{ConfigError, GroundMaterial};
 use super::convert::to_f64;
 use super::ground_index::{GroundEntry, GroundIndex};
 use super::handles::{HandleMap, HandleSet};
+use super::resolve::material;
+use crate::model::Material;
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
 };
@@ -225,5 +227,22 @@ impl Registry {
             && mass.is_finite()
             && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
             && (self.excluded.is_empty() || !self.excluded.contains(&handle))
+    }
+
+    /// The material of a body collider against a ground collider.
+    pub fn material_of(
+        &self,
+        colliders: &ColliderSet,
+        body: ColliderHandle,
+        ground: ColliderHandle,
+    ) -> Material {
+        let over = self.grounds.get(&ground).and_then(|g| g.material);
+        match (colliders.get(body), colliders.get(ground)) {
+            (Some(b), Some(g)) => material(b, g, over),
+            _ => over.unwrap_or(Material {
+                restitution: 0.0,
+                friction: 0.0,
+            }),
+        }
     }
 }
