@@ -42,6 +42,14 @@ use crate::rapier::prelude::{
 };
 use nalgebra::Vector3;
 
+/// Tables a step fills again: kept from the step before so that their allocations are.
+#[derive(Default)]
+struct Spare {
+    shadows: HandleMap<RigidBodyHandle, Shadow>,
+    roles: HandleMap<PairKey, Role>,
+    candidates: Vec<Candidate>,
+}
+
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
 /// and the per-step driver.
 ///
@@ -120,6 +128,8 @@ pub struct ImpactPlugin<H = ()> {
     /// Where the plugin's hook flags are (see `hook_flags.rs`).
     pub(crate) flags: HookFlags,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
+    /// Last step's tables, cleared and filled again by the next (their allocations kept).
+    spare: Spare,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
     /// What touched each managed body near a ground in the last step besides its grounds
@@ -154,6 +164,7 @@ impl<H> ImpactPlugin<H> {
             step: StepData::default(),
             flags: HookFlags::default(),
             shadows: HandleMap::default(),
+            spare: Spare::default(),
             prev_roles: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
@@ -460,10 +471,15 @@ impl<H> ImpactPlugin<H> {
         );
         // Lent to the step; given back at its end (`Self::after_step`).
         step.grounds = std::mem::take(&mut self.registry.index.motions);
-        let shadows = std::mem::take(&mut self.shadows);
+        // Last step's shadows and roles are read while this step's are written into the
+        // spare tables.
+        let shadows = std::mem::replace(&mut self.shadows, std::mem::take(&mut self.spare.shadows));
+        self.shadows.clear();
         let prev_roles = std::mem::take(&mut self.prev_roles);
-        // About as many pairs as last step: no rehashing while the map grows.
-        step.roles.reserve(prev_roles.len());
+        step.roles = std::mem::take(&mut self.spare.roles);
+        step.roles.clear();
+        step.candidates = std::mem::take(&mut self.spare.candidates);
+        step.candidates.clear();
         // The awake managed bodies that may reach a ground. A body surely far from every
         // ground needs no snapshot, inertia or geometry (only its flight in `Exact` mode); a
         // body without collider is skipped.
@@ -780,6 +796,8 @@ impl<H> ImpactPlugin<H> {
             .update(&self.registry, &near_bodies, unmanaged, bodies, colliders);
         self.registry.flags_stale = false;
         step.lookup = Lookup::build(&step.roles, self.flags.hooked());
+        self.spare.shadows = shadows;
+        self.spare.roles = prev_roles;
         self.step = step;
     }
 
@@ -1088,6 +1106,7 @@ impl<H> ImpactPlugin<H> {
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
+        self.spare.candidates = std::mem::take(&mut step.data.candidates);
     }
 
     /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on

@@ -114,7 +114,12 @@ pub(crate) fn gyro_of(rb: &RigidBody, dt: f64) -> Option<Gyro> {
         return None;
     }
     let mp = &rb.mass_properties().local_mprops;
-    let inv = vec_to_na(mp.inv_principal_inertia);
+    let raw = mp.inv_principal_inertia;
+    // Isotropic inertia (every ball): constant-axis spin, nothing to set up.
+    if raw.x == raw.y && raw.y == raw.z {
+        return None;
+    }
+    let inv = vec_to_na(raw);
     Gyro::new(
         inv.map(|x| 1.0 / x),
         rot_to_na(mp.principal_inertia_local_frame),
@@ -137,10 +142,12 @@ pub(crate) fn body_geom<'a>(
         if !co.is_enabled() || co.is_sensor() {
             continue;
         }
-        let local =
-            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
-                * co.position_wrt_parent()
-                    .map_or(Isometry3::identity(), pose_to_na);
+        let to_com =
+            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity());
+        let local = match co.position_wrt_parent() {
+            Some(pose) => to_com * pose_to_na(pose),
+            None => to_com,
+        };
         let bs = co.shape().compute_local_bounding_sphere();
         let center = local * nalgebra::Point3::from(vec_to_na(bs.center));
         let skin = to_f64(co.contact_skin());
