@@ -216,9 +216,16 @@ fn expected(c: &Case) -> (f64, f64) {
     (vx2, wz2)
 }
 
+/// `Exact` mode flies the ball exactly before and after the impact, its spin included (an
+/// isotropic ball's spin keeps its axis), so only the rounding of what rapier stores is
+/// left: measured up to 6.1e-8 relative in `f32` (it was 1.2e-5 on `w_z'` at 1000 Hz while
+/// the spin before the impact was rapier's, drifting about 2e-7 a step).
 #[test]
 fn exact_mode_spin_bounce_matches_closed_forms() {
-    sweep(TimingMode::Exact, |_, _| floor());
+    sweep(
+        TimingMode::Exact,
+        |_, _| if F64 { [1e-12; 3] } else { [2e-7; 3] },
+    );
 }
 
 /// The impact is resolved at its time in the step, but the flight before it is rapier's
