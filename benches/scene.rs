@@ -15,6 +15,8 @@
 //!   five layers deep, sleeping disabled so the pile stays awake: most contacts are rapier's
 //!   (ball on ball, ball on wall); the bottom layer rests on the ground (the plugin hands those
 //!   contacts to rapier with `e = 0`).
+//! - `tiles8/500`, `tiles64/500`: 500 balls as in `bouncing` over a floor of 8 x 8 or 64 x 64
+//!   fixed cuboid tiles, every fixed collider ground: the cost must not grow with the grounds.
 //!
 //! `bouncing` and `idle` time a window of `WINDOW` steps from the release and start again from
 //! a freshly built scene (not timed) when it is used up, so every sample averages the same
@@ -258,5 +260,91 @@ fn piled(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bouncing, idle, piled);
+/// A floor of `tiles` x `tiles` fixed cuboids (top at y = 0) `half` m wide each way from the
+/// origin, every fixed collider ground (`set_all_fixed_colliders_ground`), under one layer of
+/// `n` balls as in `layer`.
+fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
+    let side = (n as f64).sqrt().ceil() as usize;
+    let centre = 0.5 * (side - 1) as f64 * SPACING;
+    let half = centre + 1.0;
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(DT);
+    let floor = world.bodies.insert(RigidBodyBuilder::fixed());
+    let tile = half / tiles as f64;
+    for i in 0..tiles {
+        for k in 0..tiles {
+            let at = |j: usize| -half + (2 * j + 1) as f64 * tile;
+            world.colliders.insert_with_parent(
+                ColliderBuilder::cuboid(real(tile), 0.25, real(tile))
+                    .translation(Vector::new(real(at(i)), -0.25, real(at(k))))
+                    .restitution(real(RESTITUTION))
+                    .friction(real(FRICTION)),
+                floor,
+                &mut world.bodies,
+            );
+        }
+    }
+    let mut rng = Rng::new(SEED);
+    for i in 0..n {
+        let (row, col) = (i / side, i % side);
+        let gap = rng.uniform(0.05, 0.45);
+        let p = [
+            col as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
+            gap + RADIUS,
+            row as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
+        ];
+        ball(&mut world, p, true);
+    }
+    let plugin = match mode {
+        Mode::Rapier => None,
+        Mode::Plugin(timing) => {
+            let mut p = ImpactPlugin::new(ImpactConfig {
+                timing,
+                ..Default::default()
+            })
+            .expect("valid configuration");
+            p.set_all_fixed_colliders_ground(true);
+            Some(p)
+        }
+    };
+    let mut scene = Scene {
+        world,
+        plugin,
+        steps: 0,
+    };
+    scene.step();
+    scene
+}
+
+/// `tiles/N`: 500 balls bouncing on floors of 8 x 8 and 64 x 64 tiles, a window of steps from
+/// a fresh scene: the cost must not grow with the number of grounds.
+fn tiled(c: &mut Criterion) {
+    const BALLS: usize = 500;
+    for tiles in [8, 64] {
+        let mut group = c.benchmark_group(format!("tiles{tiles}/{BALLS}"));
+        configure(&mut group, BALLS);
+        for (mode, label) in MODES {
+            let mut scene: Option<Scene> = None;
+            group.bench_function(BenchmarkId::from_parameter(label), |b| {
+                let scene = scene.get_or_insert_with(|| tiled_layer(BALLS, tiles, mode));
+                b.iter_custom(|iters| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        if scene.steps > WINDOW {
+                            *scene = tiled_layer(BALLS, tiles, mode);
+                        }
+                        let start = Instant::now();
+                        scene.step();
+                        total += start.elapsed();
+                        black_box(&scene.world.bodies);
+                    }
+                    total
+                });
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bouncing, idle, piled, tiled);
 criterion_main!(benches);
