@@ -313,8 +313,10 @@ impl<H> ImpactPlugin<H> {
             ..end
         };
         write_state(rb, &s, &cand.local_com, false);
-        if cand.flight.gyro.is_none() {
-            rb.set_angvel(vec_from_na(&s.w), true);
+        // Written only where rapier drifted (a write queues the body for rapier's update).
+        let w = vec_from_na(&s.w);
+        if cand.flight.gyro.is_none() && rb.angvel() != w {
+            rb.set_angvel(w, true);
         }
         self.settle().remember(cand.body, rb, &s);
     }
