@@ -107,7 +107,9 @@ fn ball(world: &mut PhysicsWorld, p: [f64; 3], sleep: bool) {
     );
 }
 
-fn with_plugin(world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> Scene {
+/// The scene with the plugin in `mode` (none for rapier alone), `ground` its ground, or every
+/// fixed collider (`None`).
+fn with_plugin(world: PhysicsWorld, ground: Option<ColliderHandle>, mode: Mode) -> Scene {
     let plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
@@ -116,8 +118,12 @@ fn with_plugin(world: PhysicsWorld, ground: ColliderHandle, mode: Mode) -> Scene
                 ..Default::default()
             })
             .expect("valid configuration");
-            p.add_ground(&world.bodies, &world.colliders, ground)
-                .expect("the ground exists");
+            match ground {
+                Some(ground) => p
+                    .add_ground(&world.bodies, &world.colliders, ground)
+                    .expect("the ground exists"),
+                None => p.set_all_fixed_colliders_ground(true),
+            }
             Some(p)
         }
     };
@@ -145,7 +151,7 @@ fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
         ];
         ball(&mut world, p, true);
     }
-    let mut scene = with_plugin(world, ground, mode);
+    let mut scene = with_plugin(world, Some(ground), mode);
     // The first step builds rapier's broad phase: not part of the window.
     scene.step();
     scene
@@ -183,7 +189,7 @@ fn pile(n: usize, mode: Mode) -> Scene {
         ];
         ball(&mut world, p, false);
     }
-    let mut scene = with_plugin(world, ground, mode);
+    let mut scene = with_plugin(world, Some(ground), mode);
     for _ in 0..(3.0 / DT) as usize {
         scene.step();
     }
@@ -205,32 +211,38 @@ fn configure(
     group.warm_up_time(Duration::from_millis(500));
 }
 
-/// `bouncing` (lift 0) and `idle` (lift 100 m): a window of steps from a fresh scene.
+/// A window of `WINDOW` steps from a fresh scene (`build`, not timed), built again when used
+/// up, in group `name` for every mode.
+fn windowed_group(c: &mut Criterion, name: &str, n: usize, build: impl Fn(Mode) -> Scene) {
+    let mut group = c.benchmark_group(name);
+    configure(&mut group, n);
+    for (mode, label) in MODES {
+        // Built on first use, so a filtered-out benchmark costs nothing.
+        let mut scene: Option<Scene> = None;
+        group.bench_function(BenchmarkId::from_parameter(label), |b| {
+            let scene = scene.get_or_insert_with(|| build(mode));
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    if scene.steps > WINDOW {
+                        *scene = build(mode);
+                    }
+                    let start = Instant::now();
+                    scene.step();
+                    total += start.elapsed();
+                    black_box(&scene.world.bodies);
+                }
+                total
+            });
+        });
+    }
+    group.finish();
+}
+
+/// `bouncing` (lift 0) and `idle` (lift 100 m).
 fn windowed(c: &mut Criterion, name: &str, lift: f64) {
     for n in SIZES {
-        let mut group = c.benchmark_group(format!("{name}/{n}"));
-        configure(&mut group, n);
-        for (mode, label) in MODES {
-            // Built on first use, so a filtered-out benchmark costs nothing.
-            let mut scene: Option<Scene> = None;
-            group.bench_function(BenchmarkId::from_parameter(label), |b| {
-                let scene = scene.get_or_insert_with(|| layer(n, lift, mode));
-                b.iter_custom(|iters| {
-                    let mut total = Duration::ZERO;
-                    for _ in 0..iters {
-                        if scene.steps > WINDOW {
-                            *scene = layer(n, lift, mode);
-                        }
-                        let start = Instant::now();
-                        scene.step();
-                        total += start.elapsed();
-                        black_box(&scene.world.bodies);
-                    }
-                    total
-                });
-            });
-        }
-        group.finish();
+        windowed_group(c, &format!("{name}/{n}"), n, |mode| layer(n, lift, mode));
     }
 }
 
@@ -295,54 +307,19 @@ fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
         ];
         ball(&mut world, p, true);
     }
-    let plugin = match mode {
-        Mode::Rapier => None,
-        Mode::Plugin(timing) => {
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                timing,
-                ..Default::default()
-            })
-            .expect("valid configuration");
-            p.set_all_fixed_colliders_ground(true);
-            Some(p)
-        }
-    };
-    let mut scene = Scene {
-        world,
-        plugin,
-        steps: 0,
-    };
+    let mut scene = with_plugin(world, None, mode);
     scene.step();
     scene
 }
 
-/// `tiles/N`: 500 balls bouncing on floors of 8 x 8 and 64 x 64 tiles, a window of steps from
-/// a fresh scene: the cost must not grow with the number of grounds.
+/// `tilesN/500`: 500 balls bouncing on floors of 8 x 8 and 64 x 64 tiles: the cost must not
+/// grow with the number of grounds.
 fn tiled(c: &mut Criterion) {
     const BALLS: usize = 500;
     for tiles in [8, 64] {
-        let mut group = c.benchmark_group(format!("tiles{tiles}/{BALLS}"));
-        configure(&mut group, BALLS);
-        for (mode, label) in MODES {
-            let mut scene: Option<Scene> = None;
-            group.bench_function(BenchmarkId::from_parameter(label), |b| {
-                let scene = scene.get_or_insert_with(|| tiled_layer(BALLS, tiles, mode));
-                b.iter_custom(|iters| {
-                    let mut total = Duration::ZERO;
-                    for _ in 0..iters {
-                        if scene.steps > WINDOW {
-                            *scene = tiled_layer(BALLS, tiles, mode);
-                        }
-                        let start = Instant::now();
-                        scene.step();
-                        total += start.elapsed();
-                        black_box(&scene.world.bodies);
-                    }
-                    total
-                });
-            });
-        }
-        group.finish();
+        windowed_group(c, &format!("tiles{tiles}/{BALLS}"), BALLS, |mode| {
+            tiled_layer(BALLS, tiles, mode)
+        });
     }
 }
 

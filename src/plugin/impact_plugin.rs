@@ -219,7 +219,8 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         collider: ColliderHandle,
     ) -> Result<(), ConfigError> {
-        self.registry.add_ground(bodies, colliders, collider)
+        self.registry
+            .insert_ground(bodies, colliders, collider, None)
     }
 
     /// Marks one collider as ground with its own material, which replaces the coefficients
@@ -231,8 +232,9 @@ impl<H> ImpactPlugin<H> {
         collider: ColliderHandle,
         material: GroundMaterial,
     ) -> Result<(), ConfigError> {
+        material.validate()?;
         self.registry
-            .add_ground_with_material(bodies, colliders, collider, material)
+            .insert_ground(bodies, colliders, collider, Some(material))
     }
 
     /// Marks every collider of a fixed or kinematic body as ground.
@@ -1075,13 +1077,7 @@ impl<H> ImpactPlugin<H> {
                 if h.dist < 0.0 {
                     let before = end;
                     end.com -= h.normal * h.dist;
-                    let site = Site {
-                        body: cand.body,
-                        collider: geom.parts[h.part].handle,
-                        ground: grounds[h.ground].handle,
-                        normal: h.normal,
-                        point: h.point - h.normal * h.dist,
-                    };
+                    let site = Site::of_hit(cand.body, &geom, &grounds, &h);
                     let pushed =
                         correction(EventKind::PushOut, &site, &inertia, &before, &end, step.dt);
                     self.events.push(pushed);

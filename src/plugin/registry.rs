@@ -34,34 +34,7 @@ pub(crate) struct Registry {
 }
 
 impl Registry {
-    /// Marks one collider as ground, with the materials rapier combines from the colliders.
-    ///
-    /// The collider must exist and be parentless, or attached to a fixed or kinematic body.
-    /// Its hook flags are the user's: the plugin adds its own at each step where needed and
-    /// hands the user's to the wrapped hook.
-    pub fn add_ground(
-        &mut self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        collider: ColliderHandle,
-    ) -> Result<(), ConfigError> {
-        self.insert_ground(bodies, colliders, collider, None)
-    }
-
-    /// Marks one collider as ground with its own material, which replaces the coefficients
-    /// rapier would combine (validated here).
-    pub fn add_ground_with_material(
-        &mut self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        collider: ColliderHandle,
-        material: GroundMaterial,
-    ) -> Result<(), ConfigError> {
-        material.validate()?;
-        self.insert_ground(bodies, colliders, collider, Some(material))
-    }
-
-    /// Marks every collider of a fixed or kinematic body as ground.
+    /// [`crate::ImpactPlugin::add_ground_body`].
     pub fn add_ground_body(
         &mut self,
         bodies: &RigidBodySet,
@@ -82,7 +55,7 @@ impl Registry {
         Ok(())
     }
 
-    /// Sets or clears (`None`) the material override of a ground.
+    /// [`crate::ImpactPlugin::set_ground_material`].
     pub fn set_ground_material(
         &mut self,
         collider: ColliderHandle,
@@ -100,9 +73,7 @@ impl Registry {
         Ok(())
     }
 
-    /// Makes a ground an ordinary collider again. Returns whether it was a ground. The all-fixed mode
-    /// ([`Self::set_all_fixed_colliders_ground`]) does not mark it again; [`Self::add_ground`]
-    /// does.
+    /// [`crate::ImpactPlugin::remove_ground`].
     pub fn remove_ground(&mut self, collider: ColliderHandle) -> bool {
         self.unmarked.insert(collider);
         self.unmark(collider)
@@ -113,9 +84,7 @@ impl Registry {
         self.grounds.remove(&collider).is_some()
     }
 
-    /// Every fixed collider (parentless, or on a fixed body) is ground, including those
-    /// added later; checked at each [`Self::before_step`]. Turning it off unmarks the
-    /// colliders it marked.
+    /// [`crate::ImpactPlugin::set_all_fixed_colliders_ground`].
     pub fn set_all_fixed_colliders_ground(&mut self, enabled: bool) {
         self.all_fixed = enabled;
         if !enabled {
@@ -136,6 +105,8 @@ impl Registry {
         self.grounds.contains_key(&collider)
     }
 
+    /// Marks one collider as ground, with its material override if any (validated by the
+    /// caller): [`crate::ImpactPlugin::add_ground`].
     pub fn insert_ground(
         &mut self,
         bodies: &RigidBodySet,

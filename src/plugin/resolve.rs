@@ -208,6 +208,23 @@ pub(crate) struct Site {
 }
 
 impl Site {
+    /// The site of a contact `hit` of `body` (its parts `geom`) with one of `grounds`, at the
+    /// ground's surface (the hit's point moved out by its depth).
+    pub fn of_hit(
+        body: RigidBodyHandle,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        hit: &Hit,
+    ) -> Self {
+        Self {
+            body,
+            collider: geom.parts[hit.part].handle,
+            ground: grounds[hit.ground].handle,
+            normal: hit.normal,
+            point: hit.point - hit.normal * hit.dist,
+        }
+    }
+
     /// The site of an event already reported.
     pub fn of(e: &ImpactEvent) -> Self {
         Self {

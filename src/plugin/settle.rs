@@ -262,21 +262,7 @@ impl Settle<'_> {
                     let before = s;
                     s.com -= hit.normal * hit.dist;
                     changed = true;
-                    let site = Site {
-                        body,
-                        collider: geom.parts[hit.part].handle,
-                        ground: grounds[hit.ground].handle,
-                        normal: hit.normal,
-                        point: hit.point - hit.normal * hit.dist,
-                    };
-                    self.events.push(correction(
-                        EventKind::PushOut,
-                        &site,
-                        inertia,
-                        &before,
-                        &s,
-                        t,
-                    ));
+                    self.report_push_out(body, geom, grounds, &hit, inertia, &before, &s, step);
                 }
                 break;
             }
@@ -602,13 +588,7 @@ impl Settle<'_> {
         if before.com == after.com && before.v == after.v {
             return;
         }
-        let site = Site {
-            body,
-            collider: geom.parts[hit.part].handle,
-            ground: grounds[hit.ground].handle,
-            normal: hit.normal,
-            point: hit.point - hit.normal * hit.dist,
-        };
+        let site = Site::of_hit(body, geom, grounds, hit);
         self.events.push(correction(
             EventKind::PushOut,
             &site,
