@@ -26,7 +26,7 @@ pub(crate) enum Role {
     /// sliding that `Rolling` does not take.
     Resting,
     /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
-    /// moved in closed form after the step (`motion::Rolling`, `ImpactPlugin::rolling_end`).
+    /// moved in closed form after the step (`motion::Rolling`, `Settle::rolling_end`).
     Rolling,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,
@@ -56,10 +56,10 @@ pub(crate) struct Candidate {
     /// the resting gap in the step (a box tipping off its edge, a capsule swinging down at a
     /// wall, a ball spun fast): each ground's index (in `StepData::grounds`) and the resting
     /// contact point in the body's frame (from its centre of mass). Checked after the step
-    /// (see `ImpactPlugin::resting_end`).
+    /// (see `Settle::resting_end`).
     pub turning_resting: SmallList<(usize, Vector3<f64>)>,
     /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `ImpactPlugin::resting_end` and `ImpactPlugin::turned_end`.
+    /// `Settle::resting_end` and `Settle::turned_end`.
     pub turns_surface: bool,
     /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
     /// `StepData::grounds`) and the motion. `start` then touches the ground.
@@ -101,7 +101,7 @@ pub(crate) struct StepData {
     pub roles: HandleMap<PairKey, Role>,
     pub grounds: Vec<GroundMotion>,
     pub candidates: Vec<Candidate>,
-    /// Managed bodies asleep at the start of the step (see `ImpactPlugin::woken_end`).
+    /// Managed bodies asleep at the start of the step (see `Settle::woken_end`).
     pub asleep: Vec<RigidBodyHandle>,
     pub lookup: Lookup,
 }
