@@ -12,10 +12,11 @@ pub enum ImpactTiming {
     InStep,
     /// At the start of the step, to the start-of-step velocity (`Step` mode).
     StepStart,
-    /// At the end of the step, on rapier's end-of-step state, the body pushed out of the
-    /// ground along the normal: the fallback for a body that also touched something else
-    /// (another body, a non-ground collider through rapier's CCD), had a joint or a torque in
-    /// the step, so that its flight could not be re-integrated alone.
+    /// At the end of the step, on rapier's end-of-step state: an impact of the fallback for a
+    /// body that also touched something else (another body, a non-ground collider through
+    /// rapier's CCD), had a joint or a torque in the step, so that its flight could not be
+    /// re-integrated alone (the body pushed out of the ground along the normal), or of the
+    /// settle stage's checks; and every push-out and energy cap.
     StepEnd,
 }
 
@@ -69,7 +70,8 @@ pub struct ImpactEvent {
     pub approach_speed: f64,
     /// Impulse on the body at `point` (N s).
     pub impulse: Vector,
-    /// Normal impulse `P.n >= 0` (N s).
+    /// Normal impulse `P.n` (N s): `>= 0` for an impact; for a correction, the change of
+    /// linear momentum along the normal (an energy cap's may be negative).
     pub normal_impulse: f64,
     /// Tangential (friction) impulse (N s).
     pub tangent_impulse: Vector,
@@ -77,7 +79,8 @@ pub struct ImpactEvent {
     pub regime: Regime,
     /// The law that produced the impulse (`Document` or `Consistent`).
     pub law: Law,
-    /// Why `Guarded` fell back to `Consistent`, if it did.
+    /// Why the document's closed form was left for `Consistent`, if it was: by `Guarded` where
+    /// it is unphysical, or by `Document` at a jam (no solution).
     pub fallback: Option<Fallback>,
     /// `true` when the approach was below the resting speed and the impact was resolved with
     /// `e = 0`: the body came to rest on the ground.

@@ -10,14 +10,15 @@
 //! - the collision groups accept each other;
 //! - the solver groups accept each other (otherwise rapier computes contacts and events but
 //!   applies no impulse);
-//! - no joint between the two bodies disables their contacts (checked after the step, where
-//!   the joints are known: [`joint_disables_contacts`]).
+//! - no joint between the two bodies disables their contacts ([`joint_disables_contacts`]).
 //!
-//! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately, where the
-//! colliders' hook flags ask for it, as rapier would.
+//! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately
+//! ([`user_refuses`]), where the colliders' hook flags ask for it, as rapier would.
 
+use super::resolve::PairKey;
 use crate::rapier::prelude::{
-    Collider, ImpulseJointSet, MultibodyJointSet, RigidBodyHandle, RigidBodySet, RigidBodyType,
+    ActiveHooks, Collider, ColliderSet, ImpulseJointSet, MultibodyJointSet, PairFilterContext,
+    PhysicsHooks, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,
 };
 
 /// Would rapier solve the pair of colliders, before the hooks and the joints? (See the
@@ -68,4 +69,30 @@ pub(crate) fn joint_disables_contacts(
         || multibody_joints
             .joint_between(a, b)
             .is_some_and(|(_, _, link)| !link.joint.data.contacts_enabled)
+}
+
+/// Does the user's filter refuse the pair `key` (body collider, ground collider)? Asked only
+/// when the colliders' own hook flags (`user_flags`, those the user set) ask for it; a refusal
+/// is `None`, or flags without rigid impulses.
+pub(crate) fn user_refuses<H: PhysicsHooks>(
+    user_hooks: &H,
+    user_flags: ActiveHooks,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    key: PairKey,
+) -> bool {
+    if !user_flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
+        return false;
+    }
+    let context = PairFilterContext {
+        bodies,
+        colliders,
+        collider1: key.0,
+        collider2: key.1,
+        rigid_body1: colliders.get(key.0).and_then(|c| c.parent()),
+        rigid_body2: colliders.get(key.1).and_then(|c| c.parent()),
+    };
+    !user_hooks
+        .filter_contact_pair(&context)
+        .is_some_and(|f| f.contains(SolverFlags::COMPUTE_RIGID_IMPULSES))
 }

@@ -113,8 +113,8 @@ pub(crate) struct GroundGeom<'a> {
     /// The collider's world pose at the start of the step (`pose_at(0)`, kept because a
     /// still ground is asked for it in every query).
     pub pose0: Isometry3<f64>,
-    /// Body colliders that have no contact with this ground for the plugin (the user's
-    /// filter refused the pair).
+    /// Body colliders that have no contact with this ground for the plugin (the pair is
+    /// `Filtered`: rapier's filtering or the user's filter refuses it).
     pub skip: Vec<ColliderHandle>,
 }
 

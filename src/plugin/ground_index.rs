@@ -77,32 +77,46 @@ impl GroundMotion {
     }
 }
 
-/// What a still ground's motion was computed from: if any of it changes, it is computed
-/// again.
+/// What a ground's motion and place were computed from. A change of `class` (the shape,
+/// enabled or sensor flags, the parent's type, the collider itself) moves the ground to
+/// another place or out: the index is rebuilt. A change of `pose` or `skin` of a still ground
+/// is computed again in place. (A shape edited in place through `Collider::shape_mut` keeps its
+/// address and is not seen: set a new shape, or mark the ground again.)
 #[derive(Clone, Copy, PartialEq)]
 struct Basis {
+    class: Class,
     pose: Pose,
+    skin: Real,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+struct Class {
     /// The collider's shape, by address (rapier replaces the shared shape on `set_shape`).
     shape: *const (),
-    skin: Real,
-    /// Enabled, not a sensor, and its parent (if any) fixed.
-    solid_still: bool,
+    enabled: bool,
+    sensor: bool,
+    /// The parent's type (`None`: parentless), and whether the parent is enabled.
+    parent: Option<(RigidBodyType, bool)>,
 }
 
 // SAFETY of `Send`/`Sync`: `shape` is only ever compared, never dereferenced.
-unsafe impl Send for Basis {}
-unsafe impl Sync for Basis {}
+unsafe impl Send for Class {}
+unsafe impl Sync for Class {}
 
 impl Basis {
     fn of(co: &Collider, bodies: &RigidBodySet) -> Self {
-        let parent_fixed = co
-            .parent()
-            .is_none_or(|p| bodies.get(p).is_some_and(|rb| rb.is_fixed()));
         Self {
+            class: Class {
+                shape: co.shape() as *const _ as *const (),
+                enabled: co.is_enabled(),
+                sensor: co.is_sensor(),
+                parent: co
+                    .parent()
+                    .and_then(|p| bodies.get(p))
+                    .map(|rb| (rb.body_type(), rb.is_enabled())),
+            },
             pose: *co.position(),
-            shape: co.shape() as *const _ as *const (),
             skin: co.contact_skin(),
-            solid_still: co.is_enabled() && !co.is_sensor() && parent_fixed,
         }
     }
 }
@@ -125,6 +139,7 @@ pub(crate) struct GroundIndex {
     /// By index: the ground's motion this step (meaningful where `places` is not `Absent`).
     pub motions: Vec<GroundMotion>,
     places: Vec<Place>,
+    /// By index: what the motion was computed from (`None`: the collider was gone).
     bases: Vec<Option<Basis>>,
     /// Indices of the `Listed` grounds.
     listed: Vec<usize>,
@@ -162,6 +177,16 @@ impl GroundIndex {
         })
     }
 
+    /// A ground's entry changed (its material): the hooks' table follows, if it holds the
+    /// ground (else it is rebuilt from the registry at the next refresh anyway).
+    pub fn set_entry(&mut self, c: ColliderHandle, entry: GroundEntry) {
+        if let Some(Some((h, e))) = self.by_slot.get_mut(slot_of(c)) {
+            if *h == c {
+                *e = entry;
+            }
+        }
+    }
+
     /// Brings every ground's motion to this step (see the module's contract).
     pub fn refresh(
         &mut self,
@@ -179,44 +204,33 @@ impl GroundIndex {
         for i in 0..self.bases.len() {
             let handle = self.motions[i].handle;
             let now = colliders.get(handle).map(|co| Basis::of(co, bodies));
-            let Some(before) = self.bases[i] else {
-                // A ground on a kinematic or dynamic body: recomputed below if moving.
-                if now.is_some_and(|b| b.solid_still) {
-                    // Its body became fixed.
-                    self.rebuild(registry, bodies, colliders, dt, gap);
-                    return;
-                }
+            let before = self.bases[i];
+            if now.map(|b| b.class) != before.map(|b| b.class) {
+                // Another place, or out: rare (a body type switched, a collider disabled,
+                // removed or given a new shape).
+                self.rebuild(registry, bodies, colliders, dt, gap);
+                return;
+            }
+            // Moving grounds are computed below; absent ones have nothing to compute.
+            let (Some(now), Some(before)) = (now, before) else {
                 continue;
             };
-            if now == Some(before) {
+            if now == before || self.places[i] == Place::Absent || !self.motions[i].is_still() {
                 continue;
             }
-            // A still ground moved, changed shape, or left: computed again; a change of
-            // where it belongs rebuilds the index (rare: a body type switched, a collider
-            // disabled or removed).
-            let motion = colliders
+            // A still ground moved, or changed its skin: computed again in place.
+            let Some(m) = colliders
                 .get(handle)
-                .and_then(|co| motion_of(handle, co, bodies, dt, gap));
-            match (motion, now) {
-                (Some(m), Some(b)) if b.solid_still && m.plane.is_none() && m.is_still() => {
-                    self.motions[i] = m;
-                    self.bases[i] = Some(b);
-                    if self.places[i] == Place::Tree {
-                        self.tree.remove(i as u32);
-                    }
-                    self.tree.insert(m.aabb, i as u32);
-                    self.places[i] = Place::Tree;
-                }
-                (Some(m), Some(b))
-                    if b.solid_still && m.is_still() && self.places[i] == Place::Listed =>
-                {
-                    self.motions[i] = m;
-                    self.bases[i] = Some(b);
-                }
-                _ => {
-                    self.rebuild(registry, bodies, colliders, dt, gap);
-                    return;
-                }
+                .and_then(|co| motion_of(handle, co, bodies, dt, gap))
+            else {
+                self.rebuild(registry, bodies, colliders, dt, gap);
+                return;
+            };
+            self.motions[i] = m;
+            self.bases[i] = Some(now);
+            if self.places[i] == Place::Tree {
+                self.tree.remove(i as u32);
+                self.tree.insert(m.aabb, i as u32);
             }
         }
         for k in 0..self.moving.len() {
@@ -270,14 +284,11 @@ impl GroundIndex {
                 }
                 None => (absent(handle), Place::Absent),
             };
-            let basis = co
-                .map(|co| Basis::of(co, bodies))
-                .filter(|b| b.solid_still || place == Place::Absent);
             self.motions.push(motion);
             self.places.push(place);
             // Absent grounds keep what they were computed from too, so that a change (the
             // collider enabled again) is seen.
-            self.bases.push(basis);
+            self.bases.push(co.map(|co| Basis::of(co, bodies)));
         }
         // parry 0.31's `Bvh::from_iter` indexes its leaf table by position for one or two
         // leaves (it panics when their indices are not 0 and 1): those are inserted.
@@ -351,7 +362,8 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
 }
 
 /// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
-/// would not collide with it this step (disabled, a sensor) or it is on a dynamic body.
+/// would not collide with it this step (disabled, a sensor, on a disabled body) or it is on a
+/// dynamic body.
 fn motion_of(
     handle: ColliderHandle,
     co: &Collider,
@@ -374,7 +386,7 @@ fn motion_of(
         })
     };
     match parent {
-        Some((_, rb)) if rb.is_dynamic() => None,
+        Some((_, rb)) if rb.is_dynamic() || !rb.is_enabled() => None,
         Some((bh, rb)) if !rb.is_fixed() => {
             let frame0 = pose_to_na(rb.position());
             let local_com = vec_to_na(rb.local_center_of_mass());
@@ -430,5 +442,129 @@ fn motion_of(
                 plane: plane_at(co.position()),
             })
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rapier::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
+
+    const DT: f64 = 1.0 / 60.0;
+    const GAP: f64 = 0.005;
+
+    fn registry(grounds: &[ColliderHandle]) -> Registry {
+        grounds
+            .iter()
+            .map(|h| {
+                (
+                    *h,
+                    GroundEntry {
+                        material: None,
+                        automatic: false,
+                    },
+                )
+            })
+            .collect()
+    }
+
+    /// The grounds within 10 cm of `at`, by collider handle.
+    fn near_at(index: &GroundIndex, at: Vector) -> Vec<ColliderHandle> {
+        index
+            .near(&index.motions, at, 0.1)
+            .iter()
+            .map(|i| index.motions[*i].handle)
+            .collect()
+    }
+
+    #[test]
+    fn a_moved_still_ground_is_found_where_it_now_is() {
+        let mut world = PhysicsWorld::default();
+        let a = world
+            .colliders
+            .insert(ColliderBuilder::cuboid(0.5, 0.1, 0.5));
+        let b = world
+            .colliders
+            .insert(ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(3.0, 0.0, 0.0)));
+        let reg = registry(&[a, b]);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![b]);
+        world.colliders[b].set_translation(Vector::new(10.0, 0.0, 0.0));
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![]);
+        assert_eq!(near_at(&index, Vector::new(10.0, 0.2, 0.0)), vec![b]);
+        assert_eq!(near_at(&index, Vector::new(0.0, 0.2, 0.0)), vec![a]);
+    }
+
+    #[test]
+    fn a_kinematic_ground_disabled_and_enabled_again_is_found_again() {
+        let mut world = PhysicsWorld::default();
+        let (_, platform) = world.insert(
+            RigidBodyBuilder::kinematic_velocity_based(),
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+        );
+        let reg = registry(&[platform]);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        let above = Vector::new(0.0, 0.2, 0.0);
+        assert_eq!(near_at(&index, above), vec![platform]);
+        world.colliders[platform].set_enabled(false);
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, above), vec![]);
+        world.colliders[platform].set_enabled(true);
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, above), vec![platform]);
+        assert_eq!(index.moving(), &[0]);
+    }
+
+    #[test]
+    fn a_half_space_given_a_box_shape_is_listed_once_as_a_box() {
+        let mut world = PhysicsWorld::default();
+        let ground = world.colliders.insert(ColliderBuilder::halfspace(
+            crate::rapier::na::Unit::new_unchecked(Vector::Y),
+        ));
+        let reg = registry(&[ground]);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        // A half-space is everywhere below its plane.
+        assert_eq!(
+            near_at(&index, Vector::new(50.0, 0.05, -40.0)),
+            vec![ground]
+        );
+        world.colliders[ground]
+            .set_shape(crate::rapier::prelude::SharedShape::cuboid(1.0, 0.1, 1.0));
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, Vector::new(50.0, 0.05, -40.0)), vec![]);
+        assert_eq!(near_at(&index, Vector::new(0.0, 0.15, 0.0)), vec![ground]);
+    }
+
+    #[test]
+    fn a_ground_on_a_body_turned_dynamic_or_removed_is_no_longer_found() {
+        let mut world = PhysicsWorld::default();
+        let (body, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+        );
+        let other = world
+            .colliders
+            .insert(ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(3.0, 0.0, 0.0)));
+        let reg = registry(&[ground, other]);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        let above = Vector::new(0.0, 0.2, 0.0);
+        assert_eq!(near_at(&index, above), vec![ground]);
+        world.bodies[body].set_body_type(RigidBodyType::Dynamic, true);
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, above), vec![]);
+        world.colliders.remove(
+            other,
+            &mut world.islands,
+            &mut world.bodies,
+            &mut world.soft_bodies,
+            true,
+        );
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![]);
     }
 }

@@ -37,8 +37,8 @@ use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
-    MultibodyJointSet, NarrowPhase, PairFilterContext, PhysicsHooks, PhysicsWorld, RigidBody,
-    RigidBodyHandle, RigidBodySet, SolverFlags,
+    LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBody,
+    RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -86,7 +86,7 @@ struct Spare {
 /// # Around your own `PhysicsPipeline::step`
 /// ```
 /// use rapier_impact::rapier::prelude::*;
-/// use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+/// use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
 ///
 /// let mut bodies = RigidBodySet::new();
 /// let mut colliders = ColliderSet::new();
@@ -114,7 +114,8 @@ struct Spare {
 ///     );
 ///     plugin.after_step(&mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
 ///     for event in plugin.events() {
-///         assert!(event.normal_impulse > 0.0);
+///         // Impacts push; the corrections (push-outs, energy caps) report their own kind.
+///         assert!(event.kind != EventKind::Impact || event.normal_impulse > 0.0);
 ///     }
 /// }
 /// assert!(bodies[ball].translation().y > 0.1);
@@ -132,11 +133,9 @@ pub struct ImpactPlugin<H = ()> {
     spare: Spare,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
-    /// What touched each managed body near a ground in the last step besides its grounds
-    /// (another body, a wall, a joint: see `NonGround`), by body; a body absent touched
-    /// nothing. Decides the pressed roles, the push-outs, the energy cap and `Rolling`.
-    /// Managed bodies asleep at the start of the last step: their neighbours were not
-    /// measured (see `prev_neighbours`) when they wake.
+    /// Managed bodies asleep at the start of the last step: the plugin had no roles for them,
+    /// so a body just woken is not taken for `Rolling` (a pile woken by a hit would lose its
+    /// ground support for a step).
     prev_asleep: HandleSet<RigidBodyHandle>,
     events: Vec<ImpactEvent>,
 }
@@ -193,7 +192,8 @@ impl<H> ImpactPlugin<H> {
         &mut self.user_hooks
     }
 
-    /// The impacts resolved in the last step (cleared by the next [`Self::before_step`]).
+    /// Every change the plugin made to a body in the last step: the impacts and the
+    /// corrections (see [`crate::EventKind`]), cleared by the next [`Self::before_step`].
     pub fn events(&self) -> &[ImpactEvent] {
         &self.events
     }
@@ -298,16 +298,19 @@ impl<H> ImpactPlugin<H> {
 
     /// `Exact` mode, a body that flew free all step: its translation and linear velocity
     /// from the exact flight. Its rotation stays rapier's, and so does the spin of an
-    /// anisotropic body (rapier turns it its own way, and the two must agree); a body whose
-    /// spin keeps its axis (isotropic inertia, or rapier's gyroscopic forces off) gets the
-    /// exact spin too, which rapier's `f32` integrator lets drift by about 2e-7 relative a
-    /// step (1.6e-5 on a hollow ball's spin after 40 steps at 1 000 Hz).
+    /// anisotropic body or of one with a locked rotation axis (rapier turns it its own way,
+    /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
+    /// rapier's gyroscopic forces off) gets the exact spin too, which rapier's `f32`
+    /// integrator lets drift by about 2e-7 relative a step (1.2e-5 on a hollow ball's spin
+    /// after 40 steps at 1 000 Hz).
     fn fly_exactly(&mut self, bodies: &mut RigidBodySet, cand: &Candidate, dt: f64) {
         let end = cand.flight.advance(&cand.start, dt);
         let rb = &mut bodies[cand.body];
+        let exact_spin =
+            cand.flight.gyro.is_none() && !rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED);
         let s = State {
             rot: rot_to_na(*rb.rotation()),
-            w: if cand.flight.gyro.is_none() {
+            w: if exact_spin {
                 end.w
             } else {
                 vec_to_na(rb.angvel())
@@ -317,7 +320,7 @@ impl<H> ImpactPlugin<H> {
         write_state(rb, &s, &cand.local_com, false);
         // Written only where rapier drifted (a write queues the body for rapier's update).
         let w = vec_from_na(&s.w);
-        if cand.flight.gyro.is_none() && rb.angvel() != w {
+        if exact_spin && rb.angvel() != w {
             rb.set_angvel(w, true);
         }
         self.settle().remember(cand.body, rb, &s);
@@ -394,21 +397,7 @@ impl<H> ImpactPlugin<H> {
         H: PhysicsHooks,
     {
         let flags = self.user_flags(colliders, key.0) | self.user_flags(colliders, key.1);
-        if !flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
-            return false;
-        }
-        let context = PairFilterContext {
-            bodies,
-            colliders,
-            collider1: key.0,
-            collider2: key.1,
-            rigid_body1: colliders.get(key.0).and_then(|c| c.parent()),
-            rigid_body2: colliders.get(key.1).and_then(|c| c.parent()),
-        };
-        !self
-            .user_hooks
-            .filter_contact_pair(&context)
-            .is_some_and(|f| f.contains(SolverFlags::COMPUTE_RIGID_IMPULSES))
+        filter::user_refuses(&self.user_hooks, flags, bodies, colliders, key)
     }
 
     /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
@@ -739,13 +728,13 @@ impl<H> ImpactPlugin<H> {
                         if let Some((dist, n, _)) =
                             contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
                         {
-                            // Its neighbours (`prev_neighbours`) were measured after the last
-                            // step if the pair had a role then. A body just woken was not
-                            // measured: a pile woken by a hit would lose its ground support
-                            // for a step. A body new to the plugin (just created, or first
-                            // near the ground) has nothing to go on either; it is taken, and
-                            // if something touches it in the step, `rolling_end` puts it back
-                            // on the ground.
+                            // What touches it is read from rapier's contact graph (in
+                            // `rolling_of`). A body just woken is not taken: rapier solved
+                            // nothing of it while it slept, and a pile woken by a hit would
+                            // lose its ground support for a step. A body new to the plugin
+                            // (just created, or first near the ground) is taken, and if
+                            // something touches it in the step, `Settle::rolling_end` puts it
+                            // back on the ground.
                             let known = matches!(
                                 prev_roles.get(&key),
                                 Some(Role::Resting | Role::Impact | Role::Rolling)
@@ -840,7 +829,9 @@ impl<H> ImpactPlugin<H> {
         narrow_phase: &NarrowPhase,
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
-    ) {
+    ) where
+        H: PhysicsHooks,
+    {
         let sets = Sets {
             narrow_phase,
             impulse_joints,
@@ -879,7 +870,32 @@ impl<H> ImpactPlugin<H> {
                 .get(*handle)
                 .is_some_and(|rb| !rb.is_sleeping() && self.registry.manages(*handle, rb))
             {
-                self.settle().woken_end(bodies, colliders, *handle, &step);
+                // Asleep at the start, it has no roles: the joints and the user's filter are
+                // asked here (rapier's own filters in `woken_end`).
+                let (user_hooks, flags) = (&self.user_hooks, &self.flags);
+                let refused = |bodies: &RigidBodySet,
+                               part: ColliderHandle,
+                               ground: ColliderHandle| {
+                    let user = flags.recorded_user_flags(colliders, part)
+                        | flags.recorded_user_flags(colliders, ground);
+                    colliders[ground].parent().is_some_and(|ground_body| {
+                        filter::joint_disables_contacts(
+                            impulse_joints,
+                            multibody_joints,
+                            *handle,
+                            ground_body,
+                        )
+                    }) || filter::user_refuses(user_hooks, user, bodies, colliders, (part, ground))
+                };
+                Settle {
+                    config: &self.config,
+                    registry: &self.registry,
+                    flags: &self.flags,
+                    roles: &self.prev_roles,
+                    events: &mut self.events,
+                    shadows: &mut self.shadows,
+                }
+                .woken_end(bodies, colliders, *handle, &step, &refused);
             }
         }
         let mode = self.config.timing;

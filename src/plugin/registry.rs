@@ -64,12 +64,13 @@ impl Registry {
         if let Some(m) = &material {
             m.validate()?;
         }
-        self.changed();
         let entry = self
             .grounds
             .get_mut(&collider)
             .ok_or(ConfigError::NotAGround(collider))?;
         entry.material = material.map(GroundMaterial::to_model);
+        // Only the hooks' table holds materials: no rebuild of the index.
+        self.index.set_entry(collider, *entry);
         Ok(())
     }
 

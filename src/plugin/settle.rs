@@ -35,7 +35,9 @@ use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
 use crate::motion::{Flight, Rolling, State};
 use crate::rapier::math::{Real, Vector};
-use crate::rapier::prelude::{ActiveHooks, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+};
 use nalgebra::Vector3;
 
 /// `s` moved out of the ground along `hit`'s normal and, if `stop`, without its speed into
@@ -188,7 +190,7 @@ impl Settle<'_> {
     }
 
     /// Nothing but still grounds touched the candidate in the step (no body, wall or joint:
-    /// `prev_neighbours` is this step's by now), through the plugin's pairs with no contact
+    /// read from rapier's contact graph after the step), through the plugin's pairs with no contact
     /// modification of the user's, and no user torque acted: its energy can only have been
     /// lost.
     pub fn may_cap_energy(
@@ -330,7 +332,8 @@ impl Settle<'_> {
     ///   moved out of the ground; a ball's speed into the ground is removed, other bodies'
     ///   velocities are kept. The lift's energy is capped (`cap_energy`).
     ///
-    /// Returns whether a step-end impact resolved it.
+    /// Returns whether it changed the body (a step-end impact or a push-out): rapier's end
+    /// state, corrected, then stands, and no flight is written over it.
     pub fn resting_end(
         &mut self,
         bodies: &mut RigidBodySet,
@@ -396,6 +399,7 @@ impl Settle<'_> {
             );
             write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
             self.cap_energy(bodies, colliders, cand, &inertia, step);
+            return true;
         }
         false
     }
@@ -471,6 +475,7 @@ impl Settle<'_> {
         colliders: &ColliderSet,
         handle: RigidBodyHandle,
         step: &EndOfStep,
+        refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
     ) {
         let rb = &bodies[handle];
         let local_com = vec_to_na(rb.local_center_of_mass());
@@ -492,7 +497,10 @@ impl Settle<'_> {
                     .parts
                     .iter()
                     .map(|part| part.handle)
-                    .filter(|h| !filter::rapier_solves(bodies, &colliders[*h], ground))
+                    .filter(|h| {
+                        !filter::rapier_solves(bodies, &colliders[*h], ground)
+                            || refused(bodies, *h, gg.handle)
+                    })
                     .collect();
                 Some(gg)
             })
@@ -519,7 +527,7 @@ impl Settle<'_> {
     /// its solver) and so fell by up to `|g| dt^2 / 2` while pushed by whatever touched it:
     /// - moving into the ground no faster than that fall (`|a.n| dt`, plus the resting
     ///   speed), it is put back on the ground with no speed into it, as rapier's resting
-    ///   contact would have held it, and no event (a ball rolling up to another);
+    ///   contact would have held it (a `PushOut` event: a ball rolling up to another);
     /// - faster (something pushed it down), it is resolved at the step end (`step_end`,
     ///   `e = 0`, moved out).
     #[allow(clippy::too_many_arguments)]
