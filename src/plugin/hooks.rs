@@ -29,16 +29,16 @@ use crate::rapier::prelude::{
 impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
         let (bodies, colliders) = (context.bodies, context.colliders);
-        let managed = self
-            .managed_pair(bodies, colliders, context.collider1, context.collider2)
-            .map(|key| self.role(&key));
+        let managed = self.pair_in_step(bodies, colliders, context.collider1, context.collider2);
         match managed {
-            Some(Role::Impact | Role::Rolling) => Some(SolverFlags::empty()),
+            Some((_, Role::Impact | Role::Rolling, _)) => Some(SolverFlags::empty()),
             // Resting (in rapier's solver), refused by the user, or not managed: the user's
             // filter when the colliders ask for it, as rapier would.
             _ => {
-                let flags = self.user_flags(colliders, context.collider1)
-                    | self.user_flags(colliders, context.collider2);
+                let flags = managed.map(|(_, _, user)| user).unwrap_or_else(|| {
+                    self.user_flags(colliders, context.collider1)
+                        | self.user_flags(colliders, context.collider2)
+                });
                 if flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
                     self.user_hooks.filter_contact_pair(context)
                 } else {
@@ -57,15 +57,12 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         let (bodies, colliders) = (context.bodies, context.colliders);
         let (c1, c2) = (context.collider1, context.collider2);
-        let managed = self
-            .managed_pair(bodies, colliders, c1, c2)
-            .map(|key| (key, self.role(&key)));
+        let managed = self.pair_in_step(bodies, colliders, c1, c2);
         match managed {
-            Some((_, Role::Impact | Role::Rolling)) => {}
-            Some((key, Role::Resting)) => {
+            Some((_, Role::Impact | Role::Rolling, _)) => {}
+            Some((key, Role::Resting, flags)) => {
                 // The user's contact modification first (a conveyor ground, a one-way
                 // platform), then the plugin's: no bounce by rapier.
-                let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);
                 }
@@ -77,7 +74,12 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     }
                 }
             }
-            Some((_, Role::Rapier | Role::Filtered)) | None => {
+            Some((_, Role::Rapier | Role::Filtered, flags)) => {
+                if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
+                    self.user_hooks.modify_solver_contacts(context);
+                }
+            }
+            None => {
                 let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);

@@ -338,6 +338,32 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
+    /// The pair as the plugin sees it in rapier's step: `Some((key, role, user flags))` for a
+    /// managed body-ground pair, `None` for another pair. The step's table answers the pairs
+    /// `before_step` gave a role (most of them) without looking at the sets; the others are
+    /// checked (a pair the plugin did not see coming is `Resting`).
+    pub(crate) fn pair_in_step(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<(PairKey, Role, ActiveHooks)> {
+        // The table holds the registry as `before_step` saw it; a ground marked or unmarked
+        // since is checked against the sets.
+        let current = self.registry.index.entry(c1).is_ok();
+        if let Some((key, slot)) = current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
+            return Some((key, slot.role, slot.user));
+        }
+        self.managed_pair(bodies, colliders, c1, c2).map(|key| {
+            (
+                key,
+                self.role(&key),
+                self.user_flags(colliders, c1) | self.user_flags(colliders, c2),
+            )
+        })
+    }
+
     /// The hook flags the user asked for on a collider.
     pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
         self.step_user_flags(c)
@@ -813,7 +839,10 @@ impl<H> ImpactPlugin<H> {
         self.flags
             .update(&self.registry, &near_bodies, unmanaged, bodies, colliders);
         self.registry.flags_stale = false;
-        step.lookup = Lookup::build(&step.roles, self.flags.hooked());
+        let flags = &self.flags;
+        step.lookup = Lookup::build(&step.roles, flags.hooked(), |c| {
+            flags.recorded_user_flags(colliders, c)
+        });
         self.spare.shadows = shadows;
         self.spare.roles = prev_roles;
         self.step = step;

@@ -31,13 +31,17 @@ pub(crate) struct RoleSlot {
     pub body: ColliderHandle,
     pub ground: ColliderHandle,
     pub role: Role,
+    /// The hook flags the user set on the two colliders (what rapier would have seen).
+    pub user: ActiveHooks,
     pub more: bool,
 }
 
 impl Lookup {
+    /// `user_flags`: the hook flags the user set on a collider.
     pub fn build(
         roles: &HandleMap<PairKey, Role>,
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
+        user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
     ) -> Self {
         let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
             it.map(slot_of).max().map_or(0, |m| m + 1)
@@ -64,11 +68,29 @@ impl Lookup {
                         body: *body,
                         ground: *ground,
                         role: *role,
+                        user: user_flags(*body) | user_flags(*ground),
                         more: false,
                     })
                 }
             }
         }
         out
+    }
+
+    /// The pair `(c1, c2)` in either order as the table holds it (body collider, ground
+    /// collider), with its role and the user's flags, if the table holds it alone.
+    #[inline]
+    pub fn pair(&self, c1: ColliderHandle, c2: ColliderHandle) -> Option<(PairKey, RoleSlot)> {
+        if !self.roles_built {
+            return None;
+        }
+        [(c1, c2), (c2, c1)].into_iter().find_map(|(body, ground)| {
+            match self.roles.get(slot_of(body)) {
+                Some(Some(slot)) if slot.body == body && slot.ground == ground => {
+                    Some(((body, ground), *slot))
+                }
+                _ => None,
+            }
+        })
     }
 }
