@@ -916,6 +916,7 @@ impl<H> ImpactPlugin<H> {
                         )
                     }) || filter::user_refuses(user_hooks, user, bodies, colliders, (part, ground))
                 };
+                // `Self::settle` would borrow the user's hook that `refused` reads.
                 Settle {
                     config: &self.config,
                     registry: &self.registry,
