@@ -15,11 +15,11 @@ use super::commit::{Shadow, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
-use super::events::{EventKind, ImpactEvent, ImpactTiming};
+use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, closest, contact_checked,
-    first_impact, flat_throughout, landing_point,
+    BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, contact_checked, first_impact,
+    flat_throughout, landing_point,
 };
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
@@ -29,9 +29,10 @@ use super::observe::{
 };
 use super::plan::{Candidate, EndOfStep, Role, StepData, closes_within};
 use super::policy::{Policy, ROLLING_MIN_SLIP};
+use super::reconstruct;
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
-use super::settle::{Settle, capped_energy};
+use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
+use super::settle::Settle;
 use crate::motion::{Flight, Rolling, State};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
@@ -1029,126 +1030,17 @@ impl<H> ImpactPlugin<H> {
                 self.settle().turned_end(bodies, colliders, cand, &step);
                 continue;
             }
-            let mut next = first;
-            let mut flight = cand.flight;
-            let mut seg = cand.start;
-            let mut seg_t0 = 0.0;
-            // Where the flight stops short of the step's end, if it does.
-            let mut stop: Option<State> = None;
-            let mut count = 0usize;
-            let events = self.events.len();
-            loop {
-                let (t, s, hit) = match next {
-                    Search::Clear => break,
-                    // Never fly past a contact the search could not resolve: the rest of the
-                    // step is dropped for this body (it touches no ground there).
-                    Search::Stalled(_, s) => {
-                        stop = Some(s);
-                        break;
-                    }
-                    Search::Hit(t, s, hit) => (t, s, hit),
-                };
-                let part = &geom.parts[hit.part];
-                let gg = &grounds[hit.ground];
-                let (point, points) =
-                    landing_point(part, gg, &s, t, &hit, self.config.flat_tolerance);
-                let input = ImpactInput {
-                    body: cand.body,
-                    inertia: &inertia,
-                    law: self.config.law,
-                    material: self.registry.material_of(colliders, part.handle, gg.handle),
-                    resting_speed: step.policy.resting_speed,
-                    force_settle: count + 1 >= self.config.max_impacts_per_step,
-                    timing: ImpactTiming::InStep,
-                };
-                count += 1;
-                seg = s;
-                seg_t0 = t;
-                // A landing point (centroid) that does not approach falls back to the deepest
-                // point; if that does not approach either, the flight stops here.
-                let resolved = resolve(&input, &geom, gg, &s, t, &hit, point, points)
-                    .or_else(|| resolve(&input, &geom, gg, &s, t, &hit, hit.point, 1));
-                let Some((after, event)) = resolved else {
-                    stop = Some(s);
-                    break;
-                };
-                seg = after;
-                let settled = event.settled;
-                self.events.push(event);
-                // A settled impact on a body whose centre of mass leaves the ground (a
-                // spinning cube's corner swinging down while it rises) does not rest it:
-                // holding gravity there lifted the cube for the rest of the step (dice seed
-                // 4, f64 Exact 60 Hz: +3.0e-3 of the throw's energy). It flies on, with
-                // gravity, to its next impact.
-                if settled && hit.normal.dot(&seg.v) <= step.policy.resting_speed {
-                    // Resting from here: gravity into the ground is held by the contact.
-                    let an = hit.normal.dot(&flight.accel);
-                    if an < 0.0 {
-                        flight.accel -= hit.normal * an;
-                    }
-                    let vn = hit.normal.dot(&seg.v);
-                    if vn < 0.0 {
-                        let before = seg;
-                        seg.v -= hit.normal * vn;
-                        let site = Site {
-                            body: cand.body,
-                            collider: part.handle,
-                            ground: gg.handle,
-                            normal: hit.normal,
-                            point,
-                        };
-                        self.events.push(correction(
-                            EventKind::Settle,
-                            &site,
-                            &inertia,
-                            &before,
-                            &seg,
-                            t,
-                        ));
-                    }
-                    break;
-                }
-                if count >= self.config.max_impacts_per_step {
-                    // The last impact allowed in the step (forced settled) on a leaving
-                    // body: it flies on; the safety net below keeps it out of the ground.
-                    break;
-                }
-                next = first_impact(&geom, &grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
-            }
-            let mut end = stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0));
-            // Safety net: never leave the body inside a ground, nor let the lift add energy
-            // (a cube pivoting on a corner through the step's last allowed impact, lifted
-            // out at its end: +3.2e-4 of a throw's energy, `cap_energy`).
-            if let Some(h) = closest(&geom, &grounds, &end, step.dt, 0.0) {
-                if h.dist < 0.0 {
-                    let before = end;
-                    end.com -= h.normal * h.dist;
-                    let site = Site::of_hit(cand.body, &geom, &grounds, &h);
-                    let pushed =
-                        correction(EventKind::PushOut, &site, &inertia, &before, &end, step.dt);
-                    self.events.push(pushed);
-                    let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-                    if elastic
-                        && self
-                            .settle()
-                            .may_cap_energy(&bodies[cand.body], colliders, cand, &step)
-                    {
-                        if let Some(capped) =
-                            capped_energy(&cand.start, &end, &cand.flight, &inertia)
-                        {
-                            self.events.push(correction(
-                                EventKind::EnergyCap,
-                                &site,
-                                &inertia,
-                                &end,
-                                &capped,
-                                step.dt,
-                            ));
-                            end = capped;
-                        }
-                    }
-                }
-            }
+            let end = reconstruct::through_impacts(
+                &mut self.settle(),
+                bodies,
+                colliders,
+                cand,
+                &geom,
+                &grounds,
+                &inertia,
+                first,
+                &step,
+            );
             let rb = &mut bodies[cand.body];
             write_state(rb, &end, &cand.local_com, true);
             if mode == TimingMode::Exact {

@@ -18,6 +18,7 @@ mod install;
 mod observe;
 mod plan;
 mod policy;
+mod reconstruct;
 mod registry;
 mod resolve;
 mod settle;
