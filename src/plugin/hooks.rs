@@ -21,7 +21,7 @@
 //!   rapier's default applies.
 
 use super::impact_plugin::ImpactPlugin;
-use super::plan::Role;
+use super::policy::Role;
 use crate::rapier::prelude::{
     ActiveHooks, ContactModificationContext, PairFilterContext, PhysicsHooks, SolverFlags,
 };

@@ -27,8 +27,8 @@ use super::install::Lookup;
 use super::observe::{
     Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot, surely_far, touches_other,
 };
-use super::plan::{Candidate, EndOfStep, Role, StepData, closes_within};
-use super::policy::{Policy, ROLLING_MIN_SLIP};
+use super::plan::{Candidate, EndOfStep, StepData, closes_within};
+use super::policy::{Policy, ROLLING_MIN_SLIP, Role};
 use super::reconstruct;
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, resolve};

@@ -7,7 +7,7 @@
 
 use super::handles::{HandleMap, slot_of};
 use super::hook_flags::HookedBody;
-use super::plan::Role;
+use super::policy::Role;
 use super::resolve::PairKey;
 use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
 

@@ -1,8 +1,7 @@
 //! Plan: what the step decided for each body and pair before rapier's step, and the data it
 //! carries to the stages after it.
 //!
-//! Contract: [`Role`] is the plugin's decision for one body-ground collider pair, [`Candidate`]
-//! what it knows of one managed body at the step's start (its state, flight, and which
+//! Contract: [`Candidate`] is what the plan knows of one managed body at the step's start (its state, flight, and which
 //! grounds may reach it), [`StepData`] the step's thresholds, roles and candidates. The
 //! decisions themselves are [`super::policy::Policy`]'s; this file holds no rapier call.
 
@@ -11,31 +10,11 @@ use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::install::Lookup;
 use super::observe::Sets;
-use super::policy::Policy;
+use super::policy::{Policy, Role};
 use super::resolve::PairKey;
 use crate::motion::{Flight, Rolling, State};
 use crate::rapier::prelude::RigidBodyHandle;
 use nalgebra::Vector3;
-
-/// What the plugin does with a body-ground collider pair during the step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Role {
-    /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
-    Impact,
-    /// In rapier's solver with zero restitution: a resting contact, or a body rolling or
-    /// sliding that `Rolling` does not take.
-    Resting,
-    /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
-    /// moved in closed form after the step (`motion::Rolling`, `Settle::rolling_end`).
-    Rolling,
-    /// Left to rapier unchanged, bounce included: parry cannot query the pair.
-    Rapier,
-    /// A pair rapier would not solve (collision or solver groups, active collision types,
-    /// a joint that disables the bodies' contacts: `filter.rs`) or that the user's filter
-    /// refuses (`None`, or no rigid impulses): no ground contact for the plugin; rapier and
-    /// the user's hook have the pair, unchanged.
-    Filtered,
-}
 
 /// A managed body's start-of-step snapshot.
 pub(crate) struct Candidate {

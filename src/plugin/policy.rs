@@ -1,7 +1,7 @@
 //! Every threshold the step's decisions use, named once with its unit, and the decisions that
 //! are pure functions of them.
 //!
-//! Contract: [`Policy::new`] derives the step's thresholds from the configuration, gravity and
+//! Contract: [`Role`] is the decision for one body-ground collider pair; [`Policy::new`] derives the step's thresholds from the configuration, gravity and
 //! rapier's integration parameters once per step; the decisions ([`Policy::rests`],
 //! [`Policy::deep_resting_body`]) read nothing else and write nothing, so they are unit-tested
 //! on synthetic inputs below.
@@ -16,6 +16,26 @@ pub(crate) const ROLLING_MIN_SLIP: f64 = 1e-3;
 /// Cosine of the widest angle (60 degrees) between gravity's direction and a contact's push
 /// on a body for that contact to count as something lying on the body.
 pub(crate) const LOADED_COS: f64 = 0.5;
+
+/// What the plugin does with a body-ground collider pair during the step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Role {
+    /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
+    Impact,
+    /// In rapier's solver with zero restitution: a resting contact, or a body rolling or
+    /// sliding that `Rolling` does not take.
+    Resting,
+    /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
+    /// moved in closed form after the step (`motion::Rolling`, `Settle::rolling_end`).
+    Rolling,
+    /// Left to rapier unchanged, bounce included: parry cannot query the pair.
+    Rapier,
+    /// A pair rapier would not solve (collision or solver groups, active collision types,
+    /// a joint that disables the bodies' contacts: `filter.rs`) or that the user's filter
+    /// refuses (`None`, or no rigid impulses): no ground contact for the plugin; rapier and
+    /// the user's hook have the pair, unchanged.
+    Filtered,
+}
 
 /// The thresholds of one step. Speeds are normal speeds of a contact point relative to the
 /// ground; lengths are along the contact normal.
