@@ -15,27 +15,21 @@ use super::commit::{Shadow, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
-use super::events::{ImpactEvent, ImpactTiming};
+use super::events::ImpactEvent;
 use super::filter;
-use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Search, SmallList, cannot_close, contact_checked, first_impact,
-    flat_throughout, landing_point,
-};
+use super::geometry::{Search, first_impact};
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::Lookup;
-use super::observe::{
-    Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot, surely_far, touches_other,
-};
-use super::plan::{Candidate, EndOfStep, StepData, closes_within};
-use super::policy::{Policy, ROLLING_MIN_SLIP, Role};
+use super::observe::{Sets, body_geom, snapshot, surely_far, touches_other};
+use super::plan::{Candidate, EndOfStep, Planner, StepData};
+use super::policy::{Policy, Role};
 use super::reconstruct;
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
+use super::resolve::{Inertia, PairKey};
 use super::settle::Settle;
-use crate::motion::{Flight, Rolling, State};
+use crate::motion::State;
 use crate::rapier::math::Vector;
-use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
     LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBody,
@@ -415,18 +409,6 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
-    /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
-    /// Asked only when the colliders' own hook flags ask for the user's filter, with the
-    /// start-of-step state, so that every pair the plugin could resolve in the step is
-    /// covered (rapier asks it again during the step, for the pairs its broad phase has).
-    fn user_refuses(&self, bodies: &RigidBodySet, colliders: &ColliderSet, key: PairKey) -> bool
-    where
-        H: PhysicsHooks,
-    {
-        let flags = self.user_flags(colliders, key.0) | self.user_flags(colliders, key.1);
-        filter::user_refuses(&self.user_hooks, flags, bodies, colliders, key)
-    }
-
     /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
     /// plugin as hooks, [`Self::after_step`].
     pub fn step(&mut self, world: &mut PhysicsWorld)
@@ -561,280 +543,28 @@ impl<H> ImpactPlugin<H> {
             }
         }
         let mut near_bodies = Vec::with_capacity(self.flags.hooked().len());
+        let mut planner = Planner {
+            config: &self.config,
+            registry: &self.registry,
+            flags: &self.flags,
+            user_hooks: &self.user_hooks,
+            prev_asleep: &self.prev_asleep,
+            events: &mut self.events,
+        };
         for handle in handles {
-            let rb = &bodies[handle];
-            let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
-            let geom = body_geom(rb, colliders, &local_com);
-            if geom.parts.is_empty() {
-                continue;
-            }
-            // The cheap test: the bounding sphere swept over the step against ground AABBs.
-            let speed =
-                flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
-            let reach = speed * dt + step.policy.resting_gap.max(step.policy.prediction);
-            let sphere = Aabb::from_half_extents(
-                vec_from_na(&start.com),
-                Vector::splat(super::convert::to_real(geom.radius + reach)),
+            let near = planner.plan_body(
+                handle,
+                bodies,
+                colliders,
+                &sets,
+                &shadows,
+                &prev_roles,
+                g,
+                dt,
+                &mut step,
             );
-            let near =
-                self.registry
-                    .index
-                    .near(&step.grounds, sphere.center(), sphere.half_extents().x);
-            if near.is_empty() {
-                if self.config.timing == TimingMode::Exact {
-                    step.candidates
-                        .push(Candidate::flying(handle, start, flight, local_com));
-                }
-                continue;
-            }
-            near_bodies.push(handle);
-            let ground_geoms: SmallList<(usize, GroundGeom)> = near
-                .iter()
-                .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], colliders)?)))
-                .collect();
-            let mut state = start;
-            let mut touched = false;
-            let mut impact_grounds = SmallList::Empty;
-            let mut closing = false;
-            let mut turning_resting = SmallList::Empty;
-            let mut rolling = None;
-            // How far a point of the body can move relative to a resting contact point in the
-            // step by turning (for a ball about its centre: how fast rapier's contact point
-            // slides off its bottom). From the state after any `Step` impulse applied above.
-            let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-            let turning_reach = |s: &State| flight.max_angular_speed(s) * 2.0 * geom.radius * dt;
-            let jointed = impulse_joints.attached_joints(handle).next().is_some()
-                || multibody_joints.rigid_body_link(handle).is_some();
-            for (gi, gg) in &ground_geoms {
-                let mut any_impact = false;
-                // No pair of the body with this ground can meet in the step.
-                let mut clear = true;
-                for part in &geom.parts {
-                    let key = (part.handle, gg.handle);
-                    let joint_filtered = jointed
-                        && colliders[key.1].parent().is_some_and(|ground_body| {
-                            filter::joint_disables_contacts(
-                                impulse_joints,
-                                multibody_joints,
-                                handle,
-                                ground_body,
-                            )
-                        });
-                    if joint_filtered
-                        || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
-                        || self.user_refuses(bodies, colliders, key)
-                    {
-                        step.roles.insert(key, Role::Filtered);
-                        continue;
-                    }
-                    let found = contact_checked(part, gg, &state, 0.0, reach);
-                    let contact0 = found.as_ref().ok().copied().flatten();
-                    // A pair beyond reach cannot touch in this step: out of the solver, and
-                    // no search after the step.
-                    let reachable = matches!(found, Ok(Some(_)));
-                    let mut role = match found {
-                        // parry cannot query this pair: rapier keeps it, restitution included.
-                        Err(_) => Role::Rapier,
-                        Ok(None) => Role::Impact,
-                        Ok(Some((dist, n, p))) => {
-                            let u = super::geometry::body_velocity_at(&state, &p)
-                                - gg.velocity_at(&p, 0.0);
-                            let un = n.dot(&u);
-                            // The normal speed the contact will have on reaching the ground
-                            // (gravity, or any acceleration towards it, included).
-                            let an = n.dot(&flight.accel);
-                            let arrival = (un * un + 2.0 * (-an).max(0.0) * dist.max(0.0)).sqrt();
-                            // Hysteresis: a pair rapier held at rest last step shows the
-                            // normal speed rapier's solver leaves at rest (up to g dt and more
-                            // for a fast-rolling ball): it stays resting unless clearly hit.
-                            let prev_role = prev_roles.get(&key);
-                            let was_resting =
-                                matches!(prev_role, Some(&Role::Resting | &Role::Rolling));
-                            // The plugin had the pair last step: what touched the body
-                            // then is known (a body new near the ground has nothing to go
-                            // on).
-                            let measured = matches!(
-                                prev_role,
-                                Some(&Role::Resting | &Role::Impact | &Role::Rolling)
-                            );
-                            // A pressed contact: a resting pair of a body that also
-                            // touched another body (or a wall, or had a joint) last step
-                            // approaches only because something pushes it (a box dropped
-                            // on it, the pile above it). Taking it from rapier's solver
-                            // would let the push sink the body for a step and then push
-                            // it out and bounce it at the step end against the solver
-                            // (issue 5: 125-ball pile never settling, a 1e6 mass ratio
-                            // sinking twice as deep as rapier alone). rapier keeps it,
-                            // with e = 0 (`Policy::rests`). What touched the body is asked
-                            // only where it decides (rarely: most resting pairs are slow),
-                            // and only of a body measured after the last step.
-                            let pressed = || {
-                                measured
-                                    && neighbours(handle, rb, &sets, &self.registry, &step.down)
-                                        .touching
-                            };
-                            if step.policy.rests(dist, arrival, was_resting, pressed) {
-                                Role::Resting
-                            } else if self.config.timing == TimingMode::Step
-                                && closes_within(dist, un, n.dot(&(flight.accel)), dt)
-                                && un < 0.0
-                            {
-                                // Step mode: the impulse at the start of the step.
-                                let hit = super::geometry::Hit {
-                                    part: 0,
-                                    ground: 0,
-                                    dist,
-                                    normal: n,
-                                    point: p,
-                                    un,
-                                };
-                                let (point, count) = landing_point(
-                                    part,
-                                    gg,
-                                    &state,
-                                    0.0,
-                                    &hit,
-                                    self.config.flat_tolerance,
-                                );
-                                let inertia = Inertia::of(rb);
-                                let single = BodyGeom {
-                                    parts: SmallList::One(*part),
-                                    radius: geom.radius,
-                                };
-                                let input = ImpactInput {
-                                    body: handle,
-                                    inertia: &inertia,
-                                    law: self.config.law,
-                                    material: self.registry.material_of(
-                                        colliders,
-                                        part.handle,
-                                        gg.handle,
-                                    ),
-                                    resting_speed: step.policy.resting_speed,
-                                    force_settle: false,
-                                    timing: ImpactTiming::StepStart,
-                                };
-                                match resolve(&input, &single, gg, &state, 0.0, &hit, point, count)
-                                {
-                                    Some((after, event)) => {
-                                        state = after;
-                                        touched = true;
-                                        self.events.push(event);
-                                        // Out of rapier's solver unless the point leaves
-                                        // slower than the resting speed. (Keeping a touching
-                                        // pair in the solver after the impulse let a box
-                                        // bounced at 10 m/s be pressed 17 cm into the ground
-                                        // by a ball 135 times its mass landing on it in the
-                                        // same step, 240 Hz. Boxes rocking on two edges, each
-                                        // bounced in turn at the step's start and end, come
-                                        // to rest by `cap_energy` instead.)
-                                        let un2 = n.dot(
-                                            &(super::geometry::body_velocity_at(&state, &point)
-                                                - gg.velocity_at(&point, 0.0)),
-                                        );
-                                        if un2 <= step.policy.resting_speed {
-                                            Role::Resting
-                                        } else {
-                                            Role::Impact
-                                        }
-                                    }
-                                    None => Role::Resting,
-                                }
-                            } else {
-                                Role::Impact
-                            }
-                        }
-                    };
-                    // A ball sliding on a level fixed ground, alone on it: the closed form
-                    // instead of rapier's resting contact, which turns the contact point with
-                    // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
-                    // three closed-form rolling times).
-                    if role == Role::Resting && ground_geoms.len() == 1 && !turns_surface {
-                        // Within the resting gap of it (a `Step` impulse can leave a ball
-                        // resting on its way down, up to a step's travel above the ground).
-                        if let Some((dist, n, _)) =
-                            contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
-                        {
-                            // What touches it is read from rapier's contact graph (in
-                            // `rolling_of`). A body just woken is not taken: rapier solved
-                            // nothing of it while it slept, and a pile woken by a hit would
-                            // lose its ground support for a step. A body new to the plugin
-                            // (just created, or first near the ground) is taken, and if
-                            // something touches it in the step, `Settle::rolling_end` puts it
-                            // back on the ground.
-                            let known = matches!(
-                                prev_roles.get(&key),
-                                Some(Role::Resting | Role::Impact | Role::Rolling)
-                            ) || !self.prev_asleep.contains(&handle);
-                            let on_ground = State {
-                                com: state.com - n * dist,
-                                v: state.v - n * n.dot(&state.v),
-                                ..state
-                            };
-                            if let Some(motion) = self.rolling_of(
-                                bodies, colliders, handle, part, gg, &flight, &n, &on_ground,
-                                &step, known, &sets,
-                            ) {
-                                role = Role::Rolling;
-                                rolling = Some((*gi, motion));
-                                state = on_ground;
-                            }
-                        }
-                    }
-                    if role == Role::Resting && turning_reach(&state) > step.policy.resting_gap {
-                        if let Some((_, _, p)) = contact0 {
-                            turning_resting.push((*gi, state.rot.inverse() * (p - state.com)));
-                        }
-                    }
-                    any_impact |= role == Role::Impact && reachable;
-                    // Only asked of a ground the search may run against (a single part's
-                    // pair that is not `Impact` does not make one).
-                    clear = clear
-                        && match contact0 {
-                            Some(_) if role != Role::Impact && geom.parts.len() == 1 => true,
-                            Some((dist, n, _)) => {
-                                self.config.timing != TimingMode::Step
-                                    && cannot_close(
-                                        part,
-                                        gg,
-                                        &flight,
-                                        &state,
-                                        dt,
-                                        (dist, n),
-                                        geom.radius,
-                                        speed,
-                                    )
-                            }
-                            None => false,
-                        };
-                    step.roles.insert(key, role);
-                }
-                if any_impact {
-                    impact_grounds.push(*gi);
-                    closing |= !clear;
-                }
-            }
-            if touched {
-                write_state(&mut bodies[handle], &state, &local_com, true);
-            }
-            if !impact_grounds.is_empty()
-                || !turning_resting.is_empty()
-                || rolling.is_some()
-                || self.config.timing == TimingMode::Exact
-            {
-                step.candidates.push(Candidate {
-                    body: handle,
-                    start: state,
-                    flight,
-                    local_com,
-                    near,
-                    impact_grounds,
-                    touched,
-                    closing,
-                    turning_resting,
-                    turns_surface,
-                    rolling,
-                });
+            if near {
+                near_bodies.push(handle);
             }
         }
         self.flags
@@ -1050,79 +780,6 @@ impl<H> ImpactPlugin<H> {
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.spare.candidates = std::mem::take(&mut step.data.candidates);
-    }
-
-    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
-    /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
-    /// speed), when it applies: a ground at rest whose one flat face (a half-space, or a
-    /// cuboid's face the ball stays over: `flat_throughout`) is all it can meet in the step,
-    /// a pair whose crowding was measured last step (`known`), gravity (and any constant force) along `-n`,
-    /// no damping, torque or contact modification by the user, isotropic inertia with no
-    /// locked axis, nothing but grounds near it last step, and a ball that slips (faster than
-    /// 1 mm/s) or rolls faster than the resting speed (slower, it is rapier's, which brings
-    /// it to rest and to sleep).
-    #[allow(clippy::too_many_arguments)]
-    fn rolling_of(
-        &self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        handle: RigidBodyHandle,
-        part: &BodyPart,
-        gg: &GroundGeom,
-        flight: &Flight,
-        n: &Vector3<f64>,
-        on_ground: &State,
-        step: &StepData,
-        known: bool,
-        sets: &Sets,
-    ) -> Option<Rolling> {
-        let rb = &bodies[handle];
-        if !known {
-            return None;
-        }
-        let ball = part.shape.as_ball()?;
-        let radius = to_f64(ball.radius) + part.skin + gg.skin;
-        let an = flight.accel.dot(n);
-        let level = (flight.accel - n * an).norm() <= 1e-9 * flight.accel.norm();
-        let user_modifies = (self.user_flags(colliders, part.handle)
-            | self.user_flags(colliders, gg.handle))
-        .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
-        let plain = flight.linear_damping == 0.0
-            && flight.angular_damping == 0.0
-            && rb.user_torque() == Vector::ZERO;
-        let slip = on_ground.v - radius * on_ground.w.cross(n);
-        if !(an < 0.0 && level && plain)
-            || slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed
-            || user_modifies
-        {
-            return None;
-        }
-        // After the cheap refusals (most resting balls are at rest): the contact graph.
-        if neighbours(handle, rb, sets, &self.registry, &step.down).near {
-            return None;
-        }
-        let friction = self
-            .registry
-            .material_of(colliders, part.handle, gg.handle)
-            .friction;
-        if !(friction.is_finite() && friction >= 0.0) {
-            return None;
-        }
-        // The ground's one flat face under the ball for the whole step (a half-space, or a
-        // cuboid's face the ball stays over): a mesh's or heightfield's other triangles, or a
-        // cuboid's edge, could be met inside the step, out of rapier's solver.
-        let travel = (on_ground.v.norm() + on_ground.w.norm() * radius) * step.dt;
-        if !flat_throughout(part, gg, on_ground, travel, radius) {
-            return None;
-        }
-        let inertia_ratio = Inertia::of(rb).ball_ratio(radius)?;
-        Some(Rolling {
-            normal: *n,
-            radius,
-            inertia_ratio,
-            friction,
-            accel: flight.accel,
-        })
     }
 
     /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
