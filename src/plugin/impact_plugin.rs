@@ -348,7 +348,13 @@ impl<H> ImpactPlugin<H> {
         // since is checked against the sets.
         let current = self.registry.index.entry(c1).is_ok();
         if let Some((key, slot)) = current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
-            return Some((key, slot.role, slot.user));
+            // A body collider that is itself marked as ground (its body turned dynamic after
+            // it was marked) makes the pair two grounds: not the plugin's, as `managed_pair`
+            // says.
+            if self.registry.entry(key.0).is_none() {
+                return Some((key, slot.role, slot.user));
+            }
+            return None;
         }
         self.managed_pair(bodies, colliders, c1, c2).map(|key| {
             (
