@@ -14,7 +14,7 @@ use super::events::{EventKind, ImpactTiming};
 use super::geometry::{BodyGeom, GroundGeom, Search, closest, first_impact, landing_point};
 use super::plan::{Candidate, EndOfStep};
 use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
-use super::settle::{Settle, capped_energy};
+use super::settle::Settle;
 use crate::motion::State;
 use crate::rapier::prelude::{ColliderSet, RigidBodySet};
 
@@ -130,15 +130,7 @@ pub(crate) fn through_impacts(
             view.events.push(pushed);
             let elastic = view.events[events..].iter().all(|e| e.restitution <= 1.0);
             if elastic && view.may_cap_energy(&bodies[cand.body], colliders, cand, step) {
-                if let Some(capped) = capped_energy(&cand.start, &end, &cand.flight, inertia) {
-                    view.events.push(correction(
-                        EventKind::EnergyCap,
-                        &site,
-                        inertia,
-                        &end,
-                        &capped,
-                        step.dt,
-                    ));
+                if let Some(capped) = view.cap(&site, inertia, cand, &end, step.dt) {
                     end = capped;
                 }
             }

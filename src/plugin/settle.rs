@@ -175,18 +175,32 @@ impl Settle<'_> {
         else {
             return;
         };
-        if let Some(capped) = capped_energy(&cand.start, &end, &cand.flight, inertia) {
+        if let Some(capped) = self.cap(&site, inertia, cand, &end, step.dt) {
             rb.set_linvel(vec_from_na(&capped.v), true);
             rb.set_angvel(vec_from_na(&capped.w), true);
-            self.events.push(correction(
-                EventKind::EnergyCap,
-                &site,
-                inertia,
-                &end,
-                &capped,
-                step.dt,
-            ));
         }
+    }
+
+    /// `end` capped to the candidate's start energy (`capped_energy`), reported as an
+    /// `EnergyCap` event at `site`; `None` when it gains nothing.
+    pub fn cap(
+        &mut self,
+        site: &Site,
+        inertia: &Inertia,
+        cand: &Candidate,
+        end: &State,
+        dt: f64,
+    ) -> Option<State> {
+        let capped = capped_energy(&cand.start, end, &cand.flight, inertia)?;
+        self.events.push(correction(
+            EventKind::EnergyCap,
+            site,
+            inertia,
+            end,
+            &capped,
+            dt,
+        ));
+        Some(capped)
     }
 
     /// Nothing but still grounds touched the candidate in the step (no body, wall or joint:
