@@ -2,9 +2,10 @@
 //! are pure functions of them.
 //!
 //! Contract: [`Role`] is the decision for one body-ground collider pair; [`Policy::new`] derives the step's thresholds from the configuration, gravity and
-//! rapier's integration parameters once per step; the decisions ([`Policy::rests`],
-//! [`Policy::deep_resting_body`]) read nothing else and write nothing, so they are unit-tested
-//! on synthetic inputs below.
+//! rapier's integration parameters once per step; the decisions (the plan's
+//! [`Policy::rests`]; the settle stage's [`Policy::deep_resting_body`],
+//! [`Policy::step_end_contact`], [`Policy::woken_contact`], [`Policy::disturbed_rolling`]) read
+//! nothing else and write nothing, so they are unit-tested on synthetic inputs below.
 
 use super::config::ImpactConfig;
 
@@ -77,7 +78,57 @@ pub(crate) enum DeepResting {
     LeaveToRapier,
 }
 
+/// What the settle stage does with a body's deepest point against a ground at the step's end
+/// (see [`Policy::step_end_contact`], [`Policy::woken_contact`], [`Policy::disturbed_rolling`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EndContact {
+    /// Nothing to correct.
+    Keep,
+    /// Moved out of the ground along the normal (a ball's speed into it removed).
+    PushOut,
+    /// The model's impulse on rapier's end state, then moved out.
+    Impact,
+}
+
 impl Policy {
+    /// The step-end fallback's decision for the deepest point, at `dist` (m, negative inside)
+    /// with normal speed `un` (m/s, negative approaching): an impact when it touches and
+    /// approaches; a push-out, velocity kept, when it leaves from deeper than the resting gap
+    /// (it swung through the ground inside the step); else nothing.
+    pub fn step_end_contact(&self, dist: f64, un: f64) -> EndContact {
+        if dist <= 0.0 && un < 0.0 {
+            EndContact::Impact
+        } else if dist < -self.resting_gap {
+            EndContact::PushOut
+        } else {
+            EndContact::Keep
+        }
+    }
+
+    /// A body woken inside the step (rapier solved it without its ground contacts): an
+    /// impact with `e = 0` when its deepest point is deeper than the resting gap and
+    /// approaching, else nothing.
+    pub fn woken_contact(&self, dist: f64, un: f64) -> EndContact {
+        if dist < -self.resting_gap && un < 0.0 {
+            EndContact::Impact
+        } else {
+            EndContact::Keep
+        }
+    }
+
+    /// A rolling ball that something else acted on, in rapier's end state where it flew
+    /// without its ground: put back on the ground when it moves into it (`un`, m/s) no faster
+    /// than the step's fall `fall` (m/s, `|a.n| dt`) plus the resting speed, as rapier's
+    /// resting contact would have held it; else (something pushed it down) an impact with
+    /// `e = 0`.
+    pub fn disturbed_rolling(&self, un: f64, fall: f64) -> EndContact {
+        if un >= -(fall + self.resting_speed) {
+            EndContact::PushOut
+        } else {
+            EndContact::Impact
+        }
+    }
+
     /// The thresholds for a step of `dt` seconds under gravity of magnitude `g` (m/s^2), with
     /// rapier's allowed linear error and prediction distance (m).
     pub fn new(
@@ -214,6 +265,27 @@ mod tests {
         assert!(p.rests(0.0, 5.0, true, || true));
         // Beyond the gap the neighbours do not matter.
         assert!(!p.rests(0.01, 0.0, true, || true));
+    }
+
+    #[test]
+    fn the_step_end_contacts_are_impacts_push_outs_or_nothing() {
+        let p = policy();
+        // Touching and approaching: an impact, however shallow.
+        assert_eq!(p.step_end_contact(0.0, -0.01), EndContact::Impact);
+        assert_eq!(p.step_end_contact(-0.02, -1.0), EndContact::Impact);
+        // Leaving: moved out only from deeper than the gap.
+        assert_eq!(p.step_end_contact(-0.02, 0.5), EndContact::PushOut);
+        assert_eq!(p.step_end_contact(-0.004, 0.5), EndContact::Keep);
+        assert_eq!(p.step_end_contact(0.001, -1.0), EndContact::Keep);
+        // A woken body: only deeper than the gap and approaching.
+        assert_eq!(p.woken_contact(-0.006, -0.1), EndContact::Impact);
+        assert_eq!(p.woken_contact(-0.004, -0.1), EndContact::Keep);
+        assert_eq!(p.woken_contact(-0.006, 0.1), EndContact::Keep);
+        // A disturbed rolling ball: a step's fall (0.164 m/s at 60 Hz) plus the resting speed
+        // puts it back; faster is a push.
+        let fall = 9.81 / 60.0;
+        assert_eq!(p.disturbed_rolling(-0.2, fall), EndContact::PushOut);
+        assert_eq!(p.disturbed_rolling(-0.3, fall), EndContact::Impact);
     }
 
     #[test]

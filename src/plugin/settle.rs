@@ -30,7 +30,7 @@ use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
 use super::observe::{body_geom, ground_geom, neighbours, rapier_state};
 use super::plan::{Candidate, EndOfStep, StepData};
-use super::policy::{DeepResting, Role};
+use super::policy::{DeepResting, EndContact, Role};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
 use crate::motion::{Flight, Rolling, State};
@@ -270,17 +270,19 @@ impl Settle<'_> {
             let Some(hit) = closest(geom, grounds, &s, t, 0.0) else {
                 break;
             };
-            if hit.dist > 0.0 || hit.un >= 0.0 {
+            match step.policy.step_end_contact(hit.dist, hit.un) {
+                EndContact::Impact => {}
                 // A point deeper than the resting gap that already leaves the ground: it
                 // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
                 // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
-                if hit.dist < -step.policy.resting_gap {
+                EndContact::PushOut => {
                     let before = s;
                     s.com -= hit.normal * hit.dist;
                     changed = true;
                     self.report_push_out(body, geom, grounds, &hit, inertia, &before, &s, step);
+                    break;
                 }
-                break;
+                EndContact::Keep => break,
             }
             let part = &geom.parts[hit.part];
             let gg = &grounds[hit.ground];
@@ -526,7 +528,7 @@ impl Settle<'_> {
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
-        if hit.dist < -step.policy.resting_gap && hit.un < 0.0 {
+        if step.policy.woken_contact(hit.dist, hit.un) == EndContact::Impact {
             let inertia = Inertia::of(rb);
             self.step_end(
                 bodies, colliders, handle, &local_com, &geom, &grounds, &inertia, step, true,
@@ -579,8 +581,8 @@ impl Settle<'_> {
         let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
             return;
         };
-        let fall = -motion.accel.dot(&motion.normal) * step.dt + step.policy.resting_speed;
-        if hit.un >= -fall {
+        let fall = -motion.accel.dot(&motion.normal) * step.dt;
+        if step.policy.disturbed_rolling(hit.un, fall) == EndContact::PushOut {
             let before = end;
             put_on_ground(&mut end, &hit, true);
             let inertia = Inertia::of(&bodies[cand.body]);
