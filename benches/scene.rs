@@ -134,12 +134,18 @@ fn with_plugin(world: PhysicsWorld, ground: Option<ColliderHandle>, mode: Mode) 
     }
 }
 
-/// One layer of `n` balls on a square grid, the balls' bottoms `lift` plus 5-45 cm above the
-/// ground.
-fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
+/// Half the width (m) of the square grid of `n` balls 15 cm apart, from the origin to the
+/// outermost row's centre.
+fn grid_half(n: usize) -> f64 {
     let side = (n as f64).sqrt().ceil() as usize;
-    let centre = 0.5 * (side - 1) as f64 * SPACING;
-    let (mut world, ground) = world_with_ground(centre + 1.0);
+    0.5 * (side - 1) as f64 * SPACING
+}
+
+/// One layer of `n` balls on a square grid (seeded jitter), the balls' bottoms `lift` plus
+/// 5-45 cm above y = 0.
+fn add_layer(world: &mut PhysicsWorld, n: usize, lift: f64) {
+    let side = (n as f64).sqrt().ceil() as usize;
+    let centre = grid_half(n);
     let mut rng = Rng::new(SEED);
     for i in 0..n {
         let (row, col) = (i / side, i % side);
@@ -149,8 +155,14 @@ fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
             lift + gap + RADIUS,
             row as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
         ];
-        ball(&mut world, p, true);
+        ball(world, p, true);
     }
+}
+
+/// One layer of `n` balls (`add_layer`) over a cuboid ground.
+fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
+    let (mut world, ground) = world_with_ground(grid_half(n) + 1.0);
+    add_layer(&mut world, n, lift);
     let mut scene = with_plugin(world, Some(ground), mode);
     // The first step builds rapier's broad phase: not part of the window.
     scene.step();
@@ -276,9 +288,7 @@ fn piled(c: &mut Criterion) {
 /// origin, every fixed collider ground (`set_all_fixed_colliders_ground`), under one layer of
 /// `n` balls as in `layer`.
 fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
-    let side = (n as f64).sqrt().ceil() as usize;
-    let centre = 0.5 * (side - 1) as f64 * SPACING;
-    let half = centre + 1.0;
+    let half = grid_half(n) + 1.0;
     let mut world = PhysicsWorld::default();
     world.integration_parameters.dt = real(DT);
     let floor = world.bodies.insert(RigidBodyBuilder::fixed());
@@ -296,17 +306,7 @@ fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
             );
         }
     }
-    let mut rng = Rng::new(SEED);
-    for i in 0..n {
-        let (row, col) = (i / side, i % side);
-        let gap = rng.uniform(0.05, 0.45);
-        let p = [
-            col as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
-            gap + RADIUS,
-            row as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
-        ];
-        ball(&mut world, p, true);
-    }
+    add_layer(&mut world, n, 0.0);
     let mut scene = with_plugin(world, None, mode);
     scene.step();
     scene
