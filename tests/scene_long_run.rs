@@ -170,7 +170,7 @@ fn run(timing: TimingMode, steps: usize) -> Run {
         }
         // Resting pairs and contacts with the walls and other bodies are rapier's. A body
         // touching only the ground and walls stays within the allowed linear error (before
-        // the step-end check of bodies turning about a resting contact, `resting_end`, a box
+        // the step-end check of bodies turning about a resting contact, `EndCheck::TurningResting`, a box
         // wedged against a wall went 7.8 mm deep in f64 and a capsule swinging down at a wall
         // 11.1 mm in f32). A body pressed into the ground by another is held by rapier's
         // solver alone: the 20 cm ball (64 times the mass of the 5 cm one) falling at 1.6 m/s

@@ -401,7 +401,7 @@ fn a_ball_rolling_off_a_table_falls_from_its_edge() {
 /// 64 boxes dropped onto balls resting on the ground: each box tumbles off its ball and
 /// lands on an edge or a corner while, often, one of its edges already rests on the ground
 /// (a resting pair, rapier's at the step's start). The corner swinging down in the step is
-/// the plugin's (`resting_end`): no box ends a step deeper than rapier's allowed linear error,
+/// the plugin's (`EndCheck::TurningResting`): no box ends a step deeper than rapier's allowed linear error,
 /// in every mode at 60 and 30 Hz. (Before it, 7.8-8.8 mm in `Step` and `TimeOfImpact`; rapier
 /// alone goes 5.3 cm deep in this scene.) And they come to rest: no body bounces more than
 /// twice in the last second.
@@ -474,7 +474,7 @@ fn boxes_tumbling_off_balls_onto_an_edge_stay_out_of_the_ground() {
             assert!(stats.bounces > 64, "{label}: {}", stats.summary());
             // No box rocks for ever. In `Step` mode boxes did, bounced at both ends of every
             // step (1 775 bounces in the last second at 60 Hz, 771 at 30 Hz), fed by the
-            // potential energy of the step-end push-outs (`cap_energy`).
+            // potential energy of the step-end push-outs (the `EnergyCap` events).
             assert!(
                 most <= 2,
                 "{label}: a body bounced {most} times in the last second"
@@ -486,7 +486,7 @@ fn boxes_tumbling_off_balls_onto_an_edge_stay_out_of_the_ground() {
 /// rapier 0.36 solves a body woken inside a step (here by a ball rolling into it) without its
 /// ground contacts for that step: a box asleep on the ground falls by gravity for one step,
 /// 8.8 mm into it at 30 Hz in rapier alone (asserted here, to notice when rapier changes).
-/// With the plugin (`woken_end`) the managed box is put back at rest at the step end: no
+/// With the plugin (`EndCheck::Woken`) the managed box is put back at rest at the step end: no
 /// deeper than the allowed linear error, in every mode. The ball is left to rapier
 /// (`exclude_body`), so it rolls into the box as in rapier alone: a managed ball rolls in
 /// closed form (`Role::Rolling`) and meets the box otherwise, which no longer drops it.
@@ -554,7 +554,7 @@ fn a_box_woken_by_a_rolling_ball_does_not_drop_into_the_ground() {
 /// side at 5 and 15 m/s on a half-space (mu 0.63) go more than the allowed linear error deep
 /// in rapier alone at 30 Hz (asserted, to notice when rapier changes). The plugin moves a
 /// managed ball that ends a step that deep, with nothing lying on it, back out
-/// (`resting_end`), in every mode (two such balls had gone 14-22 mm deep in random scenes
+/// (`EndCheck::TurningResting`), in every mode (two such balls had gone 14-22 mm deep in random scenes
 /// when the check skipped any ball touching another).
 #[test]
 fn a_ball_sliding_fast_does_not_ride_low() {

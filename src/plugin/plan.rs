@@ -54,10 +54,10 @@ pub(crate) struct Candidate {
     /// the resting gap in the step (a box tipping off its edge, a capsule swinging down at a
     /// wall, a ball spun fast): each ground's index (in `StepData::grounds`) and the resting
     /// contact point in the body's frame (from its centre of mass). Checked after the step
-    /// (see `Settle::resting_end`).
+    /// (`EndCheck::TurningResting`).
     pub turning_resting: SmallList<(usize, Vector3<f64>)>,
     /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `Settle::resting_end` and `Settle::turned_end`.
+    /// `EndCheck::TurningResting` and `ImpactPlugin::turned_end`.
     pub turns_surface: bool,
     /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
     /// `StepData::grounds`) and the motion. `start` then touches the ground.
@@ -99,7 +99,7 @@ pub(crate) struct StepData {
     pub roles: HandleMap<PairKey, Role>,
     pub grounds: Vec<GroundMotion>,
     pub candidates: Vec<Candidate>,
-    /// Managed bodies asleep at the start of the step (see `Settle::woken_end`).
+    /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).
     pub asleep: Vec<RigidBodyHandle>,
     pub lookup: Lookup,
 }
@@ -329,7 +329,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                     // by a ball 135 times its mass landing on it in the
                                     // same step, 240 Hz. Boxes rocking on two edges, each
                                     // bounced in turn at the step's start and end, come
-                                    // to rest by `cap_energy` instead.)
+                                    // to rest by the energy cap instead.)
                                     let un2 = n.dot(
                                         &(super::geometry::body_velocity_at(&state, &point)
                                             - gg.velocity_at(&point, 0.0)),
@@ -362,7 +362,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                         // nothing of it while it slept, and a pile woken by a hit would
                         // lose its ground support for a step. A body new to the plugin
                         // (just created, or first near the ground) is taken, and if
-                        // something touches it in the step, `Settle::rolling_end` puts it
+                        // something touches it in the step, the settle stage puts it
                         // back on the ground.
                         let known = matches!(
                             prev_roles.get(&key),

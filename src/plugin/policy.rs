@@ -3,9 +3,8 @@
 //!
 //! Contract: [`Role`] is the decision for one body-ground collider pair; [`Policy::new`] derives the step's thresholds from the configuration, gravity and
 //! rapier's integration parameters once per step; the decisions (the plan's
-//! [`Policy::rests`]; the settle stage's [`Policy::deep_resting_body`],
-//! [`Policy::step_end_contact`], [`Policy::woken_contact`], [`Policy::disturbed_rolling`]) read
-//! nothing else and write nothing, so they are unit-tested on synthetic inputs below.
+//! [`Policy::rests`], the settle stage's table [`Policy::end_action`]) read nothing else and
+//! write nothing, so they are unit-tested on synthetic inputs below.
 
 use super::config::ImpactConfig;
 
@@ -27,7 +26,7 @@ pub(crate) enum Role {
     /// sliding that `Rolling` does not take.
     Resting,
     /// A ball sliding on a level fixed ground, touching nothing else: out of rapier's solver,
-    /// moved in closed form after the step (`motion::Rolling`, `Settle::rolling_end`).
+    /// moved in closed form after the step (`motion::Rolling`, `reconstruct::rolled`).
     Rolling,
     /// Left to rapier unchanged, bounce included: parry cannot query the pair.
     Rapier,
@@ -63,72 +62,53 @@ pub(crate) struct Policy {
     pub prediction: f64,
 }
 
-/// What becomes of a body whose ground pairs were all resting while it turned, and that
-/// ends the step deeper than the resting gap (see [`Policy::deep_resting_body`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum DeepResting {
-    /// Not deeper than the resting gap: nothing to do.
-    Within,
-    /// A point swung down into the ground: resolved as a step-end impact, settled (`e = 0`)
-    /// when it approaches slower than a fall through the gap.
-    Resolve { settle: bool },
-    /// Rapier's contact under-supported it with nothing lying on it: moved out.
-    PushOut,
-    /// Something lies on it, or it is pressed: rapier's solver holds it.
-    LeaveToRapier,
+/// Why the settle stage checks a body's state at the step's end: the rows of its table
+/// ([`Policy::end_action`]), one per way a step can leave a body in a ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum EndCheck {
+    /// The end state of the in-step impacts (`reconstruct.rs`): a safety net.
+    Flown,
+    /// rapier's end state of a body the search could not fly alone (it touched another body
+    /// or a wall, had a joint or a torque, or rapier's CCD cut it short), or of a tumbling
+    /// body whose step the search found clear (rapier's integrator turns it its own way).
+    RapierEnd,
+    /// rapier's end state of a body whose ground pairs were all resting while it turned
+    /// fast; `turns_surface`: its rotation moves its surface (not a ball about its centre).
+    TurningResting { turns_surface: bool },
+    /// rapier's end state of a body asleep at the start and woken inside the step (rapier
+    /// solved it without its ground contacts).
+    Woken,
+    /// rapier's end state of a rolling ball something else acted on, in which it flew
+    /// without its ground; `fall` (m/s) is the step's fall, `|a.n| dt`.
+    DisturbedRolling { fall: f64 },
 }
 
-/// What the settle stage does with a body's deepest point against a ground at the step's end
-/// (see [`Policy::step_end_contact`], [`Policy::woken_contact`], [`Policy::disturbed_rolling`]).
+/// What holds a resting body that turned, asked only when [`EndCheck::TurningResting`] needs
+/// it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Surroundings {
+    /// Another body (or a wall, or a joint) touches it.
+    pub touching: bool,
+    /// Something lies on it (a contact pushing it within [`LOADED_COS`] of gravity).
+    pub loaded: bool,
+    /// Its resting contact point itself is pushed into the ground faster than the pressed
+    /// speed (a body pressed from above, not turning about the contact).
+    pub pivot_pushed: bool,
+}
+
+/// What the settle stage does with a body's deepest point in a ground at the step's end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum EndContact {
-    /// Nothing to correct.
+pub(crate) enum EndAction {
+    /// Nothing to correct (rapier's solver holds it, or it is within the resting gap).
     Keep,
-    /// Moved out of the ground along the normal (a ball's speed into it removed).
-    PushOut,
-    /// The model's impulse on rapier's end state, then moved out.
-    Impact,
+    /// Moved out of the ground along the normal; `stop`: its speed into the ground removed.
+    PushOut { stop: bool },
+    /// The model's impulse on the end state (`e = 0` if `settle`), then moved out; repeated
+    /// on the next deepest point under the `RapierEnd` row.
+    Impact { settle: bool },
 }
 
 impl Policy {
-    /// The step-end fallback's decision for the deepest point, at `dist` (m, negative inside)
-    /// with normal speed `un` (m/s, negative approaching): an impact when it touches and
-    /// approaches; a push-out, velocity kept, when it leaves from deeper than the resting gap
-    /// (it swung through the ground inside the step); else nothing.
-    pub fn step_end_contact(&self, dist: f64, un: f64) -> EndContact {
-        if dist <= 0.0 && un < 0.0 {
-            EndContact::Impact
-        } else if dist < -self.resting_gap {
-            EndContact::PushOut
-        } else {
-            EndContact::Keep
-        }
-    }
-
-    /// A body woken inside the step (rapier solved it without its ground contacts): an
-    /// impact with `e = 0` when its deepest point is deeper than the resting gap and
-    /// approaching, else nothing.
-    pub fn woken_contact(&self, dist: f64, un: f64) -> EndContact {
-        if dist < -self.resting_gap && un < 0.0 {
-            EndContact::Impact
-        } else {
-            EndContact::Keep
-        }
-    }
-
-    /// A rolling ball that something else acted on, in rapier's end state where it flew
-    /// without its ground: put back on the ground when it moves into it (`un`, m/s) no faster
-    /// than the step's fall `fall` (m/s, `|a.n| dt`) plus the resting speed, as rapier's
-    /// resting contact would have held it; else (something pushed it down) an impact with
-    /// `e = 0`.
-    pub fn disturbed_rolling(&self, un: f64, fall: f64) -> EndContact {
-        if un >= -(fall + self.resting_speed) {
-            EndContact::PushOut
-        } else {
-            EndContact::Impact
-        }
-    }
-
     /// The thresholds for a step of `dt` seconds under gravity of magnitude `g` (m/s^2), with
     /// rapier's allowed linear error and prediction distance (m).
     pub fn new(
@@ -171,35 +151,61 @@ impl Policy {
         arrival <= limit || (was_resting || arrival <= self.pressed_speed) && pressed()
     }
 
-    /// The end-of-step decision for a body whose ground pairs were all resting while it
-    /// turned fast, from its deepest point at the step's end: `dist` (m, negative inside)
-    /// and its normal speed `un` (m/s, negative approaching). `turns_surface`: its rotation
-    /// moves its surface (not a ball about its centre). `pivot_pushed`: its resting contact
-    /// point itself is pushed into the ground faster than the pressed speed (a body pressed
-    /// from above, not turning about the contact). `touching` and `loaded`: another body
-    /// touches it, lies on it.
-    pub fn deep_resting_body(
+    /// The settle stage's decision table: what becomes of a body checked for `why`, whose
+    /// deepest point in a ground is at `dist` (m, negative inside) with normal speed `un`
+    /// (m/s, negative approaching). `around` is asked only for a deep turning resting body.
+    ///
+    /// | why | found | action |
+    /// | --- | --- | --- |
+    /// | `Flown` | inside | push out, velocity kept |
+    /// | `RapierEnd` | touching, approaching | impact |
+    /// | `RapierEnd` | deeper than the gap, leaving (it swung through the ground) | push out, velocity kept |
+    /// | `Woken` | deeper than the gap, approaching | impact, `e = 0` |
+    /// | `DisturbedRolling` | into the ground no faster than the step's fall plus the resting speed | push out, stopped |
+    /// | `DisturbedRolling` | faster (something pushed it down) | impact, `e = 0` |
+    /// | `TurningResting` | deeper than the gap, a point swinging down, not (slow and touching) and not pressed at its pivot | impact, `e = 0` if slower than a fall through the gap |
+    /// | `TurningResting` | deeper than the gap otherwise, nothing lying on it | push out (a ball's speed into the ground removed) |
+    /// | any | otherwise | keep |
+    pub fn end_action(
         &self,
+        why: EndCheck,
         dist: f64,
         un: f64,
-        turns_surface: bool,
-        pivot_pushed: impl FnOnce() -> bool,
-        touching: bool,
-        loaded: bool,
-    ) -> DeepResting {
-        if dist >= -self.resting_gap {
-            return DeepResting::Within;
-        }
-        if turns_surface && un < 0.0 {
-            let slow = un >= -self.pressed_speed;
-            if !(slow && touching || pivot_pushed()) {
-                return DeepResting::Resolve { settle: slow };
+        around: impl FnOnce() -> Surroundings,
+    ) -> EndAction {
+        let deep = dist < -self.resting_gap;
+        let approaching = un < 0.0;
+        match why {
+            EndCheck::Flown if dist < 0.0 => EndAction::PushOut { stop: false },
+            EndCheck::RapierEnd if dist <= 0.0 && approaching => {
+                EndAction::Impact { settle: false }
             }
-        }
-        if loaded {
-            DeepResting::LeaveToRapier
-        } else {
-            DeepResting::PushOut
+            EndCheck::RapierEnd if deep => EndAction::PushOut { stop: false },
+            EndCheck::Woken if deep && approaching => EndAction::Impact { settle: true },
+            EndCheck::DisturbedRolling { fall } => {
+                if un >= -(fall + self.resting_speed) {
+                    EndAction::PushOut { stop: true }
+                } else {
+                    EndAction::Impact { settle: true }
+                }
+            }
+            EndCheck::TurningResting { turns_surface } if deep => {
+                let around = around();
+                if turns_surface && approaching {
+                    let slow = un >= -self.pressed_speed;
+                    if !(slow && around.touching || around.pivot_pushed) {
+                        return EndAction::Impact { settle: slow };
+                    }
+                }
+                if around.loaded {
+                    EndAction::Keep
+                } else {
+                    EndAction::PushOut {
+                        stop: !turns_surface,
+                    }
+                }
+            }
+            _ => EndAction::Keep,
         }
     }
 }
@@ -267,68 +273,101 @@ mod tests {
         assert!(!p.rests(0.01, 0.0, true, || true));
     }
 
-    #[test]
-    fn the_step_end_contacts_are_impacts_push_outs_or_nothing() {
-        let p = policy();
-        // Touching and approaching: an impact, however shallow.
-        assert_eq!(p.step_end_contact(0.0, -0.01), EndContact::Impact);
-        assert_eq!(p.step_end_contact(-0.02, -1.0), EndContact::Impact);
-        // Leaving: moved out only from deeper than the gap.
-        assert_eq!(p.step_end_contact(-0.02, 0.5), EndContact::PushOut);
-        assert_eq!(p.step_end_contact(-0.004, 0.5), EndContact::Keep);
-        assert_eq!(p.step_end_contact(0.001, -1.0), EndContact::Keep);
-        // A woken body: only deeper than the gap and approaching.
-        assert_eq!(p.woken_contact(-0.006, -0.1), EndContact::Impact);
-        assert_eq!(p.woken_contact(-0.004, -0.1), EndContact::Keep);
-        assert_eq!(p.woken_contact(-0.006, 0.1), EndContact::Keep);
-        // A disturbed rolling ball: a step's fall (0.164 m/s at 60 Hz) plus the resting speed
-        // puts it back; faster is a push.
-        let fall = 9.81 / 60.0;
-        assert_eq!(p.disturbed_rolling(-0.2, fall), EndContact::PushOut);
-        assert_eq!(p.disturbed_rolling(-0.3, fall), EndContact::Impact);
+    fn alone() -> Surroundings {
+        Surroundings::default()
+    }
+
+    fn never() -> Surroundings {
+        panic!("the surroundings are not asked here")
     }
 
     #[test]
-    fn a_deep_body_is_resolved_pushed_out_or_left_by_what_holds_it() {
+    fn rapiers_end_state_gets_an_impact_a_push_out_or_nothing() {
         let p = policy();
-        let never = || panic!("the pivot is not asked here");
-        // Within the gap: nothing.
+        let rapier_end = |dist, un| p.end_action(EndCheck::RapierEnd, dist, un, never);
+        // Touching and approaching: an impact, however shallow.
+        assert_eq!(rapier_end(0.0, -0.01), EndAction::Impact { settle: false });
+        assert_eq!(rapier_end(-0.02, -1.0), EndAction::Impact { settle: false });
+        // Leaving: moved out only from deeper than the gap.
+        assert_eq!(rapier_end(-0.02, 0.5), EndAction::PushOut { stop: false });
+        assert_eq!(rapier_end(-0.004, 0.5), EndAction::Keep);
+        assert_eq!(rapier_end(0.001, -1.0), EndAction::Keep);
+        // The in-step flight's end: any depth is moved out, its velocity kept.
+        let flown = |dist, un| p.end_action(EndCheck::Flown, dist, un, never);
+        assert_eq!(flown(-1e-6, 0.5), EndAction::PushOut { stop: false });
+        assert_eq!(flown(0.0, -1.0), EndAction::Keep);
+    }
+
+    #[test]
+    fn a_woken_body_and_a_disturbed_rolling_ball_are_settled() {
+        let p = policy();
+        let woken = |dist, un| p.end_action(EndCheck::Woken, dist, un, never);
+        // Only deeper than the gap and approaching.
+        assert_eq!(woken(-0.006, -0.1), EndAction::Impact { settle: true });
+        assert_eq!(woken(-0.004, -0.1), EndAction::Keep);
+        assert_eq!(woken(-0.006, 0.1), EndAction::Keep);
+        // A step's fall (0.164 m/s at 60 Hz) plus the resting speed puts the ball back;
+        // faster is a push.
+        let fall = 9.81 / 60.0;
+        let rolling = |un| p.end_action(EndCheck::DisturbedRolling { fall }, -0.001, un, never);
+        assert_eq!(rolling(-0.2), EndAction::PushOut { stop: true });
+        assert_eq!(rolling(-0.3), EndAction::Impact { settle: true });
+    }
+
+    #[test]
+    fn a_deep_turning_body_is_resolved_pushed_out_or_left_by_what_holds_it() {
+        let p = policy();
+        let turned = |dist, un, turns_surface, around: Surroundings| {
+            p.end_action(EndCheck::TurningResting { turns_surface }, dist, un, || {
+                around
+            })
+        };
+        let touching = Surroundings {
+            touching: true,
+            ..alone()
+        };
+        let loaded = Surroundings {
+            touching: true,
+            loaded: true,
+            ..alone()
+        };
+        // Within the gap: nothing, and nothing asked.
+        let box_within = EndCheck::TurningResting {
+            turns_surface: true,
+        };
         assert_eq!(
-            p.deep_resting_body(-0.004, -1.0, true, never, false, false),
-            DeepResting::Within
+            p.end_action(box_within, -0.004, -1.0, never),
+            EndAction::Keep
         );
         // A box's corner swinging down fast, alone: a step-end impact with its bounce.
         assert_eq!(
-            p.deep_resting_body(-0.01, -1.0, true, || false, false, false),
-            DeepResting::Resolve { settle: false }
+            turned(-0.01, -1.0, true, alone()),
+            EndAction::Impact { settle: false }
         );
         // Slowly, alone: settled.
         assert_eq!(
-            p.deep_resting_body(-0.01, -0.1, true, || false, false, false),
-            DeepResting::Resolve { settle: true }
+            turned(-0.01, -0.1, true, alone()),
+            EndAction::Impact { settle: true }
         );
         // Slowly while touching another body: rapier's, unless nothing lies on it.
+        assert_eq!(turned(-0.01, -0.1, true, loaded), EndAction::Keep);
         assert_eq!(
-            p.deep_resting_body(-0.01, -0.1, true, never, true, true),
-            DeepResting::LeaveToRapier
-        );
-        assert_eq!(
-            p.deep_resting_body(-0.01, -0.1, true, never, true, false),
-            DeepResting::PushOut
+            turned(-0.01, -0.1, true, touching),
+            EndAction::PushOut { stop: false }
         );
         // Pushed down at its pivot (pressed from above): not an impact.
+        let pressed = Surroundings {
+            pivot_pushed: true,
+            loaded: true,
+            ..alone()
+        };
+        assert_eq!(turned(-0.01, -1.0, true, pressed), EndAction::Keep);
+        // A ball riding low (its surface does not turn): pushed out, its speed into the
+        // ground removed, unless loaded.
         assert_eq!(
-            p.deep_resting_body(-0.01, -1.0, true, || true, false, true),
-            DeepResting::LeaveToRapier
+            turned(-0.01, -1.0, false, touching),
+            EndAction::PushOut { stop: true }
         );
-        // A ball riding low (its surface does not turn): pushed out unless loaded.
-        assert_eq!(
-            p.deep_resting_body(-0.01, -1.0, false, never, true, false),
-            DeepResting::PushOut
-        );
-        assert_eq!(
-            p.deep_resting_body(-0.01, -1.0, false, never, false, true),
-            DeepResting::LeaveToRapier
-        );
+        assert_eq!(turned(-0.01, -1.0, false, loaded), EndAction::Keep);
     }
 }

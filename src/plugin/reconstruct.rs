@@ -1,29 +1,29 @@
 //! Reconstruct: a body's motion over the step from its start state, through the impacts the
-//! in-step search finds, as it would have been had rapier not solved its ground contacts.
+//! in-step search finds, as it would have been had rapier not solved its ground contacts;
+//! and a rolling ball's closed-form motion ([`rolled`]).
 //!
 //! Contract: [`through_impacts`] takes a body that flew alone in the step (no other contact,
 //! joint or torque, rapier's CCD consistent with its flight) and the first impact the search
 //! found; it flies the body to each impact (`crate::motion`), resolves it with the model
 //! (`resolve.rs`), and flies on, up to `ImpactConfig::max_impacts_per_step` impacts (the last
 //! with `e = 0`); an impact slower than the resting speed settles the body. It returns the
-//! state at the step's end, moved out of the ground if it is still inside one (and its
-//! energy capped if that lift would add energy), and reports every impulse and correction as
-//! an event. It writes nothing into rapier: the caller commits the state.
+//! state at the step's end and reports every impulse and correction as an event. It writes
+//! nothing into rapier: the caller has the settle stage check that state (`EndCheck::Flown`:
+//! a body never left inside a ground) and commits it.
 
 use super::events::{EventKind, ImpactTiming};
 use super::geometry::{BodyGeom, GroundGeom, Search, closest, first_impact, landing_point};
 use super::plan::{Candidate, EndOfStep};
 use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
 use super::settle::Settle;
-use crate::motion::State;
-use crate::rapier::prelude::{ColliderSet, RigidBodySet};
+use crate::motion::{Rolling, State};
+use crate::rapier::prelude::ColliderSet;
 
 /// The body's state at the step's end after the impacts from `first` on (see the module's
 /// contract); `view` receives the events.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn through_impacts(
     view: &mut Settle,
-    bodies: &RigidBodySet,
     colliders: &ColliderSet,
     cand: &Candidate,
     geom: &BodyGeom,
@@ -39,7 +39,6 @@ pub(crate) fn through_impacts(
     // Where the flight stops short of the step's end, if it does.
     let mut stop: Option<State> = None;
     let mut count = 0usize;
-    let events = view.events.len();
     loop {
         let (t, s, hit) = match next {
             Search::Clear => break,
@@ -112,29 +111,27 @@ pub(crate) fn through_impacts(
         }
         if count >= view.config.max_impacts_per_step {
             // The last impact allowed in the step (forced settled) on a leaving
-            // body: it flies on; the safety net below keeps it out of the ground.
+            // body: it flies on; the settle stage's check keeps it out of the ground.
             break;
         }
         next = first_impact(geom, grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
     }
-    let mut end = stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0));
-    // Safety net: never leave the body inside a ground, nor let the lift add energy
-    // (a cube pivoting on a corner through the step's last allowed impact, lifted
-    // out at its end: +3.2e-4 of a throw's energy, `cap_energy`).
-    if let Some(h) = closest(geom, grounds, &end, step.dt, 0.0) {
-        if h.dist < 0.0 {
-            let before = end;
-            end.com -= h.normal * h.dist;
-            let site = Site::of_hit(cand.body, geom, grounds, &h);
-            let pushed = correction(EventKind::PushOut, &site, inertia, &before, &end, step.dt);
-            view.events.push(pushed);
-            let elastic = view.events[events..].iter().all(|e| e.restitution <= 1.0);
-            if elastic && view.may_cap_energy(&bodies[cand.body], colliders, cand, step) {
-                if let Some(capped) = view.cap(&site, inertia, cand, &end, step.dt) {
-                    end = capped;
-                }
-            }
-        }
-    }
-    end
+    stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0))
+}
+
+/// A `Role::Rolling` ball's closed-form motion over the step from its start (which touches
+/// the ground), if nothing else acted on it: its end state, when it still touches the same
+/// ground plane there (`None`: rapier's end state stands, for the settle stage to check).
+pub(crate) fn rolled(
+    cand: &Candidate,
+    motion: &Rolling,
+    geom: &BodyGeom,
+    grounds: &[GroundGeom],
+    step: &EndOfStep,
+) -> Option<State> {
+    let end = motion.advance(&cand.start, step.dt);
+    let hit = closest(geom, grounds, &end, step.dt, step.policy.resting_gap)?;
+    let on_plane = hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
+        && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9;
+    on_plane.then_some(end)
 }

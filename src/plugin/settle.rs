@@ -1,39 +1,35 @@
-//! Settle: after rapier's step, the end-of-step checks of what rapier's state holds in a
-//! ground, and their corrections.
+//! Settle: after rapier's step, one end-of-step check of what a body's end state holds in a
+//! ground, and one decision table for what is done about it.
 //!
-//! Contract: [`Settle`] reads rapier's end-of-step state, the step's plan ([`EndOfStep`]) and
-//! the registry; it writes bodies (through `commit::write_state`) and reports every change as
-//! an event: a step-end impact from the model (`EventKind::Impact`, `ImpactTiming::StepEnd`),
-//! a push-out (`EventKind::PushOut`) or an energy cap (`EventKind::EnergyCap`). Its entry
-//! points, one per way rapier's step can leave a body in a ground:
-//! - [`Settle::end_fallback`]: a body the in-step search cannot fly alone (it touched
-//!   another body, had a joint or a torque, or rapier's CCD cut it short);
-//! - [`Settle::resting_end`]: a body turning fast on resting pairs (the decision is
-//!   [`super::policy::Policy::deep_resting_body`]);
-//! - [`Settle::turned_end`]: a tumbling body whose step the search found clear;
-//! - [`Settle::woken_end`]: a body woken inside the step;
-//! - [`Settle::rolling_end`]: a rolling ball something acted on.
+//! Contract: [`Settle::check`] takes a body's end state (rapier's, or the in-step impacts'
+//! from `reconstruct.rs`), the reason it is checked ([`EndCheck`], a row group of the table
+//! [`super::policy::Policy::end_action`]) and the grounds to check it against; it finds the
+//! deepest point, asks the table, and returns the corrected state: a push-out
+//! (`EventKind::PushOut`), step-end impacts from the model (`EventKind::Impact`,
+//! `ImpactTiming::StepEnd`), and an energy cap (`EventKind::EnergyCap`), each reported as an
+//! event. It reads rapier's state, the step's plan ([`EndOfStep`]) and the registry, and
+//! writes nothing into rapier: the caller commits the state.
 //!
 //! The pure state corrections are free functions: [`put_on_ground`] moves a state out of the
 //! ground along a contact normal (for a ball, also removing its speed into the ground);
 //! [`capped_energy`] scales a state's velocities so that its mechanical energy is no more
 //! than another's.
 
-use super::commit::{Shadow, write_state};
-use super::config::{ImpactConfig, TimingMode};
-use super::convert::{to_f64, vec_from_na, vec_to_na};
+use super::commit::Shadow;
+use super::config::ImpactConfig;
+use super::convert::to_f64;
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{BodyGeom, GroundGeom, SmallList, closest, landing_point};
 use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
-use super::observe::{body_geom, ground_geom, neighbours, rapier_state};
+use super::observe::{NonGround, ground_geom, neighbours};
 use super::plan::{Candidate, EndOfStep, StepData};
-use super::policy::{DeepResting, EndContact, Role};
+use super::policy::{EndAction, EndCheck, Role, Surroundings};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
-use crate::motion::{Flight, Rolling, State};
+use crate::motion::{Flight, State};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
@@ -88,6 +84,16 @@ pub(crate) fn capped_energy(
     })
 }
 
+/// A body the settle stage checks, with what its checks need.
+pub(crate) struct Checked<'c> {
+    pub body: RigidBodyHandle,
+    pub geom: &'c BodyGeom<'c>,
+    pub inertia: &'c Inertia,
+    /// The plan's candidate: the energy cap's start state and flight, the resting contacts.
+    /// `None` for a body asleep at the start (no plan, no cap).
+    pub cand: Option<&'c Candidate>,
+}
+
 /// The end-of-step stage's view of the plugin: what it reads (configuration, registry, hook
 /// flags, the step's roles) and what it writes (events, the Exact-mode shadows).
 pub(crate) struct Settle<'a> {
@@ -105,100 +111,151 @@ impl Settle<'_> {
         self.shadows.insert(handle, Shadow::of(rb, s));
     }
 
-    /// The step-end fallback (`step_end`) for a candidate, then the energy cap
-    /// (`cap_energy`).
+    /// The one end-of-step check: the body's deepest point at `end` against `grounds`, the
+    /// decision table's action for `why` ([`super::policy::Policy::end_action`]), and that
+    /// action on `end`:
+    /// - `PushOut`: moved out along the normal (`put_on_ground`), a `PushOut` event;
+    /// - `Impact`: the model's impulse at the contact (`ImpactTiming::StepEnd`, `e = 0` if
+    ///   settling, or at the body's last allowed impact), moved out, and again for the next
+    ///   deepest point under the `RapierEnd` row, up to `max_impacts_per_step`;
+    /// - then, if it changed the state, the energy cap (`cap_if_gained`).
+    ///
+    /// Returns the action taken on the first point and the corrected state (`None`: `end`
+    /// stands). It writes nothing into rapier: the caller commits the state. `events_from` is
+    /// where this body's events of the step start in `self.events` (the cap is for bodies
+    /// with no restitution above 1 among them).
     #[allow(clippy::too_many_arguments)]
-    pub fn end_fallback(
+    pub fn check(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
-        cand: &Candidate,
-        geom: &BodyGeom,
+        checked: &Checked,
+        end: &State,
+        why: EndCheck,
         grounds: &[GroundGeom],
         step: &EndOfStep,
-        settle: bool,
-    ) {
-        let Some(rb) = bodies.get(cand.body) else {
-            return;
+        events_from: usize,
+    ) -> (EndAction, Option<State>) {
+        let body = checked.body;
+        let Some(rb) = bodies.get(body) else {
+            return (EndAction::Keep, None);
         };
-        let inertia = Inertia::of(rb);
-        let events = self.events.len();
-        let moved = self.step_end(
-            bodies,
-            colliders,
-            cand.body,
-            &cand.local_com,
-            geom,
-            grounds,
-            &inertia,
-            step,
-            settle,
-        );
-        let elastic = self.events[events..].iter().all(|e| e.restitution <= 1.0);
-        if moved && elastic {
-            self.cap_energy(bodies, colliders, cand, &inertia, step);
+        let dt = step.dt;
+        let mut s = *end;
+        let mut first = EndAction::Keep;
+        let mut settle = false;
+        let mut changed = false;
+        let mut around: Option<NonGround> = None;
+        let mut neighbours_of = || {
+            *around
+                .get_or_insert_with(|| neighbours(body, rb, &step.sets, self.registry, &step.down))
+        };
+        for k in 0..self.config.max_impacts_per_step {
+            let Some(hit) = closest(checked.geom, grounds, &s, dt, 0.0) else {
+                break;
+            };
+            let rule = if k == 0 { why } else { EndCheck::RapierEnd };
+            let action = step.policy.end_action(rule, hit.dist, hit.un, || {
+                let around = neighbours_of();
+                Surroundings {
+                    touching: around.touching,
+                    loaded: around.loaded,
+                    pivot_pushed: checked
+                        .cand
+                        .is_some_and(|c| pivot_pushed(c, &grounds[hit.ground], &hit, &s, step)),
+                }
+            });
+            if k == 0 {
+                first = action;
+            }
+            match action {
+                EndAction::Keep => break,
+                EndAction::PushOut { stop } => {
+                    let before = s;
+                    put_on_ground(&mut s, &hit, stop);
+                    self.report_push_out(body, checked, grounds, &hit, &before, &s, step);
+                    changed |= s != before;
+                    break;
+                }
+                EndAction::Impact { settle: settling } => settle |= settling,
+            }
+            let part = &checked.geom.parts[hit.part];
+            let gg = &grounds[hit.ground];
+            let (point, points) = landing_point(part, gg, &s, dt, &hit, self.config.flat_tolerance);
+            let input = ImpactInput {
+                body,
+                inertia: checked.inertia,
+                law: self.config.law,
+                material: self.registry.material_of(colliders, part.handle, gg.handle),
+                // A body that touched another body or a wall in the step: no bounce slower
+                // than a fall through the resting gap (see the pressed roles).
+                resting_speed: if neighbours_of().touching {
+                    step.policy.pressed_speed
+                } else {
+                    step.policy.resting_speed
+                },
+                force_settle: settle || k + 1 >= self.config.max_impacts_per_step,
+                timing: ImpactTiming::StepEnd,
+            };
+            let Some((after, event)) =
+                resolve(&input, checked.geom, gg, &s, dt, &hit, point, points)
+            else {
+                break;
+            };
+            s = after;
+            s.com -= hit.normal * hit.dist;
+            self.events.push(event);
+            changed = true;
         }
+        if !changed {
+            return (first, None);
+        }
+        if let Some(capped) = self.cap_if_gained(rb, colliders, checked, &s, step, events_from) {
+            s = capped;
+        }
+        (first, Some(s))
     }
 
-    /// A body moved out of the ground by position at the step's end gains the potential
+    /// A state moved out of the ground by position at the step's end gains the potential
     /// energy of the lift: its end state is deeper than any state of a true flight (a corner
     /// swung or a ball rode into the ground), and moving it out keeps the speed it gathered
     /// getting there. Repeated every step, that lift fed a box rocking on its corners at
     /// the step rate for ever (`Step` mode, 60 Hz: 60 bounces a second), and it is the
     /// energy a tumbling cube gained over its throw. So, for a body whose energy can only
-    /// have been lost (`may_cap_energy`; the callers also require no restitution above 1),
-    /// the end state's mechanical energy in its constant force field (`Flight::accel`) is
-    /// held to the start's (see `capped_energy`).
-    pub fn cap_energy(
+    /// have been lost (`may_cap_energy`, and no restitution above 1 among its events of the
+    /// step from `events_from`), the end state's mechanical energy in its constant force field
+    /// (`Flight::accel`) is held to the start's (`capped_energy`), reported as an `EnergyCap`
+    /// event at the site of the body's last event.
+    fn cap_if_gained(
         &mut self,
-        bodies: &mut RigidBodySet,
+        rb: &RigidBody,
         colliders: &ColliderSet,
-        cand: &Candidate,
-        inertia: &Inertia,
+        checked: &Checked,
+        end: &State,
         step: &EndOfStep,
-    ) {
-        if !bodies
-            .get(cand.body)
-            .is_some_and(|rb| self.may_cap_energy(rb, colliders, cand, step))
-        {
-            return;
+        events_from: usize,
+    ) -> Option<State> {
+        let cand = checked.cand?;
+        let elastic = self.events[events_from..]
+            .iter()
+            .all(|e| e.body != checked.body || e.restitution <= 1.0);
+        if !elastic || !self.may_cap_energy(rb, colliders, cand, step) {
+            return None;
         }
-        let rb = &mut bodies[cand.body];
-        let end = rapier_state(rb);
-        // Only after a push-out, which reported where it was.
-        let Some(site) = self
+        let site = self
             .events
             .iter()
             .rev()
-            .find(|e| e.body == cand.body)
-            .map(Site::of)
-        else {
-            return;
-        };
-        if let Some(capped) = self.cap(&site, inertia, cand, &end, step.dt) {
-            rb.set_linvel(vec_from_na(&capped.v), true);
-            rb.set_angvel(vec_from_na(&capped.w), true);
-        }
-    }
-
-    /// `end` capped to the candidate's start energy (`capped_energy`), reported as an
-    /// `EnergyCap` event at `site`; `None` when it gains nothing.
-    pub fn cap(
-        &mut self,
-        site: &Site,
-        inertia: &Inertia,
-        cand: &Candidate,
-        end: &State,
-        dt: f64,
-    ) -> Option<State> {
-        let capped = capped_energy(&cand.start, end, &cand.flight, inertia)?;
+            .find(|e| e.body == checked.body)
+            .map(Site::of)?;
+        let capped = capped_energy(&cand.start, end, &cand.flight, checked.inertia)?;
         self.events.push(correction(
             EventKind::EnergyCap,
-            site,
-            inertia,
+            &site,
+            checked.inertia,
             end,
             &capped,
-            dt,
+            step.dt,
         ));
         Some(capped)
     }
@@ -207,7 +264,7 @@ impl Settle<'_> {
     /// read from rapier's contact graph after the step), through the plugin's pairs with no contact
     /// modification of the user's, and no user torque acted: its energy can only have been
     /// lost.
-    pub fn may_cap_energy(
+    fn may_cap_energy(
         &self,
         rb: &RigidBody,
         colliders: &ColliderSet,
@@ -244,182 +301,6 @@ impl Settle<'_> {
         })
     }
 
-    /// The `StepEnd` fallback on rapier's end-of-step state: each ground contact still
-    /// touching and approaching gets its impulse (with `e = 0` if `settle`), and the body is
-    /// moved out of the ground. Returns whether it changed the body's state.
-    #[allow(clippy::too_many_arguments)]
-    pub fn step_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        body: RigidBodyHandle,
-        local_com: &Vector3<f64>,
-        geom: &BodyGeom,
-        grounds: &[GroundGeom],
-        inertia: &Inertia,
-        step: &EndOfStep,
-        settle: bool,
-    ) -> bool {
-        let Some(rb) = bodies.get(body) else {
-            return false;
-        };
-        let mut s = rapier_state(rb);
-        let t = step.dt;
-        let mut changed = false;
-        for k in 0..self.config.max_impacts_per_step {
-            let Some(hit) = closest(geom, grounds, &s, t, 0.0) else {
-                break;
-            };
-            match step.policy.step_end_contact(hit.dist, hit.un) {
-                EndContact::Impact => {}
-                // A point deeper than the resting gap that already leaves the ground: it
-                // swung through it inside the step (a box tumbling at 15 rad/s and 20 m/s at
-                // 30 Hz ended 9.2 mm deep, rising). Moved out, its velocity kept.
-                EndContact::PushOut => {
-                    let before = s;
-                    s.com -= hit.normal * hit.dist;
-                    changed = true;
-                    self.report_push_out(body, geom, grounds, &hit, inertia, &before, &s, step);
-                    break;
-                }
-                EndContact::Keep => break,
-            }
-            let part = &geom.parts[hit.part];
-            let gg = &grounds[hit.ground];
-            let (point, points) = landing_point(part, gg, &s, t, &hit, self.config.flat_tolerance);
-            let input = ImpactInput {
-                body,
-                inertia,
-                law: self.config.law,
-                material: self.registry.material_of(colliders, part.handle, gg.handle),
-                // A body that touched another body or a wall in the step: no bounce slower
-                // than a fall through the resting gap (see the pressed roles).
-                resting_speed: if neighbours(
-                    body,
-                    &bodies[body],
-                    &step.sets,
-                    self.registry,
-                    &step.down,
-                )
-                .touching
-                {
-                    step.policy.pressed_speed
-                } else {
-                    step.policy.resting_speed
-                },
-                force_settle: settle || k + 1 >= self.config.max_impacts_per_step,
-                timing: ImpactTiming::StepEnd,
-            };
-            let Some((after, event)) = resolve(&input, geom, gg, &s, t, &hit, point, points) else {
-                break;
-            };
-            s = after;
-            s.com -= hit.normal * hit.dist;
-            self.events.push(event);
-            changed = true;
-        }
-        if changed {
-            write_state(&mut bodies[body], &s, local_com, true);
-        }
-        changed
-    }
-
-    /// After the step, for a body whose ground pairs were all resting (rapier's) while it
-    /// turned fast. Two ways rapier's resting contact lets it end the step deep:
-    /// - rapier's contact manifold, made at the step's start, holds only the points near the
-    ///   ground then, so a point swinging down from higher up (a box tipping off its edge, a
-    ///   capsule's end at a wall) can end the step deep in the ground, still approaching
-    ///   (issue 5: 8-13 mm at 30-60 Hz, rapier alone 5.3 cm). When the deepest point is deeper
-    ///   than the resting gap and approaches faster than a fall through it, while the resting
-    ///   contact point itself does not (the body turned about it, rather than being pushed
-    ///   into the ground by a body on it: a heavy box on a light one, see the pressed roles),
-    ///   it is resolved as a step-end impact (`step_end`, pushed out). Slower, on a body
-    ///   touching nothing but grounds, it is settled (`e = 0`) and moved out (a box that took a
-    ///   `Step` impulse at one corner while its spin brought another down: 11.7 mm deep at
-    ///   30 Hz, approaching at 0.14 m/s); a body touching another is left to rapier then:
-    ///   pushing it out fights the body on it;
-    /// - rapier's solver moves a contact point with its body over the step, as a material
-    ///   point; a ball's contact point stays at its bottom however it spins, so a fast-spinning
-    ///   ball is under-supported and rides low (rapier alone: a 0.1 m ball sliding at 5-15 m/s,
-    ///   spun up by friction to 20 rad/s, 8.4 mm deep at 30 Hz, 7.3 mm at 60 Hz), and a
-    ///   fast-turning box's contact points lag its faces likewise. A body left deeper than the
-    ///   resting gap otherwise, with nothing lying on it (`NonGround::loaded`: two balls sliding
-    ///   side by side at 20 m/s, spun at 20 rad/s, had gone 14-22 mm deep at 30 Hz), is
-    ///   moved out of the ground; a ball's speed into the ground is removed, other bodies'
-    ///   velocities are kept. The lift's energy is capped (`cap_energy`).
-    ///
-    /// Returns whether it changed the body (a step-end impact or a push-out): rapier's end
-    /// state, corrected, then stands, and no flight is written over it.
-    pub fn resting_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        step: &EndOfStep,
-    ) -> bool {
-        let Some(rb) = bodies.get(cand.body) else {
-            return false;
-        };
-        let geom = body_geom(rb, colliders, &cand.local_com);
-        // Each ground once (a body of several colliders lists it per collider).
-        let listed = &cand.turning_resting;
-        let grounds: SmallList<GroundGeom> = listed
-            .iter()
-            .enumerate()
-            .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
-            .filter_map(|(_, (i, _))| self.pair_geom(&step.grounds[*i], &geom, colliders))
-            .collect();
-        let mut end = rapier_state(rb);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return false;
-        };
-        if hit.dist >= -step.policy.resting_gap {
-            return false;
-        }
-        let neighbours = neighbours(cand.body, rb, &step.sets, self.registry, &step.down);
-        // The resting contact's material point, now.
-        let pivot_pushed = || {
-            listed.iter().any(|(i, local)| {
-                if step.grounds[*i].handle != grounds[hit.ground].handle {
-                    return false;
-                }
-                let p = end.com + end.rot * local;
-                let u = super::geometry::body_velocity_at(&end, &p)
-                    - grounds[hit.ground].velocity_at(&p, step.dt);
-                hit.normal.dot(&u) < -step.policy.pressed_speed
-            })
-        };
-        let decision = step.policy.deep_resting_body(
-            hit.dist,
-            hit.un,
-            cand.turns_surface,
-            pivot_pushed,
-            neighbours.touching,
-            neighbours.loaded,
-        );
-        if let DeepResting::Resolve { settle } = decision {
-            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, settle);
-            return true;
-        }
-        // A body that nothing loads (balls side by side, a box at a wall) is moved out; a
-        // body something lies on is left to rapier, whose solver holds the load.
-        if decision == DeepResting::PushOut {
-            // A ball riding low sinks on: rapier's under-supporting contact let gravity build
-            // a speed into the ground (0.3 to 0.9 m/s at 30 Hz for balls spun at 20 rad/s),
-            // which kept would take it deeper next step: removed for a ball.
-            let inertia = Inertia::of(&bodies[cand.body]);
-            let before = end;
-            put_on_ground(&mut end, &hit, !cand.turns_surface);
-            self.report_push_out(
-                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
-            );
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
-            self.cap_energy(bodies, colliders, cand, &inertia, step);
-            return true;
-        }
-        false
-    }
-
     /// The geometry of a candidate's `Impact` grounds, without its `Filtered` pairs (no
     /// contact for the plugin).
     pub fn impact_ground_geoms<'a>(
@@ -432,6 +313,57 @@ impl Settle<'_> {
         cand.impact_grounds
             .iter()
             .filter_map(|i| self.pair_geom(&step.grounds[*i], geom, colliders))
+            .collect()
+    }
+
+    /// The geometry of the grounds of a candidate's resting pairs turning fast, each ground
+    /// once (a body of several colliders lists it per collider).
+    pub fn turning_resting_geoms<'a>(
+        &self,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        colliders: &'a ColliderSet,
+        step: &StepData,
+    ) -> SmallList<GroundGeom<'a>> {
+        let listed = &cand.turning_resting;
+        listed
+            .iter()
+            .enumerate()
+            .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
+            .filter_map(|(_, (i, _))| self.pair_geom(&step.grounds[*i], geom, colliders))
+            .collect()
+    }
+
+    /// The geometry of the grounds near a body asleep at the step's start (it has no roles),
+    /// without the pairs rapier would not solve or the user `refused`.
+    pub fn woken_geoms<'a>(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &'a ColliderSet,
+        com: Vector,
+        geom: &BodyGeom,
+        step: &StepData,
+        refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
+    ) -> SmallList<GroundGeom<'a>> {
+        let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
+        self.registry
+            .index
+            .near(&step.grounds, com, half)
+            .iter()
+            .filter_map(|i| {
+                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
+                let ground = &colliders[gg.handle];
+                gg.skip = geom
+                    .parts
+                    .iter()
+                    .map(|part| part.handle)
+                    .filter(|h| {
+                        !filter::rapier_solves(bodies, &colliders[*h], ground)
+                            || refused(bodies, *h, gg.handle)
+                    })
+                    .collect();
+                Some(gg)
+            })
             .collect()
     }
 
@@ -453,158 +385,15 @@ impl Settle<'_> {
         Some(gg)
     }
 
-    /// After a step the search found clear, for a body whose rotation moves its surface (not
-    /// a ball about its centre): the search flies it torque-free, rapier's integrator turns
-    /// it its own way (and `Exact` mode keeps rapier's rotation), and for a fast tumble the
-    /// two part by centimetres at the corners (a 0.9 m rod at 21 rad/s, 30 Hz: 6 cm deep,
-    /// no event). The step-end fallback (`step_end`) then resolves what rapier's end pose
-    /// holds in the ground.
-    pub fn turned_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        step: &EndOfStep,
-    ) {
-        if !cand.turns_surface {
-            return;
-        }
-        let Some(rb) = bodies.get(cand.body) else {
-            return;
-        };
-        let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
-        self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, false);
-    }
-
-    /// After the step, for a body asleep at its start and woken inside it (by a body hitting
-    /// it): rapier solves the woken body without its ground contacts for that step (they
-    /// were not updated while it slept), so a box resting on the ground falls by gravity
-    /// for a step, into the ground (rapier alone, box resting flat, woken by a rolling ball:
-    /// 8.8 mm deep at 30 Hz, pushed out over the next steps; in a scene of tumbling boxes,
-    /// 6.9 mm). If a point ends deeper than the resting gap and approaching, the contact is
-    /// resolved at the step end with `e = 0` (what a resting contact would have done) and
-    /// the body moved out of the ground.
-    pub fn woken_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        handle: RigidBodyHandle,
-        step: &EndOfStep,
-        refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
-    ) {
-        let rb = &bodies[handle];
-        let local_com = vec_to_na(rb.local_center_of_mass());
-        let geom = body_geom(rb, colliders, &local_com);
-        if geom.parts.is_empty() {
-            return;
-        }
-        let com = rb.center_of_mass();
-        let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
-        let grounds: SmallList<GroundGeom> = self
-            .registry
-            .index
-            .near(&step.grounds, com, half)
-            .iter()
-            .filter_map(|i| {
-                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                let ground = &colliders[gg.handle];
-                gg.skip = geom
-                    .parts
-                    .iter()
-                    .map(|part| part.handle)
-                    .filter(|h| {
-                        !filter::rapier_solves(bodies, &colliders[*h], ground)
-                            || refused(bodies, *h, gg.handle)
-                    })
-                    .collect();
-                Some(gg)
-            })
-            .collect();
-        if grounds.is_empty() {
-            return;
-        }
-        let end = rapier_state(rb);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return;
-        };
-        if step.policy.woken_contact(hit.dist, hit.un) == EndContact::Impact {
-            let inertia = Inertia::of(rb);
-            self.step_end(
-                bodies, colliders, handle, &local_com, &geom, &grounds, &inertia, step, true,
-            );
-        }
-    }
-
-    /// After the step, for a ball sliding on a level ground (`Role::Rolling`): its closed-form
-    /// motion over the step from the start (which touches the ground), if nothing else acted
-    /// on it (`disturbed`) and it still touches the same ground plane at the end. Otherwise
-    /// rapier's state stands, in which the ball flew without its ground (the pair was out of
-    /// its solver) and so fell by up to `|g| dt^2 / 2` while pushed by whatever touched it:
-    /// - moving into the ground no faster than that fall (`|a.n| dt`, plus the resting
-    ///   speed), it is put back on the ground with no speed into it, as rapier's resting
-    ///   contact would have held it (a `PushOut` event: a ball rolling up to another);
-    /// - faster (something pushed it down), it is resolved at the step end (`step_end`,
-    ///   `e = 0`, moved out).
-    #[allow(clippy::too_many_arguments)]
-    pub fn rolling_end(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        cand: &Candidate,
-        ground: usize,
-        motion: &Rolling,
-        disturbed: bool,
-        step: &EndOfStep,
-    ) {
-        let Some(gg) = ground_geom(&step.grounds[ground], colliders) else {
-            return;
-        };
-        let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
-        let grounds = [gg];
-        if !disturbed {
-            let end = motion.advance(&cand.start, step.dt);
-            let on = closest(&geom, &grounds, &end, step.dt, step.policy.resting_gap);
-            if on.is_some_and(|hit| {
-                hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
-                    && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9
-            }) {
-                let rb = &mut bodies[cand.body];
-                write_state(rb, &end, &cand.local_com, true);
-                if self.config.timing == TimingMode::Exact {
-                    self.remember(cand.body, rb, &end);
-                }
-                return;
-            }
-        }
-        let mut end = rapier_state(&bodies[cand.body]);
-        let Some(hit) = closest(&geom, &grounds, &end, step.dt, 0.0) else {
-            return;
-        };
-        let fall = -motion.accel.dot(&motion.normal) * step.dt;
-        if step.policy.disturbed_rolling(hit.un, fall) == EndContact::PushOut {
-            let before = end;
-            put_on_ground(&mut end, &hit, true);
-            let inertia = Inertia::of(&bodies[cand.body]);
-            self.report_push_out(
-                cand.body, &geom, &grounds, &hit, &inertia, &before, &end, step,
-            );
-            write_state(&mut bodies[cand.body], &end, &cand.local_com, true);
-        } else {
-            self.end_fallback(bodies, colliders, cand, &geom, &grounds, step, true);
-        }
-    }
-
     /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it
     /// changed nothing.
     #[allow(clippy::too_many_arguments)]
-    pub fn report_push_out(
+    fn report_push_out(
         &mut self,
         body: RigidBodyHandle,
-        geom: &BodyGeom,
+        checked: &Checked,
         grounds: &[GroundGeom],
         hit: &super::geometry::Hit,
-        inertia: &Inertia,
         before: &State,
         after: &State,
         step: &StepData,
@@ -612,16 +401,36 @@ impl Settle<'_> {
         if before.com == after.com && before.v == after.v {
             return;
         }
-        let site = Site::of_hit(body, geom, grounds, hit);
+        let site = Site::of_hit(body, checked.geom, grounds, hit);
         self.events.push(correction(
             EventKind::PushOut,
             &site,
-            inertia,
+            checked.inertia,
             before,
             after,
             step.dt,
         ));
     }
+}
+
+/// Is a turning resting body's resting contact point on the ground of `hit` pushed into it
+/// faster than the pressed speed at `s` (a body pressed from above, not turning about the
+/// contact)?
+fn pivot_pushed(
+    cand: &Candidate,
+    ground: &GroundGeom,
+    hit: &super::geometry::Hit,
+    s: &State,
+    step: &EndOfStep,
+) -> bool {
+    cand.turning_resting.iter().any(|(i, local)| {
+        if step.grounds[*i].handle != ground.handle {
+            return false;
+        }
+        let p = s.com + s.rot * local;
+        let u = super::geometry::body_velocity_at(s, &p) - ground.velocity_at(&p, step.dt);
+        hit.normal.dot(&u) < -step.policy.pressed_speed
+    })
 }
 
 #[cfg(test)]
