@@ -21,8 +21,8 @@
 //! numerically, by Dormand and Prince's 8th-order method (DOP853) with a relative
 //! tolerance of [`SWERVE_TOLERANCE`] on the contact velocity.
 
-use super::collision_matrix::{ContactK, k_form, solve_k};
-use super::types::{Body, Contact, Material, Regime};
+use super::collision_matrix::{Compliance, ContactK};
+use super::types::{Material, Regime};
 use nalgebra::{Vector2, Vector3};
 
 /// Local error tolerance of the swerve integration, relative to the initial contact
@@ -68,14 +68,14 @@ enum Event {
 }
 
 /// Result of the integration: the impulse on the body (world) and the regime.
-pub(crate) fn consistent_impulse(
-    body: &Body,
-    contact: &Contact,
+pub(crate) fn consistent_impulse<K: Compliance>(
+    k: &K,
+    n: &Vector3<f64>,
     material: &Material,
     u1: &Vector3<f64>,
 ) -> (Vector3<f64>, Regime) {
-    let n = contact.normal;
-    let ck = ContactK::new(body, &contact.offset, &n);
+    let n = *n;
+    let ck = k.contact_k(&n);
     let (e, mu) = (material.restitution, material.friction);
     let mut state = State {
         ut: ck.tangential(u1),
@@ -141,12 +141,12 @@ pub(crate) fn consistent_impulse(
             step_hint = None;
             match linear_segment(&mut state, phase, gt, gn, friction, mode) {
                 Some(ev) => ev,
-                None => return jam_resolution(body, contact, material, u1),
+                None => return jam_resolution(k, &n, material, u1),
             }
         } else {
             match swerve_segment(&ck, mu, &mut state, phase, speed, &mut step_hint) {
                 Some(ev) => ev,
-                None => return jam_resolution(body, contact, material, u1),
+                None => return jam_resolution(k, &n, material, u1),
             }
         };
         match event {
@@ -1030,23 +1030,22 @@ const D7: [(usize, f64); 12] = [
 /// limit along the sticking impulse's tangential direction (the slip law); where that
 /// would jam or gain energy too, the impact is frictionless. Every branch stays in the
 /// cone and, for `e <= 1`, dissipates.
-fn jam_resolution(
-    body: &Body,
-    contact: &Contact,
+fn jam_resolution<K: Compliance>(
+    k: &K,
+    n: &Vector3<f64>,
     material: &Material,
     u1: &Vector3<f64>,
 ) -> (Vector3<f64>, Regime) {
-    let n = contact.normal;
-    let r = contact.offset;
+    let n = *n;
     let mu = material.friction;
     let un = n.dot(u1);
     let ut = u1 - n * un;
     // Energy of the contact-velocity change: dKE = 1/2 (u2.M u2 - u1.M u1), M = K^-1.
-    let m_u1 = solve_k(body, &r, u1);
-    let m_n = solve_k(body, &r, &n);
+    let m_u1 = k.solve(u1);
+    let m_n = k.solve(&n);
     let budget = u1.dot(&m_u1) / (n.dot(&m_n) * un * un);
     let e = material.restitution.min(budget.max(0.0).sqrt());
-    let stick = solve_k(body, &r, &(-(n * ((1.0 + e) * un)) - ut));
+    let stick = k.solve(&(-(n * ((1.0 + e) * un)) - ut));
     let stick_n = stick.dot(&n);
     let stick_t = stick - n * stick_n;
     if stick_n >= 0.0 && stick_t.norm() <= mu * stick_n {
@@ -1054,14 +1053,14 @@ fn jam_resolution(
     }
     // The work of an impulse P at the contact: P.(u1 + u2)/2 with u2 = u1 + K P.
     let gains = |p: &Vector3<f64>| {
-        let u2 = u1 + p / body.mass + (body.inv_inertia * r.cross(p)).cross(&r);
+        let u2 = u1 + k.apply(p);
         p.dot(&(u1 + u2)) > 0.0 && material.restitution <= 1.0
     };
     let e = material.restitution;
     let len = stick_t.norm();
     if len > 0.0 && mu > 0.0 {
         let along = n + stick_t * (mu / len);
-        let denominator = k_form(body, &r, &n, &along);
+        let denominator = k.k_form(&n, &along);
         if denominator > 0.0 {
             let slip = along * (-(1.0 + e) * un / denominator);
             if !gains(&slip) {
@@ -1069,6 +1068,6 @@ fn jam_resolution(
             }
         }
     }
-    let frictionless = n * (-(1.0 + e) * un / k_form(body, &r, &n, &n));
+    let frictionless = n * (-(1.0 + e) * un / k.k_form(&n, &n));
     (frictionless, Regime::Slip)
 }

@@ -12,42 +12,29 @@
 //!
 //! With `I_w^-1 = E/I` and `n = +z` this is [`super::seed::solve`] exactly.
 
-use super::collision_matrix::{ContactK, k_form, solve_k};
+use super::collision_matrix::Compliance;
 use super::consistent::SWERVE_TOLERANCE;
 use super::error::ModelError;
-use super::types::{Body, Contact, Material, Regime};
+use super::types::{Material, Regime};
 use nalgebra::{Vector2, Vector3};
 
 /// The document's impulse on the body (world frame), its regime and the unit slip
-/// direction it used (zero when sticking or frictionless), for an approaching contact.
-/// `u1` is the relative contact velocity; `iso` is `Some(a)` when the inverse inertia
-/// is `a E`, which has cheaper closed forms.
+/// direction it used (zero when sticking or frictionless), for an approaching contact of
+/// unit normal `n` and compliance `k`. `u1` is the relative contact velocity.
 #[inline(always)]
-pub(crate) fn document_impulse(
-    body: &Body,
-    iso: Option<f64>,
-    contact: &Contact,
+pub(crate) fn document_impulse<K: Compliance>(
+    k: &K,
+    n: &Vector3<f64>,
     material: &Material,
     u1: &Vector3<f64>,
 ) -> Result<(Vector3<f64>, Regime, Vector3<f64>), ModelError> {
-    let n = &contact.normal;
-    let r = &contact.offset;
     let (e, mu) = (material.restitution, material.friction);
     let un = n.dot(u1);
     let ut = u1 - n * un;
 
     // Sticking, eqs. (10)-(12): target contact velocity -e u_n n.
     let d = -(n * ((1.0 + e) * un)) - ut;
-    let stick = match iso {
-        // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4), I = 1/a,
-        // written with a (numerator and denominator times a): one division.
-        Some(a) => {
-            let m = body.mass;
-            let c = m * a;
-            (d + r * (c * r.dot(&d))) * (m / (1.0 + c * r.norm_squared()))
-        }
-        None => solve_k(body, r, &d),
-    };
+    let stick = k.solve(&d);
     let stick_n = stick.dot(n);
     let stick_t = stick - n * stick_n;
     if stick_n >= 0.0 && stick_t.norm_squared() <= (mu * stick_n) * (mu * stick_n) {
@@ -56,12 +43,7 @@ pub(crate) fn document_impulse(
 
     // Slipping, eqs. (13)-(19). A frictionless contact needs no direction: P = p n.
     let (s, along, denominator) = if mu == 0.0 {
-        let rn = r.cross(n);
-        let rot = match iso {
-            Some(a) => a * rn.norm_squared(),
-            None => rn.dot(&(body.inv_inertia * rn)),
-        };
-        (Vector3::zeros(), *n, n.norm_squared() / body.mass + rot)
+        (Vector3::zeros(), *n, k.k_form(n, n))
     } else {
         // Zero slip (erratum 2) includes a slip at rounding level: u1 - n (n.u1) leaves
         // ~1e-16 |u1| in a random direction for an exactly normal approach when n is
@@ -75,13 +57,10 @@ pub(crate) fn document_impulse(
             ut * (1.0 / len2.sqrt())
         } else {
             let ut = if slipping { ut } else { Vector3::zeros() };
-            slip_direction(body, contact, &ut, mu)
+            slip_direction(k, n, &ut, mu)
         };
         let along = n - s * mu;
-        let denominator = match iso {
-            Some(a) => n.dot(&along) / body.mass + a * r.cross(n).dot(&r.cross(&along)),
-            None => k_form(body, r, n, &along),
-        };
+        let denominator = k.k_form(n, &along);
         (s, along, denominator)
     };
     if denominator <= 0.0 || !denominator.is_finite() {
@@ -97,9 +76,9 @@ pub(crate) fn document_impulse(
 /// case (a slip of normal size) itself, so that its registers stay live.
 #[cold]
 #[inline(never)]
-pub(crate) fn slip_direction(
-    body: &Body,
-    contact: &Contact,
+pub(crate) fn slip_direction<K: Compliance>(
+    k: &K,
+    n: &Vector3<f64>,
     ut: &Vector3<f64>,
     mu: f64,
 ) -> Vector3<f64> {
@@ -113,7 +92,7 @@ pub(crate) fn slip_direction(
         let scaled = ut / ut.amax();
         return scaled / scaled.norm();
     }
-    let ck = ContactK::new(body, &contact.offset, &contact.normal);
+    let ck = k.contact_k(n);
     let s: Vector2<f64> = ck.invariant_slip_direction(mu);
     ck.world(&s)
 }

@@ -36,6 +36,8 @@ pub enum ModelError {
         /// The slip denominator in the model's units (1/kg).
         denominator: f64,
     },
+    /// Both bodies of a pair impact are fixed ([`super::Body::fixed`]): nothing can move.
+    BothFixed,
 }
 
 impl fmt::Display for ModelError {
@@ -68,6 +70,7 @@ impl fmt::Display for ModelError {
                 f,
                 "the document's slip law jams: denominator n.K(n - mu s) = {denominator:e} <= 0"
             ),
+            Self::BothFixed => write!(f, "both bodies of the pair are fixed: neither can move"),
         }
     }
 }

@@ -3,6 +3,8 @@
 //! - [`seed`]: the document's law in its own notation (eqs. 1-19), errata fixed.
 //! - [`resolve`]: the general form (any inertia tensor, any ground normal, a moving
 //!   ground) under one of three [`Law`]s.
+//! - [`resolve_pair`]: the same laws between two bodies, on the sum of their collision
+//!   matrices.
 //!
 //! The derivation, the errata and the laws are in the crate's `docs/model.md`, shown
 //! in [`crate::docs::model`].
@@ -11,13 +13,16 @@ mod collision_matrix;
 mod consistent;
 mod document;
 mod error;
+mod pair;
 pub mod seed;
 mod types;
 
 pub use consistent::SWERVE_TOLERANCE;
 pub use error::ModelError;
+pub use pair::{PairContact, PairImpact, resolve_pair};
 pub use types::{Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, Regime};
 
+use collision_matrix::OneBody;
 use nalgebra::{Matrix3, Vector3};
 
 /// Size of an energy gain, relative to the impulse times the contact speed
@@ -228,10 +233,15 @@ fn resolve_approaching(
     u1: &Vector3<f64>,
 ) -> Result<Impact, ModelError> {
     let u1 = *u1;
+    let k = OneBody {
+        body,
+        r: &contact.offset,
+        iso,
+    };
+    let n = &contact.normal;
     match law {
         Law::Document => {
-            let (impulse, regime, _) =
-                document::document_impulse(body, iso, contact, material, &u1)?;
+            let (impulse, regime, _) = document::document_impulse(&k, n, material, &u1)?;
             let (impact, _, _) = finish(
                 body,
                 iso,
@@ -249,7 +259,7 @@ fn resolve_approaching(
             body, iso, velocity, contact, material, &u1, None,
         )),
         Law::Guarded => {
-            let reason = match document::document_impulse(body, iso, contact, material, &u1) {
+            let reason = match document::document_impulse(&k, n, material, &u1) {
                 Err(_) => Fallback::Jam,
                 Ok((impulse, regime, s)) => {
                     let (impact, u2, work) = finish(
@@ -263,7 +273,8 @@ fn resolve_approaching(
                         Law::Document,
                         None,
                     );
-                    match unphysical(contact, material, &impact, &u1, &u2, work, &s) {
+                    let (p, pn) = (&impact.impulse, impact.normal_impulse);
+                    match unphysical(n, material, p, pn, impact.regime, &u1, &u2, work, &s) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }
@@ -293,7 +304,12 @@ fn consistent_impact(
     u1: &Vector3<f64>,
     fallback: Option<Fallback>,
 ) -> Impact {
-    let (impulse, regime) = consistent::consistent_impulse(body, contact, material, u1);
+    let k = OneBody {
+        body,
+        r: &contact.offset,
+        iso: None,
+    };
+    let (impulse, regime) = consistent::consistent_impulse(&k, &contact.normal, material, u1);
     finish(
         body,
         iso,
@@ -311,7 +327,7 @@ fn consistent_impact(
 /// `a` when the inverse inertia tensor is `a E` with `a > 0` (spheres, cubes), the
 /// case every step below has a cheaper closed form for.
 #[inline]
-fn isotropic_inverse_inertia(body: &Body) -> Option<f64> {
+pub(crate) fn isotropic_inverse_inertia(body: &Body) -> Option<f64> {
     let a = &body.inv_inertia;
     let isotropic = a.m11 == a.m22 && a.m22 == a.m33 && a.m11 > 0.0 && off_diagonal_is_zero(a);
     isotropic.then_some(a.m11)
@@ -330,23 +346,26 @@ fn off_diagonal_is_zero(a: &Matrix3<f64>) -> bool {
     bits << 1 == 0
 }
 
-/// Why the document's result is unphysical, if it is (the `Guarded` law's test).
-/// `u1`, `u2` are the relative contact velocities before and after, `work` the
-/// impulse's work `P . (u1 + u2) / 2`.
-fn unphysical(
-    contact: &Contact,
+/// Why the document's result (impulse `impulse`, its normal part `normal_impulse`, its
+/// `regime`) is unphysical, if it is (the `Guarded` law's test). `u1`, `u2` are the
+/// relative contact velocities before and after, `work` the impulse's work
+/// `P . (u1 + u2) / 2`, `slip` the unit slip direction it used.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn unphysical(
+    n: &Vector3<f64>,
     material: &Material,
-    impact: &Impact,
+    impulse: &Vector3<f64>,
+    normal_impulse: f64,
+    regime: Regime,
     u1: &Vector3<f64>,
     u2: &Vector3<f64>,
     work: f64,
     slip: &Vector3<f64>,
 ) -> Option<Fallback> {
-    if impact.normal_impulse < 0.0 {
+    if normal_impulse < 0.0 {
         return Some(Fallback::PullingNormalImpulse);
     }
-    let n = &contact.normal;
-    if impact.regime == Regime::Slip && material.friction > 0.0 {
+    if regime == Regime::Slip && material.friction > 0.0 {
         let along_after = (u2 - n * n.dot(u2)).dot(slip);
         if along_after < -1e-12 * u1.norm() {
             return Some(Fallback::SlipReversal);
@@ -356,7 +375,7 @@ fn unphysical(
         // The work of the impulse in the frame moving with the ground's contact point,
         // where a fixed ground's work-energy balance holds for a translating platform
         // too: dKE = P . (u1 + u2) / 2 with u the relative contact velocities (`work`).
-        if work > ENERGY_GAIN_TOLERANCE * impact.impulse.norm() * u1.norm() {
+        if work > ENERGY_GAIN_TOLERANCE * impulse.norm() * u1.norm() {
             return Some(Fallback::EnergyGain);
         }
     }

@@ -26,6 +26,23 @@ impl Body {
         }
     }
 
+    /// A fixed or kinematic body in an impact between two bodies ([`super::resolve_pair`]):
+    /// infinite mass and inertia (zero inverse inertia), so that no impulse changes its
+    /// velocity. It carries no kinetic energy in the model's results (its motion is
+    /// prescribed). [`super::resolve`] refuses it as the body hitting the ground
+    /// (`body.mass` not finite).
+    pub fn fixed() -> Self {
+        Self {
+            mass: f64::INFINITY,
+            inv_inertia: Matrix3::zeros(),
+        }
+    }
+
+    /// Is this [`Body::fixed`]: infinite mass and zero inverse inertia?
+    pub fn is_fixed(&self) -> bool {
+        self.mass == f64::INFINITY && self.inv_inertia == Matrix3::zeros()
+    }
+
     /// A body from a world-frame inertia tensor (kg m^2), which must be symmetric
     /// positive definite; it is inverted here, once.
     pub fn from_inertia(mass: f64, inertia: Matrix3<f64>) -> Result<Self, ModelError> {
@@ -107,8 +124,12 @@ impl Body {
     }
 
     /// Kinetic energy `1/2 m |v|^2 + 1/2 w . I_w w` (J). The rotational term is computed
-    /// by solving with the inverse inertia on the axes where the body can rotate.
+    /// by solving with the inverse inertia on the axes where the body can rotate. Zero for
+    /// a [`Body::fixed`] (prescribed motion).
     pub fn kinetic_energy(&self, velocity: &BodyVelocity) -> f64 {
+        if self.is_fixed() {
+            return 0.0;
+        }
         0.5 * self.mass * velocity.linear.norm_squared()
             + 0.5 * rotational_energy(&self.inv_inertia, &velocity.angular)
     }
