@@ -22,7 +22,7 @@ use super::filter;
 use super::geometry::{BodyGeom, GroundGeom, Search, first_impact};
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::install::Lookup;
+use super::install::{Looked, Lookup};
 use super::observe::{
     Sets, body_geom, ground_geom, rapier_state, snapshot, surely_far, touches_other,
 };
@@ -406,14 +406,29 @@ impl<H> ImpactPlugin<H> {
         // The table holds the registry as `before_step` saw it; a ground marked or unmarked
         // since is checked against the sets.
         let current = self.registry.index.entry(c1).is_ok();
-        if let Some((key, slot)) = current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
-            // A body collider that is itself marked as ground (its body turned dynamic after
-            // it was marked) makes the pair two grounds: not the plugin's, as `managed_pair`
-            // says.
-            if self.registry.entry(key.0).is_none() {
-                return Some((key, slot.role, slot.user));
+        match current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
+            Some(Looked::Pair(key, slot)) => {
+                // A body collider that is itself marked as ground (its body turned dynamic
+                // after it was marked) makes the pair two grounds: not the plugin's, as
+                // `managed_pair` says.
+                if self.registry.entry(key.0).is_none() {
+                    return Some((key, slot.role, slot.user));
+                }
+                return None;
             }
-            return None;
+            // A body with no ground in reach against a managed ground (not on a dynamic
+            // body, as `managed_pair` asks): `Resting`, as every pair the plugin gave no role.
+            Some(Looked::Far(key, user)) => {
+                let ground_managed = self.registry.entry(key.1).is_some()
+                    && self.registry.entry(key.0).is_none()
+                    && colliders.get(key.1).is_some_and(|co| {
+                        co.parent()
+                            .is_none_or(|p| bodies.get(p).is_some_and(|rb| !rb.is_dynamic()))
+                    });
+                return ground_managed
+                    .then(|| (key, Role::Resting, user | self.user_flags(colliders, key.1)));
+            }
+            None => {}
         }
         self.managed_pair(bodies, colliders, c1, c2).map(|key| {
             (
@@ -578,6 +593,8 @@ impl<H> ImpactPlugin<H> {
         let margin = super::convert::to_real(step.policy.resting_gap.max(step.policy.prediction));
         let g_len = gravity.length();
         let mut handles: Vec<RigidBodyHandle> = Vec::new();
+        // Awake managed bodies with no ground in reach: no roles (see `Lookup::roles`).
+        let mut far_bodies: Vec<RigidBodyHandle> = Vec::new();
         // A dynamic body the plugin does not manage decides where the hook flags go.
         let mut unmanaged = false;
         for (handle, rb) in bodies.iter() {
@@ -598,13 +615,16 @@ impl<H> ImpactPlugin<H> {
                 &self.registry.index,
                 &step.grounds,
             ) {
-                Some(true) if self.config.timing == TimingMode::Exact => {
-                    let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
-                    step.candidates
-                        .push(Candidate::flying(handle, start, flight, local_com));
+                Some(true) => {
+                    far_bodies.push(handle);
+                    if self.config.timing == TimingMode::Exact {
+                        let (start, flight, local_com) = snapshot(rb, g, dt, shadows.get(&handle));
+                        step.candidates
+                            .push(Candidate::flying(handle, start, flight, local_com));
+                    }
                 }
                 Some(false) => handles.push(handle),
-                Some(true) | None => {}
+                None => {}
             }
         }
         let mut near_bodies = Vec::with_capacity(self.flags.hooked().len());
@@ -630,13 +650,20 @@ impl<H> ImpactPlugin<H> {
             );
             if near {
                 near_bodies.push(handle);
+            } else {
+                far_bodies.push(handle);
             }
         }
         self.flags
             .update(&self.registry, &near_bodies, unmanaged, bodies, colliders);
         self.registry.flags_stale = false;
         let flags = &self.flags;
-        step.lookup = Lookup::build(&step.roles, flags.hooked(), |c| {
+        let far_colliders: Vec<ColliderHandle> = far_bodies
+            .iter()
+            .filter_map(|h| bodies.get(*h))
+            .flat_map(|rb| rb.colliders().iter().copied())
+            .collect();
+        step.lookup = Lookup::build(&step.roles, &far_colliders, flags.hooked(), |c| {
             flags.recorded_user_flags(colliders, c)
         });
         self.spare.shadows = shadows;

@@ -20,7 +20,9 @@ pub(crate) struct Lookup {
     /// `roles` holds what `StepData::roles` holds.
     pub roles_built: bool,
     /// By body collider index: one of its pairs, and whether it has others (then in
-    /// `StepData::roles`).
+    /// `StepData::roles`); or, for a collider of a body `before_step` found with no ground
+    /// in reach, that all its ground pairs are `Resting` (rapier's broad phase still pairs
+    /// it with the grounds whose bounds it overlaps, a half-space with every body).
     pub roles: Vec<Option<RoleSlot>>,
     /// By collider index: the hook flags the user set on a collider the plugin flagged.
     pub user_flags: Vec<Option<(ColliderHandle, ActiveHooks)>>,
@@ -36,10 +38,22 @@ pub(crate) struct RoleSlot {
     pub more: bool,
 }
 
+/// What the table says of a pair (see [`Lookup::pair`]).
+#[derive(Clone, Copy)]
+pub(crate) enum Looked {
+    /// A pair the table holds: its key, role and the user's flags on both colliders.
+    Pair(PairKey, RoleSlot),
+    /// `key.0` is a collider of a body with no ground in reach: if `key.1` is a managed
+    /// ground, the pair is `Resting`; `user` is the user's flags on `key.0` only.
+    Far(PairKey, ActiveHooks),
+}
+
 impl Lookup {
-    /// `user_flags`: the hook flags the user set on a collider.
+    /// `user_flags`: the hook flags the user set on a collider; `far`: the colliders of the
+    /// bodies with no ground in reach (no roles).
     pub fn build(
         roles: &HandleMap<PairKey, Role>,
+        far: &[ColliderHandle],
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
         user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
     ) -> Self {
@@ -48,7 +62,7 @@ impl Lookup {
         };
         let mut out = Self {
             roles_built: true,
-            roles: vec![None; len(&mut roles.keys().map(|k| k.0))],
+            roles: vec![None; len(&mut roles.keys().map(|k| k.0).chain(far.iter().copied()))],
             user_flags: vec![
                 None;
                 len(&mut hooked
@@ -58,6 +72,15 @@ impl Lookup {
         };
         for (c, user) in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
             out.user_flags[slot_of(c)] = Some((c, user));
+        }
+        for body in far {
+            out.roles[slot_of(*body)] = Some(RoleSlot {
+                body: *body,
+                ground: ColliderHandle::invalid(),
+                role: Role::Resting,
+                user: user_flags(*body),
+                more: false,
+            });
         }
         for ((body, ground), role) in roles {
             let slot = &mut out.roles[slot_of(*body)];
@@ -78,16 +101,21 @@ impl Lookup {
     }
 
     /// The pair `(c1, c2)` in either order as the table holds it (body collider, ground
-    /// collider), with its role and the user's flags, if the table holds it alone.
+    /// collider), if it holds it alone.
     #[inline]
-    pub fn pair(&self, c1: ColliderHandle, c2: ColliderHandle) -> Option<(PairKey, RoleSlot)> {
+    pub fn pair(&self, c1: ColliderHandle, c2: ColliderHandle) -> Option<Looked> {
         if !self.roles_built {
             return None;
         }
         [(c1, c2), (c2, c1)].into_iter().find_map(|(body, ground)| {
             match self.roles.get(slot_of(body)) {
                 Some(Some(slot)) if slot.body == body && slot.ground == ground => {
-                    Some(((body, ground), *slot))
+                    Some(Looked::Pair((body, ground), *slot))
+                }
+                Some(Some(slot))
+                    if slot.body == body && slot.ground == ColliderHandle::invalid() =>
+                {
+                    Some(Looked::Far((body, ground), slot.user))
                 }
                 _ => None,
             }
