@@ -1,5 +1,7 @@
 //! A ball dropped on a ground, headless: bounce apexes and impact times, measured against
-//! the closed forms `apex_n = e^(2n) h0`, `t_(k+1) = t1 + 2 t1 e (1 - e^k)/(1 - e)`.
+//! the closed forms `apex_n = e^(2n) h0`, `t_(k+1) = t1 + 2 t1 e (1 - e^k)/(1 - e)`. In a
+//! plugin mode, the same drop in rapier alone is printed beside it (its apexes, their
+//! error, its impact times: rapier's are the steps at which the ball starts rising).
 //!
 //! ```text
 //! cargo run --release --example drop -- --mode exact --dt 0.0166667 --csv drop.csv
@@ -17,7 +19,7 @@
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
 use std::io::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -100,14 +102,17 @@ fn parse() -> Result<Args, String> {
     Ok(a)
 }
 
-fn main() {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(2);
-        }
-    };
+/// What a drop gave: the impact times and the apex heights of the ball's bottom, and the
+/// trace for the CSV.
+struct Drop {
+    impacts: Vec<f64>,
+    apexes: Vec<f64>,
+    dt: f64,
+}
+
+/// Drops the ball in `mode` and measures its impacts and apexes (writing the trace to
+/// `csv`, if given).
+fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
     let g = 9.81;
     let mut world = PhysicsWorld::default();
     world.integration_parameters.dt = args.dt as Real;
@@ -127,7 +132,7 @@ fn main() {
             .restitution(args.restitution as Real)
             .friction(args.friction as Real),
     );
-    let mut plugin = match args.mode {
+    let mut plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
             let config = ImpactConfig {
@@ -142,7 +147,7 @@ fn main() {
     };
     let dt = f64::from(world.integration_parameters.dt);
     let steps = (args.duration / dt).ceil() as usize;
-    let mut csv = args.csv.as_ref().map(|path| {
+    let mut csv = csv.map(|path| {
         let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("create CSV"));
         writeln!(f, "t,x,y,z,vx,vy,vz,wx,wy,wz").unwrap();
         f
@@ -159,7 +164,7 @@ fn main() {
                 Some(p) => {
                     p.step(&mut world);
                     for e in p.events() {
-                        if !e.settled {
+                        if e.kind == EventKind::Impact && !e.settled {
                             impacts.push(t - dt + e.time);
                         }
                     }
@@ -196,8 +201,27 @@ fn main() {
         f.flush().unwrap();
     }
     // The first "apex" is the release height: skip it.
-    let apexes: Vec<f64> = apexes.into_iter().skip(1).collect();
-    let (h0, e) = (args.height, args.restitution);
+    let apexes = apexes.into_iter().skip(1).collect();
+    Drop {
+        impacts,
+        apexes,
+        dt,
+    }
+}
+
+fn main() {
+    let args = match parse() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(2);
+        }
+    };
+    let g = 9.81;
+    let run = drop_ball(&args, args.mode, args.csv.as_deref());
+    // Rapier alone on the same drop, beside a plugin mode.
+    let alone = (args.mode != Mode::Rapier).then(|| drop_ball(&args, Mode::Rapier, None));
+    let (h0, e, dt, radius) = (args.height, args.restitution, run.dt, args.radius);
     let t1 = (2.0 * h0 / g).sqrt();
     println!(
         "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {:?}, precision = {}",
@@ -205,32 +229,44 @@ fn main() {
         args.mode,
         if cfg!(feature = "f64") { "f64" } else { "f32" }
     );
-    println!(
+    let mut header = format!(
         "{:>3} {:>12} {:>12} {:>10} {:>12} {:>12} {:>10}",
         "n", "t_impact", "analytic", "error s", "apex", "analytic", "rel err"
     );
-    for n in 0..impacts.len().max(apexes.len()).min(12) {
+    if alone.is_some() {
+        header += &format!(
+            " | {:>12} {:>10} {:>12}",
+            "rapier apex", "rel err", "rapier t"
+        );
+    }
+    println!("{header}");
+    let rows = run.impacts.len().max(run.apexes.len()).min(12);
+    let cell = |v: Option<&f64>, f: &dyn Fn(f64) -> String| v.map_or(String::from("-"), |x| f(*x));
+    for n in 0..rows {
         let t_exp = if n == 0 {
             t1
         } else {
             t1 + 2.0 * t1 * e * (1.0 - e.powi(n as i32)) / (1.0 - e)
         };
         let apex_exp = e.powi(2 * (n as i32 + 1)) * h0;
-        let ti = impacts
-            .get(n)
-            .map_or(String::from("-"), |t| format!("{t:.7}"));
-        let te = impacts
-            .get(n)
-            .map_or(String::from("-"), |t| format!("{:+.2e}", t - t_exp));
-        let ap = apexes
-            .get(n)
-            .map_or(String::from("-"), |a| format!("{a:.7}"));
-        let ae = apexes.get(n).map_or(String::from("-"), |a| {
+        let ti = cell(run.impacts.get(n), &|t| format!("{t:.7}"));
+        let te = cell(run.impacts.get(n), &|t| format!("{:+.2e}", t - t_exp));
+        let ap = cell(run.apexes.get(n), &|a| format!("{a:.7}"));
+        let ae = cell(run.apexes.get(n), &|a| {
             format!("{:+.2e}", a / apex_exp - 1.0)
         });
-        println!(
+        let mut row = format!(
             "{:>3} {ti:>12} {t_exp:>12.7} {te:>10} {ap:>12} {apex_exp:>12.7} {ae:>10}",
             n + 1
         );
+        if let Some(alone) = &alone {
+            let rap = cell(alone.apexes.get(n), &|a| format!("{a:.7}"));
+            let rae = cell(alone.apexes.get(n), &|a| {
+                format!("{:+.2e}", a / apex_exp - 1.0)
+            });
+            let rt = cell(alone.impacts.get(n), &|t| format!("{t:.7}"));
+            row += &format!(" | {rap:>12} {rae:>10} {rt:>12}");
+        }
+        println!("{row}");
     }
 }
