@@ -29,6 +29,7 @@ pub use parry3d as parry;
 #[cfg(feature = "f64")]
 pub use parry3d_f64 as parry;
 
+mod math;
 pub mod model;
 mod motion;
 pub mod plugin;

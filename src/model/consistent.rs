@@ -339,7 +339,7 @@ fn swerve_segment(
             // rate is parallel to the slip (the rotation moves u_t by less than the
             // tolerance).
             store(&z, state);
-            let (sin, cos) = turn.sin_cos();
+            let (sin, cos) = crate::math::sin_cos(turn);
             state.ut = Vector2::new(cos * ut.x - sin * ut.y, sin * ut.x + cos * ut.y);
             return Some(Event::DirectionSettled);
         }

@@ -8,6 +8,9 @@ use core::fmt;
 /// arithmetic, so a bad value is reported at the call that supplied it and never
 /// turns into a NaN further down.
 #[derive(Clone, Debug, PartialEq)]
+// Serialize only: the field names it carries are `&'static str`, which no deserializer can
+// give back.
+#[cfg_attr(feature = "serde-serialize", derive(serde::Serialize))]
 pub enum ModelError {
     /// A value that must be finite is NaN or infinite. `what` names the field.
     NotFinite {

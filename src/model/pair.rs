@@ -17,6 +17,10 @@ use nalgebra::Vector3;
 
 /// The contact between two bodies `a` and `b`, world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct PairContact {
     /// Unit normal, pointing from body `a` towards body `b`.
     pub normal: Vector3<f64>,
@@ -42,6 +46,10 @@ impl PairContact {
 
 /// A resolved impact between two bodies.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct PairImpact {
     /// Impulse on body `b` at the contact, world frame (N s); `a` receives `-impulse`.
     pub impulse: Vector3<f64>,

@@ -16,6 +16,10 @@ use nalgebra::Vector3;
 
 /// One impact in the document's notation. Units are SI.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct SeedInput {
     /// `m`, the body's mass (kg), `> 0`.
     pub mass: f64,
@@ -57,6 +61,10 @@ impl Default for SeedInput {
 
 /// The document's result for one impact.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct SeedOutcome {
     /// `(J_x, J_y, J_z)` in the document's sign convention (N s).
     pub impulse: Vector3<f64>,
@@ -164,7 +172,7 @@ pub fn slip_angle(u1t: &Vector3<f64>) -> Option<f64> {
     if u1t.x == 0.0 && u1t.y == 0.0 {
         None
     } else {
-        Some(u1t.y.atan2(u1t.x))
+        Some(crate::math::atan2(u1t.y, u1t.x))
     }
 }
 
@@ -181,7 +189,7 @@ pub fn slip_impulse(
 ) -> Result<Vector3<f64>, ModelError> {
     let (m, i, mu) = (input.mass, input.inertia, input.friction);
     let (lx, ly, h) = (input.lx, input.ly, input.h);
-    let (sin, cos) = theta.sin_cos();
+    let (sin, cos) = crate::math::sin_cos(theta);
     let denominator = lx * lx + ly * ly + i / m - mu * h * (lx * cos + ly * sin);
     if denominator <= 0.0 || !denominator.is_finite() {
         return Err(ModelError::Jam {
@@ -221,14 +229,14 @@ pub fn solve(input: &SeedInput) -> Result<SeedOutcome, ModelError> {
         });
     }
     let stick = sticking_impulse(input, &u1t);
-    let tangential = stick.x.hypot(stick.y);
+    let tangential = crate::math::hypot(stick.x, stick.y);
     let (impulse, regime, theta) = if stick.z >= 0.0 && tangential <= input.friction * stick.z {
         (stick, Regime::Stick, None)
     } else {
         // With zero initial slip the friction impulse takes the sticking impulse's
         // tangential direction (erratum 2); J_x, J_y count against +x, +y, so that
         // direction is atan2(J_y, J_x) in the same convention as eq. (15).
-        let theta = slip_angle(&u1t).unwrap_or_else(|| stick.y.atan2(stick.x));
+        let theta = slip_angle(&u1t).unwrap_or_else(|| crate::math::atan2(stick.y, stick.x));
         (slip_impulse(input, &u1t, theta)?, Regime::Slip, Some(theta))
     };
     let (u2, w2) = apply_impulse(input, &impulse);

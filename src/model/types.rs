@@ -7,6 +7,10 @@ use nalgebra::{Matrix3, Vector3};
 
 /// The inertial properties of the impacting body, in the world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct Body {
     /// Mass `m` (kg), finite and `> 0`.
     pub mass: f64,
@@ -178,6 +182,10 @@ fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
 
 /// Linear and angular velocity of a body's centre of mass, world frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct BodyVelocity {
     /// Velocity of the centre of mass (m/s).
     pub linear: Vector3<f64>,
@@ -187,6 +195,10 @@ pub struct BodyVelocity {
 
 /// The contact between the body and the ground, world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct Contact {
     /// Unit normal `n`, pointing from the ground into the body. `u.n < 0` approaches.
     pub normal: Vector3<f64>,
@@ -226,6 +238,10 @@ impl Contact {
 
 /// The contact's material: Newton's coefficient of restitution and Coulomb's friction.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct Material {
     /// Coefficient of restitution `e >= 0` (1 = elastic; above 1 adds energy on purpose).
     pub restitution: f64,
@@ -242,6 +258,10 @@ impl Material {
 
 /// Which impact law resolves a contact. Accuracy costs time; the user chooses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum Law {
     /// The document's law, corrected and generalised: Newton restitution, stick if the
     /// sticking impulse is inside the friction cone, else slip along the initial slip
@@ -259,6 +279,10 @@ pub enum Law {
 
 /// What the contact did during the impact.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum Regime {
     /// Case A of the document: the contact point does not slip at the end.
     Stick,
@@ -272,6 +296,10 @@ pub enum Regime {
 
 /// Why the `Guarded` law left the document's result for the consistent one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum Fallback {
     /// The document's normal impulse would pull the body into the ground.
     PullingNormalImpulse,
@@ -285,6 +313,10 @@ pub enum Fallback {
 
 /// A resolved impact: the impulse, the velocities after, and what happened.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct Impact {
     /// Impulse on the body at the contact point, world frame (N s).
     pub impulse: Vector3<f64>,

@@ -216,7 +216,7 @@ fn phis(c: f64, t: f64) -> (f64, f64) {
         let phi2 = t * t * (0.5 - x / 6.0 + x * x / 24.0 - x * x * x / 120.0);
         (phi1, phi2)
     } else {
-        let phi1 = -(-x).exp_m1() / c;
+        let phi1 = -crate::math::exp_m1(-x) / c;
         (phi1, (t - phi1) / c)
     }
 }
@@ -228,13 +228,13 @@ impl Flight {
         let decay = if self.linear_damping == 0.0 {
             1.0
         } else {
-            (-self.linear_damping * tau).exp()
+            crate::math::exp(-self.linear_damping * tau)
         };
         let (phi1_w, _) = phis(self.angular_damping, tau);
         let decay_w = if self.angular_damping == 0.0 {
             1.0
         } else {
-            (-self.angular_damping * tau).exp()
+            crate::math::exp(-self.angular_damping * tau)
         };
         let (rot, w) = match &self.gyro {
             Some(gyro) if s.w != Vector3::zeros() => {

@@ -7,6 +7,10 @@ use core::fmt;
 
 /// When, inside a step, a ground impact is resolved. Accuracy costs time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum TimingMode {
     /// The impulse is applied at the start of the step in which the contact closes, to the
     /// velocity the body has at that step boundary (rapier's own timing, like its speculative
@@ -28,6 +32,10 @@ pub enum TimingMode {
 /// A material that replaces, for one ground, the coefficients rapier would combine from the
 /// two colliders.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct GroundMaterial {
     /// Coefficient of restitution `e`, finite and `>= 0` (1 = elastic).
     pub restitution: f64,
@@ -53,6 +61,10 @@ impl GroundMaterial {
 /// you need; [`ImpactConfig::validate`] (called by the plugin whenever a config is set)
 /// rejects values out of range.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct ImpactConfig {
     /// The impact law (default [`Law::Guarded`]: the document's closed form, falling back to
     /// the consistent law where the closed form is unphysical).

@@ -7,6 +7,10 @@ use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 
 /// When in the step an impact was applied (see [`crate::TimingMode`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum ImpactTiming {
     /// At its exact time inside the step (`TimeOfImpact` and `Exact` modes).
     InStep,
@@ -22,6 +26,10 @@ pub enum ImpactTiming {
 
 /// What changed a body.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub enum EventKind {
     /// A ground impact resolved by the model: an impulse at the contact point.
     Impact,
@@ -46,6 +54,10 @@ pub enum EventKind {
 /// `law` `Consistent`, `contact_points` 0, `restitution` and `friction` 0, `settled` true, and `impulse` the
 /// change of linear momentum (zero for a change of pose only).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub struct ImpactEvent {
     /// What changed the body.
     pub kind: EventKind,
