@@ -163,6 +163,8 @@ pub enum ConfigError {
     /// The collider is attached to a dynamic body: a ground must be fixed, kinematic, or
     /// parentless.
     DynamicGround(ColliderHandle),
+    /// The body is not dynamic: only dynamic bodies take part in impacts between bodies.
+    NotDynamic(RigidBodyHandle),
 }
 
 impl fmt::Display for ConfigError {
@@ -181,6 +183,10 @@ impl fmt::Display for ConfigError {
             Self::DynamicGround(h) => write!(
                 f,
                 "collider {h:?} belongs to a dynamic body; a ground must be fixed or kinematic"
+            ),
+            Self::NotDynamic(h) => write!(
+                f,
+                "body {h:?} is not dynamic; only dynamic bodies take part in impacts between bodies"
             ),
         }
     }

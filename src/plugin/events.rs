@@ -61,12 +61,16 @@ pub enum EventKind {
 pub struct ImpactEvent {
     /// What changed the body.
     pub kind: EventKind,
-    /// The body that hit the ground.
+    /// The body the change was made to: the body that hit the ground, or one of the two
+    /// bodies of an impact between bodies.
     pub body: RigidBodyHandle,
     /// The body's collider that touched.
     pub collider: ColliderHandle,
-    /// The ground collider.
+    /// The ground collider, or in an impact between bodies the other body's collider.
     pub ground: ColliderHandle,
+    /// In an impact between bodies, the other body (which has its own event for the same
+    /// impact); `None` for a ground.
+    pub body2: Option<RigidBodyHandle>,
     /// Time of the impact after the start of the step (s), in `[0, dt]`.
     pub time: f64,
     /// How the time was found.
@@ -74,13 +78,13 @@ pub struct ImpactEvent {
     /// Contact point on the body (m): the single deepest point, or the centroid of the
     /// simultaneous contact points of a flat or edge landing.
     pub point: Vector,
-    /// Unit contact normal, from the ground into the body.
+    /// Unit contact normal, from the ground (or the other body) into the body.
     pub normal: Vector,
     /// Number of contact points resolved as one simultaneous impact (1 for a single point).
     pub contact_points: usize,
     /// Approach speed `-u.n > 0` of the contact point relative to the ground (m/s).
     pub approach_speed: f64,
-    /// Impulse on the body at `point` (N s).
+    /// Impulse on the body at `point` (N s); the other body of a pair receives its opposite.
     pub impulse: Vector,
     /// Normal impulse `P.n` (N s): `>= 0` for an impact; for a correction, the change of
     /// linear momentum along the normal (an energy cap's may be negative).

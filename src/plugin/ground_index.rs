@@ -290,17 +290,7 @@ impl GroundIndex {
             // collider enabled again) is seen.
             self.bases.push(co.map(|co| Basis::of(co, bodies)));
         }
-        // parry 0.31's `Bvh::from_iter` indexes its leaf table by position for one or two
-        // leaves (it panics when their indices are not 0 and 1): those are inserted.
-        self.tree = if leaves.len() > 2 {
-            Bvh::from_iter(BvhBuildStrategy::Binned, leaves)
-        } else {
-            let mut tree = Bvh::new();
-            for (i, aabb) in leaves {
-                tree.insert(aabb, i as u32);
-            }
-            tree
-        };
+        self.tree = build_bvh(leaves);
         let len = registry.keys().map(|h| slot_of(*h) + 1).max().unwrap_or(0);
         self.by_slot.clear();
         self.by_slot.resize(len, None);
@@ -343,6 +333,21 @@ impl GroundIndex {
             out.sort_unstable();
         }
         out
+    }
+}
+
+/// A BVH over `leaves` (index, box). parry 0.31's `Bvh::from_iter` indexes its leaf table by
+/// position for one or two leaves (it panics when their indices are not 0 and 1): those are
+/// inserted one by one.
+pub(crate) fn build_bvh(leaves: Vec<(usize, Aabb)>) -> Bvh {
+    if leaves.len() > 2 {
+        Bvh::from_iter(BvhBuildStrategy::Binned, leaves)
+    } else {
+        let mut tree = Bvh::new();
+        for (i, aabb) in leaves {
+            tree.insert(aabb, i as u32);
+        }
+        tree
     }
 }
 

@@ -14,9 +14,10 @@
 //!   layer: not recycled, and the hooks called).
 //!
 //! The plugin takes the first while every dynamic body in the world is managed (the usual
-//! scene), and the second from the first step some dynamic, enabled body is not. The flags
-//! the user had set are recorded and handed back: the wrapped hook is called exactly when
-//! they ask for it.
+//! scene), and the second from the first step some dynamic, enabled body is not. In either,
+//! the balls of the step's impacts between bodies (`pair_plan.rs`) are flagged too: the
+//! plugin takes those pairs from rapier's solver. The flags the user had set are recorded and
+//! handed back: the wrapped hook is called exactly when they ask for it.
 
 use super::geometry::SmallList;
 use super::handles::{HandleMap, SlotTable};
@@ -56,13 +57,16 @@ impl HookFlags {
     }
 
     /// Puts the flags where this step needs them (see the module's documentation):
-    /// `near` are the managed bodies that can reach a ground in the step, `unmanaged`
-    /// whether the world holds a dynamic, enabled body the plugin does not manage.
-    /// `registry.flags_stale` is read here and cleared by the caller.
+    /// `near` are the managed bodies that can reach a ground in the step, `pairs` the bodies
+    /// of the step's impacts between bodies (flagged in either arrangement: the plugin takes
+    /// those pairs from rapier's solver), `unmanaged` whether the world holds a dynamic,
+    /// enabled body the plugin does not manage. `registry.flags_stale` is read here and
+    /// cleared by the caller.
     pub fn update(
         &mut self,
         registry: &Registry,
         near: &[RigidBodyHandle],
+        pairs: &[RigidBodyHandle],
         unmanaged: bool,
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
@@ -97,15 +101,14 @@ impl HookFlags {
         // Bodies: flagged in the second.
         self.stamp = self.stamp.wrapping_add(1);
         let stamp = self.stamp;
-        if unmanaged {
-            for handle in near {
-                let Some(rb) = bodies.get(*handle) else {
-                    continue;
-                };
-                let entry = self.hooked.entry(*handle).or_default();
-                entry.stamp = stamp;
-                flag_body(entry, rb, colliders);
-            }
+        let near = if unmanaged { near } else { &[] };
+        for handle in near.iter().chain(pairs) {
+            let Some(rb) = bodies.get(*handle) else {
+                continue;
+            };
+            let entry = self.hooked.entry(*handle).or_default();
+            entry.stamp = stamp;
+            flag_body(entry, rb, colliders);
         }
         if self.hooked.is_empty() {
             return;

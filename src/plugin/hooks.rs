@@ -13,6 +13,8 @@
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
 //!   platform), then sets its restitution to 0 (and the ground's friction override, if any):
 //!   the plugin owns every bounce off a ground;
+//! - a pair of two opted-in balls (`pair_plan.rs`): `Impact` out of rapier's solver as above
+//!   (the reconstruct stage moves the two together), `Resting` in it with zero restitution;
 //! - role `Filtered` (rapier would not solve the pair, or the user's filter refused it in
 //!   `before_step`): the user's hook and rapier have it, unchanged, and the plugin resolves
 //!   no impact for it;

@@ -8,7 +8,8 @@
 //! - During rapier's step, the plugin is the `&dyn PhysicsHooks`: it applies the roles and
 //!   hands every other pair to the user's hook unchanged.
 //! - [`ImpactPlugin::after_step`] routes each body: reconstruct (the in-step impacts from the
-//!   start-of-step state, a rolling ball's closed form, `Exact` mode's free flight), then
+//!   start-of-step state, the clusters of impacts between balls, a rolling ball's closed
+//!   form, `Exact` mode's free flight), then
 //!   the settle stage's one check of the end state (`Settle::check`, with the reason it is
 //!   checked: `EndCheck`), then the commit of one state per body (woken up), and moves the
 //!   colliders.
@@ -26,6 +27,8 @@ use super::install::{Looked, Lookup};
 use super::observe::{
     Sets, body_geom, ground_geom, rapier_state, snapshot, surely_far, touches_other,
 };
+use super::pair_plan::{self, pair_key};
+use super::pair_reconstruct::{self, ClusterBall};
 use super::plan::{Candidate, EndOfStep, Planner, StepData};
 use super::policy::{EndAction, EndCheck, Policy, Role};
 use super::reconstruct;
@@ -132,6 +135,8 @@ pub struct ImpactPlugin<H = ()> {
     spare: Spare,
     /// The roles of the last step (for the resting hysteresis).
     prev_roles: HandleMap<PairKey, Role>,
+    /// Last step's roles of the pairs between bodies (`pair_plan.rs`).
+    prev_pair_roles: HandleMap<PairKey, Role>,
     /// Managed bodies asleep at the start of the last step: the plugin had no roles for them,
     /// so a body just woken is not taken for `Rolling` (a pile woken by a hit would lose its
     /// ground support for a step).
@@ -164,6 +169,7 @@ impl<H> ImpactPlugin<H> {
             shadows: HandleMap::default(),
             spare: Spare::default(),
             prev_roles: HandleMap::default(),
+            prev_pair_roles: HandleMap::default(),
             prev_asleep: HandleSet::default(),
             events: Vec::new(),
         })
@@ -205,6 +211,41 @@ impl<H> ImpactPlugin<H> {
     /// Undoes [`Self::exclude_body`].
     pub fn include_body(&mut self, body: RigidBodyHandle) {
         self.registry.excluded.remove(&body);
+    }
+
+    /// Opts `body` in to impacts between bodies: its impacts with another opted-in body are
+    /// resolved by the model ([`crate::model::resolve_pair`]) at their time in the step,
+    /// like ground impacts. The body must be dynamic (else [`ConfigError::NotDynamic`]).
+    /// Which pairs and how: `docs/integration.md`, "Impacts between bodies".
+    pub fn add_impact_body(
+        &mut self,
+        bodies: &RigidBodySet,
+        body: RigidBodyHandle,
+    ) -> Result<(), ConfigError> {
+        let rb = bodies.get(body).ok_or(ConfigError::NotABody(body))?;
+        if !rb.is_dynamic() {
+            return Err(ConfigError::NotDynamic(body));
+        }
+        self.registry.impact_bodies.insert(body);
+        Ok(())
+    }
+
+    /// Undoes [`Self::add_impact_body`]; `false` if the body was not opted in.
+    pub fn remove_impact_body(&mut self, body: RigidBodyHandle) -> bool {
+        self.registry.impact_bodies.remove(&body)
+    }
+
+    /// Opts every dynamic body the plugin manages in to impacts between bodies (`true`), or
+    /// only those given to [`Self::add_impact_body`] (`false`, the default).
+    pub fn set_all_dynamic_bodies_impact(&mut self, enabled: bool) {
+        self.registry.all_impact = enabled;
+    }
+
+    /// Does `body` take part in impacts between bodies (opted in, and managed)?
+    pub fn is_impact_body(&self, bodies: &RigidBodySet, body: RigidBodyHandle) -> bool {
+        bodies
+            .get(body)
+            .is_some_and(|rb| self.registry.takes_pairs(body, rb))
     }
 
     /// Marks one collider as ground, with the materials rapier combines from the colliders.
@@ -405,6 +446,14 @@ impl<H> ImpactPlugin<H> {
     ) -> Option<(PairKey, Role, ActiveHooks)> {
         // The table holds the registry as `before_step` saw it; a ground marked or unmarked
         // since is checked against the sets.
+        // A pair of opted-in balls.
+        if !self.step.pairs.roles.is_empty() {
+            let key = pair_key(c1, c2);
+            if let Some(role) = self.step.pairs.roles.get(&key) {
+                let user = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                return Some((key, *role, user));
+            }
+        }
         let current = self.registry.index.entry(c1).is_ok();
         match current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
             Some(Looked::Pair(key, slot)) => {
@@ -592,6 +641,21 @@ impl<H> ImpactPlugin<H> {
         // body without collider is skipped.
         let margin = super::convert::to_real(step.policy.resting_gap.max(step.policy.prediction));
         let g_len = gravity.length();
+        // The pairs of opted-in balls first: a sleeping ball a pair may reach is woken, and the
+        // balls of `Impact` pairs are planned whatever their distance to the grounds.
+        let prev_pairs = std::mem::take(&mut self.prev_pair_roles);
+        step.pairs = pair_plan::plan_pairs(
+            &self.registry,
+            &self.flags,
+            &self.user_hooks,
+            bodies,
+            colliders,
+            &sets,
+            &prev_pairs,
+            g,
+            dt,
+            &step.policy,
+        );
         let mut handles: Vec<RigidBodyHandle> = Vec::new();
         // Awake managed bodies with no ground in reach: no roles (see `Lookup::roles`).
         let mut far_bodies: Vec<RigidBodyHandle> = Vec::new();
@@ -604,6 +668,10 @@ impl<H> ImpactPlugin<H> {
             }
             if rb.is_sleeping() {
                 step.asleep.push(handle);
+                continue;
+            }
+            if step.pairs.members.contains(&handle) {
+                handles.push(handle);
                 continue;
             }
             match surely_far(
@@ -654,8 +722,15 @@ impl<H> ImpactPlugin<H> {
                 far_bodies.push(handle);
             }
         }
-        self.flags
-            .update(&self.registry, &near_bodies, unmanaged, bodies, colliders);
+        let members: Vec<RigidBodyHandle> = step.pairs.members.iter().copied().collect();
+        self.flags.update(
+            &self.registry,
+            &near_bodies,
+            &members,
+            unmanaged,
+            bodies,
+            colliders,
+        );
         self.registry.flags_stale = false;
         let flags = &self.flags;
         let far_colliders: Vec<ColliderHandle> = far_bodies
@@ -698,6 +773,7 @@ impl<H> ImpactPlugin<H> {
         }
         step.active = false;
         self.prev_roles = std::mem::take(&mut step.roles);
+        self.prev_pair_roles = std::mem::take(&mut step.data.pairs.roles);
         // The grounds' actual motion over the step.
         let dt = step.dt;
         for i in self.registry.index.moving() {
@@ -782,13 +858,16 @@ impl<H> ImpactPlugin<H> {
             }
         }
         let mode = self.config.timing;
+        // The balls of impacts between bodies, moved together where they moved alone.
+        let moved_together = self.pair_clusters(bodies, colliders, &step);
         for cand in &step.candidates {
             // A body rapier put to sleep in this step rests: rapier zeroed its velocities, and
             // its contacts have left the solver's graph, so it would look free and fall for a
             // step in `Exact` mode (a box resting flat went 6.9 mm into the ground at 30 Hz).
-            if !bodies
-                .get(cand.body)
-                .is_some_and(|rb| self.registry.manages(cand.body, rb) && !rb.is_sleeping())
+            if moved_together.contains(&cand.body)
+                || !bodies
+                    .get(cand.body)
+                    .is_some_and(|rb| self.registry.manages(cand.body, rb) && !rb.is_sleeping())
             {
                 continue;
             }
@@ -946,9 +1025,175 @@ impl<H> ImpactPlugin<H> {
                 self.settle().remember(cand.body, rb, &end);
             }
         }
+        // The pairs not moved together: rapier's end state (the pair out of its solver),
+        // checked at the step's end.
+        for pair in &step.pairs.pairs {
+            if pair.role == Role::Impact
+                && !(moved_together.contains(&pair.a) && moved_together.contains(&pair.b))
+            {
+                self.settle().pair_end(bodies, colliders, pair, &step);
+            }
+        }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.spare.candidates = std::mem::take(&mut step.data.candidates);
+    }
+
+    /// The clusters of the step's `Impact` pairs between balls (joined through shared
+    /// balls) whose every ball moved alone in the step (no contact in rapier's solver, no
+    /// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
+    /// `TimeOfImpact` and `Exact` modes: moved together from their start states
+    /// (`pair_reconstruct.rs`), checked against their grounds (`EndCheck::Flown`) and
+    /// written. Returns the bodies written.
+    fn pair_clusters(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        step: &EndOfStep,
+    ) -> HandleSet<RigidBodyHandle> {
+        let mut written = HandleSet::default();
+        let impacts: Vec<_> = step
+            .pairs
+            .pairs
+            .iter()
+            .filter(|p| p.role == Role::Impact)
+            .collect();
+        if impacts.is_empty() || self.config.timing == TimingMode::Step {
+            return written;
+        }
+        let index: HandleMap<RigidBodyHandle, usize> = step
+            .candidates
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (c.body, k))
+            .collect();
+        // Clusters: the connected sets of balls, by union-find over the pairs.
+        let mut parent: HandleMap<RigidBodyHandle, RigidBodyHandle> = HandleMap::default();
+        fn root(
+            parent: &mut HandleMap<RigidBodyHandle, RigidBodyHandle>,
+            h: RigidBodyHandle,
+        ) -> RigidBodyHandle {
+            let mut r = h;
+            while let Some(p) = parent.get(&r).copied().filter(|p| *p != r) {
+                r = p;
+            }
+            parent.insert(h, r);
+            r
+        }
+        for pair in &impacts {
+            let (ra, rb) = (root(&mut parent, pair.a), root(&mut parent, pair.b));
+            if ra != rb {
+                parent.insert(ra, rb);
+            }
+        }
+        let mut clusters: Vec<(RigidBodyHandle, Vec<RigidBodyHandle>)> = Vec::new();
+        for pair in &impacts {
+            for body in [pair.a, pair.b] {
+                let r = root(&mut parent, body);
+                match clusters.iter_mut().find(|(c, _)| *c == r) {
+                    Some((_, members)) if members.contains(&body) => {}
+                    Some((_, members)) => members.push(body),
+                    None => clusters.push((r, vec![body])),
+                }
+            }
+        }
+        let sets = &step.sets;
+        for (_, members) in clusters {
+            let free = members.iter().all(|h| {
+                let (Some(rb), Some(k)) = (bodies.get(*h), index.get(h)) else {
+                    return false;
+                };
+                let cand = &step.candidates[*k];
+                self.registry.manages(*h, rb)
+                    && !rb.is_sleeping()
+                    && !touches_other(rb, sets.narrow_phase)
+                    && sets.impulse_joints.attached_joints(*h).next().is_none()
+                    && sets.multibody_joints.rigid_body_link(*h).is_none()
+                    && rb.user_torque() == Vector::ZERO
+                    && !cand.touched
+                    && self.ccd_consistent(rb, cand, step.dt, step.dt, step)
+            });
+            if !free {
+                continue;
+            }
+            let settle = self.settle();
+            let balls: Option<Vec<ClusterBall>> = members
+                .iter()
+                .map(|h| {
+                    let cand = &step.candidates[index[h]];
+                    let rb = &bodies[*h];
+                    let geom = body_geom(rb, colliders, &cand.local_com);
+                    let part = geom.parts.first()?;
+                    let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
+                    let collider = part.handle;
+                    let mut grounds = settle.impact_ground_geoms(cand, &geom, colliders, step);
+                    let rolling_on = match &cand.rolling {
+                        Some((g, _)) => {
+                            grounds.push(settle.pair_geom(&step.grounds[*g], &geom, colliders)?);
+                            Some(grounds.len() - 1)
+                        }
+                        None => None,
+                    };
+                    Some(ClusterBall {
+                        cand,
+                        collider,
+                        radius,
+                        geom,
+                        grounds,
+                        rolling_on,
+                        inertia: Inertia::of(rb),
+                    })
+                })
+                .collect();
+            let Some(balls) = balls else {
+                continue;
+            };
+            let pairs: Vec<(usize, usize)> = impacts
+                .iter()
+                .filter_map(|p| {
+                    let i = members.iter().position(|h| *h == p.a)?;
+                    let j = members.iter().position(|h| *h == p.b)?;
+                    Some((i, j))
+                })
+                .collect();
+            let from = self.events.len();
+            let Some(ends) = pair_reconstruct::through_pair_impacts(
+                &mut self.settle(),
+                colliders,
+                &balls,
+                &pairs,
+                step,
+            ) else {
+                continue;
+            };
+            for (ball, end) in balls.iter().zip(ends) {
+                // Never left inside a ground.
+                let checked = Checked {
+                    body: ball.cand.body,
+                    geom: &ball.geom,
+                    inertia: &ball.inertia,
+                    cand: Some(ball.cand),
+                };
+                let (_, settled) = self.settle().check(
+                    bodies,
+                    colliders,
+                    &checked,
+                    &end,
+                    EndCheck::Flown,
+                    &ball.grounds,
+                    step,
+                    from,
+                );
+                let end = settled.unwrap_or(end);
+                let rb = &mut bodies[ball.cand.body];
+                write_state(rb, &end, &ball.cand.local_com, true);
+                if self.config.timing == TimingMode::Exact {
+                    self.settle().remember(ball.cand.body, rb, &end);
+                }
+                written.insert(ball.cand.body);
+            }
+        }
+        written
     }
 
     /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its

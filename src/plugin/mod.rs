@@ -16,6 +16,8 @@ mod hooks;
 mod impact_plugin;
 mod install;
 mod observe;
+mod pair_plan;
+mod pair_reconstruct;
 mod plan;
 mod policy;
 mod reconstruct;

@@ -24,6 +24,7 @@ use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookFlags;
 use super::install::Lookup;
 use super::observe::{Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot};
+use super::pair_plan::PairPlan;
 use super::policy::{Policy, ROLLING_MIN_SLIP, Role};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
@@ -97,6 +98,8 @@ pub(crate) struct StepData {
     /// The unit direction of gravity (zero without gravity).
     pub down: Vector3<f64>,
     pub roles: HandleMap<PairKey, Role>,
+    /// The pairs of opted-in balls and their roles (`pair_plan.rs`).
+    pub pairs: PairPlan,
     pub grounds: Vec<GroundMotion>,
     pub candidates: Vec<Candidate>,
     /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).
@@ -185,8 +188,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.registry
                 .index
                 .near(&step.grounds, sphere.center(), sphere.half_extents().x);
+        // A ball of an impact between bodies is moved by the reconstruct stage: it needs its
+        // candidate in every mode.
+        let member = step.pairs.members.contains(&handle);
         if near.is_empty() {
-            if self.config.timing == TimingMode::Exact {
+            if self.config.timing == TimingMode::Exact || member {
                 step.candidates
                     .push(Candidate::flying(handle, start, flight, local_com));
             }
@@ -423,6 +429,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             || !turning_resting.is_empty()
             || rolling.is_some()
             || self.config.timing == TimingMode::Exact
+            || member
         {
             step.candidates.push(Candidate {
                 body: handle,
@@ -476,7 +483,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         sets: &Sets,
     ) -> Option<Rolling> {
         let rb = &bodies[handle];
-        if !known {
+        let member = step.pairs.members.contains(&handle);
+        if !known && !member {
             return None;
         }
         let ball = part.shape.as_ball()?;
@@ -490,14 +498,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
         let slip = on_ground.v - radius * on_ground.w.cross(n);
+        // A ball of an impact between bodies is taken at rest too, and beside the other ball:
+        // the reconstruct stage moves the pair together (and if anything else touched it in
+        // the step, hands it back to rapier's end state).
         if !(an < 0.0 && level && plain)
-            || slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed
+            || !member
+                && slip.norm() <= ROLLING_MIN_SLIP
+                && on_ground.v.norm() <= step.policy.resting_speed
             || user_modifies
         {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): the contact graph.
-        if neighbours(handle, rb, sets, self.registry, &step.down).near {
+        if !member && neighbours(handle, rb, sets, self.registry, &step.down).near {
             return None;
         }
         let friction = self

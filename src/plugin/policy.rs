@@ -17,6 +17,12 @@ pub(crate) const ROLLING_MIN_SLIP: f64 = 1e-3;
 /// on a body for that contact to count as something lying on the body.
 pub(crate) const LOADED_COS: f64 = 0.5;
 
+/// Sine of the steepest tilt from the horizontal (the plane normal to gravity) of a touching
+/// pair's line of centres for the pair to join a chain of impacts between bodies (a row of
+/// balls on a table, Newton's cradle); steeper, one ball lies on the other (a stack) and the
+/// pair stays rapier's resting contact.
+pub(crate) const CHAIN_MAX_TILT_SIN: f64 = 0.1;
+
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Role {

@@ -95,6 +95,7 @@ pub(crate) fn through_impacts(
                     body: cand.body,
                     collider: part.handle,
                     ground: gg.handle,
+                    body2: None,
                     normal: hit.normal,
                     point,
                 };

@@ -27,6 +27,12 @@ pub(crate) struct Registry {
     pub unmarked: HandleSet<ColliderHandle>,
     /// Bodies left to rapier entirely.
     pub excluded: HandleSet<RigidBodyHandle>,
+    /// Bodies whose impacts with each other the plugin resolves
+    /// ([`crate::ImpactPlugin::add_impact_body`]).
+    pub impact_bodies: HandleSet<RigidBodyHandle>,
+    /// Every managed body takes part in impacts between bodies
+    /// ([`crate::ImpactPlugin::set_all_dynamic_bodies_impact`]).
+    pub all_impact: bool,
     /// The grounds' motions over the step and the BVH that finds those near a body.
     pub index: GroundIndex,
     /// A ground was unmarked since the grounds' hook flags were last put in place.
@@ -199,6 +205,16 @@ impl Registry {
             && mass.is_finite()
             && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
             && (self.excluded.is_empty() || !self.excluded.contains(&handle))
+    }
+
+    /// Does the body take part in impacts between bodies: managed, and opted in?
+    pub fn takes_pairs(&self, handle: RigidBodyHandle, rb: &RigidBody) -> bool {
+        (self.all_impact || self.impact_bodies.contains(&handle)) && self.manages(handle, rb)
+    }
+
+    /// Has any body been opted in to impacts between bodies?
+    pub fn any_pairs(&self) -> bool {
+        self.all_impact || !self.impact_bodies.is_empty()
     }
 
     /// The material of a body collider against a ground collider.

@@ -175,6 +175,7 @@ pub(crate) fn resolve(
         body: input.body,
         collider: geom.parts[hit.part].handle,
         ground: ground.handle,
+        body2: None,
         time: t,
         timing: input.timing,
         point: vec_from_na(&point),
@@ -196,13 +197,118 @@ pub(crate) fn resolve(
     Some((after, event))
 }
 
+/// One ball of an impact between two balls, at the impact.
+pub(crate) struct PairSide<'a> {
+    pub body: RigidBodyHandle,
+    pub collider: ColliderHandle,
+    pub inertia: &'a Inertia,
+    pub state: State,
+    /// Radius to the contact point, skin included (m).
+    pub radius: f64,
+}
+
+/// Resolves the impact of ball `a` on ball `b` (states at time `t`), their centres'
+/// distance the sum of their radii: the contact normal is the line of centres. `input` gives
+/// the law, the material and the resting speed (its `body` and `inertia` are not read).
+/// Returns both states after and an event for each body (each naming the other), or `None`
+/// when the balls do not approach or the model refuses the input.
+pub(crate) fn resolve_balls(
+    input: &ImpactInput,
+    a: &PairSide,
+    b: &PairSide,
+    t: f64,
+) -> Option<(State, State, [ImpactEvent; 2])> {
+    let n = (b.state.com - a.state.com).try_normalize(0.0)?;
+    let contact = model::PairContact {
+        normal: n,
+        offset_a: n * a.radius,
+        offset_b: -n * b.radius,
+    };
+    let point = a.state.com + contact.offset_a;
+    let closing = n.dot(&(body_velocity_at(&a.state, &point) - body_velocity_at(&b.state, &point)));
+    if closing.is_nan() || closing <= 0.0 {
+        return None;
+    }
+    let settled = input.force_settle || closing < input.resting_speed;
+    let material = Material {
+        restitution: if settled {
+            0.0
+        } else {
+            input.material.restitution
+        },
+        friction: input.material.friction,
+    };
+    let velocity = |s: &State| BodyVelocity {
+        linear: s.v,
+        angular: s.w,
+    };
+    let (body_a, body_b) = (
+        a.inertia.body_at(&a.state.rot),
+        b.inertia.body_at(&b.state.rot),
+    );
+    let (va, vb) = (velocity(&a.state), velocity(&b.state));
+    let solve = |law| model::resolve_pair(law, &body_a, &va, &body_b, &vb, &contact, &material);
+    let impact = match solve(input.law) {
+        Ok(impact) => impact,
+        // The document's jam, as for a ground: the consistent law, and the event says so.
+        Err(ModelError::Jam { .. }) => model::PairImpact {
+            fallback: Some(Fallback::Jam),
+            ..solve(Law::Consistent).ok()?
+        },
+        Err(_) => return None,
+    };
+    let after = |s: &State, v: &BodyVelocity| State {
+        v: v.linear,
+        w: v.angular,
+        ..*s
+    };
+    let (after_a, after_b) = (after(&a.state, &impact.a), after(&b.state, &impact.b));
+    let event = |side: &PairSide, other: &PairSide, before: &State, after: &State, sign: f64| {
+        let energy = |s: &State| side.inertia.body_at(&s.rot).kinetic_energy(&velocity(s));
+        let impulse = impact.impulse * sign;
+        ImpactEvent {
+            kind: EventKind::Impact,
+            body: side.body,
+            collider: side.collider,
+            ground: other.collider,
+            body2: Some(other.body),
+            time: t,
+            timing: input.timing,
+            point: vec_from_na(&point),
+            // From the other ball into this one.
+            normal: vec_from_na(&(n * sign)),
+            contact_points: 1,
+            approach_speed: closing,
+            impulse: vec_from_na(&impulse),
+            normal_impulse: impact.normal_impulse,
+            tangent_impulse: vec_from_na(&(impact.tangent_impulse * sign)),
+            regime: impact.regime,
+            law: impact.law,
+            fallback: impact.fallback,
+            settled,
+            restitution: material.restitution,
+            friction: material.friction,
+            ke_before: energy(before),
+            ke_after: energy(after),
+        }
+    };
+    let events = [
+        event(a, b, &a.state, &after_a, -1.0),
+        event(b, a, &b.state, &after_b, 1.0),
+    ];
+    Some((after_a, after_b, events))
+}
+
 /// Where a correction happened: the body, its collider and the ground, the contact normal
 /// (from the ground into the body) and point.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Site {
     pub body: RigidBodyHandle,
     pub collider: ColliderHandle,
+    /// The ground collider, or the other body's collider.
     pub ground: ColliderHandle,
+    /// The other body of a pair; `None` for a ground.
+    pub body2: Option<RigidBodyHandle>,
     pub normal: Vector3<f64>,
     pub point: Vector3<f64>,
 }
@@ -220,6 +326,7 @@ impl Site {
             body,
             collider: geom.parts[hit.part].handle,
             ground: grounds[hit.ground].handle,
+            body2: None,
             normal: hit.normal,
             point: hit.point - hit.normal * hit.dist,
         }
@@ -231,6 +338,7 @@ impl Site {
             body: e.body,
             collider: e.collider,
             ground: e.ground,
+            body2: e.body2,
             normal: super::convert::vec_to_na(e.normal),
             point: super::convert::vec_to_na(e.point),
         }
@@ -261,6 +369,7 @@ pub(crate) fn correction(
         body: site.body,
         collider: site.collider,
         ground: site.ground,
+        body2: site.body2,
         time,
         timing: if kind == EventKind::Settle {
             ImpactTiming::InStep

@@ -15,7 +15,7 @@
 //! [`capped_energy`] scales a state's velocities so that its mechanical energy is no more
 //! than another's.
 
-use super::commit::Shadow;
+use super::commit::{Shadow, write_state};
 use super::config::ImpactConfig;
 use super::convert::to_f64;
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
@@ -24,11 +24,14 @@ use super::geometry::{BodyGeom, GroundGeom, SmallList, closest, landing_point};
 use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
-use super::observe::{NonGround, ground_geom, neighbours};
+use super::observe::{NonGround, ground_geom, neighbours, rapier_state};
+use super::pair_plan::PlannedPair;
 use super::plan::{Candidate, EndOfStep, StepData};
 use super::policy::{EndAction, EndCheck, Role, Surroundings};
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
+use super::resolve::{
+    ImpactInput, Inertia, PairKey, PairSide, Site, correction, material, resolve, resolve_balls,
+};
 use crate::motion::{Flight, State};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
@@ -383,6 +386,134 @@ impl Settle<'_> {
             .filter(|h| self.roles.get(&(*h, gg.handle)) == Some(&Role::Filtered))
             .collect();
         Some(gg)
+    }
+
+    /// After the step, for an `Impact` pair of balls not moved together (something else
+    /// touched one, a search gave up, or `Step` mode): rapier's end state, in which the pair
+    /// was out of its solver. Overlapping and approaching, the model's impulse there
+    /// (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or the pressed speed
+    /// for a ball touching something else); overlapping, both balls are then moved apart
+    /// along the line of centres, each by its share of the overlap (by inverse mass), with a
+    /// `PushOut` event each.
+    pub fn pair_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        pair: &PlannedPair,
+        step: &EndOfStep,
+    ) {
+        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+            return;
+        };
+        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let d = sb.com - sa.com;
+        let len = d.norm();
+        let overlap = pair.reach - len;
+        if !(overlap > 0.0 && len > 0.0) {
+            return;
+        }
+        let n = d / len;
+        let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+        let (ca, cb) = (pair.key.0, pair.key.1);
+        // The key orders the colliders by slot: match them to the bodies.
+        let (ca, cb) = if colliders.get(ca).and_then(|c| c.parent()) == Some(pair.a) {
+            (ca, cb)
+        } else {
+            (cb, ca)
+        };
+        let radius = |c: ColliderHandle| {
+            colliders.get(c).and_then(|co| {
+                Some(to_f64(co.shape().as_ball()?.radius) + to_f64(co.contact_skin()))
+            })
+        };
+        let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
+            return;
+        };
+        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
+            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
+        };
+        let touching = pressed(pair.a, ra) || pressed(pair.b, rb);
+        let input = ImpactInput {
+            body: pair.a,
+            inertia: &ia,
+            law: self.config.law,
+            material: material(&colliders[ca], &colliders[cb], None),
+            resting_speed: if touching {
+                step.policy.pressed_speed
+            } else {
+                step.policy.resting_speed
+            },
+            force_settle: false,
+            timing: ImpactTiming::StepEnd,
+        };
+        let side = |body, collider, inertia, state, radius| PairSide {
+            body,
+            collider,
+            inertia,
+            state,
+            radius,
+        };
+        if let Some((after_a, after_b, events)) = resolve_balls(
+            &input,
+            &side(pair.a, ca, &ia, sa, rad_a),
+            &side(pair.b, cb, &ib, sb, rad_b),
+            step.dt,
+        ) {
+            self.events.extend(events);
+            (sa, sb) = (after_a, after_b);
+        }
+        let (wa, wb) = (1.0 / ia.mass, 1.0 / ib.mass);
+        let share = |w: f64| overlap * w / (wa + wb);
+        let moves = [
+            (
+                pair.a,
+                ca,
+                cb,
+                pair.b,
+                &ia,
+                &mut sa,
+                -n * share(wa),
+                -n,
+                rad_a,
+            ),
+            (
+                pair.b,
+                cb,
+                ca,
+                pair.a,
+                &ib,
+                &mut sb,
+                n * share(wb),
+                n,
+                rad_b,
+            ),
+        ];
+        for (body, collider, other, body2, inertia, state, shift, normal, radius) in moves {
+            let before = *state;
+            state.com += shift;
+            let site = Site {
+                body,
+                collider,
+                ground: other,
+                body2: Some(body2),
+                normal,
+                // Its surface point facing the other ball.
+                point: before.com - normal * radius,
+            };
+            self.events.push(correction(
+                EventKind::PushOut,
+                &site,
+                inertia,
+                &before,
+                state,
+                step.dt,
+            ));
+        }
+        for (body, state) in [(pair.a, &sa), (pair.b, &sb)] {
+            let rb = &mut bodies[body];
+            let local_com = super::convert::vec_to_na(rb.local_center_of_mass());
+            write_state(rb, state, &local_com, true);
+        }
     }
 
     /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it

@@ -1,0 +1,244 @@
+//! Plan, for impacts between bodies: which pairs of opted-in balls may meet in the step, and
+//! what each pair's role is.
+//!
+//! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
+//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs whose spheres,
+//! swept over the step, overlap (a BVH over the swept spheres: the cost grows with the pairs
+//! that can meet, not with the square of the bodies), skips the pairs rapier would not solve
+//! or the user's filter refuses, and gives every other pair a role: `Resting` (touching and
+//! slow, as `Policy::rests` decides for a ground: rapier's solver keeps it with zero
+//! restitution) or `Impact` (it may meet in the step: out of rapier's solver, resolved by the
+//! reconstruct stage, `pair_reconstruct.rs`); a resting pair side by side with a ball of an
+//! `Impact` pair joins it (a chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an
+//! `Impact` pair may reach is woken, so that the step plans it as an awake body.
+
+use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use super::filter;
+use super::ground_index::build_bvh;
+use super::handles::{HandleMap, HandleSet, slot_of};
+use super::hook_flags::HookFlags;
+use super::observe::{Sets, body_geom, centred_ball};
+use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
+use super::registry::Registry;
+use super::resolve::PairKey;
+use crate::rapier::math::Vector;
+use crate::rapier::parry::bounding_volume::Aabb;
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+};
+use nalgebra::Vector3;
+
+/// A pair of balls with a role this step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlannedPair {
+    pub a: RigidBodyHandle,
+    pub b: RigidBodyHandle,
+    /// The pair's key ([`pair_key`] of the two ball colliders).
+    pub key: PairKey,
+    /// The two radii summed, skins included (m): the centres' distance at contact.
+    pub reach: f64,
+    /// Unit line of centres at the step's start, from `a` to `b`.
+    pub normal: Vector3<f64>,
+    pub role: Role,
+}
+
+/// The pairs of the step.
+#[derive(Default)]
+pub(crate) struct PairPlan {
+    pub pairs: Vec<PlannedPair>,
+    /// Each pair's role by [`pair_key`].
+    pub roles: HandleMap<PairKey, Role>,
+    /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
+    pub members: HandleSet<RigidBodyHandle>,
+}
+
+/// The key of the pair of two body colliders, the same whichever comes first.
+pub(crate) fn pair_key(c1: ColliderHandle, c2: ColliderHandle) -> PairKey {
+    if (slot_of(c1), c1.into_raw_parts().1) <= (slot_of(c2), c2.into_raw_parts().1) {
+        (c1, c2)
+    } else {
+        (c2, c1)
+    }
+}
+
+/// A ball that takes part in impacts between bodies, as the plan sees it at the step start.
+struct Ball {
+    body: RigidBodyHandle,
+    collider: ColliderHandle,
+    com: Vector3<f64>,
+    v: Vector3<f64>,
+    /// Radius, skin included (m).
+    radius: f64,
+    asleep: bool,
+}
+
+/// The step's pairs (see the module's contract). `prev` are last step's pair roles (a pair
+/// rapier held at rest stays resting unless clearly hit, as for grounds).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_pairs<H: PhysicsHooks>(
+    registry: &Registry,
+    flags: &HookFlags,
+    user_hooks: &H,
+    bodies: &mut RigidBodySet,
+    colliders: &ColliderSet,
+    sets: &Sets,
+    prev: &HandleMap<PairKey, Role>,
+    gravity: Vector3<f64>,
+    dt: f64,
+    policy: &Policy,
+) -> PairPlan {
+    let mut plan = PairPlan::default();
+    if !registry.any_pairs() {
+        return plan;
+    }
+    let balls: Vec<Ball> = bodies
+        .iter()
+        .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
+        .filter_map(|(handle, rb)| {
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            let geom = body_geom(rb, colliders, &local_com);
+            if geom.parts.len() != 1 {
+                return None;
+            }
+            let part = &geom.parts[0];
+            if !centred_ball(part) {
+                return None;
+            }
+            let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
+            Some(Ball {
+                body: handle,
+                collider: part.handle,
+                com: vec_to_na(rb.center_of_mass()),
+                v: vec_to_na(rb.linvel()),
+                radius,
+                asleep: rb.is_sleeping(),
+            })
+        })
+        .collect();
+    if balls.len() < 2 {
+        return plan;
+    }
+    // Each ball's sphere swept over the step: its travel under gravity and any force is at
+    // most |v| dt + |a| dt^2 (a generous bound for a user force too, checked per pair below).
+    let margin = policy.resting_gap.max(policy.prediction);
+    let swept = |b: &Ball| {
+        let rb = &bodies[b.body];
+        let accel = to_f64(rb.user_force().length()) / to_f64(rb.mass());
+        b.radius + b.v.norm() * dt + (gravity.norm() + accel) * dt * dt + margin
+    };
+    let leaves: Vec<(usize, Aabb)> = balls
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let half = to_real(swept(b));
+            (
+                i,
+                Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
+            )
+        })
+        .collect();
+    let tree = build_bvh(leaves.clone());
+    let mut woken: Vec<RigidBodyHandle> = Vec::new();
+    for (i, aabb) in &leaves {
+        for j in tree.intersect_aabb(aabb) {
+            let j = j as usize;
+            if j <= *i {
+                continue;
+            }
+            // Two sleeping balls are kept too: a chain may reach them.
+            let (a, b) = (&balls[*i], &balls[j]);
+            let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
+            let user = flags.recorded_user_flags(colliders, a.collider)
+                | flags.recorded_user_flags(colliders, b.collider);
+            if !filter::rapier_solves(bodies, ca, cb)
+                || filter::joint_disables_contacts(
+                    sets.impulse_joints,
+                    sets.multibody_joints,
+                    a.body,
+                    b.body,
+                )
+                || filter::user_refuses(
+                    user_hooks,
+                    user,
+                    bodies,
+                    colliders,
+                    (a.collider, b.collider),
+                )
+            {
+                continue;
+            }
+            let key = pair_key(a.collider, b.collider);
+            let reach = a.radius + b.radius;
+            let d = b.com - a.com;
+            let len = d.norm();
+            let gap = len - reach;
+            // Closing speed along the line of centres (a ball's spin does not move its surface
+            // along the normal).
+            let closing = if len > 0.0 {
+                (a.v - b.v).dot(&(d / len))
+            } else {
+                0.0
+            };
+            // Beyond reach: their spheres' travel cannot close the gap in the step.
+            let travel = swept(a) - a.radius + swept(b) - b.radius;
+            if gap > travel {
+                continue;
+            }
+            let was_resting = prev.get(&key) == Some(&Role::Resting);
+            let role = if policy.rests(gap, closing.max(0.0), was_resting, || false) {
+                Role::Resting
+            } else {
+                Role::Impact
+            };
+            if role == Role::Impact {
+                for ball in [a, b] {
+                    if plan.members.insert(ball.body) && ball.asleep {
+                        woken.push(ball.body);
+                    }
+                }
+            }
+            plan.roles.insert(key, role);
+            plan.pairs.push(PlannedPair {
+                a: a.body,
+                b: b.body,
+                key,
+                reach,
+                normal: if len > 0.0 { d / len } else { Vector3::zeros() },
+                role,
+            });
+        }
+    }
+    // Chains: a resting pair side by side with a ball of an impact joins it (the ball hit
+    // passes the impact on inside the step: Newton's cradle, a row of balls on a table),
+    // and so on along the row. A ball lying on another stays rapier's.
+    let down = gravity.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
+    let asleep: HandleSet<RigidBodyHandle> =
+        balls.iter().filter(|b| b.asleep).map(|b| b.body).collect();
+    loop {
+        let mut grown = false;
+        for pair in plan.pairs.iter_mut() {
+            let joins = pair.role == Role::Resting
+                && (plan.members.contains(&pair.a) || plan.members.contains(&pair.b))
+                && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN;
+            if joins {
+                pair.role = Role::Impact;
+                plan.roles.insert(pair.key, Role::Impact);
+                for body in [pair.a, pair.b] {
+                    if plan.members.insert(body) && asleep.contains(&body) {
+                        woken.push(body);
+                    }
+                }
+                grown = true;
+            }
+        }
+        if !grown {
+            break;
+        }
+    }
+    for handle in woken {
+        if let Some(rb) = bodies.get_mut(handle) {
+            rb.wake_up(true);
+        }
+    }
+    plan
+}

@@ -1,0 +1,318 @@
+//! Reconstruct, for impacts between bodies: a cluster of balls (those joined by the step's
+//! `Impact` pairs) moved together over the step from their start states, as they would have
+//! moved had rapier not solved those pairs.
+//!
+//! Contract: [`through_pair_impacts`] takes a cluster each of whose balls moved alone in the
+//! step (no contact in rapier's solver, no joint or torque: checked by the caller) and moves
+//! every ball by its own motion (`crate::motion`: free flight, or rolling in closed form on
+//! its level ground) to the cluster's earliest event: a ball's ground impact (the in-step
+//! search of `geometry.rs`) or two balls touching (`motion::meeting`), resolved by the model
+//! (`resolve.rs`), then on to the next, in time order, both balls of a pair updated between
+//! events: a chain (a ball passing an impact on to the one it touches) is a sequence of
+//! impacts at the same time, in the order the touches are found. A ball rolling on its
+//! ground that an impact lifts faster than the resting speed flies from there; slower, or
+//! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
+//! on. It returns every ball's state at the step's end and reports every impulse as an event,
+//! or `None` when the cluster cannot be moved alone (a search that stalls, more events than
+//! `max_impacts_per_step` per ball, a rolling ball leaving its plane): its events are then
+//! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
+//! nothing into rapier.
+
+use super::events::{EventKind, ImpactTiming};
+use super::geometry::{
+    BodyGeom, GroundGeom, Search, SmallList, closest, first_impact, landing_point,
+};
+use super::plan::{Candidate, EndOfStep};
+use super::resolve::{
+    ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
+};
+use super::settle::Settle;
+use crate::motion::meeting::first_touch;
+use crate::motion::{Flight, Motion, Moving, State};
+use crate::rapier::prelude::{ColliderHandle, ColliderSet};
+
+/// A ball of a cluster and what its motion needs.
+pub(crate) struct ClusterBall<'a> {
+    pub cand: &'a Candidate,
+    pub collider: ColliderHandle,
+    /// Radius to the contact point, skin included (m).
+    pub radius: f64,
+    pub geom: BodyGeom<'a>,
+    /// Its grounds: the `Impact` grounds, and the ground it rolls on (last).
+    pub grounds: SmallList<GroundGeom<'a>>,
+    /// The ground it rolls on, as an index in `grounds`.
+    pub rolling_on: Option<usize>,
+    pub inertia: Inertia,
+}
+
+/// What happens next in the cluster.
+enum Next {
+    Ground(usize, State, super::geometry::Hit),
+    Touch(usize, usize),
+}
+
+/// The cluster's states at the step's end (see the module's contract). `pairs` are the
+/// cluster's `Impact` pairs as indices into `balls`.
+pub(crate) fn through_pair_impacts(
+    view: &mut Settle,
+    colliders: &ColliderSet,
+    balls: &[ClusterBall],
+    pairs: &[(usize, usize)],
+    step: &EndOfStep,
+) -> Option<Vec<State>> {
+    let events_from = view.events.len();
+    let moved = move_cluster(view, colliders, balls, pairs, step);
+    if moved.is_none() {
+        view.events.truncate(events_from);
+    }
+    moved
+}
+
+fn move_cluster(
+    view: &mut Settle,
+    colliders: &ColliderSet,
+    balls: &[ClusterBall],
+    pairs: &[(usize, usize)],
+    step: &EndOfStep,
+) -> Option<Vec<State>> {
+    let dt = step.dt;
+    let mut moving: Vec<Moving> = balls
+        .iter()
+        .map(|b| Moving {
+            state: b.cand.start,
+            t0: 0.0,
+            motion: match &b.cand.rolling {
+                Some((_, rolling)) => Motion::Rolling(*rolling),
+                None => Motion::Flight(b.cand.flight),
+            },
+        })
+        .collect();
+    let mut flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
+    let max_events = view.config.max_impacts_per_step * balls.len();
+    let mut events = 0usize;
+    let mut t = 0.0;
+    loop {
+        // The earliest event: ties go to the ball or pair found first, the same every run.
+        let mut next: Option<(f64, Next)> = None;
+        for (k, ball) in balls.iter().enumerate() {
+            let Motion::Flight(flight) = moving[k].motion else {
+                continue;
+            };
+            if ball.grounds.is_empty() {
+                continue;
+            }
+            let m = &moving[k];
+            match first_impact(&ball.geom, &ball.grounds, &flight, &m.state, m.t0, t, dt) {
+                Search::Hit(th, s, hit) => {
+                    if next.as_ref().is_none_or(|(tn, _)| th < *tn) {
+                        next = Some((th, Next::Ground(k, s, hit)));
+                    }
+                }
+                Search::Stalled(..) => return None,
+                Search::Clear => {}
+            }
+        }
+        for (i, j) in pairs {
+            let reach = balls[*i].radius + balls[*j].radius;
+            let limit = next.as_ref().map_or(dt, |(tn, _)| *tn);
+            if let Some(tc) = first_touch(&moving[*i], &moving[*j], reach, t, limit) {
+                if next.as_ref().is_none_or(|(tn, _)| tc < *tn) {
+                    next = Some((tc, Next::Touch(*i, *j)));
+                }
+            }
+        }
+        let Some((te, event)) = next else {
+            break;
+        };
+        events += 1;
+        if events > max_events {
+            return None;
+        }
+        t = te;
+        match event {
+            Next::Ground(k, s, hit) => {
+                let ball = &balls[k];
+                let after =
+                    ground_impact(view, colliders, ball, &mut flights[k], &s, te, &hit, step)?;
+                moving[k] = Moving {
+                    state: after,
+                    t0: te,
+                    motion: Motion::Flight(flights[k]),
+                };
+            }
+            Next::Touch(i, j) => {
+                let side = |k: usize| PairSide {
+                    body: balls[k].cand.body,
+                    collider: balls[k].collider,
+                    inertia: &balls[k].inertia,
+                    state: moving[k].at(te),
+                    radius: balls[k].radius,
+                };
+                let input = ImpactInput {
+                    body: balls[i].cand.body,
+                    inertia: &balls[i].inertia,
+                    law: view.config.law,
+                    material: material(
+                        &colliders[balls[i].collider],
+                        &colliders[balls[j].collider],
+                        None,
+                    ),
+                    resting_speed: step.policy.resting_speed,
+                    force_settle: false,
+                    timing: ImpactTiming::InStep,
+                };
+                // A touch the model finds not approaching (a graze at rounding level) is
+                // stepped over: the next search starts after it.
+                let Some((after_i, after_j, pair_events)) =
+                    resolve_balls(&input, &side(i), &side(j), te)
+                else {
+                    t = next_after(te);
+                    continue;
+                };
+                view.events.extend(pair_events);
+                for (k, after) in [(i, after_i), (j, after_j)] {
+                    moving[k] = on_after_touch(view, balls, k, &moving[k], after, te, step)?;
+                }
+            }
+        }
+    }
+    let ends: Vec<State> = moving.iter().map(|m| m.at(dt)).collect();
+    // A rolling ball still on its plane at the end (a cuboid's face it left, or a mesh,
+    // would need the ground's other faces).
+    for (k, ball) in balls.iter().enumerate() {
+        if let (Motion::Rolling(rolling), Some(g)) = (moving[k].motion, ball.rolling_on) {
+            let hit = closest(
+                &ball.geom,
+                &ball.grounds[g..=g],
+                &ends[k],
+                dt,
+                step.policy.resting_gap,
+            )?;
+            let on_plane = hit.dist.abs() <= 1e-9 * rolling.radius.max(1.0)
+                && hit.normal.dot(&rolling.normal) >= 1.0 - 1e-9;
+            if !on_plane {
+                return None;
+            }
+        }
+    }
+    Some(ends)
+}
+
+/// The smallest time after `t` that differs from it.
+fn next_after(t: f64) -> f64 {
+    t + f64::EPSILON * t.abs().max(1e-3)
+}
+
+/// A ball's ground impact inside the cluster's step, as `reconstruct::through_impacts`
+/// resolves one; a settled impact holds gravity off the rest of the step (`flight`).
+#[allow(clippy::too_many_arguments)]
+fn ground_impact(
+    view: &mut Settle,
+    colliders: &ColliderSet,
+    ball: &ClusterBall,
+    flight: &mut Flight,
+    s: &State,
+    t: f64,
+    hit: &super::geometry::Hit,
+    step: &EndOfStep,
+) -> Option<State> {
+    let part = &ball.geom.parts[hit.part];
+    let gg = &ball.grounds[hit.ground];
+    let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
+    let input = ImpactInput {
+        body: ball.cand.body,
+        inertia: &ball.inertia,
+        law: view.config.law,
+        material: view.registry.material_of(colliders, part.handle, gg.handle),
+        resting_speed: step.policy.resting_speed,
+        force_settle: false,
+        timing: ImpactTiming::InStep,
+    };
+    let (mut after, event) = resolve(&input, &ball.geom, gg, s, t, hit, point, points)?;
+    let settled = event.settled;
+    view.events.push(event);
+    if settled && hit.normal.dot(&after.v) <= step.policy.resting_speed {
+        let an = hit.normal.dot(&flight.accel);
+        if an < 0.0 {
+            flight.accel -= hit.normal * an;
+        }
+        let vn = hit.normal.dot(&after.v);
+        if vn < 0.0 {
+            let before = after;
+            after.v -= hit.normal * vn;
+            let site = Site {
+                body: ball.cand.body,
+                collider: part.handle,
+                ground: gg.handle,
+                body2: None,
+                normal: hit.normal,
+                point,
+            };
+            view.events.push(correction(
+                EventKind::Settle,
+                &site,
+                &ball.inertia,
+                &before,
+                &after,
+                t,
+            ));
+        }
+    }
+    Some(after)
+}
+
+/// How ball `k` moves on after an impact with another ball left it at `after` (time `t`).
+fn on_after_touch(
+    view: &mut Settle,
+    balls: &[ClusterBall],
+    k: usize,
+    before: &Moving,
+    mut after: State,
+    t: f64,
+    step: &EndOfStep,
+) -> Option<Moving> {
+    let ball = &balls[k];
+    let (Motion::Rolling(rolling), Some(g)) = (before.motion, ball.rolling_on) else {
+        return Some(Moving {
+            state: after,
+            t0: t,
+            motion: before.motion,
+        });
+    };
+    let n = rolling.normal;
+    let vn = n.dot(&after.v);
+    if vn > step.policy.resting_speed {
+        // Lifted off its ground: it flies, and may land on it again.
+        return Some(Moving {
+            state: after,
+            t0: t,
+            motion: Motion::Flight(ball.cand.flight),
+        });
+    }
+    if vn != 0.0 {
+        // The ground takes the normal speed (an impulse through the centre, e = 0).
+        let prior = after;
+        after.v -= n * vn;
+        let site = Site {
+            body: ball.cand.body,
+            collider: ball.collider,
+            ground: ball.grounds[g].handle,
+            body2: None,
+            normal: n,
+            point: after.com - n * rolling.radius,
+        };
+        view.events.push(correction(
+            EventKind::Settle,
+            &site,
+            &ball.inertia,
+            &prior,
+            &after,
+            t,
+        ));
+    }
+    Some(Moving {
+        state: after,
+        t0: t,
+        motion: Motion::Rolling(rolling),
+    })
+}

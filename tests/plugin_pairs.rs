@@ -1,0 +1,360 @@
+//! Impacts between bodies in the plugin (`add_impact_body`): two balls meeting in flight, a
+//! cue ball rolling into an object ball on a table, a row of touching balls (Newton's
+//! cradle), against the closed forms; both bodies named in the events; opt-in, rapier's
+//! filtering, and every mode.
+
+mod plugin_support;
+
+use plugin_support::{F64, G, MODES, na, real, wide};
+use rapier_impact::na::Vector3;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ConfigError, EventKind, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode};
+
+/// Tolerance on velocities, relative to the speed, where rapier's precision is the limit.
+const V_TOL: f64 = if F64 { 1e-12 } else { 2e-6 };
+
+fn world(gravity: f64) -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: Vector::new(0.0, real(-gravity), 0.0),
+        ..Default::default()
+    }
+}
+
+fn ball(
+    world: &mut PhysicsWorld,
+    at: Vector3<f64>,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    r: f64,
+    e: f64,
+    mu: f64,
+) -> (RigidBodyHandle, ColliderHandle) {
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(real(at.x), real(at.y), real(at.z)))
+            .linvel(Vector::new(real(v.x), real(v.y), real(v.z)))
+            .angvel(Vector::new(real(w.x), real(w.y), real(w.z)))
+            .can_sleep(false),
+        ColliderBuilder::ball(real(r))
+            .density(real(0.17 / (4.0 / 3.0 * std::f64::consts::PI * r * r * r)))
+            .restitution(real(e))
+            .friction(real(mu)),
+    )
+}
+
+fn plugin(mode: TimingMode) -> ImpactPlugin {
+    ImpactPlugin::new(ImpactConfig {
+        timing: mode,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+fn pair_events(plugin: &ImpactPlugin) -> Vec<rapier_impact::ImpactEvent> {
+    plugin
+        .events()
+        .iter()
+        .filter(|e| e.kind == EventKind::Impact && e.body2.is_some())
+        .copied()
+        .collect()
+}
+
+#[test]
+fn only_dynamic_bodies_opt_in() {
+    let mut w = world(0.0);
+    let (fixed, _) = w.insert(RigidBodyBuilder::fixed(), ColliderBuilder::ball(0.1));
+    let (b, _) = ball(
+        &mut w,
+        Vector3::zeros(),
+        Vector3::zeros(),
+        Vector3::zeros(),
+        0.1,
+        1.0,
+        0.0,
+    );
+    let mut p = plugin(TimingMode::Exact);
+    assert_eq!(
+        p.add_impact_body(&w.bodies, fixed),
+        Err(ConfigError::NotDynamic(fixed))
+    );
+    assert!(!p.is_impact_body(&w.bodies, b));
+    p.add_impact_body(&w.bodies, b).unwrap();
+    assert!(p.is_impact_body(&w.bodies, b));
+    assert!(p.remove_impact_body(b));
+    assert!(!p.is_impact_body(&w.bodies, b));
+    p.set_all_dynamic_bodies_impact(true);
+    assert!(p.is_impact_body(&w.bodies, b) && !p.is_impact_body(&w.bodies, fixed));
+}
+
+/// Two equal balls (R = 28.575 mm, 0.17 kg) head-on in free space, 0.5 m apart, closing at
+/// 3 m/s: they touch at (0.5 - 2R) / 3 s, and leave at v (1 -+ e) / 2 about the mean.
+#[test]
+fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
+    let r = 0.028_575;
+    let e = 0.9;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world(0.0);
+        let (a, _) = ball(
+            &mut w,
+            Vector3::zeros(),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::zeros(),
+            r,
+            e,
+            0.0,
+        );
+        let (b, _) = ball(
+            &mut w,
+            Vector3::new(0.5, 0.0, 0.0),
+            Vector3::new(-1.0, 0.0, 0.0),
+            Vector3::zeros(),
+            r,
+            e,
+            0.0,
+        );
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        let dt = wide(w.integration_parameters.dt);
+        let t_touch = (0.5 - 2.0 * r) / 3.0;
+        let mut seen = Vec::new();
+        for k in 0..20 {
+            p.step(&mut w);
+            for ev in pair_events(&p) {
+                seen.push((k as f64 * dt + ev.time, ev));
+            }
+        }
+        assert_eq!(
+            seen.len(),
+            2,
+            "{mode:?}: one impact, an event per ball: {seen:?}"
+        );
+        for (t, ev) in &seen {
+            assert!(
+                (t - t_touch).abs() < 1e-6,
+                "{mode:?}: at {t}, expected {t_touch}"
+            );
+            assert_eq!(ev.timing, ImpactTiming::InStep);
+            let other = if ev.body == a { b } else { a };
+            assert_eq!(ev.body2, Some(other));
+        }
+        // Momentum 0.17 (2 - 1) kg m/s; relative speed 3 m/s becomes 2.7 m/s apart.
+        let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
+        let mean = 0.5;
+        assert!(
+            (va - (mean - 1.5 * e)).abs() <= V_TOL * 3.0,
+            "{mode:?}: va {va}"
+        );
+        assert!(
+            (vb - (mean + 1.5 * e)).abs() <= V_TOL * 3.0,
+            "{mode:?}: vb {vb}"
+        );
+    }
+}
+
+#[test]
+fn balls_not_opted_in_or_filtered_out_are_rapiers() {
+    let r = 0.05;
+    let run = |opt_in: bool, groups: bool| {
+        let mut w = world(0.0);
+        let (a, ca) = ball(
+            &mut w,
+            Vector3::zeros(),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::zeros(),
+            r,
+            0.9,
+            0.0,
+        );
+        let (_, cb) = ball(
+            &mut w,
+            Vector3::new(0.4, 0.0, 0.0),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            r,
+            0.9,
+            0.0,
+        );
+        if groups {
+            for c in [ca, cb] {
+                w.colliders[c].set_collision_groups(InteractionGroups::new(
+                    Group::GROUP_1,
+                    Group::GROUP_2,
+                    InteractionTestMode::And,
+                ));
+            }
+        }
+        let mut p = plugin(TimingMode::Exact);
+        p.set_all_dynamic_bodies_impact(opt_in);
+        let mut pair = 0;
+        for _ in 0..30 {
+            p.step(&mut w);
+            pair += pair_events(&p).len();
+        }
+        (pair, na(w.bodies[a].linvel()).x)
+    };
+    assert_eq!(run(true, false).0, 2, "opted in: the plugin's impact");
+    let (events, va) = run(false, false);
+    assert_eq!(events, 0);
+    // rapier's own response: a bounce, not the model's (the cue ball keeps moving forward
+    // or stops, but it hit something).
+    assert!(va < 2.0);
+    // Groups that exclude the pair: they pass through each other, as in rapier alone.
+    let (events, va) = run(true, true);
+    assert_eq!(events, 0);
+    assert!((va - 2.0).abs() < 1e-6, "passed through: {va}");
+}
+
+/// A cue ball rolling at 2 m/s into an object ball at rest on a table (pool balls, e = 0.95,
+/// no ball-ball friction): right after the impact the object ball leaves at (1 + e) / 2 v =
+/// 1.95 m/s and the cue ball keeps (1 - e) / 2 v = 0.05 m/s with all its topspin.
+#[test]
+fn a_rolling_cue_ball_sends_the_object_ball_off_at_the_closed_form_speed() {
+    let (r, m, e, v) = (0.028_575, 0.17, 0.95, 2.0);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world(G);
+        let (_, table) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
+                .friction(0.2),
+        );
+        // Rolling along +x: w = v / R about -z.
+        let (cue, _) = ball(
+            &mut w,
+            Vector3::new(0.0, r, 0.0),
+            Vector3::new(v, 0.0, 0.0),
+            Vector3::new(0.0, 0.0, -v / r),
+            r,
+            e,
+            0.0,
+        );
+        let (object, _) = ball(
+            &mut w,
+            Vector3::new(0.3, r, 0.0),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            r,
+            e,
+            0.0,
+        );
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, table).unwrap();
+        p.add_impact_body(&w.bodies, cue).unwrap();
+        p.add_impact_body(&w.bodies, object).unwrap();
+        let mut hit = Vec::new();
+        for _ in 0..30 {
+            p.step(&mut w);
+            hit.extend(pair_events(&p));
+        }
+        assert_eq!(hit.len(), 2, "{mode:?}: {hit:?}");
+        let on_object = hit.iter().find(|ev| ev.body == object).unwrap();
+        let on_cue = hit.iter().find(|ev| ev.body == cue).unwrap();
+        // The object ball's momentum after is the impulse on it.
+        let speed = wide(on_object.impulse.x) / m;
+        assert!(
+            (speed - (1.0 + e) / 2.0 * v).abs() <= V_TOL * v,
+            "{mode:?}: object ball {speed}"
+        );
+        let kept = v + wide(on_cue.impulse.x) / m;
+        assert!(
+            (kept - (1.0 - e) / 2.0 * v).abs() <= V_TOL * v,
+            "{mode:?}: cue ball {kept}"
+        );
+        assert!(wide(on_object.impulse.y).abs() <= V_TOL * m * v);
+    }
+}
+
+/// Newton's cradle in free space: five equal balls touching in a row, the first arriving
+/// at 1 m/s, e = 1, frictionless: the impact passes along the row in the step, and the last
+/// ball leaves at 1 m/s while the others stop.
+#[test]
+fn newtons_cradle_passes_the_impact_along_the_row() {
+    let r = 0.02;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world(0.0);
+        let mut balls = vec![
+            ball(
+                &mut w,
+                Vector3::new(-0.1, 0.0, 0.0),
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::zeros(),
+                r,
+                1.0,
+                0.0,
+            )
+            .0,
+        ];
+        for k in 0..4 {
+            balls.push(
+                ball(
+                    &mut w,
+                    Vector3::new(2.0 * r * k as f64, 0.0, 0.0),
+                    Vector3::zeros(),
+                    Vector3::zeros(),
+                    r,
+                    1.0,
+                    0.0,
+                )
+                .0,
+            );
+        }
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        let mut impacts = 0;
+        for _ in 0..10 {
+            p.step(&mut w);
+            impacts += pair_events(&p).len();
+        }
+        assert_eq!(
+            impacts, 8,
+            "{mode:?}: four impacts along the row, two events each"
+        );
+        for (k, h) in balls.iter().enumerate() {
+            let vx = na(w.bodies[*h].linvel()).x;
+            let expected = if k == 4 { 1.0 } else { 0.0 };
+            assert!((vx - expected).abs() <= V_TOL, "{mode:?}: ball {k} at {vx}");
+        }
+    }
+}
+
+#[test]
+fn step_mode_resolves_a_pair_at_the_step_end() {
+    let r = 0.05;
+    let mut w = world(0.0);
+    let (a, _) = ball(
+        &mut w,
+        Vector3::zeros(),
+        Vector3::new(2.0, 0.0, 0.0),
+        Vector3::zeros(),
+        r,
+        1.0,
+        0.0,
+    );
+    let (b, _) = ball(
+        &mut w,
+        Vector3::new(0.4, 0.0, 0.0),
+        Vector3::zeros(),
+        Vector3::zeros(),
+        r,
+        1.0,
+        0.0,
+    );
+    let mut p = plugin(MODES[0]);
+    p.set_all_dynamic_bodies_impact(true);
+    let mut kinds = Vec::new();
+    for _ in 0..30 {
+        p.step(&mut w);
+        kinds.extend(
+            p.events()
+                .iter()
+                .filter(|e| e.body2.is_some())
+                .map(|e| (e.kind, e.timing)),
+        );
+    }
+    assert!(
+        kinds.contains(&(EventKind::Impact, ImpactTiming::StepEnd)),
+        "{kinds:?}"
+    );
+    // Elastic and equal: the speeds exchanged.
+    let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
+    assert!(va.abs() < 1e-3 && (vb - 2.0).abs() < 1e-3, "{va} {vb}");
+}
