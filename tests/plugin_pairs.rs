@@ -246,6 +246,10 @@ fn a_rolling_cue_ball_sends_the_object_ball_off_at_the_closed_form_speed() {
             hit.extend(pair_events(&p));
         }
         assert_eq!(hit.len(), 2, "{mode:?}: {hit:?}");
+        assert!(
+            hit.iter().all(|ev| ev.timing == ImpactTiming::InStep),
+            "{mode:?}"
+        );
         let on_object = hit.iter().find(|ev| ev.body == object).unwrap();
         let on_cue = hit.iter().find(|ev| ev.body == cue).unwrap();
         // The object ball's momentum after is the impulse on it.
@@ -263,55 +267,81 @@ fn a_rolling_cue_ball_sends_the_object_ball_off_at_the_closed_form_speed() {
     }
 }
 
-/// Newton's cradle in free space: five equal balls touching in a row, the first arriving
-/// at 1 m/s, e = 1, frictionless: the impact passes along the row in the step, and the last
-/// ball leaves at 1 m/s while the others stop.
+/// Newton's cradle: five equal balls touching in a row, the first arriving at 1 m/s,
+/// frictionless, in free space and lying on a frictionless ground. The impact passes along
+/// the row inside the step, one pair after the other: at e = 1 the last ball leaves at 1 m/s
+/// and the others stop; at e = 0.9 each ball keeps (1 - e)/2 of the speed it was hit with.
 #[test]
 fn newtons_cradle_passes_the_impact_along_the_row() {
     let r = 0.02;
-    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(0.0);
-        let mut balls = vec![
-            ball(
-                &mut w,
-                Vector3::new(-0.1, 0.0, 0.0),
-                Vector3::new(1.0, 0.0, 0.0),
-                Vector3::zeros(),
-                r,
-                1.0,
-                0.0,
-            )
-            .0,
-        ];
-        for k in 0..4 {
-            balls.push(
+    for (gravity, e) in [(0.0, 1.0), (G, 1.0), (G, 0.9)] {
+        for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+            let mut w = world(gravity);
+            let first = Vector3::new(-2.0 * r - 0.1, r, 0.0);
+            let mut balls = vec![
                 ball(
                     &mut w,
-                    Vector3::new(2.0 * r * k as f64, 0.0, 0.0),
-                    Vector3::zeros(),
+                    first,
+                    Vector3::new(1.0, 0.0, 0.0),
                     Vector3::zeros(),
                     r,
-                    1.0,
+                    e,
                     0.0,
                 )
                 .0,
+            ];
+            for k in 0..4 {
+                balls.push(
+                    ball(
+                        &mut w,
+                        Vector3::new(2.0 * r * k as f64, r, 0.0),
+                        Vector3::zeros(),
+                        Vector3::zeros(),
+                        r,
+                        e,
+                        0.0,
+                    )
+                    .0,
+                );
+            }
+            let mut p = plugin(mode);
+            if gravity > 0.0 {
+                let (_, floor) = w.insert(
+                    RigidBodyBuilder::fixed(),
+                    ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(
+                        Vector::Y,
+                    ))
+                    .friction(0.0),
+                );
+                p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+            }
+            p.set_all_dynamic_bodies_impact(true);
+            let mut seen = Vec::new();
+            // The first ball reaches the row in 0.1 s; the chain is over in that step.
+            for _ in 0..7 {
+                p.step(&mut w);
+                seen.extend(pair_events(&p));
+            }
+            let case = format!("{mode:?}, g = {gravity}, e = {e}");
+            assert_eq!(
+                seen.len(),
+                8,
+                "{case}: four impacts along the row, two events each: {seen:?}"
             );
-        }
-        let mut p = plugin(mode);
-        p.set_all_dynamic_bodies_impact(true);
-        let mut impacts = 0;
-        for _ in 0..10 {
-            p.step(&mut w);
-            impacts += pair_events(&p).len();
-        }
-        assert_eq!(
-            impacts, 8,
-            "{mode:?}: four impacts along the row, two events each"
-        );
-        for (k, h) in balls.iter().enumerate() {
-            let vx = na(w.bodies[*h].linvel()).x;
-            let expected = if k == 4 { 1.0 } else { 0.0 };
-            assert!((vx - expected).abs() <= V_TOL, "{mode:?}: ball {k} at {vx}");
+            assert!(
+                seen.iter().all(|ev| ev.timing == ImpactTiming::InStep),
+                "{case}"
+            );
+            let mut hit = 1.0;
+            for (k, h) in balls.iter().enumerate() {
+                let vx = na(w.bodies[*h].linvel()).x;
+                let expected = if k == 4 { hit } else { (1.0 - e) / 2.0 * hit };
+                assert!(
+                    (vx - expected).abs() <= V_TOL,
+                    "{case}: ball {k} at {vx}, expected {expected}"
+                );
+                hit *= (1.0 + e) / 2.0;
+            }
         }
     }
 }

@@ -9,7 +9,8 @@
 //! search of `geometry.rs`) or two balls touching (`motion::meeting`), resolved by the model
 //! (`resolve.rs`), then on to the next, in time order, both balls of a pair updated between
 //! events: a chain (a ball passing an impact on to the one it touches) is a sequence of
-//! impacts at the same time, in the order the touches are found. A ball rolling on its
+//! impacts at the same time, in the order the touches are found; a touch slower than the
+//! resting speed is a resting contact from there on (rapier's next step). A ball rolling on its
 //! ground that an impact lifts faster than the resting speed flies from there; slower, or
 //! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
 //! on. It returns every ball's state at the step's end and reports every impulse as an event,
@@ -48,7 +49,8 @@ pub(crate) struct ClusterBall<'a> {
 /// What happens next in the cluster.
 enum Next {
     Ground(usize, State, super::geometry::Hit),
-    Touch(usize, usize),
+    /// The pair of this index in the cluster's pairs.
+    Touch(usize),
 }
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
@@ -88,6 +90,8 @@ fn move_cluster(
         })
         .collect();
     let mut flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
+    // Pairs left touching slowly: resting for the rest of the step.
+    let mut resting = vec![false; pairs.len()];
     let max_events = view.config.max_impacts_per_step * balls.len();
     let mut events = 0usize;
     let mut t = 0.0;
@@ -112,12 +116,15 @@ fn move_cluster(
                 Search::Clear => {}
             }
         }
-        for (i, j) in pairs {
+        for (p, (i, j)) in pairs.iter().enumerate() {
+            if resting[p] {
+                continue;
+            }
             let reach = balls[*i].radius + balls[*j].radius;
             let limit = next.as_ref().map_or(dt, |(tn, _)| *tn);
             if let Some(tc) = first_touch(&moving[*i], &moving[*j], reach, t, limit) {
                 if next.as_ref().is_none_or(|(tn, _)| tc < *tn) {
-                    next = Some((tc, Next::Touch(*i, *j)));
+                    next = Some((tc, Next::Touch(p)));
                 }
             }
         }
@@ -140,7 +147,8 @@ fn move_cluster(
                     motion: Motion::Flight(flights[k]),
                 };
             }
-            Next::Touch(i, j) => {
+            Next::Touch(p) => {
+                let (i, j) = pairs[p];
                 let side = |k: usize| PairSide {
                     body: balls[k].cand.body,
                     collider: balls[k].collider,
@@ -161,10 +169,19 @@ fn move_cluster(
                     force_settle: false,
                     timing: ImpactTiming::InStep,
                 };
+                // A touch slower than the resting speed is a resting contact from here: the
+                // next step hands it to rapier's solver (`Resting`). Resolving it with e = 0
+                // would not end: balls left touching at nearly the same speed behind a chain
+                // meet again and again, in ever smaller impacts.
+                let (si, sj) = (side(i), side(j));
+                let line = (sj.state.com - si.state.com).normalize();
+                if (si.state.v - sj.state.v).dot(&line) < step.policy.resting_speed {
+                    resting[p] = true;
+                    continue;
+                }
                 // A touch the model finds not approaching (a graze at rounding level) is
                 // stepped over: the next search starts after it.
-                let Some((after_i, after_j, pair_events)) =
-                    resolve_balls(&input, &side(i), &side(j), te)
+                let Some((after_i, after_j, pair_events)) = resolve_balls(&input, &si, &sj, te)
                 else {
                     t = next_after(te);
                     continue;

@@ -1,0 +1,128 @@
+//! Newton's cradle, headless: a row of balls lying touching on a frictionless ground, the
+//! first one arriving at the row; every ball's velocity after the chain of impacts (the
+//! step it happens in).
+//!
+//! ```text
+//! cargo run --release --example cradle -- --balls 5 --speed 1 --restitution 1
+//! ```
+//!
+//! Flags (each has a default; `--help` lists them): `--balls N` (5, at least 2: the arriving
+//! ball and the row), `--speed V` (m/s, 1), `--restitution E` (between the balls, 1), `--dt DT`
+//! (s, 1/60), `--mode rapier|step|toi|exact` (exact).
+//!
+//! The balls (R = 25 mm, 0.1 kg) lie on a half-space ground with no friction; the first is
+//! 1 mm from the row, moving along +x. With the plugin the impact passes along the row inside
+//! one step, one pair after the other (`docs/integration.md`, "Impacts between bodies"): at
+//! `e = 1` the last ball leaves at `V` and the others stop; with `e < 1` each impact keeps
+//! `(1 - e)/2` of the speed in the ball behind. The closed form printed is that sequence of
+//! two-ball impacts.
+
+mod common;
+
+use common::{Args, MODE, Mode, flag, real, wide};
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
+
+const ABOUT: &str = "Newton's cradle on a frictionless ground: every ball's velocity after \
+the chain of impacts, beside the sequence of two-ball impacts.";
+
+fn main() {
+    let spec = [
+        flag(
+            "--balls",
+            "N",
+            "5",
+            "number of balls, the arriving one included",
+        ),
+        flag("--speed", "V", "1", "speed of the arriving ball (m/s)"),
+        flag(
+            "--restitution",
+            "E",
+            "1",
+            "coefficient of restitution between the balls",
+        ),
+        flag("--dt", "DT", "0.016666666666666666", "time step (s)"),
+        MODE,
+    ];
+    let args = Args::parse("cradle", ABOUT, &spec);
+    let n = args.count("--balls", 2) as usize;
+    let speed = args.positive("--speed");
+    let e = args.non_negative("--restitution");
+    let dt = args.positive("--dt");
+    let mode = args.mode();
+    let (r, m) = (0.025, 0.1);
+    let density = m / (4.0 / 3.0 * std::f64::consts::PI * r * r * r);
+    let mut world = common::world(dt);
+    let mut balls = Vec::new();
+    for k in 0..n {
+        // The first ball 1 mm short of the row, the row touching.
+        let x = if k == 0 {
+            -2.0 * r - 0.001
+        } else {
+            2.0 * r * (k - 1) as f64
+        };
+        let v = if k == 0 { speed } else { 0.0 };
+        let (h, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(real(x), real(r), 0.0))
+                .linvel(Vector::new(real(v), 0.0, 0.0)),
+            ColliderBuilder::ball(real(r))
+                .density(real(density))
+                .restitution(real(e))
+                .friction(0.0)
+                .restitution_combine_rule(CoefficientCombineRule::Min)
+                .friction_combine_rule(CoefficientCombineRule::Min),
+        );
+        balls.push(h);
+    }
+    let ground = common::ground(&mut world, 0.0, 0.0);
+    let mut plugin = match mode {
+        Mode::Rapier => None,
+        Mode::Plugin(timing) => {
+            let mut p = ImpactPlugin::new(ImpactConfig {
+                timing,
+                ..Default::default()
+            })
+            .expect("the default configuration is valid");
+            p.add_ground(&world.bodies, &world.colliders, ground)
+                .expect("the ground exists");
+            p.set_all_dynamic_bodies_impact(true);
+            Some(p)
+        }
+    };
+    // The first ball reaches the row 1 ms in: the whole chain is in the first step (with
+    // `e < 1` the balls meet again later, slowly: not part of this chain).
+    let events = common::step(&mut world, &mut plugin).to_vec();
+    let impacts = events
+        .iter()
+        .filter(|ev| ev.kind == EventKind::Impact && ev.body2.is_some())
+        .count()
+        / 2;
+    // The sequence of two-ball impacts along the row: equal masses, the ball behind keeps
+    // (1 - e)/2 of the speed and the one ahead takes (1 + e)/2, which it passes on.
+    let mut expected = vec![0.0; n];
+    let mut moving = speed;
+    for slot in expected.iter_mut().take(n - 1) {
+        *slot = (1.0 - e) / 2.0 * moving;
+        moving *= (1.0 + e) / 2.0;
+    }
+    expected[n - 1] = moving;
+    println!(
+        "cradle: {n} balls, V = {speed} m/s, e = {e}, dt = {dt:.7} s, mode = {}, precision = {}, \
+ball-ball impacts resolved by the plugin: {impacts}",
+        mode.name(),
+        common::PRECISION
+    );
+    println!(
+        "{:>5} {:>12} {:>12} {:>10}",
+        "ball", "vx (m/s)", "closed form", "error"
+    );
+    for (k, h) in balls.iter().enumerate() {
+        let vx = wide(world.bodies[*h].linvel().x);
+        println!(
+            "{k:>5} {vx:>12.7} {:>12.7} {:>10.2e}",
+            expected[k],
+            vx - expected[k]
+        );
+    }
+}
