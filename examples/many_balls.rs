@@ -9,8 +9,9 @@
 //! Flags (each has a default; `--help` lists them): `--count N` (balls, 500), `--steps S`
 //! (600), `--mode rapier|step|toi|exact` (exact), `--scene bouncing|idle|pile` (bouncing),
 //! `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5), `--dt DT` (s, 1/60),
-//! `--seed N` (the layout's jitter, 1), `--f64` (needs `--features f64`), `--csv PATH` (trace
-//! of the first ball).
+//! `--seed N` (the layout's jitter, 1), `--pairs` (the balls' impacts with each other by the
+//! plugin too, `set_all_dynamic_bodies_impact`), `--f64` (needs `--features f64`), `--csv PATH`
+//! (trace of the first ball).
 //!
 //! Scenes (balls of radius 5 cm, each start position jittered by up to 2 cm):
 //! - `bouncing`: a grid of 20 x 20 balls per layer, 15 cm apart, layers 15 cm apart from 1 m
@@ -28,7 +29,7 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, Rng, TraceCsv, flag, real, wide};
+use common::{Args, CSV, F64, MODE, Mode, Rng, TraceCsv, flag, real, switch, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
@@ -63,6 +64,10 @@ fn main() {
         flag("--friction", "MU", "0.5", "friction of balls and ground"),
         flag("--dt", "DT", "1/60", "time step (s)"),
         flag("--seed", "N", "1", "seed of the layout's jitter"),
+        switch(
+            "--pairs",
+            "the balls' impacts with each other by the plugin too (set_all_dynamic_bodies_impact)",
+        ),
         F64,
         CSV,
     ];
@@ -129,6 +134,9 @@ fn main() {
         (_, Some(ground)) => common::plugin(mode, Law::Guarded, &mut world, ground),
         (Mode::Rapier, None) => None,
     };
+    if let Some(p) = plugin.as_mut() {
+        p.set_all_dynamic_bodies_impact(args.on("--pairs"));
+    }
     let mut csv = args
         .path("--csv")
         .map(|p| TraceCsv::create(&p, first.expect("--count >= 1")));

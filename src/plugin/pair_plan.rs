@@ -6,7 +6,7 @@
 //! swept over the step, overlap (a BVH over the swept spheres: the cost grows with the pairs
 //! that can meet, not with the square of the bodies), skips the pairs rapier would not solve
 //! or the user's filter refuses, and gives every other pair a role: `Resting` (touching and
-//! slow, as `Policy::rests` decides for a ground: rapier's solver keeps it with zero
+//! slow, or pressed, as `Policy::rests` decides for a ground: rapier's solver keeps it with zero
 //! restitution) or `Impact` (it may meet in the step: out of rapier's solver, resolved by the
 //! reconstruct stage, `pair_reconstruct.rs`); a resting pair side by side with a ball of an
 //! `Impact` pair joins it (a chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an
@@ -17,7 +17,7 @@ use super::filter;
 use super::ground_index::build_bvh;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, body_geom, centred_ball};
+use super::observe::{Sets, body_geom, centred_ball, neighbours};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::PairKey;
@@ -70,6 +70,16 @@ struct Ball {
     /// Radius, skin included (m).
     radius: f64,
     asleep: bool,
+}
+
+/// A bound on the relative acceleration of two balls from their user forces (m/s^2); gravity
+/// accelerates both alike.
+fn relative_force_accel(bodies: &RigidBodySet, a: RigidBodyHandle, b: RigidBodyHandle) -> f64 {
+    let accel = |h: RigidBodyHandle| {
+        let rb = &bodies[h];
+        to_f64(rb.user_force().length()) / to_f64(rb.mass())
+    };
+    accel(a) + accel(b)
 }
 
 /// The step's pairs (see the module's contract). `prev` are last step's pair roles (a pair
@@ -138,100 +148,156 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         })
         .collect();
     let tree = build_bvh(leaves.clone());
+    let down = gravity.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
+    // The pair of balls `i < j` with its role, or `None` when rapier would not solve it, the
+    // user's filter refuses it, or it cannot meet in the step.
+    let evaluate = |i: usize, j: usize| -> Option<PlannedPair> {
+        let (a, b) = (&balls[i], &balls[j]);
+        let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
+        let user = flags.recorded_user_flags(colliders, a.collider)
+            | flags.recorded_user_flags(colliders, b.collider);
+        if !filter::rapier_solves(bodies, ca, cb)
+            || filter::joint_disables_contacts(
+                sets.impulse_joints,
+                sets.multibody_joints,
+                a.body,
+                b.body,
+            )
+            || filter::user_refuses(
+                user_hooks,
+                user,
+                bodies,
+                colliders,
+                (a.collider, b.collider),
+            )
+        {
+            return None;
+        }
+        let key = pair_key(a.collider, b.collider);
+        let reach = a.radius + b.radius;
+        let d = b.com - a.com;
+        let len = d.norm();
+        let gap = len - reach;
+        // Closing speed along the line of centres (a ball's spin does not move its surface
+        // along the normal).
+        let closing = if len > 0.0 {
+            (a.v - b.v).dot(&(d / len))
+        } else {
+            0.0
+        };
+        // Beyond reach: their spheres' travel cannot close the gap in the step.
+        let travel = swept(a) - a.radius + swept(b) - b.radius;
+        if gap > travel {
+            return None;
+        }
+        let was_resting = prev.get(&key) == Some(&Role::Resting);
+        // Pressed, as a ground pair is: a ball that touched something else after the last
+        // step (a ball in a pile) is pushed by it, and rapier's solver holds the pile.
+        let pressed = || {
+            [a.body, b.body]
+                .iter()
+                .any(|h| neighbours(*h, &bodies[*h], sets, registry, &down).touching)
+        };
+        // An impact: approaching faster than the resting speed, closing the gap within the
+        // step (both balls fall alike; a user force adds its acceleration), and not resting
+        // or pressed. Anything slower is rapier's with e = 0 (`Resting`), as a slow ground
+        // contact is: a pile's neighbours, balls drifting together.
+        let forces = relative_force_accel(bodies, a.body, b.body);
+        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
+        let impact = closing > policy.resting_speed
+            && closes
+            && !policy.rests(gap, closing, was_resting, pressed);
+        Some(PlannedPair {
+            a: a.body,
+            b: b.body,
+            key,
+            reach,
+            normal: if len > 0.0 { d / len } else { Vector3::zeros() },
+            role: if impact { Role::Impact } else { Role::Resting },
+        })
+    };
+    let index: HandleMap<RigidBodyHandle, usize> =
+        balls.iter().enumerate().map(|(i, b)| (b.body, i)).collect();
+    let mut considered: std::collections::HashSet<(usize, usize)> = Default::default();
     let mut woken: Vec<RigidBodyHandle> = Vec::new();
+    let join = |plan: &mut PairPlan, woken: &mut Vec<RigidBodyHandle>, body: RigidBodyHandle| {
+        if plan.members.insert(body) && balls[index[&body]].asleep {
+            woken.push(body);
+        }
+    };
+    let add = |plan: &mut PairPlan, woken: &mut Vec<RigidBodyHandle>, pair: PlannedPair| {
+        if pair.role == Role::Impact {
+            join(plan, woken, pair.a);
+            join(plan, woken, pair.b);
+        }
+        plan.roles.insert(pair.key, pair.role);
+        plan.pairs.push(pair);
+    };
+    // Every pair with an awake ball (two sleeping balls cannot meet, unless a chain reaches
+    // them: below).
     for (i, aabb) in &leaves {
         for j in tree.intersect_aabb(aabb) {
             let j = j as usize;
-            if j <= *i {
+            if j <= *i || balls[*i].asleep && balls[j].asleep {
                 continue;
             }
-            // Two sleeping balls are kept too: a chain may reach them.
-            let (a, b) = (&balls[*i], &balls[j]);
-            let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
-            let user = flags.recorded_user_flags(colliders, a.collider)
-                | flags.recorded_user_flags(colliders, b.collider);
-            if !filter::rapier_solves(bodies, ca, cb)
-                || filter::joint_disables_contacts(
-                    sets.impulse_joints,
-                    sets.multibody_joints,
-                    a.body,
-                    b.body,
-                )
-                || filter::user_refuses(
-                    user_hooks,
-                    user,
-                    bodies,
-                    colliders,
-                    (a.collider, b.collider),
-                )
-            {
-                continue;
+            considered.insert((*i, j));
+            if let Some(pair) = evaluate(*i, j) {
+                add(&mut plan, &mut woken, pair);
             }
-            let key = pair_key(a.collider, b.collider);
-            let reach = a.radius + b.radius;
-            let d = b.com - a.com;
-            let len = d.norm();
-            let gap = len - reach;
-            // Closing speed along the line of centres (a ball's spin does not move its surface
-            // along the normal).
-            let closing = if len > 0.0 {
-                (a.v - b.v).dot(&(d / len))
-            } else {
-                0.0
-            };
-            // Beyond reach: their spheres' travel cannot close the gap in the step.
-            let travel = swept(a) - a.radius + swept(b) - b.radius;
-            if gap > travel {
-                continue;
-            }
-            let was_resting = prev.get(&key) == Some(&Role::Resting);
-            let role = if policy.rests(gap, closing.max(0.0), was_resting, || false) {
-                Role::Resting
-            } else {
-                Role::Impact
-            };
-            if role == Role::Impact {
-                for ball in [a, b] {
-                    if plan.members.insert(ball.body) && ball.asleep {
-                        woken.push(ball.body);
-                    }
-                }
-            }
-            plan.roles.insert(key, role);
-            plan.pairs.push(PlannedPair {
-                a: a.body,
-                b: b.body,
-                key,
-                reach,
-                normal: if len > 0.0 { d / len } else { Vector3::zeros() },
-                role,
-            });
         }
     }
     // Chains: a resting pair side by side with a ball of an impact joins it (the ball hit
     // passes the impact on inside the step: Newton's cradle, a row of balls on a table),
-    // and so on along the row. A ball lying on another stays rapier's.
-    let down = gravity.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
-    let asleep: HandleSet<RigidBodyHandle> =
-        balls.iter().filter(|b| b.asleep).map(|b| b.body).collect();
+    // and so on along the row, sleeping balls included. A ball lying on another stays
+    // rapier's, and so does a ball something lies on: a pile's layers are held by rapier's
+    // solver.
+    let mut loaded: HandleMap<RigidBodyHandle, bool> = HandleMap::default();
+    // (Without gravity nothing lies on anything.)
+    let mut is_loaded = |h: RigidBodyHandle| {
+        down != Vector3::zeros()
+            && *loaded
+                .entry(h)
+                .or_insert_with(|| neighbours(h, &bodies[h], sets, registry, &down).loaded)
+    };
+    let mut expanded: HandleSet<RigidBodyHandle> = HandleSet::default();
     loop {
-        let mut grown = false;
-        for pair in plan.pairs.iter_mut() {
-            let joins = pair.role == Role::Resting
-                && (plan.members.contains(&pair.a) || plan.members.contains(&pair.b))
-                && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN;
-            if joins {
-                pair.role = Role::Impact;
-                plan.roles.insert(pair.key, Role::Impact);
-                for body in [pair.a, pair.b] {
-                    if plan.members.insert(body) && asleep.contains(&body) {
-                        woken.push(body);
+        // The pairs around each new member that the first pass left out (two sleeping balls).
+        let fresh: Vec<RigidBodyHandle> = plan
+            .members
+            .iter()
+            .filter(|h| !expanded.contains(*h))
+            .copied()
+            .collect();
+        for h in fresh {
+            expanded.insert(h);
+            let m = index[&h];
+            for j in tree.intersect_aabb(&leaves[m].1) {
+                let (i, j) = (m.min(j as usize), m.max(j as usize));
+                if i != j && considered.insert((i, j)) {
+                    if let Some(pair) = evaluate(i, j) {
+                        add(&mut plan, &mut woken, pair);
                     }
                 }
+            }
+        }
+        let mut grown = false;
+        for k in 0..plan.pairs.len() {
+            let pair = plan.pairs[k];
+            let joins = pair.role == Role::Resting
+                && (plan.members.contains(&pair.a) || plan.members.contains(&pair.b))
+                && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
+                && !is_loaded(pair.a)
+                && !is_loaded(pair.b);
+            if joins {
+                plan.pairs[k].role = Role::Impact;
+                plan.roles.insert(pair.key, Role::Impact);
+                join(&mut plan, &mut woken, pair.a);
+                join(&mut plan, &mut woken, pair.b);
                 grown = true;
             }
         }
-        if !grown {
+        if !grown && plan.members.iter().all(|h| expanded.contains(h)) {
             break;
         }
     }
