@@ -17,7 +17,7 @@ use super::filter;
 use super::ground_index::build_bvh;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, body_geom, centred_ball, neighbours};
+use super::observe::{Sets, neighbours};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::PairKey;
@@ -105,27 +105,34 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         .iter()
         .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
         .filter_map(|(handle, rb)| {
-            let local_com = vec_to_na(rb.local_center_of_mass());
-            let geom = body_geom(rb, colliders, &local_com);
-            if geom.parts.len() != 1 {
+            // One enabled, solid ball collider, centred on the centre of mass.
+            let [collider] = rb.colliders() else {
+                return None;
+            };
+            let co = colliders.get(*collider)?;
+            let ball = co.shape().as_ball()?;
+            let radius = to_f64(ball.radius);
+            // In the body's frame, where both are exact.
+            let centre = co
+                .position_wrt_parent()
+                .map_or(Vector3::zeros(), |pose| vec_to_na(pose.translation));
+            let off_centre = (centre - vec_to_na(rb.local_center_of_mass())).norm();
+            if !co.is_enabled() || co.is_sensor() || off_centre > 1e-9 * radius {
                 return None;
             }
-            let part = &geom.parts[0];
-            if !centred_ball(part) {
-                return None;
-            }
-            let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
+            let com = vec_to_na(rb.center_of_mass());
             Some(Ball {
                 body: handle,
-                collider: part.handle,
-                com: vec_to_na(rb.center_of_mass()),
+                collider: *collider,
+                com,
                 v: vec_to_na(rb.linvel()),
-                radius,
+                radius: radius + to_f64(co.contact_skin()),
                 asleep: rb.is_sleeping(),
             })
         })
         .collect();
-    if balls.len() < 2 {
+    // Two sleeping balls cannot meet: with none awake, no pair.
+    if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
         return plan;
     }
     // Each ball's sphere swept over the step: its travel under gravity and any force is at
@@ -153,6 +160,15 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // user's filter refuses it, or it cannot meet in the step.
     let evaluate = |i: usize, j: usize| -> Option<PlannedPair> {
         let (a, b) = (&balls[i], &balls[j]);
+        let reach = a.radius + b.radius;
+        let d = b.com - a.com;
+        let len = d.norm();
+        let gap = len - reach;
+        // Beyond reach: their spheres' travel cannot close the gap in the step.
+        let travel = swept(a) - a.radius + swept(b) - b.radius;
+        if gap > travel {
+            return None;
+        }
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
         let user = flags.recorded_user_flags(colliders, a.collider)
             | flags.recorded_user_flags(colliders, b.collider);
@@ -174,10 +190,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             return None;
         }
         let key = pair_key(a.collider, b.collider);
-        let reach = a.radius + b.radius;
-        let d = b.com - a.com;
-        let len = d.norm();
-        let gap = len - reach;
         // Closing speed along the line of centres (a ball's spin does not move its surface
         // along the normal).
         let closing = if len > 0.0 {
@@ -185,11 +197,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         } else {
             0.0
         };
-        // Beyond reach: their spheres' travel cannot close the gap in the step.
-        let travel = swept(a) - a.radius + swept(b) - b.radius;
-        if gap > travel {
-            return None;
-        }
         let was_resting = prev.get(&key) == Some(&Role::Resting);
         // Pressed, as a ground pair is: a ball that touched something else after the last
         // step (a ball in a pile) is pushed by it, and rapier's solver holds the pile.
@@ -216,12 +223,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             role: if impact { Role::Impact } else { Role::Resting },
         })
     };
-    let index: HandleMap<RigidBodyHandle, usize> =
-        balls.iter().enumerate().map(|(i, b)| (b.body, i)).collect();
-    let mut considered: std::collections::HashSet<(usize, usize)> = Default::default();
     let mut woken: Vec<RigidBodyHandle> = Vec::new();
     let join = |plan: &mut PairPlan, woken: &mut Vec<RigidBodyHandle>, body: RigidBodyHandle| {
-        if plan.members.insert(body) && balls[index[&body]].asleep {
+        if plan.members.insert(body) && bodies[body].is_sleeping() {
             woken.push(body);
         }
     };
@@ -241,7 +245,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             if j <= *i || balls[*i].asleep && balls[j].asleep {
                 continue;
             }
-            considered.insert((*i, j));
             if let Some(pair) = evaluate(*i, j) {
                 add(&mut plan, &mut woken, pair);
             }
@@ -261,6 +264,13 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .or_insert_with(|| neighbours(h, &bodies[h], sets, registry, &down).loaded)
     };
     let mut expanded: HandleSet<RigidBodyHandle> = HandleSet::default();
+    // Built only for a chain: the balls by body, and the pairs of two sleeping balls seen.
+    let index: HandleMap<RigidBodyHandle, usize> = if plan.members.is_empty() {
+        HandleMap::default()
+    } else {
+        balls.iter().enumerate().map(|(i, b)| (b.body, i)).collect()
+    };
+    let mut sleeping_seen: Vec<(usize, usize)> = Vec::new();
     loop {
         // The pairs around each new member that the first pass left out (two sleeping balls).
         let fresh: Vec<RigidBodyHandle> = plan
@@ -273,8 +283,11 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             expanded.insert(h);
             let m = index[&h];
             for j in tree.intersect_aabb(&leaves[m].1) {
+                // The first pass took every pair with an awake ball.
                 let (i, j) = (m.min(j as usize), m.max(j as usize));
-                if i != j && considered.insert((i, j)) {
+                if i != j && balls[i].asleep && balls[j].asleep && !sleeping_seen.contains(&(i, j))
+                {
+                    sleeping_seen.push((i, j));
                     if let Some(pair) = evaluate(i, j) {
                         add(&mut plan, &mut woken, pair);
                     }
