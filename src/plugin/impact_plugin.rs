@@ -656,6 +656,18 @@ impl<H> ImpactPlugin<H> {
             dt,
             &step.policy,
         );
+        if self.config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
+            let events = pair_plan::step_start_impulses(
+                &mut step.pairs,
+                bodies,
+                colliders,
+                self.config.law,
+                self.config.max_impacts_per_step,
+                &step.policy,
+                dt,
+            );
+            self.events.extend(events);
+        }
         let mut handles: Vec<RigidBodyHandle> = Vec::new();
         // Awake managed bodies with no ground in reach: no roles (see `Lookup::roles`).
         let mut far_bodies: Vec<RigidBodyHandle> = Vec::new();

@@ -21,6 +21,7 @@ use super::observe::{Sets, neighbours};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::PairKey;
+use crate::motion::State;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
@@ -320,4 +321,121 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         }
     }
     plan
+}
+
+/// `Step` mode: the impulses of the step's `Impact` pairs at the step's start, to the
+/// velocities there (as for grounds, `ImpactTiming::StepStart`): every pair that closes
+/// within the step and approaches faster than the resting speed gets the model's impulse,
+/// in the plan's order, and again in turn while one approaches (a chain along a row), at
+/// most `max_impacts` per ball. The pairs are then rapier's resting contacts for the step
+/// (`Resting`, e = 0), so it never bounces them a second time. Returns the events.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn step_start_impulses(
+    plan: &mut PairPlan,
+    bodies: &mut RigidBodySet,
+    colliders: &ColliderSet,
+    law: crate::model::Law,
+    max_impacts: usize,
+    policy: &Policy,
+    dt: f64,
+) -> Vec<super::events::ImpactEvent> {
+    use super::commit::write_state;
+    use super::observe::rapier_state;
+    use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
+    let mut events = Vec::new();
+    let impacts: Vec<usize> = (0..plan.pairs.len())
+        .filter(|k| plan.pairs[*k].role == Role::Impact)
+        .collect();
+    let cap = max_impacts * plan.members.len().max(1);
+    let margin = policy.resting_gap.max(policy.prediction);
+    'passes: for _ in 0..cap {
+        let mut any = false;
+        for k in &impacts {
+            let pair = plan.pairs[*k];
+            let (ra, rb) = (&bodies[pair.a], &bodies[pair.b]);
+            let (sa, sb) = (rapier_state(ra), rapier_state(rb));
+            let d = sb.com - sa.com;
+            let len = d.norm();
+            if len == 0.0 {
+                continue;
+            }
+            let closing = (sa.v - sb.v).dot(&(d / len));
+            let gap = len - pair.reach;
+            if closing <= policy.resting_speed || gap > closing * dt + margin {
+                continue;
+            }
+            // The key orders the colliders by slot: match them to the bodies.
+            let (ca, cb) = if ra.colliders().contains(&pair.key.0) {
+                pair.key
+            } else {
+                (pair.key.1, pair.key.0)
+            };
+            let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+            let radius = |c: ColliderHandle| {
+                colliders.get(c).and_then(|co| {
+                    Some(to_f64(co.shape().as_ball()?.radius) + to_f64(co.contact_skin()))
+                })
+            };
+            let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
+                continue;
+            };
+            let input = ImpactInput {
+                body: pair.a,
+                inertia: &ia,
+                law,
+                material: material(&colliders[ca], &colliders[cb], None),
+                resting_speed: policy.resting_speed,
+                force_settle: false,
+                timing: super::events::ImpactTiming::StepStart,
+            };
+            // At the contact: the states moved along the line of centres to touching.
+            let shift = d / len * (gap.max(0.0) * 0.5);
+            let side = |body, collider, inertia, state: State, radius, shift| PairSide {
+                body,
+                collider,
+                inertia,
+                state: State {
+                    com: state.com + shift,
+                    ..state
+                },
+                radius,
+            };
+            let Some((after_a, after_b, pair_events)) = resolve_balls(
+                &input,
+                &side(pair.a, ca, &ia, sa, rad_a, shift),
+                &side(pair.b, cb, &ib, sb, rad_b, -shift),
+                0.0,
+            ) else {
+                continue;
+            };
+            events.extend(pair_events);
+            for (h, s, after) in [(pair.a, sa, after_a), (pair.b, sb, after_b)] {
+                let rb = &mut bodies[h];
+                let local_com = vec_to_na(rb.local_center_of_mass());
+                // The velocities only: the pose stays rapier's.
+                write_state(
+                    rb,
+                    &State {
+                        v: after.v,
+                        w: after.w,
+                        ..s
+                    },
+                    &local_com,
+                    true,
+                );
+            }
+            any = true;
+            if events.len() >= 2 * cap {
+                break 'passes;
+            }
+        }
+        if !any {
+            break;
+        }
+    }
+    for k in impacts {
+        plan.pairs[k].role = Role::Resting;
+        plan.roles.insert(plan.pairs[k].key, Role::Resting);
+    }
+    events
 }
