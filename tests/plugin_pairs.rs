@@ -42,6 +42,22 @@ fn ball(
     )
 }
 
+/// Two frictionless 5 cm balls 0.4 m apart on the x axis, the first moving at 2 m/s towards
+/// the second at rest, restitution `e`.
+fn closing_pair(
+    w: &mut PhysicsWorld,
+    e: f64,
+) -> (
+    (RigidBodyHandle, ColliderHandle),
+    (RigidBodyHandle, ColliderHandle),
+) {
+    let v = Vector3::new(2.0, 0.0, 0.0);
+    let zero = Vector3::zeros();
+    let a = ball(w, zero, v, zero, 0.05, e, 0.0);
+    let b = ball(w, Vector3::new(0.4, 0.0, 0.0), zero, zero, 0.05, e, 0.0);
+    (a, b)
+}
+
 fn plugin(mode: TimingMode) -> ImpactPlugin {
     ImpactPlugin::new(ImpactConfig {
         timing: mode,
@@ -153,27 +169,9 @@ fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
 
 #[test]
 fn balls_not_opted_in_or_filtered_out_are_rapiers() {
-    let r = 0.05;
     let run = |opt_in: bool, groups: bool| {
         let mut w = world(0.0);
-        let (a, ca) = ball(
-            &mut w,
-            Vector3::zeros(),
-            Vector3::new(2.0, 0.0, 0.0),
-            Vector3::zeros(),
-            r,
-            0.9,
-            0.0,
-        );
-        let (_, cb) = ball(
-            &mut w,
-            Vector3::new(0.4, 0.0, 0.0),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            r,
-            0.9,
-            0.0,
-        );
+        let ((a, ca), (_, cb)) = closing_pair(&mut w, 0.9);
         if groups {
             for c in [ca, cb] {
                 w.colliders[c].set_collision_groups(InteractionGroups::new(
@@ -348,26 +346,8 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
 
 #[test]
 fn step_mode_resolves_a_pair_at_the_step_start() {
-    let r = 0.05;
     let mut w = world(0.0);
-    let (a, _) = ball(
-        &mut w,
-        Vector3::zeros(),
-        Vector3::new(2.0, 0.0, 0.0),
-        Vector3::zeros(),
-        r,
-        1.0,
-        0.0,
-    );
-    let (b, _) = ball(
-        &mut w,
-        Vector3::new(0.4, 0.0, 0.0),
-        Vector3::zeros(),
-        Vector3::zeros(),
-        r,
-        1.0,
-        0.0,
-    );
+    let ((a, _), (b, _)) = closing_pair(&mut w, 1.0);
     let mut p = plugin(MODES[0]);
     p.set_all_dynamic_bodies_impact(true);
     let mut kinds = Vec::new();

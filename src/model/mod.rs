@@ -181,11 +181,7 @@ fn separating(law: Law, body: &Body, velocity: &BodyVelocity) -> Impact {
         tangent_impulse: Vector3::zeros(),
         velocity: *velocity,
         regime: Regime::Separating,
-        law: if law == Law::Consistent {
-            Law::Consistent
-        } else {
-            Law::Document
-        },
+        law: separating_law(law),
         fallback: None,
         ke_before: ke,
         ke_after: ke,
@@ -322,6 +318,15 @@ fn consistent_impact(
         fallback,
     )
     .0
+}
+
+/// The law a separating contact reports under `law`: `Guarded` never names itself.
+pub(crate) fn separating_law(law: Law) -> Law {
+    if law == Law::Consistent {
+        Law::Consistent
+    } else {
+        Law::Document
+    }
 }
 
 /// `a` when the inverse inertia tensor is `a E` with `a > 0` (spheres, cubes), the

@@ -12,7 +12,7 @@
 use super::collision_matrix::{Compliance, OneBody, TwoBodies};
 use super::error::{ModelError, check_coefficients, finite3};
 use super::types::{Body, BodyVelocity, Fallback, Law, Material, Regime};
-use super::{consistent, document, isotropic_inverse_inertia, unphysical};
+use super::{consistent, document, isotropic_inverse_inertia, separating_law, unphysical};
 use nalgebra::Vector3;
 
 /// The contact between two bodies `a` and `b`, world frame.
@@ -132,11 +132,7 @@ pub fn resolve_pair(
             a: *va,
             b: *vb,
             regime: Regime::Separating,
-            law: if law == Law::Consistent {
-                Law::Consistent
-            } else {
-                Law::Document
-            },
+            law: separating_law(law),
             fallback: None,
             ke_before: ke,
             ke_after: ke,

@@ -24,6 +24,7 @@ use super::geometry::{
     BodyGeom, GroundGeom, Search, SmallList, closest, first_impact, landing_point,
 };
 use super::plan::{Candidate, EndOfStep};
+use super::reconstruct::rest_on_ground;
 use super::resolve::{
     ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
 };
@@ -248,32 +249,16 @@ fn ground_impact(
     let (mut after, event) = resolve(&input, &ball.geom, gg, s, t, hit, point, points)?;
     let settled = event.settled;
     view.events.push(event);
-    if settled && hit.normal.dot(&after.v) <= step.policy.resting_speed {
-        let an = hit.normal.dot(&flight.accel);
-        if an < 0.0 {
-            flight.accel -= hit.normal * an;
-        }
-        let vn = hit.normal.dot(&after.v);
-        if vn < 0.0 {
-            let before = after;
-            after.v -= hit.normal * vn;
-            let site = Site {
-                body: ball.cand.body,
-                collider: part.handle,
-                ground: gg.handle,
-                body2: None,
-                normal: hit.normal,
-                point,
-            };
-            view.events.push(correction(
-                EventKind::Settle,
-                &site,
-                &ball.inertia,
-                &before,
-                &after,
-                t,
-            ));
-        }
+    if settled {
+        let site = Site {
+            body: ball.cand.body,
+            collider: part.handle,
+            ground: gg.handle,
+            body2: None,
+            normal: hit.normal,
+            point,
+        };
+        rest_on_ground(view, &site, &ball.inertia, flight, &mut after, t, step);
     }
     Some(after)
 }

@@ -16,7 +16,7 @@ use super::geometry::{BodyGeom, GroundGeom, Search, closest, first_impact, landi
 use super::plan::{Candidate, EndOfStep};
 use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
 use super::settle::Settle;
-use crate::motion::{Rolling, State};
+use crate::motion::{Flight, Rolling, State};
 use crate::rapier::prelude::ColliderSet;
 
 /// The body's state at the step's end after the impacts from `first` on (see the module's
@@ -81,33 +81,15 @@ pub(crate) fn through_impacts(
         // holding gravity there lifted the cube for the rest of the step (dice seed
         // 4, f64 Exact 60 Hz: +3.0e-3 of the throw's energy). It flies on, with
         // gravity, to its next impact.
-        if settled && hit.normal.dot(&seg.v) <= step.policy.resting_speed {
-            // Resting from here: gravity into the ground is held by the contact.
-            let an = hit.normal.dot(&flight.accel);
-            if an < 0.0 {
-                flight.accel -= hit.normal * an;
-            }
-            let vn = hit.normal.dot(&seg.v);
-            if vn < 0.0 {
-                let before = seg;
-                seg.v -= hit.normal * vn;
-                let site = Site {
-                    body: cand.body,
-                    collider: part.handle,
-                    ground: gg.handle,
-                    body2: None,
-                    normal: hit.normal,
-                    point,
-                };
-                view.events.push(correction(
-                    EventKind::Settle,
-                    &site,
-                    inertia,
-                    &before,
-                    &seg,
-                    t,
-                ));
-            }
+        let site = Site {
+            body: cand.body,
+            collider: part.handle,
+            ground: gg.handle,
+            body2: None,
+            normal: hit.normal,
+            point,
+        };
+        if settled && rest_on_ground(view, &site, inertia, &mut flight, &mut seg, t, step) {
             break;
         }
         if count >= view.config.max_impacts_per_step {
@@ -135,4 +117,35 @@ pub(crate) fn rolled(
     let on_plane = hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
         && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9;
     on_plane.then_some(end)
+}
+
+/// After a settled impact at `site` (time `t`): unless the state `s` leaves the ground faster
+/// than the resting speed, the body rests from there: the contact holds the acceleration into
+/// the ground for the rest of the step (`flight`), and the remaining speed into the ground is
+/// removed (a `Settle` event). Returns whether it rests.
+pub(crate) fn rest_on_ground(
+    view: &mut Settle,
+    site: &Site,
+    inertia: &Inertia,
+    flight: &mut Flight,
+    s: &mut State,
+    t: f64,
+    step: &EndOfStep,
+) -> bool {
+    let n = site.normal;
+    if n.dot(&s.v) > step.policy.resting_speed {
+        return false;
+    }
+    let an = n.dot(&flight.accel);
+    if an < 0.0 {
+        flight.accel -= n * an;
+    }
+    let vn = n.dot(&s.v);
+    if vn < 0.0 {
+        let before = *s;
+        s.v -= n * vn;
+        view.events
+            .push(correction(EventKind::Settle, site, inertia, &before, s, t));
+    }
+    true
 }

@@ -114,6 +114,23 @@ pub(crate) struct ImpactInput<'a> {
     pub timing: ImpactTiming,
 }
 
+impl ImpactInput<'_> {
+    /// Whether an impact approaching at `approach` (m/s) settles (slower than the resting
+    /// speed, or forced), and the material it is resolved with (`e = 0` if it settles).
+    fn material_at(&self, approach: f64) -> (bool, Material) {
+        let settled = self.force_settle || approach < self.resting_speed;
+        let material = Material {
+            restitution: if settled {
+                0.0
+            } else {
+                self.material.restitution
+            },
+            friction: self.material.friction,
+        };
+        (settled, material)
+    }
+}
+
 /// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the
 /// contact `point` (a landing point, see [`super::geometry::landing_point`]) with the
 /// hit's normal. Returns the state after and the event, or `None` when the point does not
@@ -135,15 +152,7 @@ pub(crate) fn resolve(
     if un.is_nan() || un >= 0.0 {
         return None;
     }
-    let settled = input.force_settle || -un < input.resting_speed;
-    let material = Material {
-        restitution: if settled {
-            0.0
-        } else {
-            input.material.restitution
-        },
-        friction: input.material.friction,
-    };
+    let (settled, material) = input.material_at(-un);
     let body = input.inertia.body_at(&s.rot);
     let contact = Contact {
         normal: n,
@@ -229,15 +238,7 @@ pub(crate) fn resolve_balls(
     if closing.is_nan() || closing <= 0.0 {
         return None;
     }
-    let settled = input.force_settle || closing < input.resting_speed;
-    let material = Material {
-        restitution: if settled {
-            0.0
-        } else {
-            input.material.restitution
-        },
-        friction: input.material.friction,
-    };
+    let (settled, material) = input.material_at(closing);
     let velocity = |s: &State| BodyVelocity {
         linear: s.v,
         angular: s.w,
