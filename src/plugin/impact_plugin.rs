@@ -28,10 +28,10 @@ use super::observe::{
     Sets, body_geom, ground_geom, rapier_state, snapshot, surely_far, touches_other,
 };
 use super::pair_plan::{self, pair_key};
-use super::pair_reconstruct::{self, ClusterBall};
+use super::pair_reconstruct;
 use super::plan::{Candidate, EndOfStep, Planner, StepData};
 use super::policy::{EndAction, EndCheck, Policy, Role};
-use super::reconstruct;
+use super::reconstruct::{self, ccd_consistent};
 use super::registry::Registry;
 use super::resolve::{Inertia, PairKey};
 use super::settle::{Checked, Settle};
@@ -39,8 +39,8 @@ use crate::motion::State;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
-    LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBody,
-    RigidBodyHandle, RigidBodySet,
+    LockedAxes, MultibodyJointSet, NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBodyHandle,
+    RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -871,7 +871,8 @@ impl<H> ImpactPlugin<H> {
         }
         let mode = self.config.timing;
         // The balls of impacts between bodies, moved together where they moved alone.
-        let moved_together = self.pair_clusters(bodies, colliders, &step);
+        let moved_together =
+            pair_reconstruct::move_clusters(&mut self.settle(), bodies, colliders, &step);
         for cand in &step.candidates {
             // A body rapier put to sleep in this step rests: rapier zeroed its velocities, and
             // its contacts have left the solver's graph, so it would look free and fall for a
@@ -895,7 +896,7 @@ impl<H> ImpactPlugin<H> {
                 let disturbed = impulse_joints.attached_joints(cand.body).next().is_some()
                     || multibody_joints.rigid_body_link(cand.body).is_some()
                     || touches_other(rb, narrow_phase)
-                    || !self.ccd_consistent(rb, cand, step.dt, step.dt, &step);
+                    || !ccd_consistent(rb, cand, step.dt, step.dt, &step);
                 let rolled = (!disturbed)
                     .then(|| reconstruct::rolled(cand, motion, &geom, &grounds, &step))
                     .flatten();
@@ -945,11 +946,11 @@ impl<H> ImpactPlugin<H> {
                 && free
                 && has_grounds
                 && !cand.closing
-                && self.ccd_consistent(rb, cand, step.dt, step.dt, &step);
+                && ccd_consistent(rb, cand, step.dt, step.dt, &step);
             if !has_grounds || clear {
                 if mode == TimingMode::Exact
                     && free
-                    && (clear || self.ccd_consistent(rb, cand, step.dt, step.dt, &step))
+                    && (clear || ccd_consistent(rb, cand, step.dt, step.dt, &step))
                 {
                     self.fly_exactly(bodies, cand, step.dt);
                 }
@@ -986,7 +987,7 @@ impl<H> ImpactPlugin<H> {
                     Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
                     Search::Clear => step.dt,
                 };
-                self.ccd_consistent(rb, cand, t_first, step.dt, &step)
+                ccd_consistent(rb, cand, t_first, step.dt, &step)
             });
             let Some(first) = first else {
                 let why = EndCheck::RapierEnd;
@@ -1049,191 +1050,5 @@ impl<H> ImpactPlugin<H> {
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.spare.candidates = std::mem::take(&mut step.data.candidates);
-    }
-
-    /// The clusters of the step's `Impact` pairs between balls (joined through shared
-    /// balls) whose every ball moved alone in the step (no contact in rapier's solver, no
-    /// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
-    /// `TimeOfImpact` and `Exact` modes: moved together from their start states
-    /// (`pair_reconstruct.rs`), checked against their grounds (`EndCheck::Flown`) and
-    /// written. Returns the bodies written.
-    fn pair_clusters(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-        step: &EndOfStep,
-    ) -> HandleSet<RigidBodyHandle> {
-        let mut written = HandleSet::default();
-        let impacts: Vec<_> = step
-            .pairs
-            .pairs
-            .iter()
-            .filter(|p| p.role == Role::Impact)
-            .collect();
-        if impacts.is_empty() || self.config.timing == TimingMode::Step {
-            return written;
-        }
-        let index: HandleMap<RigidBodyHandle, usize> = step
-            .candidates
-            .iter()
-            .enumerate()
-            .map(|(k, c)| (c.body, k))
-            .collect();
-        // Clusters: the connected sets of balls, by union-find over the pairs.
-        let mut parent: HandleMap<RigidBodyHandle, RigidBodyHandle> = HandleMap::default();
-        fn root(
-            parent: &mut HandleMap<RigidBodyHandle, RigidBodyHandle>,
-            h: RigidBodyHandle,
-        ) -> RigidBodyHandle {
-            let mut r = h;
-            while let Some(p) = parent.get(&r).copied().filter(|p| *p != r) {
-                r = p;
-            }
-            parent.insert(h, r);
-            r
-        }
-        for pair in &impacts {
-            let (ra, rb) = (root(&mut parent, pair.a), root(&mut parent, pair.b));
-            if ra != rb {
-                parent.insert(ra, rb);
-            }
-        }
-        let mut clusters: Vec<(RigidBodyHandle, Vec<RigidBodyHandle>)> = Vec::new();
-        for pair in &impacts {
-            for body in [pair.a, pair.b] {
-                let r = root(&mut parent, body);
-                match clusters.iter_mut().find(|(c, _)| *c == r) {
-                    Some((_, members)) if members.contains(&body) => {}
-                    Some((_, members)) => members.push(body),
-                    None => clusters.push((r, vec![body])),
-                }
-            }
-        }
-        let sets = &step.sets;
-        for (_, members) in clusters {
-            let free = members.iter().all(|h| {
-                let (Some(rb), Some(k)) = (bodies.get(*h), index.get(h)) else {
-                    return false;
-                };
-                let cand = &step.candidates[*k];
-                self.registry.manages(*h, rb)
-                    && !rb.is_sleeping()
-                    && !touches_other(rb, sets.narrow_phase)
-                    && sets.impulse_joints.attached_joints(*h).next().is_none()
-                    && sets.multibody_joints.rigid_body_link(*h).is_none()
-                    && rb.user_torque() == Vector::ZERO
-                    && !cand.touched
-                    && self.ccd_consistent(rb, cand, step.dt, step.dt, step)
-            });
-            if !free {
-                continue;
-            }
-            let settle = self.settle();
-            let balls: Option<Vec<ClusterBall>> = members
-                .iter()
-                .map(|h| {
-                    let cand = &step.candidates[index[h]];
-                    let rb = &bodies[*h];
-                    let geom = body_geom(rb, colliders, &cand.local_com);
-                    let part = geom.parts.first()?;
-                    let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
-                    let collider = part.handle;
-                    let mut grounds = settle.impact_ground_geoms(cand, &geom, colliders, step);
-                    let rolling_on = match &cand.rolling {
-                        Some((g, _)) => {
-                            grounds.push(settle.pair_geom(&step.grounds[*g], &geom, colliders)?);
-                            Some(grounds.len() - 1)
-                        }
-                        None => None,
-                    };
-                    Some(ClusterBall {
-                        cand,
-                        collider,
-                        radius,
-                        geom,
-                        grounds,
-                        rolling_on,
-                        inertia: Inertia::of(rb),
-                    })
-                })
-                .collect();
-            let Some(balls) = balls else {
-                continue;
-            };
-            let pairs: Vec<(usize, usize)> = impacts
-                .iter()
-                .filter_map(|p| {
-                    let i = members.iter().position(|h| *h == p.a)?;
-                    let j = members.iter().position(|h| *h == p.b)?;
-                    Some((i, j))
-                })
-                .collect();
-            let from = self.events.len();
-            let Some(ends) = pair_reconstruct::through_pair_impacts(
-                &mut self.settle(),
-                colliders,
-                &balls,
-                &pairs,
-                step,
-            ) else {
-                continue;
-            };
-            for (ball, end) in balls.iter().zip(ends) {
-                // Never left inside a ground.
-                let checked = Checked {
-                    body: ball.cand.body,
-                    geom: &ball.geom,
-                    inertia: &ball.inertia,
-                    cand: Some(ball.cand),
-                };
-                let (_, settled) = self.settle().check(
-                    bodies,
-                    colliders,
-                    &checked,
-                    &end,
-                    EndCheck::Flown,
-                    &ball.grounds,
-                    step,
-                    from,
-                );
-                let end = settled.unwrap_or(end);
-                let rb = &mut bodies[ball.cand.body];
-                write_state(rb, &end, &ball.cand.local_com, true);
-                if self.config.timing == TimingMode::Exact {
-                    self.settle().remember(ball.cand.body, rb, &end);
-                }
-                written.insert(ball.cand.body);
-            }
-        }
-        written
-    }
-
-    /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its
-    /// first ground impact at `t_first`? If rapier clamped it earlier, something other than
-    /// a ground stopped it, and re-integrating its flight would undo that.
-    fn ccd_consistent(
-        &self,
-        rb: &RigidBody,
-        cand: &Candidate,
-        t_first: f64,
-        dt: f64,
-        step: &StepData,
-    ) -> bool {
-        if !rb.is_ccd_active() {
-            return true;
-        }
-        let free_end = cand.flight.advance(&cand.start, dt).com;
-        let exact = free_end - cand.start.com;
-        let len2 = exact.norm_squared();
-        if len2 < 1e-24 {
-            return true;
-        }
-        let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
-        let fraction = actual.dot(&exact) / len2;
-        // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops
-        // a body up to about a prediction distance before the contact.
-        let slack =
-            (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
-        fraction >= t_first / dt - slack
     }
 }

@@ -2,7 +2,9 @@
 //! `Impact` pairs) moved together over the step from their start states, as they would have
 //! moved had rapier not solved those pairs.
 //!
-//! Contract: [`through_pair_impacts`] takes a cluster each of whose balls moved alone in the
+//! Contract: [`move_clusters`] finds the clusters whose every ball moved alone in the step
+//! and commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes
+//! a cluster each of whose balls moved alone in the
 //! step (no contact in rapier's solver, no joint or torque: checked by the caller) and moves
 //! every ball by its own motion (`crate::motion`: free flight, or rolling in closed form on
 //! its level ground) to the cluster's earliest event: a ball's ground impact (the in-step
@@ -19,19 +21,28 @@
 //! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
 //! nothing into rapier.
 
+use super::commit::write_state;
+use super::config::TimingMode;
+use super::convert::to_f64;
 use super::events::{EventKind, ImpactTiming};
 use super::geometry::{
     BodyGeom, GroundGeom, Search, SmallList, closest, first_impact, landing_point,
 };
+use super::handles::{HandleMap, HandleSet};
+use super::observe::{body_geom, touches_other};
 use super::plan::{Candidate, EndOfStep};
+use super::policy::{EndCheck, Role};
+use super::reconstruct::ccd_consistent;
 use super::reconstruct::rest_on_ground;
 use super::resolve::{
     ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
 };
+use super::settle::Checked;
 use super::settle::Settle;
 use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
-use crate::rapier::prelude::{ColliderHandle, ColliderSet};
+use crate::rapier::math::Vector;
+use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 
 /// A ball of a cluster and what its motion needs.
 pub(crate) struct ClusterBall<'a> {
@@ -45,6 +56,157 @@ pub(crate) struct ClusterBall<'a> {
     /// The ground it rolls on, as an index in `grounds`.
     pub rolling_on: Option<usize>,
     pub inertia: Inertia,
+}
+
+/// The clusters of the step's `Impact` pairs between balls (joined through shared
+/// balls) whose every ball moved alone in the step (no contact in rapier's solver, no
+/// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
+/// `TimeOfImpact` and `Exact` modes: moved together from their start states
+/// (`pair_reconstruct.rs`), checked against their grounds (`EndCheck::Flown`) and
+/// written. Returns the bodies written.
+pub(crate) fn move_clusters(
+    view: &mut Settle,
+    bodies: &mut RigidBodySet,
+    colliders: &ColliderSet,
+    step: &EndOfStep,
+) -> HandleSet<RigidBodyHandle> {
+    let mut written = HandleSet::default();
+    let impacts: Vec<_> = step
+        .pairs
+        .pairs
+        .iter()
+        .filter(|p| p.role == Role::Impact)
+        .collect();
+    if impacts.is_empty() || view.config.timing == TimingMode::Step {
+        return written;
+    }
+    let index: HandleMap<RigidBodyHandle, usize> = step
+        .candidates
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (c.body, k))
+        .collect();
+    // Clusters: the connected sets of balls, by union-find over the pairs.
+    let mut parent: HandleMap<RigidBodyHandle, RigidBodyHandle> = HandleMap::default();
+    fn root(
+        parent: &mut HandleMap<RigidBodyHandle, RigidBodyHandle>,
+        h: RigidBodyHandle,
+    ) -> RigidBodyHandle {
+        let mut r = h;
+        while let Some(p) = parent.get(&r).copied().filter(|p| *p != r) {
+            r = p;
+        }
+        parent.insert(h, r);
+        r
+    }
+    for pair in &impacts {
+        let (ra, rb) = (root(&mut parent, pair.a), root(&mut parent, pair.b));
+        if ra != rb {
+            parent.insert(ra, rb);
+        }
+    }
+    let mut clusters: Vec<(RigidBodyHandle, Vec<RigidBodyHandle>)> = Vec::new();
+    for pair in &impacts {
+        for body in [pair.a, pair.b] {
+            let r = root(&mut parent, body);
+            match clusters.iter_mut().find(|(c, _)| *c == r) {
+                Some((_, members)) if members.contains(&body) => {}
+                Some((_, members)) => members.push(body),
+                None => clusters.push((r, vec![body])),
+            }
+        }
+    }
+    let sets = &step.sets;
+    for (_, members) in clusters {
+        let free = members.iter().all(|h| {
+            let (Some(rb), Some(k)) = (bodies.get(*h), index.get(h)) else {
+                return false;
+            };
+            let cand = &step.candidates[*k];
+            view.registry.manages(*h, rb)
+                && !rb.is_sleeping()
+                && !touches_other(rb, sets.narrow_phase)
+                && sets.impulse_joints.attached_joints(*h).next().is_none()
+                && sets.multibody_joints.rigid_body_link(*h).is_none()
+                && rb.user_torque() == Vector::ZERO
+                && !cand.touched
+                && ccd_consistent(rb, cand, step.dt, step.dt, step)
+        });
+        if !free {
+            continue;
+        }
+        let settle = &*view;
+        let balls: Option<Vec<ClusterBall>> = members
+            .iter()
+            .map(|h| {
+                let cand = &step.candidates[index[h]];
+                let rb = &bodies[*h];
+                let geom = body_geom(rb, colliders, &cand.local_com);
+                let part = geom.parts.first()?;
+                let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
+                let collider = part.handle;
+                let mut grounds = settle.impact_ground_geoms(cand, &geom, colliders, step);
+                let rolling_on = match &cand.rolling {
+                    Some((g, _)) => {
+                        grounds.push(settle.pair_geom(&step.grounds[*g], &geom, colliders)?);
+                        Some(grounds.len() - 1)
+                    }
+                    None => None,
+                };
+                Some(ClusterBall {
+                    cand,
+                    collider,
+                    radius,
+                    geom,
+                    grounds,
+                    rolling_on,
+                    inertia: Inertia::of(rb),
+                })
+            })
+            .collect();
+        let Some(balls) = balls else {
+            continue;
+        };
+        let pairs: Vec<(usize, usize)> = impacts
+            .iter()
+            .filter_map(|p| {
+                let i = members.iter().position(|h| *h == p.a)?;
+                let j = members.iter().position(|h| *h == p.b)?;
+                Some((i, j))
+            })
+            .collect();
+        let from = view.events.len();
+        let Some(ends) = through_pair_impacts(view, colliders, &balls, &pairs, step) else {
+            continue;
+        };
+        for (ball, end) in balls.iter().zip(ends) {
+            // Never left inside a ground.
+            let checked = Checked {
+                body: ball.cand.body,
+                geom: &ball.geom,
+                inertia: &ball.inertia,
+                cand: Some(ball.cand),
+            };
+            let (_, settled) = view.check(
+                bodies,
+                colliders,
+                &checked,
+                &end,
+                EndCheck::Flown,
+                &ball.grounds,
+                step,
+                from,
+            );
+            let end = settled.unwrap_or(end);
+            let rb = &mut bodies[ball.cand.body];
+            write_state(rb, &end, &ball.cand.local_com, true);
+            if view.config.timing == TimingMode::Exact {
+                view.remember(ball.cand.body, rb, &end);
+            }
+            written.insert(ball.cand.body);
+        }
+    }
+    written
 }
 
 /// What happens next in the cluster.

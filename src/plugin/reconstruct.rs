@@ -11,13 +11,14 @@
 //! nothing into rapier: the caller has the settle stage check that state (`EndCheck::Flown`:
 //! a body never left inside a ground) and commits it.
 
+use super::convert::vec_to_na;
 use super::events::{EventKind, ImpactTiming};
 use super::geometry::{BodyGeom, GroundGeom, Search, closest, first_impact, landing_point};
-use super::plan::{Candidate, EndOfStep};
+use super::plan::{Candidate, EndOfStep, StepData};
 use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
 use super::settle::Settle;
 use crate::motion::{Flight, Rolling, State};
-use crate::rapier::prelude::ColliderSet;
+use crate::rapier::prelude::{ColliderSet, RigidBody};
 
 /// The body's state at the step's end after the impacts from `first` on (see the module's
 /// contract); `view` receives the events.
@@ -148,4 +149,31 @@ pub(crate) fn rest_on_ground(
             .push(correction(EventKind::Settle, site, inertia, &before, s, t));
     }
     true
+}
+
+/// Was the body's motion in the step cut short by rapier's CCD only at (or after) its first
+/// ground impact at `t_first`? If rapier clamped it earlier, something other than a ground
+/// stopped it, and re-integrating its flight would undo that.
+pub(crate) fn ccd_consistent(
+    rb: &RigidBody,
+    cand: &Candidate,
+    t_first: f64,
+    dt: f64,
+    step: &StepData,
+) -> bool {
+    if !rb.is_ccd_active() {
+        return true;
+    }
+    let free_end = cand.flight.advance(&cand.start, dt).com;
+    let exact = free_end - cand.start.com;
+    let len2 = exact.norm_squared();
+    if len2 < 1e-24 {
+        return true;
+    }
+    let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
+    let fraction = actual.dot(&exact) / len2;
+    // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
+    // body up to about a prediction distance before the contact.
+    let slack = (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
+    fraction >= t_first / dt - slack
 }
