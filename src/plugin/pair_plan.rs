@@ -25,7 +25,7 @@ use crate::motion::State;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    ActiveHooks, ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -71,16 +71,12 @@ struct Ball {
     /// Radius, skin included (m).
     radius: f64,
     asleep: bool,
-}
-
-/// A bound on the relative acceleration of two balls from their user forces (m/s^2); gravity
-/// accelerates both alike.
-fn relative_force_accel(bodies: &RigidBodySet, a: RigidBodyHandle, b: RigidBodyHandle) -> f64 {
-    let accel = |h: RigidBodyHandle| {
-        let rb = &bodies[h];
-        to_f64(rb.user_force().length()) / to_f64(rb.mass())
-    };
-    accel(a) + accel(b)
+    /// The hook flags the user set on its collider.
+    user: ActiveHooks,
+    /// It has a joint (only then can a joint disable its contacts).
+    jointed: bool,
+    /// The acceleration of its user force (m/s^2).
+    force_accel: f64,
 }
 
 /// The step's pairs (see the module's contract). `prev` are last step's pair roles (a pair
@@ -129,6 +125,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 v: vec_to_na(rb.linvel()),
                 radius: radius + to_f64(co.contact_skin()),
                 asleep: rb.is_sleeping(),
+                user: flags.recorded_user_flags(colliders, *collider),
+                jointed: sets.impulse_joints.attached_joints(handle).next().is_some()
+                    || sets.multibody_joints.rigid_body_link(handle).is_some(),
+                force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
             })
         })
         .collect();
@@ -139,11 +139,8 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // Each ball's sphere swept over the step: its travel under gravity and any force is at
     // most |v| dt + |a| dt^2 (a generous bound for a user force too, checked per pair below).
     let margin = policy.resting_gap.max(policy.prediction);
-    let swept = |b: &Ball| {
-        let rb = &bodies[b.body];
-        let accel = to_f64(rb.user_force().length()) / to_f64(rb.mass());
-        b.radius + b.v.norm() * dt + (gravity.norm() + accel) * dt * dt + margin
-    };
+    let swept =
+        |b: &Ball| b.radius + b.v.norm() * dt + (gravity.norm() + b.force_accel) * dt * dt + margin;
     let leaves: Vec<(usize, Aabb)> = balls
         .iter()
         .enumerate()
@@ -171,15 +168,16 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             return None;
         }
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
-        let user = flags.recorded_user_flags(colliders, a.collider)
-            | flags.recorded_user_flags(colliders, b.collider);
+        let user = a.user | b.user;
         if !filter::rapier_solves(bodies, ca, cb)
-            || filter::joint_disables_contacts(
-                sets.impulse_joints,
-                sets.multibody_joints,
-                a.body,
-                b.body,
-            )
+            || a.jointed
+                && b.jointed
+                && filter::joint_disables_contacts(
+                    sets.impulse_joints,
+                    sets.multibody_joints,
+                    a.body,
+                    b.body,
+                )
             || filter::user_refuses(
                 user_hooks,
                 user,
@@ -210,7 +208,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         // step (both balls fall alike; a user force adds its acceleration), and not resting
         // or pressed. Anything slower is rapier's with e = 0 (`Resting`), as a slow ground
         // contact is: a pile's neighbours, balls drifting together.
-        let forces = relative_force_accel(bodies, a.body, b.body);
+        let forces = a.force_accel + b.force_accel;
         let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
         let impact = closing > policy.resting_speed
             && closes
