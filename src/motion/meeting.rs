@@ -213,6 +213,8 @@ mod tests {
             radius: 0.1,
             inertia_ratio: 0.4,
             friction: 0.3,
+            rolling_resistance: 0.0,
+            spinning_friction: 0.0,
             accel: Vector3::new(0.0, -9.81, 0.0),
         });
         let a = ball(

@@ -18,24 +18,169 @@ pub(crate) struct Rolling {
     pub inertia_ratio: f64,
     /// Coulomb friction coefficient.
     pub friction: f64,
-    /// Constant acceleration, along `-normal` (gravity on a level ground).
+    /// Rolling resistance `mu_r`: while the ball rolls, a torque `mu_r r N` opposes it.
+    pub rolling_resistance: f64,
+    /// Spinning friction `mu_sp`: a torque `mu_sp r N` about the normal opposes the spin
+    /// about it.
+    pub spinning_friction: f64,
+    /// Constant acceleration (gravity): into the ground, and along it on a slope.
     pub accel: Vector3<f64>,
 }
 
+/// One phase of the motion along the ground: the accelerations (linear, and angular of the
+/// spin along the ground) and how long they last.
+struct Phase {
+    linear: Vector3<f64>,
+    angular: Vector3<f64>,
+    until: f64,
+    /// The phase ends with the ball at rest.
+    stops: bool,
+}
+
 impl Rolling {
-    /// The state `dt` seconds after `s`, which touches the ground (`v . n = 0`).
+    /// The state `dt` seconds after `s`, which touches the ground (`v . n = 0`), or `None`
+    /// where the closed form below does not reach: on a slope, a slip or (with rolling
+    /// resistance) a rolling velocity across the fall line, and the narrow band where the
+    /// ball can neither roll (the friction it needs exceeds `mu N`) nor keep a slip it starts.
     ///
-    /// The ground's normal force is `N = -m a.n`; the contact point slips at
-    /// `s = v + w x (-r n)`. While it slips, kinetic friction `F = -mu N s/|s|` acts there:
-    /// `dv/dt = F/m`, `dw/dt = (-r n) x F / I`, so `ds/dt = F (1 + 1/k) / m` keeps its direction
-    /// and the slip decays at `mu |a.n| (1 + 1/k)`, reaching zero at
-    /// `t_roll = |s| / (mu |a.n| (1 + 1/k))`. From then on the ball rolls without friction
-    /// (no tangential force on a level ground) at constant `v` and `w`. For a ball launched
-    /// sliding without spin, `v = 5/7 v0` at `t_roll = 2 v0 / (7 mu g)`. Every step of this
-    /// is exact; the orientation is turned by the integral of `w`, exact when `w` keeps its
-    /// axis (a ball sliding straight, with top- or backspin) and second order in the step
-    /// otherwise (side spin about the normal).
+    /// With `g_n = -a.n` (the normal force per unit mass, `N = m g_n`), `a_t` the acceleration
+    /// along the ground, `k = I / (m r^2)`, the contact at `-r n` and its slip
+    /// `s = v - r w x n`:
+    /// - sliding: kinetic friction `F = -mu N s/|s|` at the contact, `dv/dt = a_t + F/m`,
+    ///   `dw/dt = (-r n) x F / I`, so `ds/dt = a_t - mu g_n (1 + 1/k) s/|s|`: along the fall
+    ///   line (or on level ground) the slip keeps its direction and changes at
+    ///   `a_t.s/|s| - mu g_n (1 + 1/k)`, ending when it reaches zero. A ball launched sliding
+    ///   without spin on level ground rolls at `5/7 v0` from `t = 2 v0 / (7 mu g)`;
+    /// - rolling: `dv/dt = (a_t - mu_r g_n v/|v|) / (1 + k)`, `w = n x v / r`: on level ground
+    ///   it stops after `v0^2 (1 + k) / (2 mu_r g)`, down a slope of angle `theta` it speeds up
+    ///   at `g (sin - mu_r cos) / (1 + k)`, up it slows at `g (sin + mu_r cos) / (1 + k)`, as
+    ///   long as the friction this needs, `m (dv/dt - a_t)`, stays within `mu N`;
+    /// - at rest: it stays where `|a_t| <= mu_r g_n` (`tan(theta) <= mu_r`), else rolls down;
+    /// - the spin about the normal `w.n` decays at `mu_sp g_n / (k r)` to zero
+    ///   (`5 mu_sp g / (2 r)` for a solid ball on level ground), whatever the ball does, and
+    ///   moves nothing else (it does not turn the contact point).
+    ///
+    /// Every phase is exact (constant accelerations); the orientation turns by the integral
+    /// of `w`, exact when `w` keeps its axis and second order in the step otherwise.
     pub fn advance(&self, s: &State, dt: f64) -> State {
+        self.advance_checked(s, dt)
+            .unwrap_or_else(|| self.advance_unresisted(s, dt))
+    }
+
+    /// [`Self::advance`], `None` where the closed form does not reach.
+    pub fn advance_checked(&self, s: &State, dt: f64) -> Option<State> {
+        let n = self.normal;
+        let gn = -self.accel.dot(&n).min(0.0);
+        let at = self.accel - n * self.accel.dot(&n);
+        // The spin about the normal: its own closed form.
+        let wn0 = s.w.dot(&n);
+        let decay = self.spinning_friction * gn / (self.inertia_ratio * self.radius);
+        let (wn1, turned_n) = spin_down(wn0, decay, dt);
+        let mut st = State {
+            w: s.w - n * wn0,
+            ..*s
+        };
+        let mut turned = Vector3::zeros();
+        let mut t = 0.0;
+        // At most: slide, roll, stop (or roll back down), so a few phases.
+        for _ in 0..6 {
+            let left = dt - t;
+            if left <= 0.0 {
+                break;
+            }
+            let phase = self.phase(&st, &at, gn)?;
+            let h = phase.until.min(left);
+            st.com += st.v * h + 0.5 * phase.linear * h * h;
+            turned += st.w * h + 0.5 * phase.angular * h * h;
+            st.v += phase.linear * h;
+            st.w += phase.angular * h;
+            t += h;
+            if phase.stops && h == phase.until {
+                st.v = Vector3::zeros();
+                st.w = Vector3::zeros();
+            }
+        }
+        st.w += n * wn1;
+        turned += n * turned_n;
+        Some(State {
+            rot: UnitQuaternion::from_scaled_axis(turned) * s.rot,
+            ..st
+        })
+    }
+
+    /// The phase the ball is in at `st` (its spin along the ground only), on a ground of
+    /// acceleration `at` along it and `gn` into it.
+    fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64) -> Option<Phase> {
+        let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
+        let scale = 1e-12 * (1e-3 + st.v.norm() + r * st.w.norm() + at.norm());
+        let slip = st.v - r * st.w.cross(&n);
+        let along = |u: &Vector3<f64>| at.cross(u).norm() <= 1e-9 * at.norm();
+        let slide = |u: Vector3<f64>, slip_speed: f64| {
+            // Friction's accelerations: linear along -u, angular about n x u.
+            let linear = at - u * (self.friction * gn);
+            let angular = n.cross(&u) * (self.friction * gn / (r * k));
+            let rate = at.dot(&u) - self.friction * gn * (1.0 + 1.0 / k);
+            Phase {
+                linear,
+                angular,
+                until: if rate < 0.0 {
+                    slip_speed / -rate
+                } else {
+                    f64::INFINITY
+                },
+                stops: false,
+            }
+        };
+        let slip_speed = slip.norm();
+        if slip_speed > scale {
+            let u = slip / slip_speed;
+            return along(&u).then(|| slide(u, slip_speed));
+        }
+        // Rolling, or at rest: the direction it rolls (or would start to).
+        let speed = st.v.norm();
+        let u = if speed > scale {
+            st.v / speed
+        } else if at.norm() > self.rolling_resistance * gn {
+            at.normalize()
+        } else {
+            // Held at rest by the rolling resistance (or on level ground).
+            return Some(Phase {
+                linear: Vector3::zeros(),
+                angular: Vector3::zeros(),
+                until: f64::INFINITY,
+                stops: false,
+            });
+        };
+        if self.rolling_resistance > 0.0 && !along(&u) {
+            return None;
+        }
+        let linear = (at - u * (self.rolling_resistance * gn)) / (1.0 + k);
+        // Rolling needs the friction m (dv/dt - a_t); beyond mu N the ball slides, its slip
+        // growing down the fall line, if it can keep growing there.
+        if (linear - at).norm() > self.friction * gn * (1.0 + 1e-12) {
+            let down = at.try_normalize(0.0)?;
+            let phase = slide(down, 0.0);
+            return (phase.until == f64::INFINITY).then_some(phase);
+        }
+        let slowing = linear.dot(&u);
+        Some(Phase {
+            linear,
+            angular: n.cross(&linear) / r,
+            until: if slowing < 0.0 && speed > scale {
+                speed / -slowing
+            } else {
+                f64::INFINITY
+            },
+            stops: slowing < 0.0 && speed > scale,
+        })
+    }
+
+    /// For the states [`Self::advance_checked`] does not reach (a slip across a slope; the
+    /// plugin builds a `Rolling` only on level ground): friction held along the initial slip
+    /// for its sliding time on level ground, plus the acceleration along the ground, without
+    /// rolling resistance or spinning friction. An approximation, never more energetic than
+    /// the slope gives.
+    fn advance_unresisted(&self, s: &State, dt: f64) -> State {
         let n = self.normal;
         let r = self.radius;
         let an = self.accel.dot(&n).min(0.0);
@@ -63,6 +208,9 @@ impl Rolling {
         let rest = dt - sliding;
         com += v * rest;
         turned += w * rest;
+        let at = self.accel - n * self.accel.dot(&n);
+        com += 0.5 * at * dt * dt;
+        v += at * dt;
         State {
             com,
             rot: UnitQuaternion::from_scaled_axis(turned) * s.rot,
@@ -70,6 +218,19 @@ impl Rolling {
             w,
         }
     }
+}
+
+/// A spin `w0` (rad/s) slowed at `decay` (rad/s^2) to zero: the spin after `dt` and the angle
+/// it turned.
+fn spin_down(w0: f64, decay: f64, dt: f64) -> (f64, f64) {
+    if decay <= 0.0 || w0 == 0.0 {
+        return (w0, w0 * dt);
+    }
+    let stop = w0.abs() / decay;
+    let h = stop.min(dt);
+    let slowing = -decay * w0.signum();
+    let w1 = if h == stop { 0.0 } else { w0 + slowing * h };
+    (w1, w0 * h + 0.5 * slowing * h * h)
 }
 
 #[cfg(test)]
@@ -82,6 +243,8 @@ mod tests {
             radius: 0.1,
             inertia_ratio: 0.4,
             friction: mu,
+            rolling_resistance: 0.0,
+            spinning_friction: 0.0,
             accel: Vector3::new(0.0, -9.81, 0.0),
         };
         let s = State {
@@ -174,5 +337,245 @@ mod tests {
         let end = rolling.advance(&s, 0.5);
         assert_eq!((end.v, end.w), (s.v, s.w));
         assert!((end.com.x - 0.5).abs() < 1e-15);
+    }
+
+    const G: f64 = 9.81;
+    const R: f64 = 0.1;
+    const K: f64 = 0.4;
+
+    /// A solid ball of radius 0.1 m on a plane tilted by `slope` degrees about z, downhill
+    /// along `(cos, -sin, 0)`, with the coefficients given.
+    fn on_slope(slope: f64, mu: f64, mu_r: f64, mu_sp: f64) -> (Rolling, Vector3<f64>) {
+        let th = slope.to_radians();
+        let normal = Vector3::new(th.sin(), th.cos(), 0.0);
+        let rolling = Rolling {
+            normal,
+            radius: R,
+            inertia_ratio: K,
+            friction: mu,
+            rolling_resistance: mu_r,
+            spinning_friction: mu_sp,
+            accel: Vector3::new(0.0, -G, 0.0),
+        };
+        (rolling, Vector3::new(th.cos(), -th.sin(), 0.0))
+    }
+
+    /// At the contact point's height above the origin, moving at `v` along `dir`, spinning
+    /// `w`.
+    fn state(rolling: &Rolling, v: Vector3<f64>, w: Vector3<f64>) -> State {
+        State {
+            com: rolling.normal * R,
+            rot: UnitQuaternion::identity(),
+            v,
+            w,
+        }
+    }
+
+    /// Rolling without slip at `v` on the ground of `rolling`.
+    fn rolling_at(rolling: &Rolling, v: Vector3<f64>) -> State {
+        state(rolling, v, rolling.normal.cross(&v) / R)
+    }
+
+    /// One step of `t`, and `t` in 60 Hz steps: both must agree with the closed form.
+    fn both_ways(rolling: &Rolling, s: &State, t: f64) -> [State; 2] {
+        let one = rolling
+            .advance_checked(s, t)
+            .expect("in the closed form's reach");
+        let steps = (t * 60.0).ceil() as usize;
+        let h = t / steps as f64;
+        let mut many = *s;
+        for _ in 0..steps {
+            many = rolling.advance_checked(&many, h).expect("in reach");
+        }
+        [one, many]
+    }
+
+    #[test]
+    fn a_rolling_ball_stops_at_the_closed_form_distance_and_time() {
+        let (rolling, dir) = on_slope(0.0, 0.3, 0.02, 0.0);
+        let v0 = 1.5;
+        let s = rolling_at(&rolling, dir * v0);
+        let t_stop = v0 * (1.0 + K) / (0.02 * G);
+        let d = v0 * v0 * (1.0 + K) / (2.0 * 0.02 * G);
+        // Half-way in time: v0 / 2, three quarters of the distance.
+        for half in both_ways(&rolling, &s, 0.5 * t_stop) {
+            assert!(
+                (half.v.dot(&dir) - 0.5 * v0).abs() < 1e-12 * v0,
+                "{:?}",
+                half.v
+            );
+            assert!((half.com.x - 0.75 * d).abs() < 1e-12 * d);
+        }
+        for end in both_ways(&rolling, &s, 1.5 * t_stop) {
+            assert_eq!((end.v, end.w), (Vector3::zeros(), Vector3::zeros()));
+            assert!((end.com.x - d).abs() < 1e-12 * d, "{} vs {d}", end.com.x);
+        }
+    }
+
+    #[test]
+    fn sliding_turns_to_rolling_then_the_resistance_stops_it() {
+        let (mu, mu_r) = (0.2, 0.01);
+        let (rolling, dir) = on_slope(0.0, mu, mu_r, 0.0);
+        let v0 = 2.0;
+        let s = state(&rolling, dir * v0, Vector3::zeros());
+        let t_roll = 2.0 * v0 / (7.0 * mu * G);
+        let v1 = 5.0 / 7.0 * v0;
+        let t_stop = v1 * (1.0 + K) / (mu_r * G);
+        let d = 6.0 / 7.0 * v0 * t_roll + v1 * v1 * (1.0 + K) / (2.0 * mu_r * G);
+        for end in both_ways(&rolling, &s, t_roll + t_stop + 1.0) {
+            assert!((end.com.x - d).abs() < 1e-12 * d, "{} vs {d}", end.com.x);
+            assert_eq!(end.v, Vector3::zeros());
+        }
+        // Just after rolling starts: 5/7 v0, less the resistance's slowing since.
+        let [just, _] = both_ways(&rolling, &s, t_roll + 0.1);
+        let v = v1 - mu_r * G / (1.0 + K) * 0.1;
+        assert!((just.v.x - v).abs() < 1e-12, "{} vs {v}", just.v.x);
+    }
+
+    #[test]
+    fn a_draw_shot_comes_back_and_stops() {
+        // Backspin three times the rolling spin: the ball rolls back at (v0 - k r w)/(1 + k).
+        let (mu, mu_r) = (0.2, 0.01);
+        let (rolling, dir) = on_slope(0.0, mu, mu_r, 0.0);
+        let (v0, w0) = (1.0, 30.0);
+        let s = state(&rolling, dir * v0, Vector3::new(0.0, 0.0, w0));
+        let slip = v0 + R * w0;
+        let t_roll = slip / (mu * G * (1.0 + 1.0 / K));
+        let back = (v0 - K * R * w0) / (1.0 + K);
+        assert!(back < 0.0);
+        let x_roll = v0 * t_roll - 0.5 * mu * G * t_roll * t_roll;
+        let d_back = back * back * (1.0 + K) / (2.0 * mu_r * G);
+        for end in both_ways(&rolling, &s, 10.0) {
+            assert!(
+                (end.com.x - (x_roll - d_back)).abs() < 1e-12,
+                "{}",
+                end.com.x
+            );
+            assert_eq!(end.v, Vector3::zeros());
+        }
+        let [rolling_back, _] = both_ways(&rolling, &s, t_roll + 1e-3);
+        assert!((rolling_back.v.x - (back + mu_r * G / (1.0 + K) * 1e-3)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn spin_about_the_normal_decays_at_the_closed_form_rate() {
+        let mu_sp = 0.05;
+        let (rolling, _) = on_slope(0.0, 0.3, 0.0, mu_sp);
+        let w0 = 20.0;
+        let s = state(&rolling, Vector3::zeros(), Vector3::new(0.0, w0, 0.0));
+        let rate = 5.0 * mu_sp * G / (2.0 * R);
+        let t0 = w0 / rate;
+        for half in both_ways(&rolling, &s, 0.5 * t0) {
+            assert!((half.w.y - 0.5 * w0).abs() < 1e-12 * w0, "{}", half.w.y);
+            assert_eq!(half.com, s.com);
+        }
+        for end in both_ways(&rolling, &s, 2.0 * t0) {
+            assert_eq!(end.w, Vector3::zeros());
+            // It turned w0^2 / (2 rate) about the normal.
+            let turned = w0 * w0 / (2.0 * rate);
+            let expected = UnitQuaternion::from_scaled_axis(Vector3::y() * turned);
+            assert!(end.rot.angle_to(&expected) < 1e-9, "{:?}", end.rot);
+        }
+    }
+
+    #[test]
+    fn on_a_slope_it_rests_below_mu_r_and_rolls_down_above() {
+        let mu_r: f64 = 0.05;
+        for (tan, moves) in [(0.5 * mu_r, false), (mu_r, false), (2.0 * mu_r, true)] {
+            let slope = tan.atan().to_degrees();
+            let (rolling, down) = on_slope(slope, 0.5, mu_r, 0.0);
+            let s = state(&rolling, Vector3::zeros(), Vector3::zeros());
+            let th = tan.atan();
+            let accel = G * (th.sin() - mu_r * th.cos()) / (1.0 + K);
+            for end in both_ways(&rolling, &s, 1.0) {
+                if moves {
+                    let x = end.com - s.com;
+                    assert!((x.dot(&down) - 0.5 * accel).abs() < 1e-12, "{x:?}");
+                    let slip = end.v - R * end.w.cross(&rolling.normal);
+                    assert!(slip.norm() < 1e-12, "rolls: {slip:?}");
+                } else {
+                    assert_eq!((end.com, end.v), (s.com, Vector3::zeros()), "tan {tan}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rolling_up_a_slope_it_slows_stops_and_rolls_back_down() {
+        let (mu_r, slope) = (0.02, 5.0f64);
+        let (rolling, down) = on_slope(slope, 0.5, mu_r, 0.0);
+        let th = slope.to_radians();
+        let (up_rate, down_rate) = (
+            G * (th.sin() + mu_r * th.cos()) / (1.0 + K),
+            G * (th.sin() - mu_r * th.cos()) / (1.0 + K),
+        );
+        let v0 = 1.0;
+        let s = rolling_at(&rolling, -down * v0);
+        let t_up = v0 / up_rate;
+        let climb = v0 * v0 / (2.0 * up_rate);
+        let t = t_up + 0.7;
+        let expected = -climb + 0.5 * down_rate * 0.7 * 0.7;
+        for end in both_ways(&rolling, &s, t) {
+            let x = (end.com - s.com).dot(&down);
+            assert!((x - expected).abs() < 1e-12, "{x} vs {expected}");
+            assert!((end.v.dot(&down) - down_rate * 0.7).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn on_a_steep_slope_it_slides_down_and_spins_up() {
+        // k tan(30 deg) = 0.23 > mu (1 + k) = 0.14: it cannot roll.
+        let (mu, slope) = (0.1, 30.0f64);
+        let (rolling, down) = on_slope(slope, mu, 0.0, 0.0);
+        let th = slope.to_radians();
+        let s = state(&rolling, Vector3::zeros(), Vector3::zeros());
+        for end in both_ways(&rolling, &s, 0.5) {
+            let x = (end.com - s.com).dot(&down);
+            assert!(
+                (x - 0.5 * G * (th.sin() - mu * th.cos()) * 0.25).abs() < 1e-12,
+                "{x}"
+            );
+            // Friction spins it up towards rolling down (about n x down) at mu g cos / (k r).
+            let spin = end.w.dot(&rolling.normal.cross(&down));
+            assert!(
+                (spin - mu * G * th.cos() / (K * R) * 0.5).abs() < 1e-11,
+                "{spin}"
+            );
+        }
+    }
+
+    #[test]
+    fn energy_never_rises_and_a_slip_across_a_slope_is_out_of_reach() {
+        let (rolling, _) = on_slope(0.0, 0.3, 0.02, 0.05);
+        let energy = |s: &State| 0.5 * s.v.norm_squared() + 0.5 * K * R * R * s.w.norm_squared();
+        let mut x = 0.37f64;
+        let mut next = || {
+            x = (x * 7.31 + 0.13).fract();
+            4.0 * x - 2.0
+        };
+        for _ in 0..200 {
+            let mut s = state(
+                &rolling,
+                Vector3::new(next(), 0.0, next()),
+                Vector3::new(5.0 * next(), 5.0 * next(), 5.0 * next()) * 3.0,
+            );
+            for _ in 0..120 {
+                let after = rolling
+                    .advance_checked(&s, 1.0 / 60.0)
+                    .expect("level ground");
+                assert!(energy(&after) <= energy(&s) * (1.0 + 1e-12) + 1e-15);
+                s = after;
+            }
+        }
+        let (sloped, down) = on_slope(10.0, 0.3, 0.0, 0.0);
+        let across = Vector3::z();
+        let s = state(&sloped, across, Vector3::zeros());
+        assert_eq!(sloped.advance_checked(&s, 0.1), None);
+        // Along the fall line it is in reach.
+        assert!(
+            sloped
+                .advance_checked(&state(&sloped, down, Vector3::zeros()), 0.1)
+                .is_some()
+        );
     }
 }

@@ -533,6 +533,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             radius,
             inertia_ratio,
             friction,
+            // Not configurable yet: the plugin's rolling ball rolls on for ever, as before.
+            rolling_resistance: 0.0,
+            spinning_friction: 0.0,
             accel: flight.accel,
         })
     }
