@@ -187,10 +187,7 @@ fn main() {
                 &world.bodies,
                 &world.colliders,
                 table,
-                rapier_impact::GroundMaterial {
-                    restitution: 0.0,
-                    friction: mu_cloth,
-                },
+                rapier_impact::GroundMaterial::new(0.0, mu_cloth),
             )
             .expect("the table exists");
             p.add_impact_body(&world.bodies, cue)

@@ -307,10 +307,7 @@ fn invalid_settings_are_refused_where_they_are_set() {
     let (gone_body, gone) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::ball(1.0));
     world.remove_body(gone_body);
 
-    let material = |restitution, friction| GroundMaterial {
-        restitution,
-        friction,
-    };
+    let material = GroundMaterial::new;
     let e = p
         .add_ground_with_material(&world.bodies, &world.colliders, ground, material(-0.1, 0.5))
         .unwrap_err();

@@ -31,13 +31,17 @@ fn configuration_and_materials_round_trip() {
         resting_gap: None,
         flat_tolerance: 0.0123,
         max_impacts_per_step: 7,
+        rolling_resistance: 0.015,
+        spinning_friction: 0.02,
     };
     let json = round_trip(&config);
     assert!(json.contains("TimeOfImpact"), "{json}");
     round_trip(&ImpactConfig::default());
+    round_trip(&GroundMaterial::new(0.35, 1.0 / 3.0));
     round_trip(&GroundMaterial {
-        restitution: 0.35,
-        friction: 1.0 / 3.0,
+        rolling_resistance: Some(0.012),
+        spinning_friction: Some(0.3),
+        ..GroundMaterial::new(0.35, 1.0 / 3.0)
     });
 }
 

@@ -41,12 +41,30 @@ pub struct GroundMaterial {
     pub restitution: f64,
     /// Coefficient of friction `mu`, finite and `>= 0`.
     pub friction: f64,
+    /// Rolling resistance `mu_r` on this ground (dimensionless, finite and `>= 0`), or `None`
+    /// for the body's or the configuration's (see [`ImpactConfig::rolling_resistance`]).
+    pub rolling_resistance: Option<f64>,
+    /// Spinning friction `mu_sp` on this ground, or `None` (see
+    /// [`ImpactConfig::spinning_friction`]).
+    pub spinning_friction: Option<f64>,
 }
 
 impl GroundMaterial {
-    /// Checks `e >= 0`, `mu >= 0`, both finite.
+    /// Restitution and friction, and no rolling coefficients of its own.
+    pub fn new(restitution: f64, friction: f64) -> Self {
+        Self {
+            restitution,
+            friction,
+            rolling_resistance: None,
+            spinning_friction: None,
+        }
+    }
+
+    /// Checks `e >= 0`, `mu >= 0`, `mu_r >= 0`, `mu_sp >= 0`, all finite.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        self.to_model().validate().map_err(ConfigError::Material)
+        self.to_model().validate().map_err(ConfigError::Material)?;
+        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
+        rolling_coefficient("spinning_friction", self.spinning_friction)
     }
 
     pub(crate) fn to_model(self) -> Material {
@@ -97,6 +115,26 @@ pub struct ImpactConfig {
     /// is resolved with `e = 0`, so a body caught in a rapid sequence of impacts comes to rest
     /// on the ground instead of bouncing indefinitely.
     pub max_impacts_per_step: usize,
+    /// Rolling resistance `mu_r` (dimensionless, finite and `>= 0`, default 0): while a ball
+    /// the plugin rolls in closed form rolls without slip, a torque `mu_r R N` opposes it
+    /// (`docs/model.md`). Which value a ball gets: the ground's
+    /// ([`GroundMaterial::rolling_resistance`]), else the ball's
+    /// ([`crate::ImpactPlugin::set_body_rolling`]), else this.
+    pub rolling_resistance: f64,
+    /// Spinning friction `mu_sp` (dimensionless, finite and `>= 0`, default 0): a torque
+    /// `mu_sp R N` about the ground normal opposes a rolling ball's spin about it. Chosen as
+    /// [`ImpactConfig::rolling_resistance`] is.
+    pub spinning_friction: f64,
+}
+
+/// Checks a rolling coefficient: finite and `>= 0`.
+fn rolling_coefficient(field: &'static str, value: Option<f64>) -> Result<(), ConfigError> {
+    match value {
+        Some(v) if !(v.is_finite() && v >= 0.0) => {
+            Err(ConfigError::InvalidConfig { field, value: v })
+        }
+        _ => Ok(()),
+    }
 }
 
 impl Default for ImpactConfig {
@@ -108,6 +146,8 @@ impl Default for ImpactConfig {
             resting_gap: None,
             flat_tolerance: 1e-3,
             max_impacts_per_step: 8,
+            rolling_resistance: 0.0,
+            spinning_friction: 0.0,
         }
     }
 }
@@ -129,6 +169,8 @@ impl ImpactConfig {
             check("resting_gap", v)?;
         }
         check("flat_tolerance", self.flat_tolerance)?;
+        check("rolling_resistance", self.rolling_resistance)?;
+        check("spinning_friction", self.spinning_friction)?;
         if self.max_impacts_per_step == 0 {
             return Err(ConfigError::InvalidConfig {
                 field: "max_impacts_per_step",

@@ -35,6 +35,8 @@ use super::handles::{HandleHasher, slot_of};
 pub(crate) struct GroundEntry {
     /// Material override.
     pub material: Option<Material>,
+    /// Rolling resistance and spinning friction overrides (`GroundMaterial`).
+    pub rolling: (Option<f64>, Option<f64>),
     /// Marked by the all-fixed-colliders mode rather than by the user.
     pub automatic: bool,
 }
@@ -466,6 +468,7 @@ mod tests {
                     *h,
                     GroundEntry {
                         material: None,
+                        rolling: (None, None),
                         automatic: false,
                     },
                 )

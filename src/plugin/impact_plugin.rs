@@ -213,6 +213,30 @@ impl<H> ImpactPlugin<H> {
         self.registry.excluded.remove(&body);
     }
 
+    /// A ball's own rolling resistance and spinning friction (dimensionless, finite and
+    /// `>= 0`; `None` for the configuration's): used on every ground without an override of
+    /// its own (see [`ImpactConfig::rolling_resistance`]).
+    pub fn set_body_rolling(
+        &mut self,
+        body: RigidBodyHandle,
+        coefficients: Option<(f64, f64)>,
+    ) -> Result<(), ConfigError> {
+        match coefficients {
+            Some((rr, sp)) => {
+                for (field, value) in [("rolling_resistance", rr), ("spinning_friction", sp)] {
+                    if !(value.is_finite() && value >= 0.0) {
+                        return Err(ConfigError::InvalidConfig { field, value });
+                    }
+                }
+                self.registry.body_rolling.insert(body, (rr, sp));
+            }
+            None => {
+                self.registry.body_rolling.remove(&body);
+            }
+        }
+        Ok(())
+    }
+
     /// Opts `body` in to impacts between bodies: its impacts with another opted-in body are
     /// resolved by the model ([`crate::model::resolve_pair`]) at their time in the step,
     /// like ground impacts. The body must be dynamic (else [`ConfigError::NotDynamic`]).

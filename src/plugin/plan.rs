@@ -498,13 +498,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
         let slip = on_ground.v - radius * on_ground.w.cross(n);
+        let default = (
+            self.config.rolling_resistance,
+            self.config.spinning_friction,
+        );
+        let (rolling_resistance, spinning_friction) =
+            self.registry.rolling_of(handle, gg.handle, default);
+        // Without rolling resistance or spinning friction, a ball rolling slower than the
+        // resting speed is rapier's, which brings it to rest and to sleep. With them, rapier
+        // would roll it on (it has neither): the closed form takes it to a stop; at rest on
+        // level ground it is rapier's again, and sleeps. On a slope the closed form holds it
+        // (rapier would roll it down), awake: rapier's sleep test reads the speed gravity
+        // gives it inside its step, which the closed form takes back.
+        let slow =
+            slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed;
+        let resisted = rolling_resistance > 0.0 && (on_ground.v.norm() > 0.0 || !level)
+            || spinning_friction > 0.0 && on_ground.w.dot(n) != 0.0;
         // A ball of an impact between bodies is taken at rest too, and beside the other ball:
         // the reconstruct stage moves the pair together (and if anything else touched it in
         // the step, hands it back to rapier's end state).
-        if !(an < 0.0 && level && plain)
-            || !member
-                && slip.norm() <= ROLLING_MIN_SLIP
-                && on_ground.v.norm() <= step.policy.resting_speed
+        if !(an < 0.0 && (level || rolling_resistance > 0.0) && plain)
+            || !member && slow && !resisted
             || user_modifies
         {
             return None;
@@ -533,10 +547,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             radius,
             inertia_ratio,
             friction,
-            // Not configurable yet: the plugin's rolling ball rolls on for ever, as before.
-            rolling_resistance: 0.0,
-            spinning_friction: 0.0,
+            rolling_resistance,
+            spinning_friction,
             accel: flight.accel,
         })
+        // On a slope, only where the closed form reaches (along the fall line).
+        .filter(|motion| level || motion.advance_checked(on_ground, step.dt).is_some())
     }
 }

@@ -27,6 +27,9 @@ pub(crate) struct Registry {
     pub unmarked: HandleSet<ColliderHandle>,
     /// Bodies left to rapier entirely.
     pub excluded: HandleSet<RigidBodyHandle>,
+    /// Balls' own rolling resistance and spinning friction
+    /// ([`crate::ImpactPlugin::set_body_rolling`]).
+    pub body_rolling: HandleMap<RigidBodyHandle, (f64, f64)>,
     /// Bodies whose impacts with each other the plugin resolves
     /// ([`crate::ImpactPlugin::add_impact_body`]).
     pub impact_bodies: HandleSet<RigidBodyHandle>,
@@ -75,6 +78,7 @@ impl Registry {
             .get_mut(&collider)
             .ok_or(ConfigError::NotAGround(collider))?;
         entry.material = material.map(GroundMaterial::to_model);
+        entry.rolling = rolling_of_material(material.as_ref());
         // Only the hooks' table holds materials: no rebuild of the index.
         self.index.set_entry(collider, *entry);
         Ok(())
@@ -135,6 +139,7 @@ impl Registry {
             collider,
             GroundEntry {
                 material: material.map(GroundMaterial::to_model),
+                rolling: rolling_of_material(material.as_ref()),
                 automatic: false,
             },
         );
@@ -172,6 +177,7 @@ impl Registry {
                     h,
                     GroundEntry {
                         material: None,
+                        rolling: (None, None),
                         automatic: true,
                     },
                 );
@@ -217,6 +223,22 @@ impl Registry {
         self.all_impact || !self.impact_bodies.is_empty()
     }
 
+    /// The rolling resistance and spinning friction of a ball on a ground: each the ground's
+    /// override, else the ball's, else the configuration's `default`.
+    pub fn rolling_of(
+        &self,
+        body: RigidBodyHandle,
+        ground: ColliderHandle,
+        default: (f64, f64),
+    ) -> (f64, f64) {
+        let own = self.body_rolling.get(&body).copied().unwrap_or(default);
+        let over = self
+            .grounds
+            .get(&ground)
+            .map_or((None, None), |g| g.rolling);
+        (over.0.unwrap_or(own.0), over.1.unwrap_or(own.1))
+    }
+
     /// The material of a body collider against a ground collider.
     pub fn material_of(
         &self,
@@ -233,4 +255,11 @@ impl Registry {
             }),
         }
     }
+}
+
+/// A ground material's rolling overrides.
+fn rolling_of_material(material: Option<&GroundMaterial>) -> (Option<f64>, Option<f64>) {
+    material.map_or((None, None), |m| {
+        (m.rolling_resistance, m.spinning_friction)
+    })
 }

@@ -80,10 +80,7 @@ pub fn plugin_with_material(
         &world.bodies,
         &world.colliders,
         ground,
-        GroundMaterial {
-            restitution,
-            friction,
-        },
+        GroundMaterial::new(restitution, friction),
     )
     .unwrap();
     p
