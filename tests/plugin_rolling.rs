@@ -180,3 +180,38 @@ fn bad_rolling_coefficients_are_refused() {
             .is_err()
     );
 }
+
+/// Up a 3-degree slope at 1.5 m/s with `mu_r = 0.08` (> tan 3 deg): the ball slows at
+/// `g (sin + mu_r cos)/(1 + k)`, stops at the closed-form height and stays; down the same
+/// slope it slows at `g (mu_r cos - sin)/(1 + k)` to its stop.
+#[test]
+fn up_and_down_a_slope_it_stops_where_the_closed_form_says() {
+    let (mu_r, slope, v0) = (0.08f64, 3.0f64, 1.5);
+    let th = slope.to_radians();
+    let k = 0.4;
+    for (uphill, a) in [
+        (true, G * (th.sin() + mu_r * th.cos()) / (1.0 + k)),
+        (false, G * (mu_r * th.cos() - th.sin()) / (1.0 + k)),
+    ] {
+        let (mut w, ground, ball, down) = scene(slope, if uphill { -v0 } else { v0 });
+        let mut p = ImpactPlugin::new(config(TimingMode::Exact, mu_r, 0.0)).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+        let start = na(w.bodies[ball].center_of_mass());
+        let t_stop = v0 / a;
+        for _ in 0..((t_stop * 60.0) as usize + 120) {
+            p.step(&mut w);
+        }
+        let travelled = (na(w.bodies[ball].center_of_mass()) - start)
+            .dot(&down)
+            .abs();
+        let expected = v0 * v0 / (2.0 * a);
+        assert!(
+            (travelled - expected).abs() <= X_TOL * expected,
+            "uphill {uphill}: {travelled} vs {expected}"
+        );
+        assert!(
+            na(w.bodies[ball].linvel()).norm() <= 1e-9,
+            "held at rest on the slope"
+        );
+    }
+}

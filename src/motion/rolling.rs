@@ -27,6 +27,11 @@ pub(crate) struct Rolling {
     pub accel: Vector3<f64>,
 }
 
+/// Sine of the largest angle between a slip (or a rolling velocity) and a slope's fall line
+/// for the motion to count as along it: the rounding of a state rapier stores in `f32`
+/// (1e-7 relative) turns a ball rolling down the fall line by about that much.
+const FALL_LINE_TOLERANCE: f64 = 1e-6;
+
 /// One phase of the motion along the ground: the accelerations (linear, and angular of the
 /// spin along the ground) and how long they last.
 struct Phase {
@@ -114,7 +119,7 @@ impl Rolling {
         let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
         let scale = 1e-12 * (1e-3 + st.v.norm() + r * st.w.norm() + at.norm());
         let slip = st.v - r * st.w.cross(&n);
-        let along = |u: &Vector3<f64>| at.cross(u).norm() <= 1e-9 * at.norm();
+        let along = |u: &Vector3<f64>| at.cross(u).norm() <= FALL_LINE_TOLERANCE * at.norm();
         let slide = |u: Vector3<f64>, slip_speed: f64| {
             // Friction's accelerations: linear along -u, angular about n x u.
             let linear = at - u * (self.friction * gn);

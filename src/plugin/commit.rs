@@ -18,8 +18,10 @@ use nalgebra::Vector3;
 pub(crate) struct Shadow {
     pub com: Vector3<f64>,
     pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
     pub written_translation: Vector,
     pub written_linvel: Vector,
+    pub written_angvel: Vector,
 }
 
 impl Shadow {
@@ -28,8 +30,10 @@ impl Shadow {
         Self {
             com: s.com,
             v: s.v,
+            w: s.w,
             written_translation: rb.translation(),
             written_linvel: rb.linvel(),
+            written_angvel: rb.angvel(),
         }
     }
 }

@@ -94,6 +94,11 @@ pub(crate) fn snapshot(
         if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
             state.com = sh.com;
             state.v = sh.v;
+            // The spin too, where rapier left it as written (its gyroscopic step changes an
+            // anisotropic body's).
+            if sh.written_angvel == rb.angvel() {
+                state.w = sh.w;
+            }
         }
     }
     let mass = to_f64(rb.mass());
