@@ -23,7 +23,7 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, TraceCsv, flag, real, switch, wide};
+use common::{Args, CSV, F64, MODE, Mode, SHELL, TraceCsv, flag, real, switch, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactPlugin};
@@ -167,12 +167,7 @@ fn main() {
             "ground tilt about world z, downhill +x (deg)",
         ),
         flag("--radius", "R", "0.021335", "ball radius (m)"),
-        flag(
-            "--shell",
-            "solid|hollow",
-            "solid",
-            "solid ball (k = 2/5) or thin shell (k = 2/3)",
-        ),
+        SHELL,
         flag("--dt", "DT", "0.016666666666666666", "time step (s)"),
         flag("--duration", "T", "20", "simulated time (s)"),
         MODE,
@@ -191,8 +186,8 @@ fn main() {
         args.fail("--slope must be in [0, 80) degrees");
     }
     let slope = slope_deg.to_radians();
-    let hollow = args.choice("--shell") == "hollow";
-    let k = if hollow { 2.0 / 3.0 } else { 0.4 };
+    let k = args.inertia_ratio();
+    let hollow = k != 0.4;
     let (dt, duration) = (args.positive("--dt"), args.positive("--duration"));
     let mode = args.mode();
     let normal_spin = args.number("--normal-spin");

@@ -34,7 +34,7 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, TraceCsv, flag, real, wide};
+use common::{Args, CSV, F64, MODE, Mode, SHELL, TraceCsv, flag, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 
@@ -100,12 +100,7 @@ fn main() {
             "0",
             "angular velocity about world z (rad/s); > 0 is backspin",
         ),
-        flag(
-            "--shell",
-            "solid|hollow",
-            "solid",
-            "solid (I = 2/5 m R^2) or hollow (2/3 m R^2)",
-        ),
+        SHELL,
         flag("--dt", "DT", "1/60", "time step (s)"),
         flag("--duration", "T", "1.5", "simulated time (s)"),
         MODE,
@@ -121,11 +116,7 @@ fn main() {
     let vx0 = args.number("--vx");
     let vy_contact = args.positive("--vy");
     let spin0 = args.number("--spin");
-    let k = if args.choice("--shell") == "hollow" {
-        2.0 / 3.0
-    } else {
-        0.4
-    };
+    let k = args.inertia_ratio();
     let dt = args.positive("--dt");
     let duration = args.positive("--duration");
     let mode = args.mode();

@@ -82,6 +82,13 @@ pub const F64: Flag = switch(
     "--f64",
     "double precision: needs a build with `--features f64` (the precision is chosen at build time)",
 );
+/// `--shell solid|hollow`, default `solid`: see [`Args::inertia_ratio`].
+pub const SHELL: Flag = flag(
+    "--shell",
+    "solid|hollow",
+    "solid",
+    "solid ball (I = 2/5 m R^2) or thin shell (2/3 m R^2)",
+);
 /// `--csv PATH`.
 pub const CSV: Flag = flag(
     "--csv",
@@ -187,6 +194,15 @@ impl Args {
     /// Was the flag given?
     pub fn given(&self, name: &str) -> bool {
         self.given.contains_key(name)
+    }
+
+    /// `I / (m R^2)` of the `--shell` chosen: 2/5 solid, 2/3 hollow.
+    pub fn inertia_ratio(&self) -> f64 {
+        if self.choice("--shell") == "hollow" {
+            2.0 / 3.0
+        } else {
+            0.4
+        }
     }
 
     /// A switch.
