@@ -41,7 +41,7 @@ mod common;
 use common::{Mode, Rng, real, wide};
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
-use rapier_impact::TimingMode;
+use rapier_impact::{ImpactConfig, TimingMode};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 use std::collections::BTreeMap;
@@ -117,14 +117,16 @@ struct Row {
     pile_pen: f64,
     pile_jitter: f64,
     pile_cost: f64,
+    /// Putt: relative error of the stopping distance (NaN where it does not stop in time).
+    putt_err: f64,
 }
 
-const FIELDS: usize = 19;
+const FIELDS: usize = 20;
 
 impl Row {
     fn to_line(&self) -> String {
         format!(
-            "{}\t{}\t{}\t{}\t{:e}\t{:e}\t{}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}",
+            "{}\t{}\t{}\t{}\t{:e}\t{:e}\t{}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}\t{:e}",
             self.precision,
             self.mode,
             self.law,
@@ -143,6 +145,7 @@ impl Row {
             self.pile_pen,
             self.pile_jitter,
             self.pile_cost,
+            self.putt_err,
         )
     }
 
@@ -171,6 +174,7 @@ impl Row {
             pile_pen: n(15)?,
             pile_jitter: n(16)?,
             pile_cost: n(17)?,
+            putt_err: n(18)?,
         })
     }
 }
@@ -501,6 +505,41 @@ const PILE_R: f64 = 0.05;
 const PILE_T: f64 = 4.0;
 
 /// `(settling time or NaN, deepest penetration, jitter, cost)`.
+/// The putt of the README: a golf ball (R = 21.335 mm, solid) rolling at 1.8 m/s on a level
+/// green with rolling resistance 0.078 (stimp 10). Returns the relative error of where it
+/// stops against `v0^2 (1 + k) / (2 mu_r g)` (NaN if it has not stopped after 6 s, as in
+/// rapier alone, which has no rolling resistance).
+fn run_putt(dt: f64, mode: Mode, law: Law) -> f64 {
+    let (r, v0, mu_r) = (0.021_335, 1.8, 0.078);
+    let mut world = common::world(dt);
+    let ground = common::ground(&mut world, 0.0, 0.2);
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, real(r), 0.0))
+            .linvel(Vector::new(real(v0), 0.0, 0.0))
+            .angvel(Vector::new(0.0, 0.0, real(-v0 / r))),
+        ColliderBuilder::ball(real(r)).restitution(0.0).friction(0.2),
+    );
+    let mut plugin = common::plugin(mode, law, &mut world, ground);
+    if let Some(p) = plugin.as_mut() {
+        let config = ImpactConfig {
+            rolling_resistance: mu_r,
+            ..*p.config()
+        };
+        p.set_config(config).expect("a valid configuration");
+    }
+    let steps = (6.0 / dt).ceil() as usize;
+    for _ in 0..steps {
+        common::step(&mut world, &mut plugin);
+    }
+    let rb = &world.bodies[ball];
+    if wide(rb.linvel().length()) > 1e-9 {
+        return f64::NAN;
+    }
+    let expected = v0 * v0 * 1.4 / (2.0 * mu_r * 9.81);
+    (wide(rb.center_of_mass().x) - expected) / expected
+}
+
 fn run_pile(dt: f64, mode: Mode, law: Law) -> (f64, f64, f64, f64) {
     let (mut world, _, ground) = {
         let mut world = common::world(dt);
@@ -595,6 +634,7 @@ fn measure(mode: Mode, law: Option<Law>, di: usize) -> Row {
         sim += s;
     }
     let pile = run_pile(dt, mode, l);
+    let putt_err = run_putt(dt, mode, l);
     Row {
         precision: common::PRECISION.into(),
         mode: mode.name().into(),
@@ -618,6 +658,7 @@ fn measure(mode: Mode, law: Option<Law>, di: usize) -> Row {
         pile_pen: pile.1,
         pile_jitter: pile.2,
         pile_cost: pile.3,
+        putt_err,
     }
 }
 
@@ -772,6 +813,25 @@ fn report(rows: &[Row], secs: &BTreeMap<String, (f64, f64)>, total: f64) -> Stri
             r.pile_pen * 1e3,
             ms(r.drop_cost),
             ms(r.pile_cost),
+        );
+    }
+    let _ = writeln!(
+        w,
+        "\n## Rolling (law `guarded`)\n\n\
+         The putt of the README: a golf ball rolling at 1.8 m/s on a level green with rolling\n\
+         resistance 0.078, against its closed-form stop `v0^2 (1 + k) / (2 mu_r g)` = 2.964 m\n\
+         (`-`: still rolling after 6 s).\n\n\
+         | precision | mode | dt | stopping distance err |\n\
+         |---|---|---|---|"
+    );
+    for r in rows.iter().filter(|r| r.law == "guarded" || r.law == "-") {
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} |",
+            r.precision,
+            r.mode,
+            r.dt,
+            sci(r.putt_err)
         );
     }
     let _ = writeln!(
