@@ -41,9 +41,9 @@ mod common;
 use common::{Mode, Rng, real, wide};
 use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::*;
-use rapier_impact::{ImpactConfig, TimingMode};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, TimingMode};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -518,7 +518,9 @@ fn run_putt(dt: f64, mode: Mode, law: Law) -> f64 {
             .translation(Vector::new(0.0, real(r), 0.0))
             .linvel(Vector::new(real(v0), 0.0, 0.0))
             .angvel(Vector::new(0.0, 0.0, real(-v0 / r))),
-        ColliderBuilder::ball(real(r)).restitution(0.0).friction(0.2),
+        ColliderBuilder::ball(real(r))
+            .restitution(0.0)
+            .friction(0.2),
     );
     let mut plugin = common::plugin(mode, law, &mut world, ground);
     if let Some(p) = plugin.as_mut() {

@@ -78,8 +78,17 @@ fn cases() -> u32 {
         .unwrap_or(1_000)
 }
 
-fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_mu: f64) {
-    let label = format!("{timing:?} at {hz:.0} Hz, ground e {ground_e:.3} mu {ground_mu:.3}");
+fn run(
+    bodies: &[BodySpec],
+    timing: TimingMode,
+    hz: f64,
+    ground_e: f64,
+    ground_mu: f64,
+    pairs: bool,
+) {
+    let label = format!(
+        "{timing:?} at {hz:.0} Hz, ground e {ground_e:.3} mu {ground_mu:.3}, pairs {pairs}"
+    );
     let mut world = PhysicsWorld::default();
     world.integration_parameters.dt = real(1.0 / hz);
     let (_, ground) = world.insert(
@@ -95,8 +104,9 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
             ColliderBuilder::cuboid(real(b.size[0]), real(b.size[1]), real(b.size[2]))
         };
         let lift = b.size.iter().cloned().fold(0.0, f64::max) * 1.8;
-        // Spread horizontally so that the bodies start apart.
-        let x = b.pos[0] + 7.0 * i as f64;
+        // Spread horizontally so that the bodies start apart; with impacts between bodies
+        // opted in, close enough to meet.
+        let x = b.pos[0] + if pairs { 1.2 } else { 7.0 } * i as f64;
         world.insert(
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(real(x), real(b.pos[1] + lift), real(b.pos[2])))
@@ -115,6 +125,7 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
         );
     }
     let mut p = plugin_on(&world, ground, timing);
+    p.set_all_dynamic_bodies_impact(pairs);
     let mut stats = Stats::new();
     let strict = std::env::var("RAPIER_IMPACT_STRICT_PENETRATION").is_ok();
     let allowed = wide(world.integration_parameters.allowed_linear_error());
@@ -142,6 +153,7 @@ fn run(bodies: &[BodySpec], timing: TimingMode, hz: f64, ground_e: f64, ground_m
         for ev in p.events() {
             check_event(ev, &mut stats, &label);
         }
+        check_pair_energy(p.events(), &label);
         for (h, rb) in world.bodies.iter() {
             if !rb.is_dynamic() {
                 continue;
@@ -209,6 +221,20 @@ proptest! {
         ground_mu in 0.0f64..2.0,
     ) {
         let timing = [TimingMode::Step, TimingMode::TimeOfImpact, TimingMode::Exact][mode];
-        run(&bodies, timing, hz, ground_e, ground_mu);
+        run(&bodies, timing, hz, ground_e, ground_mu, false);
+    }
+
+    /// The same, the bodies close together and every one opted in to impacts between bodies
+    /// (the balls' are the model's; boxes stay rapier's).
+    #[test]
+    fn random_scenes_with_impacts_between_bodies(
+        bodies in prop::collection::vec(body(), 2..=4),
+        mode in 0usize..3,
+        hz in prop::sample::select(vec![30.0, 60.0, 120.0, 240.0]),
+        ground_e in 0.0f64..=1.0,
+        ground_mu in 0.0f64..2.0,
+    ) {
+        let timing = [TimingMode::Step, TimingMode::TimeOfImpact, TimingMode::Exact][mode];
+        run(&bodies, timing, hz, ground_e, ground_mu, true);
     }
 }

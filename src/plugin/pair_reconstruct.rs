@@ -351,6 +351,9 @@ fn move_cluster(
                 };
                 view.events.extend(pair_events);
                 for (k, after) in [(i, after_i), (j, after_j)] {
+                    if reaches_other_grounds(view, &balls[k], &after, dt - te, step) {
+                        return None;
+                    }
                     moving[k] = on_after_touch(view, balls, k, &moving[k], after, te, step)?;
                 }
             }
@@ -376,6 +379,36 @@ fn move_cluster(
         }
     }
     Some(ends)
+}
+
+/// Can ball `ball`, leaving an impact at `s` with `left` seconds of the step to go, reach a
+/// ground it was not planned against? Its grounds came from its start-of-step speed; a hit
+/// from a heavier ball can send it much faster (a light ball struck down into the floor), and
+/// the cluster cannot be moved alone then.
+fn reaches_other_grounds(
+    view: &Settle,
+    ball: &ClusterBall,
+    s: &State,
+    left: f64,
+    step: &EndOfStep,
+) -> bool {
+    let accel = ball.cand.flight.accel.norm();
+    let reach = ball.radius
+        + s.v.norm() * left
+        + accel * left * left
+        + step.policy.resting_gap.max(step.policy.prediction);
+    let half = super::convert::to_real(reach);
+    let centre = super::convert::vec_from_na(&s.com);
+    view.registry
+        .index
+        .near(&step.grounds, centre, half)
+        .iter()
+        .any(|i| {
+            !ball
+                .grounds
+                .iter()
+                .any(|g| g.handle == step.grounds[*i].handle)
+        })
 }
 
 /// The smallest time after `t` that differs from it.

@@ -24,7 +24,7 @@ use super::geometry::{BodyGeom, GroundGeom, SmallList, closest, landing_point};
 use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
-use super::observe::{NonGround, ground_geom, neighbours, rapier_state};
+use super::observe::{NonGround, body_geom, ground_geom, neighbours, rapier_state};
 use super::pair_plan::PlannedPair;
 use super::plan::{Candidate, EndOfStep, StepData};
 use super::policy::{EndAction, EndCheck, Role, Surroundings};
@@ -509,10 +509,34 @@ impl Settle<'_> {
                 step.dt,
             ));
         }
-        for (body, state) in [(pair.a, &sa), (pair.b, &sb)] {
-            let rb = &mut bodies[body];
+        // Moved apart, a ball may be moved into a ground (a light ball pushed down by a heavy
+        // one): each is checked against the grounds near it, as rapier's end state is.
+        for (body, state) in [(pair.a, sa), (pair.b, sb)] {
+            let rb = &bodies[body];
             let local_com = super::convert::vec_to_na(rb.local_center_of_mass());
-            write_state(rb, state, &local_com, true);
+            let geom = body_geom(rb, colliders, &local_com);
+            let inertia = Inertia::of(rb);
+            let com = super::convert::vec_from_na(&state.com);
+            let grounds = self.woken_geoms(bodies, colliders, com, &geom, step, &|_, _, _| false);
+            let checked = Checked {
+                body,
+                geom: &geom,
+                inertia: &inertia,
+                cand: None,
+            };
+            let from = self.events.len();
+            let (_, settled) = self.check(
+                bodies,
+                colliders,
+                &checked,
+                &state,
+                EndCheck::RapierEnd,
+                &grounds,
+                step,
+                from,
+            );
+            let end = settled.unwrap_or(state);
+            write_state(&mut bodies[body], &end, &local_com, true);
         }
     }
 
