@@ -223,3 +223,41 @@ fn up_and_down_a_slope_it_stops_where_the_closed_form_says() {
         );
     }
 }
+
+/// Spun about the normal at 30 rad/s while rolling, with spinning friction 0.05: the spin
+/// decays at `5 mu_sp g / (2 R)` to zero at its closed-form time, and the rolling is
+/// untouched by it.
+#[test]
+fn the_spin_about_the_normal_decays_at_the_closed_form_rate() {
+    let (mu_sp, w0, v0) = (0.05, 30.0, 0.5);
+    let rate = 5.0 * mu_sp * G / (2.0 * R);
+    let t0 = w0 / rate;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let (mut w, ground, ball, _) = scene(0.0, v0);
+        let spin = w.bodies[ball].angvel() + Vector::new(0.0, real(w0), 0.0);
+        w.bodies[ball].set_angvel(spin, true);
+        let mut p = ImpactPlugin::new(config(mode, 0.0, mu_sp)).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+        let half = (0.5 * t0 * 60.0).round() as usize;
+        for _ in 0..half {
+            p.step(&mut w);
+        }
+        let t = half as f64 / 60.0;
+        let wy = wide(w.bodies[ball].angvel().y);
+        let tol = if F64 { 1e-11 } else { 1e-5 };
+        assert!(
+            (wy - (w0 - rate * t)).abs() <= tol * w0,
+            "{mode:?}: {wy} at {t} s"
+        );
+        // Rolling on at v0, no resistance.
+        assert!((wide(w.bodies[ball].linvel().x) - v0).abs() <= tol * v0);
+        for _ in 0..(t0 * 60.0) as usize {
+            p.step(&mut w);
+        }
+        assert_eq!(
+            wide(w.bodies[ball].angvel().y),
+            0.0,
+            "{mode:?}: stopped spinning"
+        );
+    }
+}
