@@ -514,13 +514,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed;
         let resisted = rolling_resistance > 0.0 && (on_ground.v.norm() > 0.0 || !level)
             || spinning_friction > 0.0 && on_ground.w.dot(n) != 0.0;
-        // A ball of an impact between bodies is taken at rest too, and beside the other ball:
+        // Any slope: the closed form says where it reaches (along the fall line). A ball of an
+        // impact between bodies is taken at rest too, and beside the other ball:
         // the reconstruct stage moves the pair together (and if anything else touched it in
         // the step, hands it back to rapier's end state).
-        if !(an < 0.0 && (level || rolling_resistance > 0.0) && plain)
-            || !member && slow && !resisted
-            || user_modifies
-        {
+        if !(an < 0.0 && plain) || !member && slow && !resisted || user_modifies {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): the contact graph.
