@@ -315,10 +315,15 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
             }
             p.set_all_dynamic_bodies_impact(true);
             let mut seen = Vec::new();
-            // The first ball reaches the row in 0.1 s; the chain is over in that step.
+            // The first ball reaches the row in 0.1 s; the chain is over in that step, and
+            // the velocities are read right after it (the balls left touching slowly behind it
+            // are rapier's resting contacts from the next step, with e = 0).
             for _ in 0..7 {
                 p.step(&mut w);
                 seen.extend(pair_events(&p));
+                if !seen.is_empty() {
+                    break;
+                }
             }
             let case = format!("{mode:?}, g = {gravity}, e = {e}");
             assert_eq!(

@@ -30,8 +30,11 @@ impl Motion {
     fn accel_bound(&self, s: &State) -> f64 {
         match self {
             Motion::Flight(f) => f.accel.norm() + f.linear_damping * (s.v.norm() + 1.0),
-            // Kinetic friction at most: mu |a.n| along the ground.
-            Motion::Rolling(r) => r.friction * r.accel.dot(&r.normal).abs(),
+            // The pull along a slope and kinetic friction at most: |a_t| + mu |a.n|.
+            Motion::Rolling(r) => {
+                let an = r.accel.dot(&r.normal);
+                (r.accel - r.normal * an).norm() + r.friction * an.abs()
+            }
         }
     }
 

@@ -167,16 +167,19 @@ impl Rolling {
             let phase = slide(down, 0.0);
             return (phase.until == f64::INFINITY).then_some(phase);
         }
+        // Only the rolling resistance stops a ball: without it the acceleration is constant
+        // (a_t / (1 + k)) and the velocity passes through zero, or turns, unbroken.
         let slowing = linear.dot(&u);
+        let stops = self.rolling_resistance > 0.0 && slowing < 0.0 && speed > scale;
         Some(Phase {
             linear,
             angular: n.cross(&linear) / r,
-            until: if slowing < 0.0 && speed > scale {
+            until: if stops {
                 speed / -slowing
             } else {
                 f64::INFINITY
             },
-            stops: slowing < 0.0 && speed > scale,
+            stops,
         })
     }
 

@@ -758,7 +758,16 @@ impl<H> ImpactPlugin<H> {
                 far_bodies.push(handle);
             }
         }
-        let members: Vec<RigidBodyHandle> = step.pairs.members.iter().copied().collect();
+        // The balls of every planned pair: `Impact` pairs leave rapier's solver, `Resting`
+        // ones get zero restitution, both through the hooks.
+        let mut seen: HandleSet<RigidBodyHandle> = HandleSet::default();
+        let members: Vec<RigidBodyHandle> = step
+            .pairs
+            .pairs
+            .iter()
+            .flat_map(|pair| [pair.a, pair.b])
+            .filter(|body| seen.insert(*body))
+            .collect();
         self.flags.update(
             &self.registry,
             &near_bodies,

@@ -205,6 +205,40 @@ pub(crate) fn ground_geom<'a>(
     })
 }
 
+/// Did the body touch, in rapier's solver after the last step, anything but a ground and
+/// the collider `partner` (a ball's pair partner), or does it have a joint? What presses a
+/// pair of balls is a third body.
+pub(crate) fn pressed_besides(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    partner: ColliderHandle,
+    sets: &Sets,
+    registry: &Registry,
+) -> bool {
+    if sets.impulse_joints.attached_joints(body).next().is_some()
+        || sets.multibody_joints.rigid_body_link(body).is_some()
+    {
+        return true;
+    }
+    rb.colliders().iter().any(|ch| {
+        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            other != partner
+                && registry.entry(other).is_none()
+                && pair.solver_manifolds().iter().any(|m| {
+                    m.data
+                        .solver_flags
+                        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                        && !m.data.solver_contacts.is_empty()
+                })
+        })
+    })
+}
+
 /// Does the body have a contact in rapier's solver this step (other than the pairs taken
 /// from it)?
 pub(crate) fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {

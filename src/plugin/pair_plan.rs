@@ -17,7 +17,7 @@ use super::filter;
 use super::ground_index::build_bvh;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, neighbours};
+use super::observe::{Sets, neighbours, pressed_besides};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::PairKey;
@@ -199,10 +199,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         let was_resting = prev.get(&key) == Some(&Role::Resting);
         // Pressed, as a ground pair is: a ball that touched something else after the last
         // step (a ball in a pile) is pushed by it, and rapier's solver holds the pile.
+        // (Not by each other: their own contact does not press them together.)
         let pressed = || {
-            [a.body, b.body]
-                .iter()
-                .any(|h| neighbours(*h, &bodies[*h], sets, registry, &down).touching)
+            pressed_besides(a.body, &bodies[a.body], b.collider, sets, registry)
+                || pressed_besides(b.body, &bodies[b.body], a.collider, sets, registry)
         };
         // An impact: approaching faster than the resting speed, closing the gap within the
         // step (both balls fall alike; a user force adds its acceleration), and not resting

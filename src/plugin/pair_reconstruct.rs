@@ -180,12 +180,13 @@ pub(crate) fn move_clusters(
             continue;
         };
         for (ball, end) in balls.iter().zip(ends) {
-            // Never left inside a ground.
+            // Never left inside a ground. No energy cap: an impact between balls passes
+            // energy from one to the other, so the ball hit may end above its start energy.
             let checked = Checked {
                 body: ball.cand.body,
                 geom: &ball.geom,
                 inertia: &ball.inertia,
-                cand: Some(ball.cand),
+                cand: None,
             };
             let (_, settled) = view.check(
                 bodies,
@@ -356,6 +357,12 @@ fn move_cluster(
                     }
                     moving[k] = on_after_touch(view, balls, k, &moving[k], after, te, step)?;
                 }
+                // A ball that moved on may drive into a pair it rested in.
+                for (q, (a, b)) in pairs.iter().enumerate() {
+                    if [*a, *b].iter().any(|x| *x == i || *x == j) {
+                        resting[q] = false;
+                    }
+                }
             }
         }
     }
@@ -486,6 +493,12 @@ fn on_after_touch(
             motion: Motion::Flight(ball.cand.flight),
         });
     }
+    // Rolling on, where the closed form reaches (on a slope: along the fall line).
+    let on_ground = State {
+        v: after.v - n * vn,
+        ..after
+    };
+    rolling.advance_checked(&on_ground, step.dt - t)?;
     if vn != 0.0 {
         // The ground takes the normal speed (an impulse through the centre, e = 0).
         let prior = after;
