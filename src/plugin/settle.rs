@@ -389,12 +389,14 @@ impl Settle<'_> {
     }
 
     /// After the step, for an `Impact` pair of balls not moved together (something else
-    /// touched one, a search gave up, or `Step` mode): rapier's end state, in which the pair
-    /// was out of its solver. Overlapping and approaching, the model's impulse there
-    /// (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or the pressed speed
-    /// for a ball touching something else); overlapping, both balls are then moved apart
-    /// along the line of centres, each by its share of the overlap (by inverse mass), with a
-    /// `PushOut` event each.
+    /// touched one, or a search gave up): rapier's end state, in which the pair was out of
+    /// its solver, so that the balls may have passed into, or right through, each other. If
+    /// they met in the step (they overlap, their centres crossed the line of centres they
+    /// started on, or their straight relative motion came within reach), the model's impulse
+    /// along that line (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
+    /// the pressed speed for a ball touching something else), and both balls moved apart
+    /// along it to touching, on the sides they started on, each by its inverse-mass share,
+    /// with a `PushOut` event each.
     pub fn pair_end(
         &mut self,
         bodies: &mut RigidBodySet,
@@ -408,11 +410,39 @@ impl Settle<'_> {
         let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
         let d = sb.com - sa.com;
         let len = d.norm();
-        let overlap = pair.reach - len;
-        if !(overlap > 0.0 && len > 0.0) {
+        // Out of rapier's solver, the balls may have passed into or through each other in the
+        // step: they met if they overlap now, if their centres crossed the line of centres
+        // they started on, or if their relative motion over the step (straight, as out of the
+        // solver) came within reach.
+        let crossed = d.dot(&pair.normal) < 0.0;
+        let dv = sb.v - sa.v;
+        let back = dv.norm_squared();
+        let nearest = if back > 0.0 {
+            // The closest approach of d - dv s for s in [0, dt] before the step's end.
+            let s_min = (d.dot(&dv) / back).clamp(0.0, step.dt);
+            (d - dv * s_min).norm()
+        } else {
+            len
+        };
+        let met = len < pair.reach || crossed || nearest < pair.reach;
+        if !met || pair.normal == Vector3::zeros() && len == 0.0 {
             return;
         }
-        let n = d / len;
+        // The contact normal: the line of centres now, or the one they started on if they
+        // have crossed (or passed by).
+        let n = if !crossed && len > 0.0 && len < pair.reach {
+            d / len
+        } else {
+            pair.normal
+        };
+        // How far apart to move them along n: to touching, on the sides they started on.
+        let along = d.dot(&n);
+        let overlap = (pair.reach - along).max(0.0);
+        // The model's impulse is taken with the balls touching along n.
+        let touching_b = State {
+            com: sa.com + n * pair.reach,
+            ..sb
+        };
         let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
         let (ca, cb) = (pair.key.0, pair.key.1);
         // The key orders the colliders by slot: match them to the bodies.
@@ -456,11 +486,15 @@ impl Settle<'_> {
         if let Some((after_a, after_b, events)) = resolve_balls(
             &input,
             &side(pair.a, ca, &ia, sa, rad_a),
-            &side(pair.b, cb, &ib, sb, rad_b),
+            &side(pair.b, cb, &ib, touching_b, rad_b),
             step.dt,
         ) {
             self.events.extend(events);
-            (sa, sb) = (after_a, after_b);
+            sa = after_a;
+            sb = State {
+                com: sb.com,
+                ..after_b
+            };
         }
         let (wa, wb) = (1.0 / ia.mass, 1.0 / ib.mass);
         let share = |w: f64| overlap * w / (wa + wb);
@@ -489,6 +523,9 @@ impl Settle<'_> {
             ),
         ];
         for (body, collider, other, body2, inertia, state, shift, normal, radius) in moves {
+            if overlap == 0.0 {
+                break;
+            }
             let before = *state;
             state.com += shift;
             let site = Site {
