@@ -13,9 +13,8 @@
 //! events: a chain (a ball passing an impact on to the one it touches) is a sequence of
 //! impacts at the same time, in the order the touches are found; a touch slower than the
 //! resting speed is a resting contact from there on (rapier's next step). A ball rolling on its
-//! ground that an impact lifts faster than the resting speed flies from there; slower, or
-//! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
-//! on. It returns every ball's state at the step's end and reports every impulse as an event,
+//! ground that an impact lifts flies from there; pressed into the ground, the ground takes
+//! the normal speed (a `Settle` event) and it rolls on. It returns every ball's state at the step's end and reports every impulse as an event,
 //! or `None` when the cluster cannot be moved alone (a search that stalls, more events than
 //! `max_impacts_per_step` per ball, a rolling ball leaving its plane): its events are then
 //! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
@@ -485,8 +484,9 @@ fn on_after_touch(
     };
     let n = rolling.normal;
     let vn = n.dot(&after.v);
-    if vn > step.policy.resting_speed {
-        // Lifted off its ground: it flies, and may land on it again.
+    if vn > 0.0 {
+        // Lifted off its ground, however little (the ground cannot pull): it flies, and may
+        // land on it again.
         return Some(Moving {
             state: after,
             t0: t,
@@ -499,8 +499,9 @@ fn on_after_touch(
         ..after
     };
     rolling.advance_checked(&on_ground, step.dt - t)?;
-    if vn != 0.0 {
-        // The ground takes the normal speed (an impulse through the centre, e = 0).
+    if vn < 0.0 {
+        // Pressed into the ground: the ground takes the normal speed (an impulse through the
+        // centre, e = 0).
         let prior = after;
         after.v -= n * vn;
         let site = Site {
