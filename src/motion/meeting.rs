@@ -67,10 +67,23 @@ pub(crate) fn touch_tolerance(reach: f64) -> f64 {
     1e-12 * (1.0 + reach)
 }
 
+/// The search gave up: a glancing approach that closes too slowly for the steps allowed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Stalled;
+
+/// The most steps of the search (each closes the gap by a bounded fraction).
+const MAX_STEPS: usize = 10_000;
+
 /// The first time in `[t, t_end]` at which balls `a` and `b`, whose radii sum to `reach`,
-/// touch while approaching, or `None`. A pair already touching and approaching at `t`
-/// touches at `t`.
-pub(crate) fn first_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64) -> Option<f64> {
+/// touch while approaching, `Ok(None)` if they do not, or [`Stalled`]. A pair already
+/// touching and approaching at `t` touches at `t`.
+pub(crate) fn first_touch(
+    a: &Moving,
+    b: &Moving,
+    reach: f64,
+    t: f64,
+    t_end: f64,
+) -> Result<Option<f64>, Stalled> {
     let tol = touch_tolerance(reach);
     let gap_at = |t: f64| {
         let (sa, sb) = (a.at(t), b.at(t));
@@ -85,11 +98,11 @@ pub(crate) fn first_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64
     };
     let (gap, rate) = gap_at(t);
     if gap <= tol {
-        return (rate < 0.0).then_some(t);
+        return Ok((rate < 0.0).then_some(t));
     }
     if let (Some(aa), Some(ab)) = (a.motion.uniform_accel(), b.motion.uniform_accel()) {
         if aa == ab {
-            return uniform_touch(a, b, reach, t, t_end);
+            return Ok(uniform_touch(a, b, reach, t, t_end));
         }
     }
     // Conservative advancement: over [t, t_end] the relative speed is at most its value at t
@@ -97,15 +110,15 @@ pub(crate) fn first_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64
     let mut t = t;
     let mut gap = gap;
     let mut rate = rate;
-    for _ in 0..10_000 {
+    for _ in 0..MAX_STEPS {
         if gap <= tol {
-            return Some(t);
+            return Ok(Some(t));
         }
         let (sa, sb) = (a.at(t), b.at(t));
         let accel = a.motion.accel_bound(&sa) + b.motion.accel_bound(&sb);
         let speed = (sb.v - sa.v).norm() + accel * (t_end - t);
         if speed <= 0.0 {
-            return None;
+            return Ok(None);
         }
         // Newton's step from the outside when the gap closes; kept only if it stays outside
         // (a gap convex in time, as under uniform relative motion, never overshoots).
@@ -125,7 +138,7 @@ pub(crate) fn first_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64
             next = t_end;
             let (g, r) = gap_at(next);
             if g > tol {
-                return None;
+                return Ok(None);
             }
             (t, gap, rate) = (next, g, r);
             continue;
@@ -135,7 +148,7 @@ pub(crate) fn first_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64
             (next, g, r)
         };
     }
-    None
+    Err(Stalled)
 }
 
 /// [`first_touch`] for a uniform relative motion: the smaller root of
@@ -196,16 +209,16 @@ mod tests {
             Vector3::new(-1.0, 0.0, 0.0),
             falling(),
         );
-        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap();
+        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         assert!((t - 0.1).abs() < 1e-15, "{t}");
-        assert_eq!(first_touch(&a, &b, 0.2, 0.0, 0.09), None);
+        assert_eq!(first_touch(&a, &b, 0.2, 0.0, 0.09), Ok(None));
         // Moving apart: never.
         let c = ball(
             Vector3::new(0.5, 0.0, 0.0),
             Vector3::new(3.0, 0.0, 0.0),
             falling(),
         );
-        assert_eq!(first_touch(&a, &c, 0.2, 0.0, 1.0), None);
+        assert_eq!(first_touch(&a, &c, 0.2, 0.0, 1.0), Ok(None));
     }
 
     #[test]
@@ -226,7 +239,7 @@ mod tests {
             slide,
         );
         let b = ball(Vector3::new(0.6, 0.1, 0.0), Vector3::zeros(), slide);
-        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap();
+        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         let gap = (b.at(t).com - a.at(t).com).norm() - 0.2;
         // Touching to rounding (Newton's last step may land a rounding error inside).
         assert!(gap.abs() <= touch_tolerance(0.2), "gap {gap:e} at {t}");
@@ -244,10 +257,10 @@ mod tests {
         };
         let a = ball(Vector3::zeros(), Vector3::new(2.0, 0.3, 0.0), f(1e-300));
         let b = ball(Vector3::new(0.5, 0.0, 0.0), Vector3::zeros(), f(0.0));
-        let searched = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap();
+        let searched = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         let b0 = ball(Vector3::new(0.5, 0.0, 0.0), Vector3::zeros(), f(0.0));
         let a0 = ball(Vector3::zeros(), Vector3::new(2.0, 0.3, 0.0), f(0.0));
-        let closed = first_touch(&a0, &b0, 0.2, 0.0, 1.0).unwrap();
+        let closed = first_touch(&a0, &b0, 0.2, 0.0, 1.0).unwrap().unwrap();
         assert!((searched - closed).abs() < 1e-12, "{searched} vs {closed}");
     }
 }

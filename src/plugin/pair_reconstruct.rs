@@ -285,7 +285,8 @@ fn move_cluster(
             }
             let reach = balls[*i].radius + balls[*j].radius;
             let limit = next.as_ref().map_or(dt, |(tn, _)| *tn);
-            if let Some(tc) = first_touch(&moving[*i], &moving[*j], reach, t, limit) {
+            // A search that gives up cannot say the balls stay apart: not moved alone.
+            if let Some(tc) = first_touch(&moving[*i], &moving[*j], reach, t, limit).ok()? {
                 if next.as_ref().is_none_or(|(tn, _)| tc < *tn) {
                     next = Some((tc, Next::Touch(p)));
                 }
