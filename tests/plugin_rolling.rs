@@ -28,6 +28,15 @@ fn config(mode: TimingMode, mu_r: f64, mu_sp: f64) -> ImpactConfig {
 /// A world with a half-space ground tilted by `slope` degrees about z (downhill +x), and a
 /// solid ball resting on it at the origin's contact point, rolling downhill at `v0`.
 fn scene(slope: f64, v0: f64) -> (PhysicsWorld, ColliderHandle, RigidBodyHandle, Vector3<f64>) {
+    let th = slope.to_radians();
+    scene_moving(slope, Vector3::new(th.cos(), -th.sin(), 0.0) * v0)
+}
+
+/// [`scene`] with the ball rolling at `v` (along the ground).
+fn scene_moving(
+    slope: f64,
+    v: Vector3<f64>,
+) -> (PhysicsWorld, ColliderHandle, RigidBodyHandle, Vector3<f64>) {
     let mut w = PhysicsWorld {
         gravity: Vector::new(0.0, real(-G), 0.0),
         ..Default::default()
@@ -43,13 +52,12 @@ fn scene(slope: f64, v0: f64) -> (PhysicsWorld, ColliderHandle, RigidBodyHandle,
         .friction(0.5),
     );
     let at = n * R;
-    let v = down * v0;
     let spin = n.cross(&v) / R;
     let (ball, _) = w.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(real(at.x), real(at.y), 0.0))
-            .linvel(Vector::new(real(v.x), real(v.y), 0.0))
-            .angvel(Vector::new(0.0, 0.0, real(spin.z))),
+            .linvel(Vector::new(real(v.x), real(v.y), real(v.z)))
+            .angvel(Vector::new(real(spin.x), real(spin.y), real(spin.z))),
         ColliderBuilder::ball(real(R)).friction(0.5),
     );
     (w, ground, ball, down)
@@ -258,6 +266,49 @@ fn the_spin_about_the_normal_decays_at_the_closed_form_rate() {
             wide(w.bodies[ball].angvel().y),
             0.0,
             "{mode:?}: stopped spinning"
+        );
+    }
+}
+
+/// Rolling at 0.8 m/s square to the fall line of a 5-degree slope with `mu_r = 0.12`
+/// (> tan 5 deg): the ball curves down the slope and stops where the pursuit curve's capture
+/// says, `v0^2 A / (4 (B^2 - A^2))` down the slope and `2 v0^2 B / (4 B^2 - A^2)` across,
+/// `A = g sin / (1 + k)`, `B = mu_r g cos / (1 + k)`. Rapier alone would roll it on down.
+#[test]
+fn rolling_across_a_slope_it_curves_down_and_stops_where_the_pursuit_curve_says() {
+    let (mu_r, slope, v0, k) = (0.12f64, 5.0f64, 0.8, 0.4);
+    let th = slope.to_radians();
+    let (a, b) = (G * th.sin() / (1.0 + k), mu_r * G * th.cos() / (1.0 + k));
+    let along = v0 * v0 * a / (4.0 * (b * b - a * a));
+    let across = 2.0 * v0 * v0 * b / (4.0 * b * b - a * a);
+    let stop = v0 * b / (b * b - a * a);
+    // TimeOfImpact moves the ball in closed form from rapier's stored state each step;
+    // Exact keeps its own `f64` state.
+    for (mode, tol) in [
+        (TimingMode::TimeOfImpact, if F64 { 1e-12 } else { 1e-4 }),
+        (TimingMode::Exact, X_TOL),
+    ] {
+        let (mut w, ground, ball, down) = scene_moving(slope, Vector3::z() * v0);
+        let mut p = ImpactPlugin::new(config(mode, mu_r, 0.0)).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+        let start = na(w.bodies[ball].center_of_mass());
+        for _ in 0..((stop * 60.0) as usize + 60) {
+            p.step(&mut w);
+        }
+        let moved = na(w.bodies[ball].center_of_mass()) - start;
+        assert!(
+            (moved.dot(&down) - along).abs() <= X_TOL * along,
+            "{mode:?}: down {} vs {along}",
+            moved.dot(&down)
+        );
+        assert!(
+            (moved.z - across).abs() <= X_TOL * across,
+            "{mode:?}: across {} vs {across}",
+            moved.z
+        );
+        assert!(
+            na(w.bodies[ball].linvel()).norm() <= 1e-9,
+            "{mode:?}: at rest"
         );
     }
 }
