@@ -471,6 +471,40 @@ fn plane_contact_on(
     Ok((height - skins, n, support - n * part.skin))
 }
 
+/// The first time in `(0, dt]` at which `touches` holds, for a body moving smoothly along
+/// one closed-form path (a rolling ball): `touches` is asked at `TOUCH_SAMPLES` evenly
+/// spaced times and the first touch bisected to rounding. A path that grazes a ground
+/// between two samples is not found: the caller's end check must catch it.
+pub(crate) fn earliest_touch(dt: f64, touches: impl Fn(f64) -> bool) -> Option<f64> {
+    let mut lo = 0.0;
+    for i in 1..=TOUCH_SAMPLES {
+        let t = dt * i as f64 / TOUCH_SAMPLES as f64;
+        if touches(t) {
+            let mut hi = t;
+            // 64 halvings take a step's interval to rounding (f64's 53 bits and margin).
+            for _ in 0..64 {
+                let mid = 0.5 * (lo + hi);
+                if mid <= lo || mid >= hi {
+                    break;
+                }
+                if touches(mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            return Some(hi);
+        }
+        lo = t;
+    }
+    None
+}
+
+/// How many times in the step [`earliest_touch`] asks: a rolling ball moves straight or nearly
+/// (its path bows by under `(|a_t| + mu g_n) dt^2 / 8`), so it meets a plane or a cuboid's
+/// face once, and a sample every 16th of a step finds it.
+const TOUCH_SAMPLES: usize = 16;
+
 /// The closest contact over every body part and ground (indices in `grounds`), at `t`.
 pub(crate) fn closest(
     body: &BodyGeom,
@@ -600,6 +634,58 @@ pub(crate) fn one_plane_under(
         .all(|offset| pieces_cover(grounds, n, &(from + offset), &(to + offset)))
 }
 
+/// A ground as a piece of a plane (see [`one_plane_under`]).
+enum PlanePiece {
+    /// A half-space: all of the plane.
+    Everywhere,
+    /// A cuboid's face in the plane: the cuboid's pose, half extents, and the axis normal
+    /// to the face.
+    Face {
+        pose: Isometry3<f64>,
+        half: Vector3<f64>,
+        axis: usize,
+    },
+}
+
+/// `ground` as a piece of the plane of unit normal `n` at `height` (`n . x` of its points, plus
+/// the ground's contact skin): a still half-space or cuboid lying wholly below the plane with
+/// a face in it; `None` for any other ground.
+fn plane_piece(ground: &GroundGeom, n: &Vector3<f64>, height: f64) -> Option<PlanePiece> {
+    use crate::parry::shape::TypedShape;
+    if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
+        return None;
+    }
+    let pose = ground.pose0;
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => {
+            let normal = pose.rotation * vec_to_na(hs.normal);
+            let top = pose.translation.vector.dot(n) + ground.skin;
+            (normal.dot(n) >= COPLANAR_COS && (top - height).abs() <= COPLANAR_TOLERANCE)
+                .then_some(PlanePiece::Everywhere)
+        }
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let n_local = pose.rotation.inverse() * n;
+            let axis = (0..3)
+                .max_by(|i, j| n_local[*i].abs().total_cmp(&n_local[*j].abs()))
+                .unwrap_or(1);
+            let top = pose.translation.vector.dot(n)
+                + (0..3).map(|i| half[i] * n_local[i].abs()).sum::<f64>()
+                + ground.skin;
+            (n_local[axis].abs() >= COPLANAR_COS && (top - height).abs() <= COPLANAR_TOLERANCE)
+                .then_some(PlanePiece::Face { pose, half, axis })
+        }
+        _ => None,
+    }
+}
+
+/// Is `ground` a piece of the plane through `p` of unit normal `n` (at the height of its
+/// faces plus their contact skins): a still half-space or cuboid wholly below it with a face
+/// in it? A ball on the plane touches such a ground only at its contact point.
+pub(crate) fn plane_piece_of(ground: &GroundGeom, n: &Vector3<f64>, p: &Vector3<f64>) -> bool {
+    plane_piece(ground, n, n.dot(p)).is_some()
+}
+
 /// [`one_plane_under`] for one straight path `p..q`.
 fn pieces_cover(
     grounds: &[&GroundGeom],
@@ -607,35 +693,12 @@ fn pieces_cover(
     p: &Vector3<f64>,
     q: &Vector3<f64>,
 ) -> bool {
-    use crate::parry::shape::TypedShape;
-    let height = n.dot(p);
     let mut covered: Vec<(f64, f64)> = Vec::with_capacity(grounds.len());
     for ground in grounds {
-        if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
-            return false;
-        }
-        let pose = ground.pose0;
-        match ground.shape.as_typed_shape() {
-            TypedShape::HalfSpace(hs) => {
-                let normal = pose.rotation * vec_to_na(hs.normal);
-                let top = pose.translation.vector.dot(n) + ground.skin;
-                if normal.dot(n) < COPLANAR_COS || (top - height).abs() > COPLANAR_TOLERANCE {
-                    return false;
-                }
-                covered.push((0.0, 1.0));
-            }
-            TypedShape::Cuboid(cb) => {
-                let half = vec_to_na(cb.half_extents);
-                let n_local = pose.rotation.inverse() * n;
-                let axis = (0..3)
-                    .max_by(|i, j| n_local[*i].abs().total_cmp(&n_local[*j].abs()))
-                    .unwrap_or(1);
-                let top = pose.translation.vector.dot(n)
-                    + (0..3).map(|i| half[i] * n_local[i].abs()).sum::<f64>()
-                    + ground.skin;
-                if n_local[axis].abs() < COPLANAR_COS || (top - height).abs() > COPLANAR_TOLERANCE {
-                    return false;
-                }
+        match plane_piece(ground, n, n.dot(p)) {
+            None => return false,
+            Some(PlanePiece::Everywhere) => covered.push((0.0, 1.0)),
+            Some(PlanePiece::Face { pose, half, axis }) => {
                 // The path's stretch over the face, by its two in-plane axes.
                 let (a, b) = (
                     pose.inverse_transform_point(&nalgebra::Point3::from(*p))
@@ -660,7 +723,6 @@ fn pieces_cover(
                     covered.push((lo, hi));
                 }
             }
-            _ => return false,
         }
     }
     // The stretches must join up from 0 to 1.

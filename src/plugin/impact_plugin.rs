@@ -18,9 +18,9 @@ use super::commit::{Shadow, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
-use super::events::ImpactEvent;
+use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
-use super::geometry::{BodyGeom, GroundGeom, Search, SmallList, first_impact};
+use super::geometry::{BodyGeom, GroundGeom, Hit, Search, SmallList, closest, first_impact};
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
@@ -33,9 +33,9 @@ use super::plan::{Candidate, EndOfStep, Planner, StepData};
 use super::policy::{EndAction, EndCheck, Policy, Role};
 use super::reconstruct::{self, ccd_consistent};
 use super::registry::Registry;
-use super::resolve::{Inertia, PairKey};
+use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
 use super::settle::{Checked, Settle};
-use crate::motion::State;
+use crate::motion::{Rolling, State};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
@@ -399,6 +399,137 @@ impl<H> ImpactPlugin<H> {
             roles: &self.prev_roles,
             events: &mut self.events,
             shadows: &mut self.shadows,
+        }
+    }
+
+    /// A rolling ball that meets another ground in the step, at `touch`
+    /// (`reconstruct::rolling_touch`): the impact there, by the model. Left on that ground
+    /// (e = 0) and leaving its own plane (rolling off a slope onto the level ground at its foot), it
+    /// rolls on in closed form on the new ground to the step's end; otherwise it goes on
+    /// through the impacts the search finds, as any impact's body does, and the settle
+    /// stage checks where it ends. `grounds`: every ground near it, `obstacles` among them.
+    #[allow(clippy::too_many_arguments)]
+    fn rolled_into(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        motion: &Rolling,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        obstacles: &[GroundGeom],
+        touch: (f64, State, Hit),
+        step: &EndOfStep,
+    ) {
+        let (t, s, hit) = touch;
+        let inertia = Inertia::of(&bodies[cand.body]);
+        let part = &geom.parts[hit.part];
+        let og = &obstacles[hit.ground];
+        let material = self.registry.material_of(colliders, part.handle, og.handle);
+        let input = ImpactInput {
+            body: cand.body,
+            inertia: &inertia,
+            law: self.config.law,
+            material,
+            resting_speed: step.policy.resting_speed,
+            force_settle: false,
+            timing: ImpactTiming::InStep,
+        };
+        let n = hit.normal;
+        let rolls_on =
+            resolve(&input, geom, og, &s, t, &hit, hit.point, 1).and_then(|(after, event)| {
+                // e = 0 (the materials', or a settled impact's) leaves it on the new ground.
+                let onto = (event.settled || event.restitution == 0.0)
+                    && after.v.dot(&motion.normal) > 0.0
+                    && n.dot(&motion.accel) < 0.0;
+                let ball = part.shape.as_ball().filter(|_| onto)?;
+                let radius = to_f64(ball.radius) + part.skin + og.skin;
+                let default = (
+                    self.config.rolling_resistance,
+                    self.config.spinning_friction,
+                );
+                let (rolling_resistance, spinning_friction) =
+                    self.registry.rolling_of(cand.body, og.handle, default);
+                let on_new = Rolling {
+                    normal: n,
+                    radius,
+                    inertia_ratio: inertia.ball_ratio(radius)?,
+                    friction: material.friction,
+                    rolling_resistance,
+                    spinning_friction,
+                    accel: motion.accel,
+                };
+                let end = on_new.advance_checked(&after, step.dt - t)?;
+                // Still on the new ground's plane at the end, and in no other ground.
+                let reach = step.policy.resting_gap.max(step.policy.prediction);
+                let last = closest(geom, grounds, &end, step.dt, reach)?;
+                let on_plane =
+                    last.dist.abs() <= 1e-9 * radius.max(1.0) && last.normal.dot(&n) >= 1.0 - 1e-9;
+                on_plane.then_some((end, event))
+            });
+        if let Some((end, event)) = rolls_on {
+            self.events.push(event);
+            let rb = &mut bodies[cand.body];
+            write_state(rb, &end, &cand.local_com, true);
+            if self.config.timing == TimingMode::Exact {
+                self.settle().remember(cand.body, rb, &end);
+            }
+            return;
+        }
+        let Some(index) = grounds.iter().position(|g| g.handle == og.handle) else {
+            return;
+        };
+        // Its rolling ends here: next step, its pairs with the plane are not ones rapier held
+        // at rest (the hysteresis would take a ball the impact lifted, still within the
+        // resting gap, for a resting one and put it back on the ground).
+        for part in &geom.parts {
+            for g in grounds {
+                let key = (part.handle, g.handle);
+                if self.prev_roles.get(&key) == Some(&Role::Rolling) {
+                    self.prev_roles.insert(key, Role::Impact);
+                }
+            }
+        }
+        let first = Search::Hit(
+            t,
+            s,
+            Hit {
+                ground: index,
+                ..hit
+            },
+        );
+        let from = self.events.len();
+        let flown = reconstruct::through_impacts(
+            &mut self.settle(),
+            colliders,
+            cand,
+            geom,
+            grounds,
+            &inertia,
+            first,
+            step,
+        );
+        let checked = Checked {
+            body: cand.body,
+            geom,
+            inertia: &inertia,
+            cand: Some(cand),
+        };
+        let (_, settled) = self.settle().check(
+            bodies,
+            colliders,
+            &checked,
+            &flown,
+            EndCheck::Flown,
+            grounds,
+            step,
+            from,
+        );
+        let end = settled.unwrap_or(flown);
+        let rb = &mut bodies[cand.body];
+        write_state(rb, &end, &cand.local_com, true);
+        if self.config.timing == TimingMode::Exact {
+            self.settle().remember(cand.body, rb, &end);
         }
     }
 
@@ -938,6 +1069,22 @@ impl<H> ImpactPlugin<H> {
                     || multibody_joints.rigid_body_link(cand.body).is_some()
                     || touches_other(rb, narrow_phase)
                     || !ccd_consistent(rb, cand, step.dt, step.dt, &step);
+                if !disturbed && !cand.impact_grounds.is_empty() {
+                    // A ground it may roll into: where it does, that impact, and on from
+                    // there.
+                    let obstacles = self
+                        .settle()
+                        .impact_ground_geoms(cand, &geom, colliders, &step);
+                    if let Some(touch) =
+                        reconstruct::rolling_touch(cand, motion, &geom, &obstacles, &step)
+                    {
+                        self.rolled_into(
+                            bodies, colliders, cand, motion, &geom, &grounds, &obstacles, touch,
+                            &step,
+                        );
+                        continue;
+                    }
+                }
                 let rolled = (!disturbed)
                     .then(|| reconstruct::rolled(cand, motion, &geom, &grounds, &step))
                     .flatten();

@@ -17,7 +17,7 @@ use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
     BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, SmallList, cannot_close, contact_checked,
-    flat_throughout, landing_point, one_plane_under,
+    earliest_touch, flat_throughout, landing_point, one_plane_under, plane_piece_of,
 };
 use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet};
@@ -220,6 +220,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let mut closing = false;
         let mut turning_resting = SmallList::Empty;
         let mut rolling = None;
+        // The plane it rolls on: its normal and a point of it.
+        let mut rolling_plane: Option<(Vector3<f64>, Vector3<f64>)> = None;
         // How far a point of the body can move relative to a resting contact point in the
         // step by turning (for a ball about its centre: how fast rapier's contact point
         // slides off its bottom). From the state after any `Step` impulse applied above.
@@ -227,16 +229,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let jointed = sets.impulse_joints.attached_joints(handle).next().is_some()
             || sets.multibody_joints.rigid_body_link(handle).is_some();
         for (gi, gg) in &ground_geoms {
-            // The ball rolls on the plane of an earlier (nearer) ground, of which this one
-            // is a piece: the pair is the rolling's too, out of rapier's solver (its edges
-            // under the ball would otherwise be met: rapier's contact with a tile's edge at
-            // a flush seam throws the ball up, and `Step` mode would bounce it).
-            if rolling.is_some() {
-                for part in &geom.parts {
-                    step.roles.insert((part.handle, gg.handle), Role::Rolling);
-                }
-                continue;
-            }
             let mut any_impact = false;
             // No pair of the body with this ground can meet in the step.
             let mut clear = true;
@@ -256,6 +248,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     || self.user_refuses(bodies, colliders, key)
                 {
                     step.roles.insert(key, Role::Filtered);
+                    continue;
+                }
+                // The ball rolls on the plane of an earlier (nearer) ground. A piece of that
+                // plane: the pair is the rolling's too, out of rapier's solver (rapier's
+                // contact with a tile's edge at a flush seam throws the ball up, and `Step`
+                // mode would bounce it). Another ground it may roll into (a slope's foot, a
+                // wall): out of rapier's solver too, the search along the rolling finds the
+                // impact.
+                if let Some((n, p)) = rolling_plane {
+                    let role = if plane_piece_of(gg, &n, &p) {
+                        Role::Rolling
+                    } else {
+                        any_impact = true;
+                        Role::Impact
+                    };
+                    step.roles.insert(key, role);
                     continue;
                 }
                 let found = contact_checked(part, gg, &state, 0.0, reach);
@@ -410,6 +418,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             step, known, sets,
                         ) {
                             role = Role::Rolling;
+
+                            let radius = motion.radius - gg.skin;
+                            rolling_plane = Some((n, on_ground.com - n * radius));
                             rolling = Some((*gi, motion));
                             state = on_ground;
                         }
@@ -591,10 +602,32 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let (p, q) = (on_ground.com - to_plane, end.com - to_plane);
             let at = flight.accel - n * an;
             let bow = (at.norm() - friction * an) * step.dt * step.dt / 8.0;
-            let pieces: SmallList<&GroundGeom> =
-                std::iter::once(gg).chain(others.iter().copied()).collect();
-            if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+            // The others are the plane's pieces, or grounds it may roll into, which must
+            // not touch it yet (a ball resting in a crease is rapier's). One it has just
+            // left (a slope behind the crease) may be nearer than the resting gap: the
+            // search along the rolling finds whether it comes back.
+            let (pieces, obstacles): (Vec<&GroundGeom>, Vec<&GroundGeom>) = std::iter::once(gg)
+                .chain(others.iter().copied())
+                .partition(|g| plane_piece_of(g, n, &p));
+            let touching = |s: &State, t: f64| {
+                obstacles
+                    .iter()
+                    .any(|og| !matches!(contact_checked(part, og, s, t, 0.0), Ok(None)))
+            };
+            if touching(on_ground, 0.0) {
                 return None;
+            }
+            if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+                // Its contact point leaves the plane, but it may meet another ground first
+                // (rolling down into a crease, it touches the level ground while still on
+                // the slope): the plane need only reach that far, the reconstruct stage's
+                // search (the same samples) finds the touch.
+                let t = earliest_touch(step.dt, |t| touching(&motion.advance(on_ground, t), t))?;
+                let q = motion.advance(on_ground, t).com - to_plane;
+                let bow = bow * (t / step.dt).powi(2);
+                if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+                    return None;
+                }
             }
         }
         Some(motion)

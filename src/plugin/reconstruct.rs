@@ -13,7 +13,9 @@
 
 use super::convert::vec_to_na;
 use super::events::{EventKind, ImpactTiming};
-use super::geometry::{BodyGeom, GroundGeom, Search, closest, first_impact, landing_point};
+use super::geometry::{
+    BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
+};
 use super::plan::{Candidate, EndOfStep, StepData};
 use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
 use super::settle::Settle;
@@ -118,6 +120,28 @@ pub(crate) fn rolled(
     let on_plane = hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
         && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9;
     on_plane.then_some(end)
+}
+
+/// The first time in the step a `Role::Rolling` ball, moved by `motion` from the candidate's
+/// start, touches one of `obstacles` (the grounds near it not of its plane: a slope's foot,
+/// a wall), with its state and the contact there ([`earliest_touch`]; a graze between two
+/// samples is left to the end check, `rolled`, which then finds the ball off its plane).
+pub(crate) fn rolling_touch(
+    cand: &Candidate,
+    motion: &Rolling,
+    geom: &BodyGeom,
+    obstacles: &[GroundGeom],
+    step: &EndOfStep,
+) -> Option<(f64, State, Hit)> {
+    let reach = step.policy.resting_gap.max(step.policy.prediction);
+    let at = |t: f64| {
+        let s = motion.advance(&cand.start, t);
+        let hit = closest(geom, obstacles, &s, t, reach);
+        (s, hit)
+    };
+    let t = earliest_touch(step.dt, |t| at(t).1.is_some_and(|h| h.dist <= 0.0))?;
+    let (s, hit) = at(t);
+    Some((t, s, hit?))
 }
 
 /// After a settled impact at `site` (time `t`): unless the state `s` leaves the ground faster
