@@ -42,7 +42,7 @@ use bevy_rapier3d::prelude::{
     TransformInterpolation,
 };
 use bevy_rapier3d::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodySet};
-use rapier_impact::ImpactPlugin;
+use rapier_impact::{ImpactConfig, ImpactPlugin};
 
 /// The messages the step writes.
 #[derive(SystemParam)]
@@ -112,9 +112,19 @@ pub(crate) fn step_with_impacts<H>(
         let (sim, colliders, joints, bodies) =
             (&mut *sim, &mut *colliders, &mut *joints, &mut *bodies);
         let impact = &mut *impact;
-        // Only while the plugin is out of its component, for the hook swap; put back below.
-        let Some(mut plugin) = impact.plugin.take() else {
-            continue;
+        // Out of its component for the hook swap, put back below. It is missing only if a
+        // frame was cut short (a user hook panicked): start again from a new plugin, to which
+        // the settings and the grounds are applied anew.
+        let mut plugin = match impact.plugin.take() {
+            Some(plugin) => plugin,
+            None => {
+                let Ok(fresh) = ImpactPlugin::new(ImpactConfig::default()) else {
+                    continue;
+                };
+                impact.grounds.clear();
+                impact.applied = None;
+                fresh
+            }
         };
         apply_settings(ctx, settings, impact, &mut plugin, &mut writers.errors);
         sync_grounds(

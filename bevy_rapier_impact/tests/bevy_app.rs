@@ -169,10 +169,7 @@ fn user_hooks_still_filter_the_pairs_the_plugin_does_not_take() {
             Collider::cuboid(1.0, 0.05, 1.0),
         ))
         .id();
-    app.insert_resource(HookLog {
-        contact_calls: Default::default(),
-        ghost,
-    });
+    app.insert_resource(HookLog::refusing(ghost));
     let ball = spawn_ball(app);
     app.world_mut()
         .entity_mut(ball)
@@ -203,6 +200,52 @@ fn user_hooks_still_filter_the_pairs_the_plugin_does_not_take() {
     assert!(
         hit_ground,
         "no impact with the ground under the ghost platform"
+    );
+}
+
+#[test]
+fn hook_flags_the_app_sets_at_run_time_keep_the_plugin_s_bounces() {
+    // bevy_rapier copies a changed `ActiveHooks` into rapier, over the flags the plugin put
+    // on the ground: the plugin must take them as the user's and add its own again.
+    let mut app = app(
+        RapierImpactPlugin::<TestHooks>::new(ImpactConfig::default()).unwrap(),
+        fixed(DT, 1),
+        f64::from(DT),
+    );
+    app.insert_resource(HookLog::refusing(Entity::PLACEHOLDER));
+    let ground = spawn_ground(&mut app, true);
+    let ball = spawn_ball(&mut app);
+    for _ in 0..10 {
+        app.update();
+    }
+    app.world_mut()
+        .entity_mut(ground)
+        .insert(ActiveHooks::MODIFY_SOLVER_CONTACTS);
+    // To 4.6 s: ten bounces, then at rest from 4.06 s.
+    let bounces = measure(&mut app, ball, 266, f64::from(DT));
+    let worst = (1..=10)
+        .map(|n| {
+            bounces
+                .apexes
+                .get(n - 1)
+                .map_or(f64::INFINITY, |a| (a / apex(n) - 1.0).abs())
+        })
+        .fold(0.0, f64::max);
+    let modify = *app
+        .world()
+        .resource::<HookLog>()
+        .modify_calls
+        .lock()
+        .unwrap();
+    println!("worst apex error {worst:.2e}; the user's modify_solver_contacts calls {modify}");
+    assert!(
+        worst <= 1e-6,
+        "apexes: worst relative error {worst:.3e}, tolerance 1e-6"
+    );
+    // The resting ball's contact is rapier's: handed to the user's hook first.
+    assert!(
+        modify > 0,
+        "the user's modify_solver_contacts was never called"
     );
 }
 

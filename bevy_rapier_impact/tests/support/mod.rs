@@ -12,7 +12,9 @@ use bevy_rapier_impact::{
     Ground, ImpactConfig, ImpactErrorMessage, ImpactMessage, ImpactSettings, ImpactSimulation,
     RapierImpactPlugin,
 };
-use bevy_rapier3d::pipeline::{BevyPhysicsHooks, PairFilterContextView};
+use bevy_rapier3d::pipeline::{
+    BevyPhysicsHooks, ContactModificationContextView, PairFilterContextView,
+};
 use bevy_rapier3d::prelude::*;
 use std::sync::Mutex;
 use std::time::Duration;
@@ -196,11 +198,23 @@ pub fn measure(app: &mut App, ball: Entity, frames: usize, dt: f64) -> Bounces {
 #[derive(Resource, Default)]
 pub struct StepTrace(pub Mutex<Vec<[u32; 6]>>);
 
-/// Filter calls and the collider whose contacts the user refuses.
+/// Hook calls, and the collider whose contacts the user refuses.
 #[derive(Resource)]
 pub struct HookLog {
     pub contact_calls: Mutex<usize>,
+    pub modify_calls: Mutex<usize>,
     pub ghost: Entity,
+}
+
+impl HookLog {
+    /// Counts the calls; refuses the contacts of `ghost`.
+    pub fn refusing(ghost: Entity) -> Self {
+        Self {
+            contact_calls: Mutex::new(0),
+            modify_calls: Mutex::new(0),
+            ghost,
+        }
+    }
 }
 
 /// The user's Bevy hooks in the tests: records the ball's state from the sensor's
@@ -221,6 +235,12 @@ impl BevyPhysicsHooks for TestHooks<'_> {
             None
         } else {
             Some(SolverFlags::COMPUTE_RIGID_IMPULSES)
+        }
+    }
+
+    fn modify_solver_contacts(&self, _context: ContactModificationContextView) {
+        if let Some(log) = &self.log {
+            *log.modify_calls.lock().unwrap() += 1;
         }
     }
 
