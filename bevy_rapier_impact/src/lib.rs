@@ -25,7 +25,8 @@
 //!
 //! Give the app's `BevyPhysicsHooks` as `RapierImpactPlugin<H>` (as it would give
 //! `RapierPhysicsPlugin<H>`). The core plugin is the hook rapier sees; it wraps the user's
-//! ([`UserHooks`]) and hands it every pair it does not manage, when the colliders'
+//! ([`UserHooks`]) and hands it every pair it does not take out of rapier's solver (a
+//! resting ground contact included, before its restitution is zeroed), when the colliders'
 //! `ActiveHooks` ask for it, so filters and one-way platforms keep working. bevy_rapier copies
 //! an `ActiveHooks` component into rapier only when the component changes, and the core
 //! plugin takes such a change as the user's new flags: the flags it adds are not lost.
