@@ -92,7 +92,6 @@ type Grounds<'w, 's> = Query<
 
 /// Advances every rapier context by one frame, the core plugin around each rapier step (see
 /// the module's contract). Replaces bevy_rapier's `step_simulation::<H>`.
-#[allow(clippy::type_complexity)]
 pub(crate) fn step_with_impacts<H>(
     mut contexts: Contexts,
     grounds: Grounds,
