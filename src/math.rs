@@ -50,6 +50,15 @@ pub(crate) fn exp_m1(x: f64) -> f64 {
     return x.exp_m1();
 }
 
+/// The natural logarithm.
+#[inline]
+pub(crate) fn ln(x: f64) -> f64 {
+    #[cfg(feature = "enhanced-determinism")]
+    return libm::log(x);
+    #[cfg(not(feature = "enhanced-determinism"))]
+    return x.ln();
+}
+
 #[cfg(all(test, feature = "enhanced-determinism"))]
 mod tests {
     /// Under the feature every function is libm's, bit for bit (the platform's `std` may
@@ -72,6 +81,7 @@ mod tests {
                 super::exp_m1(x * 1e-3).to_bits(),
                 libm::expm1(x * 1e-3).to_bits()
             );
+            assert_eq!(super::ln(x.abs()).to_bits(), libm::log(x.abs()).to_bits());
         }
     }
 }

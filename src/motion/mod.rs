@@ -6,6 +6,7 @@
 
 pub(crate) mod flight;
 pub(crate) mod meeting;
+pub(crate) mod pursuit;
 pub(crate) mod rolling;
 
 pub(crate) use flight::{Flight, Gyro, State};

@@ -3,6 +3,7 @@
 //! turns with the ball, which then hops and slips on). No rapier types.
 
 use super::flight::State;
+use super::pursuit::Pursuit;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A ball sliding or rolling on a fixed flat ground, the ground pressing it with the force
@@ -28,25 +29,49 @@ pub(crate) struct Rolling {
 }
 
 /// Sine of the largest angle between a slip (or a rolling velocity) and a slope's fall line
-/// for the motion to count as along it: the rounding of a state rapier stores in `f32`
-/// (1e-7 relative) turns a ball rolling down the fall line by about that much.
-const FALL_LINE_TOLERANCE: f64 = 1e-6;
+/// for the motion to count as along it (a straight phase rather than a pursuit): the pursuit
+/// then differs from the straight line by less than that fraction of its travel, and its
+/// terms in `tan(psi/2)^4` stay far from overflow.
+const FALL_LINE_TOLERANCE: f64 = 1e-12;
 
-/// One phase of the motion along the ground: the accelerations (linear, and angular of the
-/// spin along the ground) and how long they last.
+/// One phase of the motion along the ground and how long it lasts.
 struct Phase {
-    linear: Vector3<f64>,
-    angular: Vector3<f64>,
+    kind: PhaseKind,
     until: f64,
-    /// The phase ends with the ball at rest.
-    stops: bool,
+    /// What the ball does at `until`.
+    then: PhaseEnd,
+}
+
+enum PhaseKind {
+    /// Constant accelerations: linear, and angular of the spin along the ground.
+    Constant {
+        linear: Vector3<f64>,
+        angular: Vector3<f64>,
+    },
+    /// Sliding across a slope's fall line: the slip's pursuit (`motion::pursuit`), friction
+    /// `mu g_n` along it and gravity `a_t`.
+    SlideAcross(Pursuit),
+    /// Rolling across a slope's fall line against rolling resistance: the velocity's
+    /// pursuit, the spin `n x v / r`.
+    RollAcross(Pursuit),
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum PhaseEnd {
+    /// The next phase follows from the state.
+    Continue,
+    /// At rest (the rolling resistance stopped it).
+    Rest,
+    /// The slip has vanished: rolling from here (the spin set to match exactly).
+    Rolls,
+    /// Rolling needs more friction than `mu N` from here: it slides.
+    Slides,
 }
 
 impl Rolling {
     /// The state `dt` seconds after `s`, which touches the ground (`v . n = 0`), or `None`
-    /// where the closed form below does not reach: on a slope, a slip or (with rolling
-    /// resistance) a rolling velocity across the fall line, and the narrow band where the
-    /// ball can neither roll (the friction it needs exceeds `mu N`) nor keep a slip it starts.
+    /// where the closed form below does not reach: the narrow band where the ball can
+    /// neither roll (the friction it needs exceeds `mu N`) nor keep a slip it starts.
     ///
     /// With `g_n = -a.n` (the normal force per unit mass, `N = m g_n`), `a_t` the acceleration
     /// along the ground, `k = I / (m r^2)`, the contact at `-r n` and its slip
@@ -55,18 +80,22 @@ impl Rolling {
     ///   `dw/dt = (-r n) x F / I`, so `ds/dt = a_t - mu g_n (1 + 1/k) s/|s|`: along the fall
     ///   line (or on level ground) the slip keeps its direction and changes at
     ///   `a_t.s/|s| - mu g_n (1 + 1/k)`, ending when it reaches zero. A ball launched sliding
-    ///   without spin on level ground rolls at `5/7 v0` from `t = 2 v0 / (7 mu g)`;
+    ///   without spin on level ground rolls at `5/7 v0` from `t = 2 v0 / (7 mu g)`. Across
+    ///   the fall line the slip turns down it as a pursuit curve (`motion::pursuit`), and the
+    ///   friction's integrals follow from the slip's: `int F/m dt = (s - s0 - a_t t) / (1 + 1/k)`;
     /// - rolling: `dv/dt = (a_t - mu_r g_n v/|v|) / (1 + k)`, `w = n x v / r`: on level ground
     ///   it stops after `v0^2 (1 + k) / (2 mu_r g)`, down a slope of angle `theta` it speeds up
-    ///   at `g (sin - mu_r cos) / (1 + k)`, up it slows at `g (sin + mu_r cos) / (1 + k)`, as
-    ///   long as the friction this needs, `m (dv/dt - a_t)`, stays within `mu N`;
+    ///   at `g (sin - mu_r cos) / (1 + k)`, up it slows at `g (sin + mu_r cos) / (1 + k)`;
+    ///   across the fall line `v` is a pursuit too, which stops where `tan(theta) < mu_r`. It
+    ///   rolls as long as the friction this needs, `m (dv/dt - a_t)`, stays within `mu N`, and
+    ///   then slides down the fall line;
     /// - at rest: it stays where `|a_t| <= mu_r g_n` (`tan(theta) <= mu_r`), else rolls down;
     /// - the spin about the normal `w.n` decays at `mu_sp g_n / (k r)` to zero
     ///   (`5 mu_sp g / (2 r)` for a solid ball on level ground), whatever the ball does, and
     ///   moves nothing else (it does not turn the contact point).
     ///
-    /// Every phase is exact (constant accelerations); the orientation turns by the integral
-    /// of `w`, exact when `w` keeps its axis and second order in the step otherwise.
+    /// Every phase is exact; the orientation turns by the integral of `w`, exact when `w`
+    /// keeps its axis and second order in the step otherwise.
     pub fn advance(&self, s: &State, dt: f64) -> State {
         self.advance_checked(s, dt)
             .unwrap_or_else(|| self.advance_unresisted(s, dt))
@@ -87,22 +116,62 @@ impl Rolling {
         };
         let mut turned = Vector3::zeros();
         let mut t = 0.0;
-        // At most: slide, roll, stop (or roll back down), so a few phases.
-        for _ in 0..6 {
+        let mut slides = false;
+        // At most: slide, roll, slide again (rolling needs too much friction further down),
+        // stop, roll back down, so a few phases.
+        for _ in 0..8 {
             let left = dt - t;
             if left <= 0.0 {
                 break;
             }
-            let phase = self.phase(&st, &at, gn)?;
+            let phase = self.phase(&st, &at, gn, slides)?;
             let h = phase.until.min(left);
-            st.com += st.v * h + 0.5 * phase.linear * h * h;
-            turned += st.w * h + 0.5 * phase.angular * h * h;
-            st.v += phase.linear * h;
-            st.w += phase.angular * h;
+            let p0 = st;
+            match phase.kind {
+                PhaseKind::Constant { linear, angular } => {
+                    st.com += st.v * h + 0.5 * linear * h * h;
+                    turned += st.w * h + 0.5 * angular * h * h;
+                    st.v += linear * h;
+                    st.w += angular * h;
+                }
+                PhaseKind::SlideAcross(slip) => {
+                    // dv/dt = a_t - mu g_n s/|s| and ds/dt = a_t - B s/|s| with
+                    // B = mu g_n (1 + 1/k): the friction's integrals are the slip's.
+                    let brake = self.friction * gn * (1.0 + 1.0 / self.inertia_ratio);
+                    let ratio = self.friction * gn / brake;
+                    let s0 = p0.v - self.radius * p0.w.cross(&n);
+                    let end = slip.at(h);
+                    // int_0^h F/m dt and int_0^h int_0^t F/m, from s(h) and int s.
+                    let impulse = (end.w - s0 - at * h) * ratio;
+                    let moment = (end.travelled - s0 * h - 0.5 * at * h * h) * ratio;
+                    st.com += p0.v * h + 0.5 * at * h * h + moment;
+                    st.v = p0.v + at * h + impulse;
+                    // dw/dt = (-r n) x F / I = n x (-F/m) / (k r).
+                    let spin = -1.0 / (self.inertia_ratio * self.radius);
+                    turned += p0.w * h + n.cross(&moment) * spin;
+                    st.w = p0.w + n.cross(&impulse) * spin;
+                }
+                PhaseKind::RollAcross(velocity) => {
+                    let end = velocity.at(h);
+                    st.com += end.travelled;
+                    st.v = end.w;
+                    let r = self.radius;
+                    turned += n.cross(&end.travelled) / r;
+                    st.w = n.cross(&st.v) / r;
+                }
+            }
             t += h;
-            if phase.stops && h == phase.until {
-                st.v = Vector3::zeros();
-                st.w = Vector3::zeros();
+            slides = false;
+            if h == phase.until {
+                match phase.then {
+                    PhaseEnd::Rest => {
+                        st.v = Vector3::zeros();
+                        st.w = Vector3::zeros();
+                    }
+                    PhaseEnd::Rolls => st.w = n.cross(&st.v) / self.radius,
+                    PhaseEnd::Slides => slides = true,
+                    PhaseEnd::Continue => {}
+                }
             }
         }
         st.w += n * wn1;
@@ -114,32 +183,56 @@ impl Rolling {
     }
 
     /// The phase the ball is in at `st` (its spin along the ground only), on a ground of
-    /// acceleration `at` along it and `gn` into it.
-    fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64) -> Option<Phase> {
+    /// acceleration `at` along it and `gn` into it; `slides`: the last phase ended where
+    /// rolling needs more friction than `mu N`.
+    fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64, slides: bool) -> Option<Phase> {
         let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
         let scale = 1e-12 * (1e-3 + st.v.norm() + r * st.w.norm() + at.norm());
         let slip = st.v - r * st.w.cross(&n);
         let along = |u: &Vector3<f64>| at.cross(u).norm() <= FALL_LINE_TOLERANCE * at.norm();
+        let constant = |linear: Vector3<f64>, angular: Vector3<f64>, until: f64, then| Phase {
+            kind: PhaseKind::Constant { linear, angular },
+            until,
+            then,
+        };
         let slide = |u: Vector3<f64>, slip_speed: f64| {
             // Friction's accelerations: linear along -u, angular about n x u.
             let linear = at - u * (self.friction * gn);
             let angular = n.cross(&u) * (self.friction * gn / (r * k));
             let rate = at.dot(&u) - self.friction * gn * (1.0 + 1.0 / k);
-            Phase {
-                linear,
-                angular,
-                until: if rate < 0.0 {
-                    slip_speed / -rate
-                } else {
-                    f64::INFINITY
-                },
-                stops: false,
-            }
+            let until = if rate < 0.0 {
+                slip_speed / -rate
+            } else {
+                f64::INFINITY
+            };
+            constant(linear, angular, until, PhaseEnd::Continue)
         };
+        // A ball that cannot roll slides, its slip growing down the fall line, if it can keep
+        // growing there (otherwise the narrow band out of reach).
+        let slide_down = || {
+            let phase = slide(at.try_normalize(0.0)?, 0.0);
+            (phase.until == f64::INFINITY).then_some(phase)
+        };
+        if slides {
+            return slide_down();
+        }
         let slip_speed = slip.norm();
         if slip_speed > scale {
             let u = slip / slip_speed;
-            return along(&u).then(|| slide(u, slip_speed));
+            if along(&u) || self.friction == 0.0 {
+                return Some(slide(u, slip_speed));
+            }
+            let brake = self.friction * gn * (1.0 + 1.0 / k);
+            let Some(pursuit) = Pursuit::new(&slip, at, brake) else {
+                // Braking so much harder than gravity drifts it that the slip keeps its
+                // direction to rounding.
+                return Some(slide(u, slip_speed));
+            };
+            return Some(Phase {
+                kind: PhaseKind::SlideAcross(pursuit),
+                until: pursuit.stop_time().unwrap_or(f64::INFINITY),
+                then: PhaseEnd::Rolls,
+            });
         }
         // Rolling, or at rest: the direction it rolls (or would start to).
         let speed = st.v.norm();
@@ -149,45 +242,66 @@ impl Rolling {
             at.normalize()
         } else {
             // Held at rest by the rolling resistance (or on level ground).
-            return Some(Phase {
-                linear: Vector3::zeros(),
-                angular: Vector3::zeros(),
-                until: f64::INFINITY,
-                stops: false,
-            });
+            let zero = Vector3::zeros();
+            return Some(constant(zero, zero, f64::INFINITY, PhaseEnd::Continue));
         };
-        if self.rolling_resistance > 0.0 && !along(&u) {
-            return None;
-        }
         let linear = (at - u * (self.rolling_resistance * gn)) / (1.0 + k);
-        // Rolling needs the friction m (dv/dt - a_t); beyond mu N the ball slides, its slip
-        // growing down the fall line, if it can keep growing there.
-        if (linear - at).norm() > self.friction * gn * (1.0 + 1e-12) {
-            let down = at.try_normalize(0.0)?;
-            let phase = slide(down, 0.0);
-            return (phase.until == f64::INFINITY).then_some(phase);
+        // Rolling needs the friction m (dv/dt - a_t); beyond mu N the ball slides.
+        let limit = self.friction * gn * (1.0 + 1e-12);
+        if (linear - at).norm() > limit {
+            return slide_down();
+        }
+        if self.rolling_resistance > 0.0 && !along(&u) {
+            let brake = self.rolling_resistance * gn / (1.0 + k);
+            if let Some(pursuit) = Pursuit::new(&st.v, &(at / (1.0 + k)), brake) {
+                // The friction rolling needs, |k a_t + mu_r g_n v/|v|| / (1 + k), grows as
+                // the velocity turns down the fall line: it reaches mu N where
+                // cos(psi) = ((mu g_n (1 + k))^2 - (k |a_t|)^2 - (mu_r g_n)^2)
+                //   / (2 k |a_t| mu_r g_n).
+                let (ka, rg) = (k * at.norm(), self.rolling_resistance * gn);
+                let mu = self.friction * gn * (1.0 + k);
+                let cos_limit = (mu * mu - ka * ka - rg * rg) / (2.0 * ka * rg);
+                let stop = pursuit.stop_time();
+                let slides_at = (cos_limit < 1.0)
+                    .then(|| pursuit.time_at_angle(cos_limit))
+                    .flatten();
+                let (until, then) = match (slides_at, stop) {
+                    (Some(t), _) => (t, PhaseEnd::Slides),
+                    (None, Some(t)) => (t, PhaseEnd::Rest),
+                    (None, None) => (f64::INFINITY, PhaseEnd::Continue),
+                };
+                return Some(Phase {
+                    kind: PhaseKind::RollAcross(pursuit),
+                    until,
+                    then,
+                });
+            }
         }
         // Only the rolling resistance stops a ball: without it the acceleration is constant
         // (a_t / (1 + k)) and the velocity passes through zero, or turns, unbroken.
         let slowing = linear.dot(&u);
         let stops = self.rolling_resistance > 0.0 && slowing < 0.0 && speed > scale;
-        Some(Phase {
+        Some(constant(
             linear,
-            angular: n.cross(&linear) / r,
-            until: if stops {
+            n.cross(&linear) / r,
+            if stops {
                 speed / -slowing
             } else {
                 f64::INFINITY
             },
-            stops,
-        })
+            if stops {
+                PhaseEnd::Rest
+            } else {
+                PhaseEnd::Continue
+            },
+        ))
     }
 
-    /// For the states [`Self::advance_checked`] does not reach (a slip across a slope; the
-    /// plugin builds a `Rolling` only on level ground): friction held along the initial slip
-    /// for its sliding time on level ground, plus the acceleration along the ground, without
-    /// rolling resistance or spinning friction. An approximation, never more energetic than
-    /// the slope gives.
+    /// For the states [`Self::advance_checked`] does not reach (the band where the ball can
+    /// neither roll nor slide; the plugin leaves those to rapier): friction held along the
+    /// initial slip for its sliding time on level ground, plus the acceleration along the
+    /// ground, without rolling resistance or spinning friction. An approximation, never more
+    /// energetic than the slope gives.
     fn advance_unresisted(&self, s: &State, dt: f64) -> State {
         let n = self.normal;
         let r = self.radius;
@@ -553,37 +667,218 @@ mod tests {
     }
 
     #[test]
-    fn energy_never_rises_and_a_slip_across_a_slope_is_out_of_reach() {
-        let (rolling, _) = on_slope(0.0, 0.3, 0.02, 0.05);
-        let energy = |s: &State| 0.5 * s.v.norm_squared() + 0.5 * K * R * R * s.w.norm_squared();
+    fn energy_never_rises_on_level_ground_or_a_slope() {
+        let energy = |rolling: &Rolling, s: &State| {
+            0.5 * s.v.norm_squared() + 0.5 * K * R * R * s.w.norm_squared()
+                - rolling.accel.dot(&s.com)
+        };
         let mut x = 0.37f64;
         let mut next = || {
             x = (x * 7.31 + 0.13).fract();
             4.0 * x - 2.0
         };
-        for _ in 0..200 {
-            let mut s = state(
-                &rolling,
-                Vector3::new(next(), 0.0, next()),
-                Vector3::new(5.0 * next(), 5.0 * next(), 5.0 * next()) * 3.0,
-            );
-            for _ in 0..120 {
-                let after = rolling
-                    .advance_checked(&s, 1.0 / 60.0)
-                    .expect("level ground");
-                assert!(energy(&after) <= energy(&s) * (1.0 + 1e-12) + 1e-15);
-                s = after;
+        for (slope, mu_r) in [(0.0, 0.02), (5.0, 0.02), (5.0, 0.2), (12.0, 0.0)] {
+            let (rolling, _) = on_slope(slope, 0.3, mu_r, 0.05);
+            let n = rolling.normal;
+            for _ in 0..100 {
+                let v = Vector3::new(next(), next(), next());
+                let mut s = state(
+                    &rolling,
+                    v - n * v.dot(&n),
+                    Vector3::new(5.0 * next(), 5.0 * next(), 5.0 * next()) * 3.0,
+                );
+                for _ in 0..120 {
+                    let after = rolling.advance_checked(&s, 1.0 / 60.0).expect("in reach");
+                    assert!(
+                        energy(&rolling, &after) <= energy(&rolling, &s) + 1e-12,
+                        "slope {slope}: {s:?} -> {after:?}"
+                    );
+                    assert!(
+                        after.v.dot(&n).abs() < 1e-12 && (after.com - s.com).dot(&n).abs() < 1e-12
+                    );
+                    s = after;
+                }
             }
         }
-        let (sloped, down) = on_slope(10.0, 0.3, 0.0, 0.0);
+    }
+
+    /// The ball's own equations, `dv/dt = a_t + F/m`, `dw/dt = (-r n) x F / I` with kinetic
+    /// friction against the slip, by classical Runge-Kutta in 1e-5 s steps: the reference for
+    /// a slip across a slope (the closed form's pursuit is held to it in `motion::pursuit`).
+    fn integrate_sliding(rolling: &Rolling, s: &State, t: f64) -> State {
+        let (n, r) = (rolling.normal, R);
+        let gn = -rolling.accel.dot(&n);
+        let at = rolling.accel - n * rolling.accel.dot(&n);
+        let f = |v: &Vector3<f64>, w: &Vector3<f64>| {
+            let slip = v - r * w.cross(&n);
+            let force = -slip.normalize() * (rolling.friction * gn);
+            (at + force, (-n * r).cross(&force) / (K * r * r))
+        };
+        let steps = (t / 1e-5).ceil() as usize;
+        let h = t / steps as f64;
+        let (mut com, mut v, mut w) = (s.com, s.v, s.w);
+        for _ in 0..steps {
+            let (a1, b1) = f(&v, &w);
+            let (a2, b2) = f(&(v + a1 * (0.5 * h)), &(w + b1 * (0.5 * h)));
+            let (a3, b3) = f(&(v + a2 * (0.5 * h)), &(w + b2 * (0.5 * h)));
+            let (a4, b4) = f(&(v + a3 * h), &(w + b3 * h));
+            com += (v * 6.0 + (a1 + a2 + a3) * h) * (h / 6.0);
+            v += (a1 + a2 * 2.0 + a3 * 2.0 + a4) * (h / 6.0);
+            w += (b1 + b2 * 2.0 + b3 * 2.0 + b4) * (h / 6.0);
+        }
+        State { com, v, w, ..*s }
+    }
+
+    #[test]
+    fn a_slip_across_a_slope_turns_down_it_as_the_ball_equations_say() {
+        // 10 degrees, mu = 0.3: a ball thrown across the fall line, slightly uphill, with
+        // some backspin. Gravity turns the slip down the slope while friction ends it.
+        let (rolling, down) = on_slope(10.0, 0.3, 0.0, 0.0);
         let across = Vector3::z();
-        let s = state(&sloped, across, Vector3::zeros());
-        assert_eq!(sloped.advance_checked(&s, 0.1), None);
-        // Along the fall line it is in reach.
+        let v0 = across * 1.5 - down * 0.4;
+        let s = state(&rolling, v0, rolling.normal.cross(&v0) / R * -0.5);
+        let slip = |s: &State| s.v - R * s.w.cross(&rolling.normal);
+        for t in [0.03, 0.08, 0.15] {
+            let reference = integrate_sliding(&rolling, &s, t);
+            assert!(slip(&reference).norm() > 1e-3, "still sliding at {t}");
+            for end in both_ways(&rolling, &s, t) {
+                assert!(
+                    (end.v - reference.v).norm() < 1e-11,
+                    "{t}: {:?} vs {:?}",
+                    end.v,
+                    reference.v
+                );
+                assert!(
+                    (end.w - reference.w).norm() * R < 1e-11,
+                    "{t}: {:?} vs {:?}",
+                    end.w,
+                    reference.w
+                );
+                assert!(
+                    (end.com - reference.com).norm() < 1e-11,
+                    "{t}: {:?}",
+                    end.com
+                );
+            }
+        }
+        // Whatever friction does, it acts at the contact: the angular momentum about the
+        // contact point changes only by gravity's moment, r n x a_t per unit mass. It holds
+        // through the end of the slip into rolling (no rolling resistance here).
+        let at = rolling.accel - rolling.normal * rolling.accel.dot(&rolling.normal);
+        let l = |s: &State| rolling.normal.cross(&s.v) * R + s.w * (K * R * R);
+        for t in [0.4, 1.0, 2.0] {
+            for end in both_ways(&rolling, &s, t) {
+                let expected = l(&s) + rolling.normal.cross(&at) * (R * t);
+                assert!(
+                    (l(&end) - expected).norm() < 1e-12,
+                    "{t}: {:?} vs {expected:?}",
+                    l(&end)
+                );
+            }
+        }
+        let [rolled, _] = both_ways(&rolling, &s, 2.0);
+        assert!(slip(&rolled).norm() < 1e-12, "{:?}", slip(&rolled));
+    }
+
+    #[test]
+    fn rolling_across_a_slope_against_rolling_resistance_stops_at_the_capture_time() {
+        // tan(5 deg) = 0.087 < mu_r = 0.12: set rolling square to the fall line, the ball
+        // curves down and stops after the pursuit's capture time v0 B / (B^2 - A^2), with
+        // A = g sin / (1 + k) and B = mu_r g cos / (1 + k).
+        let (mu_r, slope) = (0.12, 5.0f64);
+        let (rolling, down) = on_slope(slope, 0.4, mu_r, 0.0);
+        let th = slope.to_radians();
+        let (a, b) = (G * th.sin() / (1.0 + K), mu_r * G * th.cos() / (1.0 + K));
+        let v0 = 0.8;
+        let s = rolling_at(&rolling, Vector3::z() * v0);
+        let stop = v0 * b / (b * b - a * a);
+        let along = v0 * v0 * a / (4.0 * (b * b - a * a));
+        let across = 2.0 * v0 * v0 * b / (4.0 * b * b - a * a);
+        for end in both_ways(&rolling, &s, stop + 0.5) {
+            // At rest (its start's spin about the normal, the rounding of n x v / r, stays).
+            assert_eq!(end.v, Vector3::zeros());
+            assert!(end.w.norm() < 1e-15, "{:?}", end.w);
+            let moved = end.com - s.com;
+            assert!(
+                (moved.dot(&down) - along).abs() < 1e-12,
+                "{moved:?} vs {along}"
+            );
+            assert!((moved.z - across).abs() < 1e-12, "{moved:?} vs {across}");
+        }
+        // Just before the stop it still rolls, without slip, nearly straight down the slope.
+        let [before, _] = both_ways(&rolling, &s, 0.999 * stop);
+        assert!(before.v.norm() > 0.0 && before.v.dot(&down) > 0.99 * before.v.norm());
+        let slip = before.v - R * before.w.cross(&rolling.normal);
+        assert!(slip.norm() < 1e-14, "{slip:?}");
+    }
+
+    #[test]
+    fn rolling_across_a_slope_steeper_than_mu_r_it_runs_down_for_ever() {
+        let (rolling, down) = on_slope(8.0, 0.5, 0.05, 0.0);
+        let s = rolling_at(&rolling, Vector3::z() * 1.0 - down * 0.3);
+        let [one, many] = both_ways(&rolling, &s, 3.0);
+        assert!((one.com - many.com).norm() < 1e-12 && (one.v - many.v).norm() < 1e-12);
+        // It turns towards the fall line and speeds up: gravity's work exceeds the
+        // resistance's, sin > mu_r cos.
+        assert!(one.v.dot(&down) > 0.9 * one.v.norm() && one.v.norm() > s.v.norm());
+        // The energy lost is the resistance's work, mu_r g_n times the length rolled, which
+        // the straight line between start and end bounds from below.
+        let g_n = G * 8.0f64.to_radians().cos();
+        let lost = (0.5 * (1.0 + K) * s.v.norm_squared()
+            + G * 8.0f64.to_radians().sin() * (one.com - s.com).dot(&down))
+            - 0.5 * (1.0 + K) * one.v.norm_squared();
         assert!(
-            sloped
-                .advance_checked(&state(&sloped, down, Vector3::zeros()), 0.1)
-                .is_some()
+            lost >= 0.05 * g_n * (one.com - s.com).norm() * (1.0 - 1e-12),
+            "{lost}"
         );
+    }
+
+    #[test]
+    fn rolling_up_across_a_steep_slope_it_slides_once_it_turns_down_far_enough() {
+        // 50 degrees, mu = 0.3, mu_r = 0.45: rolling needs the friction
+        // |k a_t + mu_r g_n v/|v|| / (1 + k), small while it rolls uphill and above mu g_n
+        // once its velocity has turned down to cos(psi) = -0.59; there it slides, its slip
+        // growing down the fall line at g (sin - mu cos (1 + 1/k)).
+        let (mu, mu_r, slope) = (0.3, 0.45, 50.0f64);
+        let (rolling, down) = on_slope(slope, mu, mu_r, 0.0);
+        let th = slope.to_radians();
+        let (g_t, g_n) = (G * th.sin(), G * th.cos());
+        let s = rolling_at(&rolling, (Vector3::z() * 0.2 - down) * 2.0);
+        let slip = |s: &State| s.v - R * s.w.cross(&rolling.normal);
+        let at = |t: f64| rolling.advance_checked(&s, t).expect("in reach");
+        // When it starts to slide: bisection on the slip.
+        let (mut lo, mut hi) = (0.0, 2.0);
+        assert!(slip(&at(hi)).norm() > 1e-3);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if slip(&at(mid)).norm() > 1e-14 {
+                hi = mid
+            } else {
+                lo = mid
+            }
+        }
+        let onset = at(lo);
+        let cos = onset.v.dot(&down) / onset.v.norm();
+        let limit = ((mu * g_n * (1.0 + K)).powi(2) - (K * g_t).powi(2) - (mu_r * g_n).powi(2))
+            / (2.0 * K * g_t * mu_r * g_n);
+        assert!((cos - limit).abs() < 1e-9, "{cos} vs {limit}");
+        let later = at(lo + 0.1);
+        let rate = g_t - mu * g_n * (1.0 + 1.0 / K);
+        assert!(
+            (slip(&later) - down * (rate * 0.1)).norm() < 1e-12,
+            "{:?}",
+            slip(&later)
+        );
+        let [one, many] = both_ways(&rolling, &s, lo + 0.1);
+        assert!((one.com - many.com).norm() < 1e-12 && (one.v - many.v).norm() < 1e-12);
+    }
+
+    #[test]
+    fn where_it_can_neither_roll_nor_keep_a_slip_it_is_out_of_reach() {
+        // 40 degrees, mu = 0.3 and mu_r = 0.5 at rest: rolling needs (k tan + mu_r) / (1 + k)
+        // = 0.59 of g_n > mu, while a slip down it would shrink (tan < mu (1 + 1/k)).
+        let (rolling, _) = on_slope(40.0, 0.3, 0.5, 0.0);
+        let s = state(&rolling, Vector3::zeros(), Vector3::zeros());
+        assert_eq!(rolling.advance_checked(&s, 0.1), None);
     }
 }

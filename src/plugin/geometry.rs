@@ -556,6 +556,125 @@ pub(crate) fn flat_throughout(
     }
 }
 
+/// Largest height difference (m) between two grounds' faces for a ball to roll from one to the
+/// other as on one plane: below rapier's contact tolerances, and above the rounding of `f32`
+/// poses of flush cuboids a few metres from the origin (about 5e-7 m).
+pub(crate) const COPLANAR_TOLERANCE: f64 = 1e-6;
+
+/// Cosine of the largest angle between two faces' normals for them to count as one plane:
+/// the rounding of one rotation stored twice in `f32`.
+const COPLANAR_COS: f64 = 1.0 - 1e-12;
+
+/// Does the plane through `p` (unit normal `n`, out of the grounds; at the height of the
+/// grounds' faces plus their contact skins) carry a ball rolling from `p` straight to `q`
+/// (both on it) across the still grounds `grounds`, as one flat face
+/// would? Each ground must lie wholly below the plane with a face in it (a half-space, or a
+/// cuboid face: a ball resting on the plane then touches a ground only at its contact
+/// point, whatever edges lie under it), and the faces must cover the path `p..q` and
+/// `margin` around it (the path bows from its chord by less: the caller's bound). A flush
+/// seam between two floor tiles passes; a gap, a step, or a tile's outer edge within the
+/// path does not.
+pub(crate) fn one_plane_under(
+    grounds: &[&GroundGeom],
+    n: &Vector3<f64>,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+    margin: f64,
+) -> bool {
+    // The path lies within `margin` of its chord: the chord and its two parallels at
+    // `margin` either side in the plane, each lengthened by `margin` at both ends, must be
+    // covered (for faces tiling the plane, that covers the band between them).
+    let chord = q - p;
+    let length = chord.norm();
+    let ahead = if length > 0.0 {
+        chord / length
+    } else {
+        n.cross(&Vector3::x())
+            .try_normalize(0.0)
+            .unwrap_or_else(|| n.cross(&Vector3::y()).normalize())
+    };
+    let side = n.cross(&ahead) * margin;
+    let (from, to) = (p - ahead * margin, q + ahead * margin);
+    [Vector3::zeros(), side, -side]
+        .iter()
+        .all(|offset| pieces_cover(grounds, n, &(from + offset), &(to + offset)))
+}
+
+/// [`one_plane_under`] for one straight path `p..q`.
+fn pieces_cover(
+    grounds: &[&GroundGeom],
+    n: &Vector3<f64>,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+) -> bool {
+    use crate::parry::shape::TypedShape;
+    let height = n.dot(p);
+    let mut covered: Vec<(f64, f64)> = Vec::with_capacity(grounds.len());
+    for ground in grounds {
+        if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
+            return false;
+        }
+        let pose = ground.pose0;
+        match ground.shape.as_typed_shape() {
+            TypedShape::HalfSpace(hs) => {
+                let normal = pose.rotation * vec_to_na(hs.normal);
+                let top = pose.translation.vector.dot(n) + ground.skin;
+                if normal.dot(n) < COPLANAR_COS || (top - height).abs() > COPLANAR_TOLERANCE {
+                    return false;
+                }
+                covered.push((0.0, 1.0));
+            }
+            TypedShape::Cuboid(cb) => {
+                let half = vec_to_na(cb.half_extents);
+                let n_local = pose.rotation.inverse() * n;
+                let axis = (0..3)
+                    .max_by(|i, j| n_local[*i].abs().total_cmp(&n_local[*j].abs()))
+                    .unwrap_or(1);
+                let top = pose.translation.vector.dot(n)
+                    + (0..3).map(|i| half[i] * n_local[i].abs()).sum::<f64>()
+                    + ground.skin;
+                if n_local[axis].abs() < COPLANAR_COS || (top - height).abs() > COPLANAR_TOLERANCE {
+                    return false;
+                }
+                // The path's stretch over the face, by its two in-plane axes.
+                let (a, b) = (
+                    pose.inverse_transform_point(&nalgebra::Point3::from(*p))
+                        .coords,
+                    pose.inverse_transform_point(&nalgebra::Point3::from(*q))
+                        .coords,
+                );
+                let (mut lo, mut hi) = (0.0f64, 1.0f64);
+                for i in (0..3).filter(|i| *i != axis) {
+                    let d = b[i] - a[i];
+                    if d == 0.0 {
+                        if a[i].abs() > half[i] {
+                            hi = -1.0;
+                        }
+                        continue;
+                    }
+                    let (t1, t2) = ((-half[i] - a[i]) / d, (half[i] - a[i]) / d);
+                    lo = lo.max(t1.min(t2));
+                    hi = hi.min(t1.max(t2));
+                }
+                if lo <= hi {
+                    covered.push((lo, hi));
+                }
+            }
+            _ => return false,
+        }
+    }
+    // The stretches must join up from 0 to 1.
+    covered.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut reached = 0.0;
+    for (lo, hi) in covered {
+        if lo > reached {
+            return false;
+        }
+        reached = f64::max(reached, hi);
+    }
+    reached >= 1.0
+}
+
 /// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of
 /// mass, so its rotation does not move it) without linear damping against grounds whose
 /// every query over the flight is one face's plane ([`flat_throughout`]) and towards which

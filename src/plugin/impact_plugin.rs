@@ -20,7 +20,7 @@ use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use super::events::ImpactEvent;
 use super::filter;
-use super::geometry::{BodyGeom, GroundGeom, Search, first_impact};
+use super::geometry::{BodyGeom, GroundGeom, Search, SmallList, first_impact};
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
@@ -958,7 +958,15 @@ impl<H> ImpactPlugin<H> {
                     continue;
                 };
                 let geom = body_geom(rb, colliders, &cand.local_com);
-                let grounds = [gg];
+                // With the other pieces of its plane, if it rolls across a seam.
+                let grounds: SmallList<_> = std::iter::once(gg)
+                    .chain(
+                        cand.near
+                            .iter()
+                            .filter(|i| *i != ground)
+                            .filter_map(|i| ground_geom(&step.grounds[*i], colliders)),
+                    )
+                    .collect();
                 // Something else acted on it in the step: a contact, a joint, or rapier's CCD
                 // stopping it short (against a thin body).
                 let disturbed = impulse_joints.attached_joints(cand.body).next().is_some()

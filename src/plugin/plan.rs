@@ -16,8 +16,8 @@ use super::convert::{to_f64, vec_from_na};
 use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
-    BodyGeom, BodyPart, GroundGeom, SmallList, cannot_close, contact_checked, flat_throughout,
-    landing_point,
+    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, SmallList, cannot_close, contact_checked,
+    flat_throughout, landing_point, one_plane_under,
 };
 use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet};
@@ -198,10 +198,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
             return false;
         }
-        let ground_geoms: SmallList<(usize, GroundGeom)> = near
+        let mut ground_geoms: SmallList<(usize, GroundGeom)> = near
             .iter()
             .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], colliders)?)))
             .collect();
+        let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
+        // A ball near several grounds (a seam between floor tiles): the one it rests on
+        // first, so that if it rolls there on one plane with the others the rest are only
+        // that plane's pieces (below).
+        if !turns_surface && ground_geoms.len() > 1 {
+            let gap =
+                |gg: &GroundGeom| match contact_checked(&geom.parts[0], gg, &start, 0.0, reach) {
+                    Ok(Some((dist, ..))) => dist.abs(),
+                    _ => f64::INFINITY,
+                };
+            ground_geoms.sort_by(|(_, a), (_, b)| gap(a).total_cmp(&gap(b)));
+        }
         let mut state = start;
         let mut touched = false;
         let mut impact_grounds = SmallList::Empty;
@@ -211,11 +223,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // How far a point of the body can move relative to a resting contact point in the
         // step by turning (for a ball about its centre: how fast rapier's contact point
         // slides off its bottom). From the state after any `Step` impulse applied above.
-        let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
         let turning_reach = |s: &State| flight.max_angular_speed(s) * 2.0 * geom.radius * dt;
         let jointed = sets.impulse_joints.attached_joints(handle).next().is_some()
             || sets.multibody_joints.rigid_body_link(handle).is_some();
         for (gi, gg) in &ground_geoms {
+            // The ball rolls on the plane of an earlier (nearer) ground, of which this one
+            // is a piece: the pair is the rolling's too, out of rapier's solver (its edges
+            // under the ball would otherwise be met: rapier's contact with a tile's edge at
+            // a flush seam throws the ball up, and `Step` mode would bounce it).
+            if rolling.is_some() {
+                for part in &geom.parts {
+                    step.roles.insert((part.handle, gg.handle), Role::Rolling);
+                }
+                continue;
+            }
             let mut any_impact = false;
             // No pair of the body with this ground can meet in the step.
             let mut clear = true;
@@ -357,7 +378,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 // instead of rapier's resting contact, which turns the contact point with
                 // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
                 // three closed-form rolling times).
-                if role == Role::Resting && ground_geoms.len() == 1 && !turns_surface {
+                if role == Role::Resting && !turns_surface && rolling.is_none() {
                     // Within the resting gap of it (a `Step` impulse can leave a ball
                     // resting on its way down, up to a step's travel above the ground).
                     if let Some((dist, n, _)) =
@@ -379,9 +400,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             v: state.v - n * n.dot(&state.v),
                             ..state
                         };
+                        let others: SmallList<&GroundGeom> = ground_geoms
+                            .iter()
+                            .filter(|(other, _)| other != gi)
+                            .map(|(_, g)| g)
+                            .collect();
                         if let Some(motion) = self.rolling_of(
-                            bodies, colliders, handle, part, gg, &flight, &n, &on_ground, step,
-                            known, sets,
+                            bodies, colliders, handle, part, gg, &others, &flight, &n, &on_ground,
+                            step, known, sets,
                         ) {
                             role = Role::Rolling;
                             rolling = Some((*gi, motion));
@@ -462,6 +488,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
     /// speed), when it applies: a ground at rest whose one flat face (a half-space, or a
     /// cuboid's face the ball stays over: `flat_throughout`) is all it can meet in the step,
+    /// or with `others` near too, the faces of them all in one plane under the ball's whole
+    /// path (`one_plane_under`: a flush seam between tiles),
     /// a pair whose crowding was measured last step (`known`), gravity (and any constant force) along `-n`,
     /// no damping, torque or contact modification by the user, isotropic inertia with no
     /// locked axis, nothing but grounds near it last step, and a ball that slips (faster than
@@ -475,6 +503,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         handle: RigidBodyHandle,
         part: &BodyPart,
         gg: &GroundGeom,
+        others: &[&GroundGeom],
         flight: &Flight,
         n: &Vector3<f64>,
         on_ground: &State,
@@ -533,14 +562,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         // The ground's one flat face under the ball for the whole step (a half-space, or a
-        // cuboid's face the ball stays over): a mesh's or heightfield's other triangles, or a
+        // cuboid's face the ball stays well inside of), or the faces in one plane under its
+        // contact point's whole path: a mesh's or heightfield's other triangles, or a
         // cuboid's edge, could be met inside the step, out of rapier's solver.
         let travel = (on_ground.v.norm() + on_ground.w.norm() * radius) * step.dt;
-        if !flat_throughout(part, gg, on_ground, travel, radius) {
-            return None;
-        }
+        let inside = others.is_empty() && flat_throughout(part, gg, on_ground, travel, radius);
         let inertia_ratio = Inertia::of(rb).ball_ratio(radius)?;
-        Some(Rolling {
+        let motion = Rolling {
             normal: *n,
             radius,
             inertia_ratio,
@@ -548,8 +576,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             rolling_resistance,
             spinning_friction,
             accel: flight.accel,
-        })
-        // On a slope, only where the closed form reaches (along the fall line).
-        .filter(|motion| level || motion.advance_checked(on_ground, step.dt).is_some())
+        };
+        if level && inside {
+            return Some(motion);
+        }
+        // Only where the closed form reaches (on a slope, the band where a ball can neither
+        // roll nor slide is not).
+        let end = motion.advance_checked(on_ground, step.dt)?;
+        if !inside {
+            // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8: the
+            // acceleration across the path is at most gravity along the ground and the
+            // friction.
+            let to_plane = n * (radius - gg.skin);
+            let (p, q) = (on_ground.com - to_plane, end.com - to_plane);
+            let at = flight.accel - n * an;
+            let bow = (at.norm() - friction * an) * step.dt * step.dt / 8.0;
+            let pieces: SmallList<&GroundGeom> =
+                std::iter::once(gg).chain(others.iter().copied()).collect();
+            if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+                return None;
+            }
+        }
+        Some(motion)
     }
 }
