@@ -197,6 +197,41 @@ impl<H> ImpactPlugin<H> {
         &mut self.user_hooks
     }
 
+    /// The same plugin wrapping `user_hooks` instead, and the hook it wrapped: every other
+    /// piece of state (grounds, bodies, last step's roles) carries over. For a driver whose
+    /// hook lives for one system run only (a Bevy `SystemParam` borrows the world): swap it
+    /// in before [`Self::before_step`] and back after [`Self::after_step`].
+    pub fn replace_hooks<H2>(self, user_hooks: H2) -> (ImpactPlugin<H2>, H) {
+        // Every field named, so that a new one cannot be forgotten here.
+        let Self {
+            config,
+            registry,
+            user_hooks: old,
+            step,
+            flags,
+            shadows,
+            spare,
+            prev_roles,
+            prev_pair_roles,
+            prev_asleep,
+            events,
+        } = self;
+        let plugin = ImpactPlugin {
+            config,
+            registry,
+            user_hooks,
+            step,
+            flags,
+            shadows,
+            spare,
+            prev_roles,
+            prev_pair_roles,
+            prev_asleep,
+            events,
+        };
+        (plugin, old)
+    }
+
     /// Every change the plugin made to a body in the last step: the impacts and the
     /// corrections (see [`crate::EventKind`]), cleared by the next [`Self::before_step`].
     pub fn events(&self) -> &[ImpactEvent] {

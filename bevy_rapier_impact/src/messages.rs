@@ -1,0 +1,45 @@
+//! What the plugin tells the app, as Bevy messages: the core crate's events with entities in
+//! place of rapier handles, and the registrations or settings it refused.
+//!
+//! Contract: one [`ImpactMessage`] per `rapier_impact::ImpactEvent`, written right after the
+//! rapier step that produced it (so in step order, several steps per frame included), read
+//! with a `MessageReader<ImpactMessage>` in any later system. Entities come from the
+//! `user_data` bevy_rapier stores on every rapier body and collider it creates; an object
+//! made without bevy_rapier (no entity in its `user_data`) is named `Entity::PLACEHOLDER`.
+
+use bevy::prelude::{Entity, Message};
+use rapier_impact::{ConfigError, ImpactEvent};
+
+/// One change the plugin made to a body in one rapier step: an impact or a correction (see
+/// [`rapier_impact::EventKind`]), named by entities.
+#[derive(Message, Clone, Copy, Debug, PartialEq)]
+pub struct ImpactMessage {
+    /// The rapier context (bevy_rapier's context entity) the step ran in.
+    pub context: Entity,
+    /// Index of the rapier step in that context, counted from 0 over the app's life: the
+    /// steps of one frame have consecutive indices.
+    pub step: u64,
+    /// The rigid-body entity the change was made to.
+    pub body: Entity,
+    /// The entity of the body's collider that touched.
+    pub collider: Entity,
+    /// The ground collider's entity, or in an impact between bodies the other body's
+    /// collider.
+    pub ground: Entity,
+    /// In an impact between bodies, the other body's entity; `None` for a ground.
+    pub body2: Option<Entity>,
+    /// The core crate's event: times, impulses, energies, and the rapier handles.
+    pub event: ImpactEvent,
+}
+
+/// A ground, a setting or a configuration the plugin refused, and why. Written once per
+/// refusal (a refused `Ground` is not tried again until its collider changes).
+#[derive(Message, Clone, Debug, PartialEq)]
+pub struct ImpactErrorMessage {
+    /// The rapier context.
+    pub context: Entity,
+    /// The collider entity refused as ground, or `None` for the settings.
+    pub entity: Option<Entity>,
+    /// The core crate's reason.
+    pub error: ConfigError,
+}
