@@ -570,11 +570,7 @@ fn into_a_wall_it_bounces_off_by_the_model_and_flies_as_a_ball_thrown_up() {
         let mut highest: f64 = 0.0;
         for i in 0..(2.0 * hz) as usize {
             p.step(&mut w);
-            impacts.extend(
-                p.events()
-                    .iter()
-                    .map(|e| (i as f64 * dt + e.time, *e)),
-            );
+            impacts.extend(p.events().iter().map(|e| (i as f64 * dt + e.time, *e)));
             highest = highest.max(na(w.bodies[ball].center_of_mass()).y - R);
             if impacts.len() >= 2 {
                 break;
