@@ -1018,3 +1018,73 @@ fn landings_on_large_flat_grounds_use_the_face_normal() {
         assert!(lowest > -allowed, "{label}: a body sank to {lowest} m");
     }
 }
+
+/// `replace_hooks`, as a driver whose hook lives for one system run uses it (swapped in
+/// before each step, back out after): the trace is bitwise that of a plugin holding the hook
+/// all along (grounds, roles and shadows carry over), and the hook swapped in is the one
+/// asked (the ghost it refuses falls through the ground).
+#[test]
+fn a_hook_swapped_in_for_each_step_gives_the_trace_of_a_hook_held_throughout() {
+    let scene = || {
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(up()).restitution(0.7),
+        );
+        let hooks = ActiveHooks::FILTER_CONTACT_PAIRS;
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 0.0)),
+            ColliderBuilder::ball(0.1)
+                .restitution(0.7)
+                .active_hooks(hooks),
+        );
+        let (ghost, ghost_co) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(1.0, 0.5, 0.0)),
+            ColliderBuilder::ball(0.1).active_hooks(hooks),
+        );
+        (world, ground, [ball, ghost], ghost_co)
+    };
+    let trace = |world: &PhysicsWorld, bodies: &[RigidBodyHandle; 2]| {
+        bodies
+            .iter()
+            .map(|b| (world.bodies[*b].translation(), world.bodies[*b].linvel()))
+            .collect::<Vec<_>>()
+    };
+    let (mut held_world, ground, bodies, ghost_co) = scene();
+    let mut held =
+        ImpactPlugin::with_hooks(ImpactConfig::default(), GhostFilter::new(ghost_co)).unwrap();
+    held.add_ground(&held_world.bodies, &held_world.colliders, ground)
+        .unwrap();
+    let (mut swapped_world, ..) = scene();
+    let mut idle = Some(ImpactPlugin::new(ImpactConfig::default()).unwrap());
+    if let Some(p) = idle.as_mut() {
+        p.add_ground(&swapped_world.bodies, &swapped_world.colliders, ground)
+            .unwrap();
+    }
+    let (mut asked, mut impacts) = (0, 0);
+    for i in 0..120 {
+        held.step(&mut held_world);
+        let (mut hooked, ()) = idle
+            .take()
+            .unwrap()
+            .replace_hooks(GhostFilter::new(ghost_co));
+        hooked.step(&mut swapped_world);
+        assert_eq!(hooked.events(), held.events(), "step {i}: the same events");
+        impacts += held.events().len();
+        let (back, filter) = hooked.replace_hooks(());
+        asked += filter.seen.lock().unwrap().len();
+        idle = Some(back);
+        assert_eq!(
+            trace(&swapped_world, &bodies),
+            trace(&held_world, &bodies),
+            "step {i}: the same bodies"
+        );
+    }
+    assert!(asked > 0, "the swapped-in hook was never asked");
+    let ghost_y = swapped_world.bodies[bodies[1]].translation().y;
+    assert!(
+        ghost_y < 0.0,
+        "the ghost fell through the ground: y = {ghost_y}"
+    );
+    assert!(impacts > 0, "the ball never bounced");
+}
