@@ -48,11 +48,11 @@ pub enum EventKind {
 /// One change the plugin made to a body in the last step: a ground impact resolved by the
 /// model, or a correction ([`EventKind`]). World frame, y-up or not: the frame is rapier's.
 ///
-/// `ke_after` is the kinetic energy of the state the change left; where it is the last
-/// change in the step and no flight follows (`timing` `StepEnd`), that state is what was
-/// written into rapier. For the corrections (`kind` not `Impact`), `regime` is `Separating`,
-/// `law` `Consistent`, `contact_points` 0, `restitution` and `friction` 0, `settled` true, and `impulse` the
-/// change of linear momentum (zero for a change of pose only).
+/// `ke_after` is the kinetic energy of the state the change left; where it is the last change in
+/// the step and no flight follows (`timing` `StepEnd`), that state is what was written into rapier.
+/// For the corrections (`kind` not `Impact`), `regime` is `Separating`, `law` `Consistent`,
+/// `contact_points` 0, `restitution` and `friction` 0, `settled` true, and `impulse` the change of
+/// linear momentum (zero for a change of pose only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",

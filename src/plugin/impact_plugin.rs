@@ -438,11 +438,11 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// A rolling ball that meets another ground in the step, at `touch`
-    /// (`reconstruct::rolling_touch`): the impact there, by the model. Left on that ground
-    /// (e = 0) and leaving its own plane (rolling off a slope onto the level ground at its foot), it
-    /// rolls on in closed form on the new ground to the step's end; otherwise it goes on
-    /// through the impacts the search finds, as any impact's body does, and the settle
-    /// stage checks where it ends. `grounds`: every ground near it, `obstacles` among them.
+    /// (`reconstruct::rolling_touch`): the impact there, by the model. Left on that ground (e = 0)
+    /// and leaving its own plane (rolling off a slope onto the level ground at its foot), it rolls
+    /// on in closed form on the new ground to the step's end; otherwise it goes on through the
+    /// impacts the search finds, as any impact's body does, and the settle stage checks where it
+    /// ends. `grounds`: every ground near it, `obstacles` among them.
     #[allow(clippy::too_many_arguments)]
     fn rolled_into(
         &mut self,
@@ -533,6 +533,27 @@ impl<H> ImpactPlugin<H> {
                 ..hit
             },
         );
+        self.fly_through_impacts(
+            bodies, colliders, cand, geom, grounds, &inertia, first, step,
+        );
+    }
+
+    /// A candidate moved by the reconstruct stage through the impacts from `first` on to the
+    /// step's end, checked by the settle stage there (never left inside a ground, nor lifted
+    /// out with energy gained: a cube pivoting on a corner through the step's last allowed
+    /// impact gained 3.2e-4 of a throw's energy without the cap), and committed.
+    #[allow(clippy::too_many_arguments)]
+    fn fly_through_impacts(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        grounds: &[GroundGeom],
+        inertia: &Inertia,
+        first: Search,
+        step: &EndOfStep,
+    ) {
         let from = self.events.len();
         let flown = reconstruct::through_impacts(
             &mut self.settle(),
@@ -540,14 +561,14 @@ impl<H> ImpactPlugin<H> {
             cand,
             geom,
             grounds,
-            &inertia,
+            inertia,
             first,
             step,
         );
         let checked = Checked {
             body: cand.body,
             geom,
-            inertia: &inertia,
+            inertia,
             cand: Some(cand),
         };
         let (_, settled) = self.settle().check(
@@ -1224,42 +1245,9 @@ impl<H> ImpactPlugin<H> {
                 self.turned_end(bodies, colliders, cand, &step);
                 continue;
             }
-            let from = self.events.len();
-            let flown = reconstruct::through_impacts(
-                &mut self.settle(),
-                colliders,
-                cand,
-                &geom,
-                &grounds,
-                &inertia,
-                first,
-                &step,
+            self.fly_through_impacts(
+                bodies, colliders, cand, &geom, &grounds, &inertia, first, &step,
             );
-            // Never left inside a ground, nor lifted out with energy gained (a cube pivoting
-            // on a corner through the step's last allowed impact: +3.2e-4 of a throw's
-            // energy without the cap).
-            let checked = Checked {
-                body: cand.body,
-                geom: &geom,
-                inertia: &inertia,
-                cand: Some(cand),
-            };
-            let (_, settled) = self.settle().check(
-                bodies,
-                colliders,
-                &checked,
-                &flown,
-                EndCheck::Flown,
-                &grounds,
-                &step,
-                from,
-            );
-            let end = settled.unwrap_or(flown);
-            let rb = &mut bodies[cand.body];
-            write_state(rb, &end, &cand.local_com, true);
-            if mode == TimingMode::Exact {
-                self.settle().remember(cand.body, rb, &end);
-            }
         }
         // The pairs not moved together: rapier's end state (the pair out of its solver),
         // checked at the step's end.

@@ -2,15 +2,15 @@
 //! what each pair's role is.
 //!
 //! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
-//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs whose spheres,
-//! swept over the step, overlap (a BVH over the swept spheres: the cost grows with the pairs
-//! that can meet, not with the square of the bodies), skips the pairs rapier would not solve
-//! or the user's filter refuses, and gives every other pair a role: `Resting` (touching and
-//! slow, or pressed, as `Policy::rests` decides for a ground: rapier's solver keeps it with zero
-//! restitution) or `Impact` (it may meet in the step: out of rapier's solver, resolved by the
-//! reconstruct stage, `pair_reconstruct.rs`); a resting pair side by side with a ball of an
-//! `Impact` pair joins it (a chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an
-//! `Impact` pair may reach is woken, so that the step plans it as an awake body.
+//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs whose spheres, swept
+//! over the step, overlap (a BVH over the swept spheres: the cost grows with the pairs that can
+//! meet, not with the square of the bodies), skips the pairs rapier would not solve or the user's
+//! filter refuses, and gives every other pair a role: `Resting` (touching and slow, or pressed, as
+//! `Policy::rests` decides for a ground: rapier's solver keeps it with zero restitution) or
+//! `Impact` (it may meet in the step: out of rapier's solver, resolved by the reconstruct stage,
+//! `pair_reconstruct.rs`); a resting pair side by side with a ball of an `Impact` pair joins it (a
+//! chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an `Impact` pair may
+//! reach is woken, so that the step plans it as an awake body.
 
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;

@@ -2,23 +2,22 @@
 //! `Impact` pairs) moved together over the step from their start states, as they would have
 //! moved had rapier not solved those pairs.
 //!
-//! Contract: [`move_clusters`] finds the clusters whose every ball moved alone in the step
-//! and commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes
-//! a cluster each of whose balls moved alone in the
-//! step (no contact in rapier's solver, no joint or torque: checked by the caller) and moves
-//! every ball by its own motion (`crate::motion`: free flight, or rolling in closed form on
-//! its level ground) to the cluster's earliest event: a ball's ground impact (the in-step
-//! search of `geometry.rs`) or two balls touching (`motion::meeting`), resolved by the model
-//! (`resolve.rs`), then on to the next, in time order, both balls of a pair updated between
-//! events: a chain (a ball passing an impact on to the one it touches) is a sequence of
-//! impacts at the same time, in the order the touches are found; a touch slower than the
-//! resting speed is a resting contact from there on (rapier's next step). A ball rolling on its
-//! ground that an impact lifts flies from there; pressed into the ground, the ground takes
-//! the normal speed (a `Settle` event) and it rolls on. It returns every ball's state at the step's end and reports every impulse as an event,
-//! or `None` when the cluster cannot be moved alone (a search that stalls, more events than
-//! `max_impacts_per_step` per ball, a rolling ball leaving its plane): its events are then
-//! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
-//! nothing into rapier.
+//! Contract: [`move_clusters`] finds the clusters whose every ball moved alone in the step and
+//! commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes a cluster
+//! each of whose balls moved alone in the step (no contact in rapier's solver, no joint or torque:
+//! checked by the caller) and moves every ball by its own motion (`crate::motion`: free flight, or
+//! rolling in closed form on its level ground) to the cluster's earliest event: a ball's ground
+//! impact (the in-step search of `geometry.rs`) or two balls touching (`motion::meeting`), resolved
+//! by the model (`resolve.rs`), then on to the next, in time order, both balls of a pair updated
+//! between events: a chain (a ball passing an impact on to the one it touches) is a sequence of
+//! impacts at the same time, in the order the touches are found; a touch slower than the resting
+//! speed is a resting contact from there on (rapier's next step). A ball rolling on its ground that
+//! an impact lifts flies from there; pressed into the ground, the ground takes the normal speed (a
+//! `Settle` event) and it rolls on. It returns every ball's state at the step's end and reports
+//! every impulse as an event, or `None` when the cluster cannot be moved alone (a search that
+//! stalls, more events than `max_impacts_per_step` per ball, a rolling ball leaving its plane): its
+//! events are then withdrawn, rapier's end state stands, and the settle stage checks the pairs. It
+//! writes nothing into rapier.
 
 use super::commit::write_state;
 use super::config::TimingMode;

@@ -495,17 +495,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         filter::user_refuses(self.user_hooks, flags, bodies, colliders, key)
     }
 
-    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
-    /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
-    /// speed), when it applies: a ground at rest whose one flat face (a half-space, or a
-    /// cuboid's face the ball stays over: `flat_throughout`) is all it can meet in the step,
-    /// or with `others` near too, the faces of them all in one plane under the ball's whole
-    /// path (`one_plane_under`: a flush seam between tiles),
-    /// a pair whose crowding was measured last step (`known`), gravity (and any constant force) along `-n`,
-    /// no damping, torque or contact modification by the user, isotropic inertia with no
-    /// locked axis, nothing but grounds near it last step, and a ball that slips (faster than
-    /// 1 mm/s) or rolls faster than the resting speed (slower, it is rapier's, which brings
-    /// it to rest and to sleep).
+    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on the
+    /// ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal speed), when
+    /// it applies: a ground at rest whose one flat face (a half-space, or a cuboid's face the ball
+    /// stays over: `flat_throughout`) is all it can meet in the step, or with `others` near too,
+    /// the faces of those in its plane under the ball's path (`one_plane_under`: a flush seam
+    /// between tiles) up to where it first touches one of the others (a crease, a wall: not
+    /// touching it at the start), a pair whose crowding was measured last step (`known`), gravity (and
+    /// any constant force) along `-n`, no damping, torque or contact modification by the user,
+    /// isotropic inertia with no locked axis, nothing but grounds near it last step, and a ball
+    /// that slips (faster than 1 mm/s) or rolls faster than the resting speed (slower, it is
+    /// rapier's, which brings it to rest and to sleep).
     #[allow(clippy::too_many_arguments)]
     fn rolling_of(
         &self,

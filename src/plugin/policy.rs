@@ -1,10 +1,11 @@
 //! Every threshold the step's decisions use, named once with its unit, and the decisions that
 //! are pure functions of them.
 //!
-//! Contract: [`Role`] is the decision for one body-ground collider pair; [`Policy::new`] derives the step's thresholds from the configuration, gravity and
-//! rapier's integration parameters once per step; the decisions (the plan's
-//! [`Policy::rests`], the settle stage's table [`Policy::end_action`]) read nothing else and
-//! write nothing, so they are unit-tested on synthetic inputs below.
+//! Contract: [`Role`] is the decision for one body-ground collider pair; [`Policy::new`] derives
+//! the step's thresholds from the configuration, gravity and rapier's integration parameters once
+//! per step; the decisions (the plan's [`Policy::rests`], the settle stage's table
+//! [`Policy::end_action`]) read nothing else and write nothing, so they are unit-tested on
+//! synthetic inputs below.
 
 use super::config::ImpactConfig;
 
