@@ -436,10 +436,19 @@ fn plane_contact_on(
         // A mesh triangle has no outside: the body's side is.
         n = -n;
     }
-    let sm = part.shape.as_support_map().ok_or(None)?;
-    let dir_local = pose_b.rotation.inverse() * (-n);
-    let support_local = vec_to_na(sm.local_support_point(super::convert::vec_from_na(&dir_local)));
-    let support = (pose_b * nalgebra::Point3::from(support_local)).coords;
+    let support = match part.shape.as_ball() {
+        // Written out in `f64`, as `ball_plane_contact` does: parry's support map takes the
+        // direction in rapier's precision, which moves a ball on a mesh by nanometres from
+        // one triangle to the next.
+        Some(ball) => pose_b.translation.vector - n * to_f64(ball.radius),
+        None => {
+            let sm = part.shape.as_support_map().ok_or(None)?;
+            let dir_local = pose_b.rotation.inverse() * (-n);
+            let support_local =
+                vec_to_na(sm.local_support_point(super::convert::vec_from_na(&dir_local)));
+            (pose_b * nalgebra::Point3::from(support_local)).coords
+        }
+    };
     let height = n.dot(&(support - q));
     let over = support - n * height;
     let tol = 1e-6 * (1.0 + body_point.norm());
@@ -599,22 +608,43 @@ pub(crate) const COPLANAR_TOLERANCE: f64 = 1e-6;
 /// the rounding of one rotation stored twice in `f32`.
 const COPLANAR_COS: f64 = 1.0 - 1e-12;
 
-/// Does the plane through `p` (unit normal `n`, out of the grounds; at the height of the
-/// grounds' faces plus their contact skins) carry a ball rolling from `p` straight to `q`
-/// (both on it) across the still grounds `grounds`, as one flat face
-/// would? Each ground must lie wholly below the plane with a face in it (a half-space, or a
-/// cuboid face: a ball resting on the plane then touches a ground only at its contact
-/// point, whatever edges lie under it), and the faces must cover the path `p..q` and
-/// `margin` around it (the path bows from its chord by less: the caller's bound). A flush
-/// seam between two floor tiles passes; a gap, a step, or a tile's outer edge within the
-/// path does not.
+/// The plane under a rolling ball, and the part of space the ball can reach in the step: what
+/// decides whether a ground is a piece of that plane ([`plane_piece_of`], [`one_plane_under`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlaneNear {
+    /// Unit normal, out of the grounds.
+    pub n: Vector3<f64>,
+    /// `n . x` of the plane's points: the grounds' faces plus their contact skins.
+    pub height: f64,
+    /// The ball's centre at the step's start.
+    pub centre: Vector3<f64>,
+    /// How far from `centre` a point of the ball can get in the step (m): its radius, its
+    /// travel and its path's bow.
+    pub reach: f64,
+}
+
+/// Does the plane `plane` carry a ball rolling from `p` straight to `q` (contact points, both
+/// on it) across the still grounds `grounds`, as one flat face would? Each ground must be a
+/// piece of the plane ([`plane_piece_of`]: a ball resting on the plane then touches it only at
+/// its contact point, whatever edges lie under it), and their faces must cover the path `p..q`
+/// and `margin` around it (the path bows from its chord by less: the caller's bound). A flush
+/// seam between two floor tiles passes, and so does a flat stretch of a mesh across its
+/// triangles' edges; a gap, a step, a bump, or a tile's outer edge within the path does not.
 pub(crate) fn one_plane_under(
     grounds: &[&GroundGeom],
-    n: &Vector3<f64>,
+    plane: &PlaneNear,
     p: &Vector3<f64>,
     q: &Vector3<f64>,
     margin: f64,
 ) -> bool {
+    let Some(pieces) = grounds
+        .iter()
+        .map(|g| plane_piece(g, plane))
+        .collect::<Option<Vec<_>>>()
+    else {
+        return false;
+    };
+    let n = &plane.n;
     // The path lies within `margin` of its chord: the chord and its two parallels at
     // `margin` either side in the plane, each lengthened by `margin` at both ends, must be
     // covered (for faces tiling the plane, that covers the band between them).
@@ -631,7 +661,7 @@ pub(crate) fn one_plane_under(
     let (from, to) = (p - ahead * margin, q + ahead * margin);
     [Vector3::zeros(), side, -side]
         .iter()
-        .all(|offset| pieces_cover(grounds, n, &(from + offset), &(to + offset)))
+        .all(|offset| pieces_cover(&pieces, n, &(from + offset), &(to + offset)))
 }
 
 /// A ground as a piece of a plane (see [`one_plane_under`]).
@@ -645,16 +675,20 @@ enum PlanePiece {
         half: Vector3<f64>,
         axis: usize,
     },
+    /// A mesh's or heightfield's triangles in the plane within the ball's reach (world
+    /// vertices); every other triangle within it lies below the plane.
+    Triangles(Vec<[Vector3<f64>; 3]>),
 }
 
-/// `ground` as a piece of the plane of unit normal `n` at `height` (`n . x` of its points, plus
-/// the ground's contact skin): a still half-space or cuboid lying wholly below the plane with
-/// a face in it; `None` for any other ground.
-fn plane_piece(ground: &GroundGeom, n: &Vector3<f64>, height: f64) -> Option<PlanePiece> {
+/// `ground` as a piece of `plane`: a still ground lying wholly below the plane with a face in
+/// it (a half-space, a cuboid), or a still mesh or heightfield whose triangles within the
+/// ball's reach all lie below the plane; `None` for any other ground.
+fn plane_piece(ground: &GroundGeom, plane: &PlaneNear) -> Option<PlanePiece> {
     use crate::parry::shape::TypedShape;
     if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
         return None;
     }
+    let (n, height) = (&plane.n, plane.height);
     let pose = ground.pose0;
     match ground.shape.as_typed_shape() {
         TypedShape::HalfSpace(hs) => {
@@ -675,30 +709,81 @@ fn plane_piece(ground: &GroundGeom, n: &Vector3<f64>, height: f64) -> Option<Pla
             (n_local[axis].abs() >= COPLANAR_COS && (top - height).abs() <= COPLANAR_TOLERANCE)
                 .then_some(PlanePiece::Face { pose, half, axis })
         }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            let mut flat = Vec::new();
+            let mut below = true;
+            triangles_near(ground, &plane.centre, plane.reach, &mut |v| {
+                let above = v.map(|x| x.dot(n) + ground.skin - height);
+                if above.iter().any(|h| *h > COPLANAR_TOLERANCE) {
+                    below = false;
+                } else if above.iter().all(|h| h.abs() <= COPLANAR_TOLERANCE) {
+                    let normal = (v[1] - v[0]).cross(&(v[2] - v[0]));
+                    if normal.norm() > 0.0 && normal.normalize().dot(n).abs() >= COPLANAR_COS {
+                        flat.push(v);
+                    }
+                }
+            });
+            below.then_some(PlanePiece::Triangles(flat))
+        }
         _ => None,
     }
 }
 
-/// Is `ground` a piece of the plane through `p` of unit normal `n` (at the height of its
-/// faces plus their contact skins): a still half-space or cuboid wholly below it with a face
-/// in it? A ball on the plane touches such a ground only at its contact point.
-pub(crate) fn plane_piece_of(ground: &GroundGeom, n: &Vector3<f64>, p: &Vector3<f64>) -> bool {
-    plane_piece(ground, n, n.dot(p)).is_some()
+/// Calls `f` with the world vertices of every triangle of the still mesh or heightfield
+/// `ground` whose bounding box meets the cube of half side `reach` around `centre`.
+fn triangles_near(
+    ground: &GroundGeom,
+    centre: &Vector3<f64>,
+    reach: f64,
+    f: &mut impl FnMut([Vector3<f64>; 3]),
+) {
+    use crate::parry::bounding_volume::Aabb;
+    use crate::parry::shape::TypedShape;
+    let pose = ground.pose0;
+    // A ball's reach is a sphere: its box in the ground's frame is the same cube.
+    let local = pose
+        .inverse_transform_point(&nalgebra::Point3::from(*centre))
+        .coords;
+    let r = Vector3::repeat(reach);
+    let aabb = Aabb::new(
+        super::convert::vec_from_na(&(local - r)),
+        super::convert::vec_from_na(&(local + r)),
+    );
+    let mut world = |tri: &Triangle| {
+        f([tri.a, tri.b, tri.c].map(|x| (pose * nalgebra::Point3::from(vec_to_na(x))).coords));
+    };
+    match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) => {
+            for id in m.bvh().intersect_aabb(&aabb) {
+                world(&m.triangle(id));
+            }
+        }
+        TypedShape::HeightField(hf) => {
+            hf.map_elements_in_local_aabb(&aabb, &mut |_, tri| world(tri))
+        }
+        _ => {}
+    }
 }
 
-/// [`one_plane_under`] for one straight path `p..q`.
+/// Is `ground` a piece of `plane` (a still half-space or cuboid wholly below it with a face in
+/// it, or a still mesh or heightfield with every triangle within the ball's reach below it)?
+/// A ball on the plane touches such a ground only at its contact point.
+pub(crate) fn plane_piece_of(ground: &GroundGeom, plane: &PlaneNear) -> bool {
+    plane_piece(ground, plane).is_some()
+}
+
+/// [`one_plane_under`] for one straight path `p..q` over the pieces of one plane.
 fn pieces_cover(
-    grounds: &[&GroundGeom],
+    pieces: &[PlanePiece],
     n: &Vector3<f64>,
     p: &Vector3<f64>,
     q: &Vector3<f64>,
 ) -> bool {
-    let mut covered: Vec<(f64, f64)> = Vec::with_capacity(grounds.len());
-    for ground in grounds {
-        match plane_piece(ground, n, n.dot(p)) {
-            None => return false,
-            Some(PlanePiece::Everywhere) => covered.push((0.0, 1.0)),
-            Some(PlanePiece::Face { pose, half, axis }) => {
+    let mut covered: Vec<(f64, f64)> = Vec::with_capacity(pieces.len());
+    for piece in pieces {
+        match piece {
+            PlanePiece::Everywhere => covered.push((0.0, 1.0)),
+            PlanePiece::Face { pose, half, axis } => {
                 // The path's stretch over the face, by its two in-plane axes.
                 let (a, b) = (
                     pose.inverse_transform_point(&nalgebra::Point3::from(*p))
@@ -707,7 +792,7 @@ fn pieces_cover(
                         .coords,
                 );
                 let (mut lo, mut hi) = (0.0f64, 1.0f64);
-                for i in (0..3).filter(|i| *i != axis) {
+                for i in (0..3).filter(|i| i != axis) {
                     let d = b[i] - a[i];
                     if d == 0.0 {
                         if a[i].abs() > half[i] {
@@ -723,18 +808,66 @@ fn pieces_cover(
                     covered.push((lo, hi));
                 }
             }
+            PlanePiece::Triangles(triangles) => {
+                for v in triangles {
+                    if let Some(stretch) = stretch_over_triangle(v, n, p, q) {
+                        covered.push(stretch);
+                    }
+                }
+            }
         }
     }
-    // The stretches must join up from 0 to 1.
+    // The stretches must join up from 0 to 1; faces apart by less than `COPLANAR_TOLERANCE`
+    // (the rounding of a shared edge computed from two faces) join.
+    let slack = COPLANAR_TOLERANCE / (q - p).norm().max(COPLANAR_TOLERANCE);
     covered.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut reached = 0.0;
     for (lo, hi) in covered {
-        if lo > reached {
+        if lo > reached + slack {
             return false;
         }
         reached = f64::max(reached, hi);
     }
     reached >= 1.0
+}
+
+/// The stretch `(lo, hi)` of the path `p + s (q - p)`, `s` in 0..1, over the triangle `v`
+/// (in the plane of normal `n`, as the path), by its three edges; `None` if it misses it or
+/// the triangle has no area.
+fn stretch_over_triangle(
+    v: &[Vector3<f64>; 3],
+    n: &Vector3<f64>,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for i in 0..3 {
+        let (a, b, c) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
+        // The edge's normal in the plane, towards the third vertex.
+        let mut inward = n.cross(&(b - a));
+        let to_c = inward.dot(&(c - a));
+        if to_c == 0.0 {
+            return None;
+        }
+        if to_c < 0.0 {
+            inward = -inward;
+        }
+        // inward . (p - a) + s inward . (q - p) >= 0
+        let (at0, rate) = (inward.dot(&(p - a)), inward.dot(&(q - p)));
+        if rate == 0.0 {
+            if at0 < 0.0 {
+                return None;
+            }
+            continue;
+        }
+        let s = -at0 / rate;
+        if rate > 0.0 {
+            lo = lo.max(s);
+        } else {
+            hi = hi.min(s);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
 }
 
 /// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of

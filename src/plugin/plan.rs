@@ -16,8 +16,9 @@ use super::convert::{to_f64, vec_from_na};
 use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
-    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, SmallList, cannot_close, contact_checked,
-    earliest_touch, flat_throughout, landing_point, one_plane_under, plane_piece_of,
+    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PlaneNear, SmallList, cannot_close,
+    contact_checked, earliest_touch, flat_throughout, landing_point, one_plane_under,
+    plane_piece_of,
 };
 use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet};
@@ -220,8 +221,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let mut closing = false;
         let mut turning_resting = SmallList::Empty;
         let mut rolling = None;
-        // The plane it rolls on: its normal and a point of it.
-        let mut rolling_plane: Option<(Vector3<f64>, Vector3<f64>)> = None;
+        // The plane it rolls on, and what the ball can reach of it in the step.
+        let mut rolling_plane: Option<PlaneNear> = None;
         // How far a point of the body can move relative to a resting contact point in the
         // step by turning (for a ball about its centre: how fast rapier's contact point
         // slides off its bottom). From the state after any `Step` impulse applied above.
@@ -256,8 +257,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 // mode would bounce it). Another ground it may roll into (a slope's foot, a
                 // wall): out of rapier's solver too, the search along the rolling finds the
                 // impact.
-                if let Some((n, p)) = rolling_plane {
-                    let role = if plane_piece_of(gg, &n, &p) {
+                if let Some(plane) = &rolling_plane {
+                    let role = if plane_piece_of(gg, plane) {
                         Role::Rolling
                     } else {
                         any_impact = true;
@@ -413,14 +414,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             .filter(|(other, _)| other != gi)
                             .map(|(_, g)| g)
                             .collect();
-                        if let Some(motion) = self.rolling_of(
+                        if let Some((motion, plane)) = self.rolling_of(
                             bodies, colliders, handle, part, gg, &others, &flight, &n, &on_ground,
                             step, known, sets,
                         ) {
                             role = Role::Rolling;
-
-                            let radius = motion.radius - gg.skin;
-                            rolling_plane = Some((n, on_ground.com - n * radius));
+                            rolling_plane = Some(plane);
                             rolling = Some((*gi, motion));
                             state = on_ground;
                         }
@@ -521,7 +520,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
         known: bool,
         sets: &Sets,
-    ) -> Option<Rolling> {
+    ) -> Option<(Rolling, PlaneNear)> {
         let rb = &bodies[handle];
         let member = step.pairs.members.contains(&handle);
         if !known && !member {
@@ -588,27 +587,36 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             spinning_friction,
             accel: flight.accel,
         };
+        let to_plane = n * (radius - gg.skin);
+        let at = flight.accel - n * an;
+        // The acceleration along the ground is at most gravity's along it and the friction.
+        let accel_bound = at.norm() - friction * an;
+        let plane = PlaneNear {
+            n: *n,
+            height: n.dot(&(on_ground.com - to_plane)),
+            centre: on_ground.com,
+            reach: radius
+                + on_ground.v.norm() * step.dt
+                + accel_bound * step.dt * step.dt / 2.0
+                + COPLANAR_TOLERANCE,
+        };
         if level && inside {
-            return Some(motion);
+            return Some((motion, plane));
         }
         // Only where the closed form reaches (on a slope, the band where a ball can neither
         // roll nor slide is not).
         let end = motion.advance_checked(on_ground, step.dt)?;
         if !inside {
-            // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8: the
-            // acceleration across the path is at most gravity along the ground and the
-            // friction.
-            let to_plane = n * (radius - gg.skin);
+            // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8.
             let (p, q) = (on_ground.com - to_plane, end.com - to_plane);
-            let at = flight.accel - n * an;
-            let bow = (at.norm() - friction * an) * step.dt * step.dt / 8.0;
+            let bow = accel_bound * step.dt * step.dt / 8.0;
             // The others are the plane's pieces, or grounds it may roll into, which must
             // not touch it yet (a ball resting in a crease is rapier's). One it has just
             // left (a slope behind the crease) may be nearer than the resting gap: the
             // search along the rolling finds whether it comes back.
             let (pieces, obstacles): (Vec<&GroundGeom>, Vec<&GroundGeom>) = std::iter::once(gg)
                 .chain(others.iter().copied())
-                .partition(|g| plane_piece_of(g, n, &p));
+                .partition(|g| plane_piece_of(g, &plane));
             let touching = |s: &State, t: f64| {
                 obstacles
                     .iter()
@@ -617,7 +625,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             if touching(on_ground, 0.0) {
                 return None;
             }
-            if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+            if !one_plane_under(&pieces, &plane, &p, &q, bow + COPLANAR_TOLERANCE) {
                 // Its contact point leaves the plane, but it may meet another ground first
                 // (rolling down into a crease, it touches the level ground while still on
                 // the slope): the plane need only reach that far, the reconstruct stage's
@@ -625,11 +633,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 let t = earliest_touch(step.dt, |t| touching(&motion.advance(on_ground, t), t))?;
                 let q = motion.advance(on_ground, t).com - to_plane;
                 let bow = bow * (t / step.dt).powi(2);
-                if !one_plane_under(&pieces, n, &p, &q, bow + COPLANAR_TOLERANCE) {
+                if !one_plane_under(&pieces, &plane, &p, &q, bow + COPLANAR_TOLERANCE) {
                     return None;
                 }
             }
         }
-        Some(motion)
+        Some((motion, plane))
     }
 }

@@ -119,6 +119,7 @@ pub(crate) fn rolled(
     let hit = closest(geom, grounds, &end, step.dt, step.policy.resting_gap)?;
     let on_plane = hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
         && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9;
+
     on_plane.then_some(end)
 }
 
