@@ -232,6 +232,7 @@ mod tests {
             rolling_resistance: 0.0,
             spinning_friction: 0.0,
             accel: Vector3::new(0.0, -9.81, 0.0),
+            ground_velocity: Vector3::zeros(),
         });
         let a = ball(
             Vector3::new(0.0, 0.1, 0.0),

@@ -26,6 +26,11 @@ pub(crate) struct Rolling {
     pub spinning_friction: f64,
     /// Constant acceleration (gravity): into the ground, and along it on a slope.
     pub accel: Vector3<f64>,
+    /// The ground's velocity (m/s), constant, along its plane (`normal . u = 0`: a conveyor,
+    /// a sliding platform), without turning. Relative to the ground the ball moves as on a
+    /// still one (Galilean invariance: the friction acts on the slip against the ground, the
+    /// accelerations are the same in both frames).
+    pub ground_velocity: Vector3<f64>,
 }
 
 /// Sine of the largest angle between a slip (or a rolling velocity) and a slope's fall line
@@ -97,12 +102,39 @@ impl Rolling {
     /// Every phase is exact; the orientation turns by the integral of `w`, exact when `w`
     /// keeps its axis and second order in the step otherwise.
     pub fn advance(&self, s: &State, dt: f64) -> State {
-        self.advance_checked(s, dt)
-            .unwrap_or_else(|| self.advance_unresisted(s, dt))
+        self.advance_checked(s, dt).unwrap_or_else(|| {
+            let rel = self.relative(s);
+            self.absolute(&self.advance_unresisted(&rel, dt), dt)
+        })
     }
 
     /// [`Self::advance`], `None` where the closed form does not reach.
     pub fn advance_checked(&self, s: &State, dt: f64) -> Option<State> {
+        let rel = self.relative(s);
+        self.advance_on_still(&rel, dt)
+            .map(|end| self.absolute(&end, dt))
+    }
+
+    /// `s` in the ground's frame: the velocity relative to the ground (the frames coincide at
+    /// the start).
+    fn relative(&self, s: &State) -> State {
+        State {
+            v: s.v - self.ground_velocity,
+            ..*s
+        }
+    }
+
+    /// A state `dt` into the motion in the ground's frame, back in the world's.
+    fn absolute(&self, end: &State, dt: f64) -> State {
+        State {
+            com: end.com + self.ground_velocity * dt,
+            v: end.v + self.ground_velocity,
+            ..*end
+        }
+    }
+
+    /// [`Self::advance_checked`] on a still ground.
+    fn advance_on_still(&self, s: &State, dt: f64) -> Option<State> {
         let n = self.normal;
         let gn = -self.accel.dot(&n).min(0.0);
         let at = self.accel - n * self.accel.dot(&n);
@@ -368,6 +400,7 @@ mod tests {
             rolling_resistance: 0.0,
             spinning_friction: 0.0,
             accel: Vector3::new(0.0, -9.81, 0.0),
+            ground_velocity: Vector3::zeros(),
         };
         let s = State {
             com: Vector3::new(0.0, 0.1, 0.0),
@@ -478,6 +511,7 @@ mod tests {
             rolling_resistance: mu_r,
             spinning_friction: mu_sp,
             accel: Vector3::new(0.0, -G, 0.0),
+            ground_velocity: Vector3::zeros(),
         };
         (rolling, Vector3::new(th.cos(), -th.sin(), 0.0))
     }
@@ -880,5 +914,47 @@ mod tests {
         let (rolling, _) = on_slope(40.0, 0.3, 0.5, 0.0);
         let s = state(&rolling, Vector3::zeros(), Vector3::zeros());
         assert_eq!(rolling.advance_checked(&s, 0.1), None);
+    }
+
+    #[test]
+    fn set_at_rest_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried() {
+        // Level ground moving at u along x, the ball set on it at rest, no spin. In the world
+        // frame friction mu m g pushes it along x until the slip against the belt vanishes:
+        // at t1 = u k / ((1 + k) mu g) it rolls at v1 = u k / (1 + k), -rel = -u / (1 + k)
+        // relative to the belt. The rolling resistance then slows it relative to the belt at
+        // mu_r g / (1 + k), to rest on it after t2 = rel (1 + k) / (mu_r g), in which it
+        // rolls back rel t2 / 2 on the belt while the belt moves u t2; from there it is
+        // carried at u.
+        let (mu, mu_r, u) = (0.3, 0.02, 0.8);
+        let (mut rolling, _) = on_slope(0.0, mu, mu_r, 0.0);
+        rolling.ground_velocity = Vector3::new(u, 0.0, 0.0);
+        let s = state(&rolling, Vector3::zeros(), Vector3::zeros());
+        let t1 = u * K / ((1.0 + K) * mu * G);
+        let v1 = u * K / (1.0 + K);
+        let x1 = 0.5 * mu * G * t1 * t1;
+        let rel = u - v1;
+        let t2 = rel * (1.0 + K) / (mu_r * G);
+        let x2 = x1 + u * t2 - rel * t2 / 2.0;
+        for (t, x, v) in [
+            (t1, x1, v1),
+            (t1 + t2, x2, u),
+            (t1 + t2 + 1.5, x2 + 1.5 * u, u),
+        ] {
+            for end in both_ways(&rolling, &s, t) {
+                let dx = end.com.x - s.com.x;
+                assert!((dx - x).abs() < 1e-12 * x.max(1.0), "at {t}: {dx} vs {x}");
+                assert!(
+                    (end.v - Vector3::new(v, 0.0, 0.0)).norm() < 1e-12,
+                    "at {t}: {:?}",
+                    end.v
+                );
+                // Rolling without slip on the belt from t1 on: w x (-r n) + v = u.
+                let contact = end.v + end.w.cross(&(-rolling.normal * R));
+                assert!(
+                    (contact.x - u).abs() < 1e-12,
+                    "at {t}: contact moves at {contact:?}"
+                );
+            }
+        }
     }
 }

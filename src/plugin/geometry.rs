@@ -564,9 +564,21 @@ pub(crate) fn flat_throughout(
     travel: f64,
     radius: f64,
 ) -> bool {
+    ground.v == Vector3::zeros() && flat_relative(part, ground, s, travel, radius)
+}
+
+/// [`flat_throughout`] for a ground that may translate (without turning), with `travel`
+/// measured relative to it: in the ground's frame the ground is still and the body moves by
+/// its velocity relative to it.
+pub(crate) fn flat_relative(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    travel: f64,
+    radius: f64,
+) -> bool {
     use crate::parry::shape::TypedShape;
-    if ground.v != Vector3::zeros()
-        || ground.w != Vector3::zeros()
+    if ground.w != Vector3::zeros()
         || part.shape.as_support_map().is_none()
         || !(travel.is_finite() && radius.is_finite())
     {

@@ -30,7 +30,7 @@ use super::observe::{
 use super::pair_plan::{self, pair_key};
 use super::pair_reconstruct;
 use super::plan::{Candidate, EndOfStep, Planner, StepData};
-use super::policy::{EndAction, EndCheck, Policy, Role};
+use super::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
 use super::reconstruct::{self, ccd_consistent};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
@@ -477,7 +477,10 @@ impl<H> ImpactPlugin<H> {
                 let onto = (event.settled || event.restitution == 0.0)
                     && after.v.dot(&motion.normal) > 0.0
                     && n.dot(&motion.accel) < 0.0;
-                let ball = part.shape.as_ball().filter(|_| onto)?;
+                // A new ground that turns, or moves off its plane, is not rolled on.
+                let in_plane = og.w == Vector3::zeros()
+                    && og.v.dot(&n).abs() <= IN_PLANE_TOLERANCE * og.v.norm();
+                let ball = part.shape.as_ball().filter(|_| onto && in_plane)?;
                 let radius = to_f64(ball.radius) + part.skin + og.skin;
                 let default = (
                     self.config.rolling_resistance,
@@ -493,6 +496,7 @@ impl<H> ImpactPlugin<H> {
                     rolling_resistance,
                     spinning_friction,
                     accel: motion.accel,
+                    ground_velocity: og.v,
                 };
                 let end = on_new.advance_checked(&after, step.dt - t)?;
                 // Still on the new ground's plane at the end, and in no other ground.

@@ -17,8 +17,7 @@ use super::events::{ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{
     BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PlaneNear, SmallList, cannot_close,
-    contact_checked, earliest_touch, flat_throughout, landing_point, one_plane_under,
-    plane_piece_of,
+    contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under, plane_piece_of,
 };
 use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet};
@@ -26,7 +25,7 @@ use super::hook_flags::HookFlags;
 use super::install::Lookup;
 use super::observe::{Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot};
 use super::pair_plan::PairPlan;
-use super::policy::{Policy, ROLLING_MIN_SLIP, Role};
+use super::policy::{IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
 use crate::motion::{Flight, Rolling, State};
@@ -496,15 +495,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 
     /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on the
     /// ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal speed), when
-    /// it applies: a ground at rest whose one flat face (a half-space, or a cuboid's face the ball
-    /// stays over: `flat_throughout`) is all it can meet in the step, or with `others` near too,
-    /// the faces of those in its plane under the ball's path (`one_plane_under`: a flush seam
-    /// between tiles) up to where it first touches one of the others (a crease, a wall: not
-    /// touching it at the start), a pair whose crowding was measured last step (`known`), gravity (and
-    /// any constant force) along `-n`, no damping, torque or contact modification by the user,
-    /// isotropic inertia with no locked axis, nothing but grounds near it last step, and a ball
-    /// that slips (faster than 1 mm/s) or rolls faster than the resting speed (slower, it is
-    /// rapier's, which brings it to rest and to sleep).
+    /// it applies: a ground at rest (or moving along its plane without turning, in its frame) whose
+    /// one flat face (a half-space, or a cuboid's face the ball stays over: `flat_relative`) is
+    /// all it can meet in the step, or with `others` near too, the faces of those in its plane
+    /// under the ball's path (`one_plane_under`: a flush seam between tiles) up to where it first
+    /// touches one of the others (a crease, a wall: not touching it at the start), a pair whose
+    /// crowding was measured last step (`known`), gravity (and any constant force) along `-n`, no
+    /// damping, torque or contact modification by the user, isotropic inertia with no locked axis,
+    /// nothing but grounds near it last step, and a ball that slips (faster than 1 mm/s) or rolls
+    /// faster than the resting speed (slower, it is rapier's, which brings it to rest and to
+    /// sleep).
     #[allow(clippy::too_many_arguments)]
     fn rolling_of(
         &self,
@@ -536,7 +536,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let plain = flight.linear_damping == 0.0
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
-        let slip = on_ground.v - radius * on_ground.w.cross(n);
+        // A ground moving at constant velocity along its plane without turning (a conveyor):
+        // relative to it the ball moves as on a still one. Any other moving ground is
+        // rapier's.
+        let u = gg.v;
+        if gg.w != Vector3::zeros() || u.dot(n).abs() > IN_PLANE_TOLERANCE * u.norm() {
+            return None;
+        }
+        let v = on_ground.v - u;
+        let slip = v - radius * on_ground.w.cross(n);
         let default = (
             self.config.rolling_resistance,
             self.config.spinning_friction,
@@ -549,15 +557,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // level ground it is rapier's again, and sleeps. On a slope the closed form holds it
         // (rapier would roll it down), awake: rapier's sleep test reads the speed gravity
         // gives it inside its step, which the closed form takes back.
-        let slow =
-            slip.norm() <= ROLLING_MIN_SLIP && on_ground.v.norm() <= step.policy.resting_speed;
-        let resisted = rolling_resistance > 0.0 && (on_ground.v.norm() > 0.0 || !level)
+        let slow = slip.norm() <= ROLLING_MIN_SLIP && v.norm() <= step.policy.resting_speed;
+        let resisted = rolling_resistance > 0.0 && (v.norm() > 0.0 || !level)
             || spinning_friction > 0.0 && on_ground.w.dot(n) != 0.0;
         // Any slope: the closed form says where it reaches (along the fall line). A ball of an
         // impact between bodies is taken at rest too, and beside the other ball:
         // the reconstruct stage moves the pair together (and if anything else touched it in
-        // the step, hands it back to rapier's end state).
-        if !(an < 0.0 && plain) || !member && slow && !resisted || user_modifies {
+        // the step, hands it back to rapier's end state). So is one at rest on a moving
+        // ground, which cannot sleep: rapier's resting contact on a belt at 0.8 m/s sank it
+        // 0.28 mm and let it lag 6e-5 m/s behind.
+        let carried = u != Vector3::zeros();
+        if !(an < 0.0 && plain) || !member && slow && !resisted && !carried || user_modifies {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): the contact graph.
@@ -574,9 +584,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // The ground's one flat face under the ball for the whole step (a half-space, or a
         // cuboid's face the ball stays well inside of), or the faces in one plane under its
         // contact point's whole path: a mesh's or heightfield's other triangles, or a
-        // cuboid's edge, could be met inside the step, out of rapier's solver.
-        let travel = (on_ground.v.norm() + on_ground.w.norm() * radius) * step.dt;
-        let inside = others.is_empty() && flat_throughout(part, gg, on_ground, travel, radius);
+        // cuboid's edge, could be met inside the step, out of rapier's solver. On a moving
+        // ground: its one flat face, in its frame.
+        let travel = (v.norm() + on_ground.w.norm() * radius) * step.dt;
+        let inside = others.is_empty() && flat_relative(part, gg, on_ground, travel, radius);
         let inertia_ratio = Inertia::of(rb).ball_ratio(radius)?;
         let motion = Rolling {
             normal: *n,
@@ -586,6 +597,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             rolling_resistance,
             spinning_friction,
             accel: flight.accel,
+            ground_velocity: u,
         };
         let to_plane = n * (radius - gg.skin);
         let at = flight.accel - n * an;

@@ -14,6 +14,11 @@ use super::config::ImpactConfig;
 /// brings it to rest and to sleep.
 pub(crate) const ROLLING_MIN_SLIP: f64 = 1e-3;
 
+/// Largest velocity along a ground's normal, relative to its speed, for the ground to count as
+/// moving along its own plane (a conveyor, a sliding platform) that a ball can roll on in
+/// closed form: the rounding of an in-plane velocity given in `f32`.
+pub(crate) const IN_PLANE_TOLERANCE: f64 = 1e-6;
+
 /// Cosine of the widest angle (60 degrees) between gravity's direction and a contact's push
 /// on a body for that contact to count as something lying on the body.
 pub(crate) const LOADED_COS: f64 = 0.5;
