@@ -518,17 +518,6 @@ impl<H> ImpactPlugin<H> {
         let Some(index) = grounds.iter().position(|g| g.handle == og.handle) else {
             return;
         };
-        // Its rolling ends here: next step, its pairs with the plane are not ones rapier held
-        // at rest (the hysteresis would take a ball the impact lifted, still within the
-        // resting gap, for a resting one and put it back on the ground).
-        for part in &geom.parts {
-            for g in grounds {
-                let key = (part.handle, g.handle);
-                if self.prev_roles.get(&key) == Some(&Role::Rolling) {
-                    self.prev_roles.insert(key, Role::Impact);
-                }
-            }
-        }
         let first = Search::Hit(
             t,
             s,

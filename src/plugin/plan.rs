@@ -287,8 +287,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                         // normal speed rapier's solver leaves at rest (up to g dt and more
                         // for a fast-rolling ball): it stays resting unless clearly hit.
                         let prev_role = prev_roles.get(&key);
-                        let was_resting =
-                            matches!(prev_role, Some(&Role::Resting | &Role::Rolling));
+                        // A ball the closed form rolled ends on its plane: one above it has
+                        // left it since (an impact with a wall or another ball lifted it, and
+                        // it flies), and is not held (the hysteresis would put it back on the
+                        // ground, within the resting gap, with no event).
+                        let was_resting = match prev_role {
+                            Some(Role::Resting) => true,
+                            Some(Role::Rolling) => dist <= COPLANAR_TOLERANCE,
+                            _ => false,
+                        };
                         // The plugin had the pair last step: what touched the body
                         // then is known (a body new near the ground has nothing to go
                         // on).
