@@ -7,8 +7,9 @@
 //! ```
 //!
 //! Flags (each has a default; `--help` lists them): `--count N` (balls, 500), `--steps S`
-//! (600), `--mode rapier|step|toi|exact` (exact), `--scene bouncing|idle|pile` (bouncing),
-//! `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5), `--dt DT` (s, 1/60),
+//! (600), `--mode rapier|step|toi|exact` (exact), `--scene bouncing|idle|pile|rolling`
+//! (bouncing), `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5),
+//! `--rolling-resistance MU_R` (0), `--dt DT` (s, 1/60),
 //! `--seed N` (the layout's jitter, 1), `--pairs` (the balls' impacts with each other by the
 //! plugin too, `set_all_dynamic_bodies_impact`), `--f64` (needs `--features f64`), `--csv PATH`
 //! (trace of the first ball).
@@ -21,6 +22,9 @@
 //!   within reach of the ground, and no two touch, for the whole run.
 //! - `pile`: 10 x 10 balls per layer, 11 cm apart, dropped into a walled box 1.2 m wide (the
 //!   walls are fixed cuboids, 2 m high); they come to rest on each other.
+//! - `rolling`: one layer of balls on the ground, 15 cm apart in a square grid, each rolling
+//!   at 1 m/s along x without slip: the cost of the closed-form rolling against rapier's
+//!   resting contact (with `--rolling-resistance`, they stop after `(1 + k) / (2 mu_r g)`).
 //!
 //! The ground is a half-space at y = 0, or with `--tiles N` (N > 0) an N x N floor of fixed
 //! cuboid tiles (0.5 m thick, top at y = 0) covering 8 m x 8 m about the origin, marked with
@@ -45,7 +49,7 @@ fn main() {
         MODE,
         flag(
             "--scene",
-            "bouncing|idle|pile",
+            "bouncing|idle|pile|rolling",
             "bouncing",
             "the scene (see the docs)",
         ),
@@ -62,6 +66,12 @@ fn main() {
             "restitution of balls and ground",
         ),
         flag("--friction", "MU", "0.5", "friction of balls and ground"),
+        flag(
+            "--rolling-resistance",
+            "MU_R",
+            "0",
+            "rolling resistance of the balls the plugin rolls (ImpactConfig::rolling_resistance)",
+        ),
         flag("--dt", "DT", "1/60", "time step (s)"),
         flag("--seed", "N", "1", "seed of the layout's jitter"),
         switch(
@@ -78,6 +88,7 @@ fn main() {
     let mode = args.mode();
     let e = args.non_negative("--restitution");
     let mu = args.non_negative("--friction");
+    let mu_r = args.non_negative("--rolling-resistance");
     let dt = args.positive("--dt");
     let mut rng = Rng::new(args.count("--seed", 0));
 
@@ -92,6 +103,7 @@ fn main() {
             (0.05, 0.11, 10u64, 0.3)
         }
         "idle" => (0.05, 0.15, 20u64, 50.0),
+        "rolling" => (0.05, 0.15, (count as f64).sqrt().ceil() as u64, 0.05),
         _ => (0.05, 0.15, 20u64, 1.0),
     };
     // Idle: up at g T / 2, back at the start height when the run ends.
@@ -100,6 +112,12 @@ fn main() {
     } else {
         0.0
     };
+    let rolling = scene == "rolling";
+    let (roll_v, roll_w) = if rolling {
+        (1.0, -1.0 / radius)
+    } else {
+        (0.0, 0.0)
+    };
     let mut first = None;
     for i in 0..count {
         let (layer, cell) = (i / (per_row * per_row), i % (per_row * per_row));
@@ -107,13 +125,18 @@ fn main() {
         let centre = 0.5 * (per_row - 1) as f64 * spacing;
         let p = [
             col as f64 * spacing - centre + rng.range(-0.02, 0.02),
-            bottom + layer as f64 * spacing + rng.range(-0.02, 0.02),
+            if rolling {
+                bottom
+            } else {
+                bottom + layer as f64 * spacing + rng.range(-0.02, 0.02)
+            },
             row as f64 * spacing - centre + rng.range(-0.02, 0.02),
         ];
         let (h, _) = world.insert(
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(real(p[0]), real(p[1]), real(p[2])))
-                .linvel(Vector::new(0.0, real(launch), 0.0)),
+                .linvel(Vector::new(real(roll_v), real(launch), 0.0))
+                .angvel(Vector::new(0.0, 0.0, real(roll_w))),
             ColliderBuilder::ball(real(radius))
                 .restitution(real(e))
                 .friction(real(mu)),
@@ -136,6 +159,11 @@ fn main() {
     };
     if let Some(p) = plugin.as_mut() {
         p.set_all_dynamic_bodies_impact(args.on("--pairs"));
+        p.set_config(ImpactConfig {
+            rolling_resistance: mu_r,
+            ..*p.config()
+        })
+        .unwrap_or_else(|e| args.fail(&e.to_string()));
     }
     let mut csv = args
         .path("--csv")
