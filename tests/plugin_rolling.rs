@@ -928,8 +928,9 @@ fn set_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried_as_the_closed_for
 /// One closed-form case on a half-space: the ground's slope (degrees, downhill +x), the
 /// ball's start speed down it and its spin as a multiple of the rolling spin `v0 / R`
 /// (1: rolling, 0: sliding without spin, below 0: backspin, above 1: topspin), the
-/// friction and rolling resistance, and the motion along +x as phases of constant
-/// acceleration `(duration, a)` after which the ball is at rest (the last may be endless).
+/// friction, rolling resistance and `k = I / (m R^2)`, and the motion along +x as phases of
+/// constant acceleration `(duration, a)` after which the ball is at rest (the last may be
+/// endless).
 struct AlongCase {
     name: &'static str,
     slope: f64,
@@ -937,14 +938,14 @@ struct AlongCase {
     spin: f64,
     mu: f64,
     mu_r: f64,
+    k: f64,
     phases: Vec<(f64, f64)>,
 }
 
 impl AlongCase {
     /// On level ground: a slide from slip `v0 (1 - spin)` (friction `mu g` against it, which
     /// it loses at `mu g (1 + 1/k)`), then rolling slowed at `mu_r g / (1 + k)` to rest.
-    fn level(name: &'static str, v0: f64, spin: f64, mu: f64, mu_r: f64) -> Self {
-        let k = 0.4;
+    fn level(name: &'static str, v0: f64, spin: f64, mu: f64, mu_r: f64, k: f64) -> Self {
         let slip = v0 * (1.0 - spin);
         let t1 = slip.abs() / (mu * G * (1.0 + 1.0 / k));
         let v1 = v0 - mu * G * t1 * slip.signum();
@@ -957,6 +958,7 @@ impl AlongCase {
             spin,
             mu,
             mu_r,
+            k,
             phases,
         }
     }
@@ -975,25 +977,39 @@ impl AlongCase {
         }
         (x, 0.0)
     }
+
+    /// When to compare: in the first phase, in the last, and after the stop (or, with an
+    /// endless last phase, at 0.5 s and 1 s).
+    fn times(&self) -> [f64; 3] {
+        let total: f64 = self.phases.iter().map(|p| p.0).sum();
+        let first = self.phases[0].0;
+        if total.is_finite() {
+            [0.5 * first, 0.5 * (first + total), total + 0.5]
+        } else {
+            [0.5 * first.min(0.5), 0.5, 1.0]
+        }
+    }
 }
 
-/// Every phase of a ball on a plane in the plugin, against the closed form at three times, in
-/// every mode and at 30, 60 and 240 Hz: sliding without spin, with backspin and with topspin
-/// to rolling and then to a stop on level ground (so the slide-to-roll time and speed, the
-/// stop's time and distance), a ball at rest on a slope steeper than `mu_r` rolling down, and
-/// one on a slope too steep to roll sliding down it. Measured in `f32`: `Exact` within 2e-7
-/// (the same at every rate: each phase is exact, whatever the step), `Step` and
-/// `TimeOfImpact` within 2e-6; in `f64` 3.2e-14.
+/// Every phase of a ball on a plane in the plugin, against the closed form, in every mode and
+/// at 30, 60 and 240 Hz: sliding without spin (solid and hollow), with backspin and with
+/// topspin to rolling and then to a stop on level ground (position and speed in the slide,
+/// in the roll and after the stop: the slide-to-roll time and speed, the stop's time and
+/// distance), a ball at rest on a slope steeper than `mu_r` rolling down, and one on a slope
+/// too steep to roll sliding down it; and the energy never rises from one step to the next.
+/// Measured in `f32`: `Exact` within 1.9e-7 (the same at every rate: each phase is exact,
+/// whatever the step), `Step` and `TimeOfImpact` within 1.4e-5 (rapier's `f32` state each
+/// step, over up to 2 000 steps); in `f64` 7.6e-14. The energy rose at no step.
 #[test]
 fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
-    let k = 0.4;
-    let (mu, mu_r) = (0.3, 0.02);
+    let (mu, mu_r, solid, hollow) = (0.3, 0.02, 0.4, 2.0 / 3.0);
     let (five, forty) = (5.0f64.to_radians(), 40.0f64.to_radians());
     let cases = [
-        AlongCase::level("rolling", 1.2, 1.0, mu, mu_r),
-        AlongCase::level("sliding without spin", 1.2, 0.0, mu, mu_r),
-        AlongCase::level("backspin", 1.2, -1.0, mu, mu_r),
-        AlongCase::level("topspin", 1.2, 3.0, mu, mu_r),
+        AlongCase::level("rolling", 1.2, 1.0, mu, mu_r, solid),
+        AlongCase::level("sliding without spin", 1.2, 0.0, mu, mu_r, solid),
+        AlongCase::level("hollow, sliding without spin", 1.2, 0.0, mu, mu_r, hollow),
+        AlongCase::level("backspin", 1.2, -1.0, mu, mu_r, solid),
+        AlongCase::level("topspin", 1.2, 3.0, mu, mu_r, solid),
         AlongCase {
             name: "at rest on 5 degrees, rolling down",
             slope: 5.0,
@@ -1001,9 +1017,10 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
             spin: 1.0,
             mu,
             mu_r,
+            k: solid,
             phases: vec![(
                 f64::INFINITY,
-                G * (five.sin() - mu_r * five.cos()) / (1.0 + k),
+                G * (five.sin() - mu_r * five.cos()) / (1.0 + solid),
             )],
         },
         AlongCase {
@@ -1014,12 +1031,11 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
             spin: 0.0,
             mu: 0.2,
             mu_r: 0.0,
+            k: solid,
             phases: vec![(f64::INFINITY, G * (forty.sin() - 0.2 * forty.cos()))],
         },
     ];
     for case in &cases {
-        let end: f64 = case.phases.iter().map(|p| p.0).sum::<f64>().min(1.0);
-        let times = [0.3 * end, 0.7 * end, end + 0.5];
         for hz in [30.0, 60.0, 240.0] {
             for mode in MODES {
                 let th = case.slope.to_radians();
@@ -1029,19 +1045,53 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
                 );
                 let (mut w, ground, ball, _) = scene(case.slope, case.v0);
                 w.integration_parameters.dt = real(1.0 / hz);
-                w.colliders
-                    .iter_mut()
-                    .for_each(|(_, co)| co.set_friction(real(case.mu)));
+                for (_, co) in w.colliders.iter_mut() {
+                    co.set_friction(real(case.mu));
+                }
+                let m = wide(w.bodies[ball].mass());
+                let ball_collider = w.bodies[ball].colliders()[0];
+                w.colliders[ball_collider].set_mass_properties(MassProperties::new(
+                    Vector::ZERO,
+                    real(m),
+                    Vector::splat(real(case.k * m * R * R)),
+                ));
                 let spin = n.cross(&(down * case.v0)) / R * case.spin;
-                w.bodies[ball].set_angvel(Vector::new(0.0, 0.0, real(spin.z)), true);
+                let rb = &mut w.bodies[ball];
+                rb.recompute_mass_properties_from_colliders(&w.colliders);
+                rb.set_angvel(Vector::new(0.0, 0.0, real(spin.z)), true);
                 let mut p = ImpactPlugin::new(config(mode, case.mu_r, 0.0)).unwrap();
                 p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
                 let start = na(w.bodies[ball].center_of_mass());
+                let energy = |w: &PhysicsWorld| {
+                    let rb = &w.bodies[ball];
+                    let (v, om) = (na(rb.linvel()), na(rb.angvel()));
+                    0.5 * m * v.norm_squared()
+                        + 0.5 * case.k * m * R * R * om.norm_squared()
+                        + m * G * na(rb.center_of_mass()).y
+                };
+                // The energy's scale: the start's kinetic energy and a fall of a radius.
+                let e_scale = 0.5 * (1.0 + case.k) * m * case.v0 * case.v0 + m * G * R;
+                let mut e_last = energy(&w);
                 let mut done = 0;
-                for t in times {
+                for t in case.times() {
                     let steps = (t * hz).round() as usize;
-                    for _ in done..steps {
+                    // `Step` and `TimeOfImpact` start each step from rapier's `f32` state.
+                    let tol = match mode {
+                        TimingMode::Exact => X_TOL,
+                        _ if F64 => X_TOL,
+                        _ => (steps as f64 * f64::from(f32::EPSILON) / 2.0).max(1e-5),
+                    };
+                    let at = |t: f64| format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
+                    for i in done..steps {
                         p.step(&mut w);
+                        let e = energy(&w);
+                        assert!(
+                            e <= e_last + X_TOL * e_scale,
+                            "{}: the energy rose by {:e} of its scale",
+                            at(i as f64 / hz),
+                            (e - e_last) / e_scale
+                        );
+                        e_last = e;
                     }
                     done = steps;
                     let t = steps as f64 / hz;
@@ -1050,18 +1100,16 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
                     let v = na(w.bodies[ball].linvel()).dot(&down);
                     // Relative to the speed (at least 1 m/s: near a stop, to the start's).
                     let scale = v_cf.abs().max(case.v0).max(1.0);
-                    // `Step` and `TimeOfImpact` start each step from rapier's `f32` state.
-                    let tol = match mode {
-                        TimingMode::Exact => X_TOL,
-                        _ if F64 => X_TOL,
-                        _ => (steps as f64 * f64::from(f32::EPSILON) / 2.0).max(1e-5),
-                    };
-                    let at = format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
                     assert!(
                         (x - x_cf).abs() <= tol * x_cf.abs().max(1e-3),
-                        "{at}: x {x} vs {x_cf}"
+                        "{}: x {x} vs {x_cf}",
+                        at(t)
                     );
-                    assert!((v - v_cf).abs() <= tol * scale, "{at}: v {v} vs {v_cf}");
+                    assert!(
+                        (v - v_cf).abs() <= tol * scale,
+                        "{}: v {v} vs {v_cf}",
+                        at(t)
+                    );
                 }
             }
         }
