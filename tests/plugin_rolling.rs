@@ -18,6 +18,18 @@ const R: f64 = 0.05;
 /// 9.7e-15 in `f64`).
 const X_TOL: f64 = if F64 { 1e-12 } else { 1e-6 };
 
+/// The tolerance on a distance, time or speed in `mode`: the goal (`X_TOL`) in
+/// `Exact` and in `f64`. `Step` and `TimeOfImpact` keep no `f64` state between steps: each
+/// starts from rapier's `f32` state, which loses up to half an ulp of the position a step,
+/// over `steps` steps of motion (and at least 1e-5).
+fn tolerance(mode: TimingMode, steps: f64) -> f64 {
+    match mode {
+        TimingMode::Exact => X_TOL,
+        _ if F64 => X_TOL,
+        _ => (steps * f64::from(f32::EPSILON) / 2.0).max(1e-5),
+    }
+}
+
 fn config(mode: TimingMode, mu_r: f64, mu_sp: f64) -> ImpactConfig {
     ImpactConfig {
         timing: mode,
@@ -90,11 +102,7 @@ fn a_rolling_ball_stops_at_the_closed_form_distance_and_sleeps() {
             let x = na(rb.center_of_mass()).x;
             // `Step` and `TimeOfImpact` keep no `f64` state between steps: rapier's `f32`
             // rounding of each step's state adds up (2e-6 to 3e-6 here); `Exact` carries it.
-            let tol = match mode {
-                TimingMode::Exact => X_TOL,
-                _ if F64 => X_TOL,
-                _ => 1e-5,
-            };
+            let tol = tolerance(mode, 0.0);
             assert!(
                 (x - distance).abs() <= tol * distance,
                 "{mode:?} at {hz} Hz: stopped at {x}, closed form {distance}"
@@ -238,11 +246,7 @@ fn up_and_down_a_slope_it_stops_where_the_closed_form_says() {
                 // `Step` and `TimeOfImpact` start each step from rapier's `f32` state: up to
                 // half an ulp of the position is lost per step moving (measured: down the
                 // slope at 240 Hz, 1 865 steps, 2.2e-5; `Exact` 5.5e-9).
-                let tol = match mode {
-                    TimingMode::Exact => X_TOL,
-                    _ if F64 => X_TOL,
-                    _ => (t_stop * hz * f64::from(f32::EPSILON) / 2.0).max(1e-5),
-                };
+                let tol = tolerance(mode, t_stop * hz);
                 assert!(
                     (travelled - expected).abs() <= tol * expected,
                     "{mode:?} at {hz} Hz, uphill {uphill}: {travelled} vs {expected}"
@@ -326,11 +330,7 @@ fn rolling_across_a_slope_it_curves_down_and_stops_where_the_pursuit_curve_says(
                 p.step(&mut w);
             }
             let moved = na(w.bodies[ball].center_of_mass()) - start;
-            let tol = match mode {
-                TimingMode::Exact => X_TOL,
-                _ if F64 => X_TOL,
-                _ => 1e-5,
-            };
+            let tol = tolerance(mode, 0.0);
             assert!(
                 (moved.dot(&down) - along).abs() <= tol * along,
                 "{mode:?} at {hz} Hz: down {} vs {along}",
@@ -404,11 +404,7 @@ fn across_a_seam_between_two_tiles_it_stops_as_on_one_plane() {
             // As on one plane (`a_rolling_ball_stops_at_the_closed_form_distance_and_sleeps`):
             // `Step` and `TimeOfImpact` keep no `f64` state between steps (measured 3.1e-6
             // in `f32`); `Exact` 9.4e-9.
-            let tol = match mode {
-                TimingMode::Exact => X_TOL,
-                _ if F64 => X_TOL,
-                _ => 1e-5,
-            };
+            let tol = tolerance(mode, 0.0);
             assert!(
                 (x - distance).abs() <= tol * distance,
                 "{mode:?} at {hz} Hz: stopped at {x}, closed form {distance}"
@@ -521,11 +517,7 @@ fn down_a_slope_onto_level_ground_it_meets_the_crease_and_stops_where_the_closed
             // Measured in `f32`: stopping point 2.8e-7 (`Exact`), 3.5e-6 (`Step` and
             // `TimeOfImpact` keep no `f64` state between steps); the impact's time 1.8e-7,
             // its speed 1.3e-6. In `f64`: all below 1e-12.
-            let tol = match mode {
-                TimingMode::Exact => X_TOL,
-                _ if F64 => X_TOL,
-                _ => 1e-5,
-            };
+            let tol = tolerance(mode, 0.0);
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
                 (x - x_end).abs() <= tol * x_end,
@@ -732,11 +724,7 @@ fn down_a_flat_mesh_or_heightfield_it_stops_as_on_one_plane() {
                 // Measured in `f32`: `Exact` 7.3e-8 (mesh) and 7.9e-9 (heightfield); `Step`
                 // and `TimeOfImpact` up to 1.1e-5 at 240 Hz (rapier's `f32` state each step).
                 // In `f64`: 3.8e-14.
-                let tol = match mode {
-                    TimingMode::Exact => X_TOL,
-                    _ if F64 => X_TOL,
-                    _ => (t_stop * hz * f64::from(f32::EPSILON) / 2.0).max(1e-5),
-                };
+                let tol = tolerance(mode, t_stop * hz);
                 let at = format!("{name}, {mode:?} at {hz} Hz");
                 assert!(
                     (moved - distance).abs() <= tol * distance,
@@ -901,11 +889,7 @@ fn set_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried_as_the_closed_for
             let x = na(w.bodies[ball].center_of_mass()).x;
             // Measured in `f32`: `Exact` 2.4e-8, `Step` and `TimeOfImpact` up to 2.7e-6 (at
             // 240 Hz); in `f64` 1.9e-14.
-            let tol = match mode {
-                TimingMode::Exact => X_TOL,
-                _ if F64 => X_TOL,
-                _ => 1e-5,
-            };
+            let tol = tolerance(mode, 0.0);
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
                 (x - expected).abs() <= tol * expected,
@@ -1076,11 +1060,7 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
                 for t in case.times() {
                     let steps = (t * hz).round() as usize;
                     // `Step` and `TimeOfImpact` start each step from rapier's `f32` state.
-                    let tol = match mode {
-                        TimingMode::Exact => X_TOL,
-                        _ if F64 => X_TOL,
-                        _ => (steps as f64 * f64::from(f32::EPSILON) / 2.0).max(1e-5),
-                    };
+                    let tol = tolerance(mode, steps as f64);
                     let at = |t: f64| format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
                     for i in done..steps {
                         p.step(&mut w);
