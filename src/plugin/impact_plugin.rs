@@ -24,9 +24,7 @@ use super::geometry::{BodyGeom, GroundGeom, Hit, Search, SmallList, closest, fir
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
-use super::observe::{
-    Sets, body_geom, ground_geom, rapier_state, snapshot, surely_far, touches_other,
-};
+use super::observe::{Sets, body_geom, rapier_state, snapshot, surely_far, touches_other};
 use super::pair_plan::{self, pair_key};
 use super::pair_reconstruct;
 use super::plan::{Candidate, EndOfStep, Planner, StepData};
@@ -1099,17 +1097,19 @@ impl<H> ImpactPlugin<H> {
             }
             let rb = &bodies[cand.body];
             if let Some((ground, motion)) = &cand.rolling {
-                let Some(gg) = ground_geom(&step.grounds[*ground], colliders) else {
+                let geom = body_geom(rb, colliders, &cand.local_com);
+                let settle = self.settle();
+                let Some(gg) = settle.pair_geom(&step.grounds[*ground], &geom, colliders) else {
                     continue;
                 };
-                let geom = body_geom(rb, colliders, &cand.local_com);
-                // With the other pieces of its plane, if it rolls across a seam.
+                // With the other grounds near it (the pieces of its plane, if it rolls across
+                // a seam), each without the pairs rapier's or the user's filter refused.
                 let grounds: SmallList<_> = std::iter::once(gg)
                     .chain(
                         cand.near
                             .iter()
                             .filter(|i| *i != ground)
-                            .filter_map(|i| ground_geom(&step.grounds[*i], colliders)),
+                            .filter_map(|i| settle.pair_geom(&step.grounds[*i], &geom, colliders)),
                     )
                     .collect();
                 // Something else acted on it in the step: a contact, a joint, or rapier's CCD

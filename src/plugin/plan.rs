@@ -33,7 +33,7 @@ use crate::motion::{Flight, Rolling, State};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
-    ActiveHooks, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    ActiveHooks, ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -235,8 +235,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let mut closing = false;
         let mut turning_resting = SmallList::Empty;
         let mut rolling = None;
-        // The plane it rolls on, and what the ball can reach of it in the step.
-        let mut rolling_plane: Option<PlaneNear> = None;
+        // The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
+        let mut rolling_pieces: Option<SmallList<ColliderHandle>> = None;
         // How far a point of the body can move relative to a resting contact point in the
         // step by turning (for a ball about its centre: how fast rapier's contact point
         // slides off its bottom). From the state after any `Step` impulse applied above.
@@ -271,11 +271,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 // mode would bounce it). Another ground it may roll into (a slope's foot, a
                 // wall): out of rapier's solver too, the search along the rolling finds the
                 // impact.
-                if let Some(plane) = &rolling_plane {
-                    let role = if plane_piece_of(gg, plane) {
+                if let Some(pieces) = &rolling_pieces {
+                    let role = if pieces.contains(&gg.handle) {
                         Role::Rolling
                     } else {
-                        any_impact = true;
+                        // Searched after the step only if within reach of it.
+                        any_impact |= match start_contacts.get(k) {
+                            Some(found) => matches!(found, Ok(Some(_))),
+                            None => {
+                                matches!(contact_checked(part, gg, &state, 0.0, reach), Ok(Some(_)))
+                            }
+                        };
                         Role::Impact
                     };
                     step.roles.insert(key, role);
@@ -438,12 +444,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             .filter(|(other, _)| other != gi)
                             .map(|(_, g)| g)
                             .collect();
-                        if let Some((motion, plane)) = self.rolling_of(
+                        if let Some((motion, pieces)) = self.rolling_of(
                             bodies, colliders, handle, part, gg, &others, &flight, &n, &on_ground,
                             step, known, sets,
                         ) {
                             role = Role::Rolling;
-                            rolling_plane = Some(plane);
+                            rolling_pieces = Some(pieces);
                             rolling = Some((*gi, motion));
                             state = on_ground;
                         }
@@ -545,7 +551,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
         known: bool,
         sets: &Sets,
-    ) -> Option<(Rolling, PlaneNear)> {
+    ) -> Option<(Rolling, SmallList<ColliderHandle>)> {
         let rb = &bodies[handle];
         let member = step.pairs.members.contains(&handle);
         if !known && !member {
@@ -637,9 +643,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 + accel_bound * step.dt * step.dt / 2.0
                 + COPLANAR_TOLERANCE,
         };
-        if level && inside {
-            return Some((motion, plane));
+        // On level ground the closed form reaches every state unless the rolling resistance
+        // needs more friction than `mu N` (`mu_r / (1 + k) > mu`): then it is asked.
+        if level
+            && inside
+            && (rolling_resistance <= friction
+                || motion.advance_checked(on_ground, step.dt).is_some())
+        {
+            return Some((motion, SmallList::One(gg.handle)));
         }
+        let mut piece_handles = SmallList::One(gg.handle);
         // Only where the closed form reaches (on a slope, the band where a ball can neither
         // roll nor slide is not).
         let end = motion.advance_checked(on_ground, step.dt)?;
@@ -651,9 +664,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             // not touch it yet (a ball resting in a crease is rapier's). One it has just
             // left (a slope behind the crease) may be nearer than the resting gap: the
             // search along the rolling finds whether it comes back.
+            // A piece rolls the ball with this ground's coefficients: one of other materials,
+            // or whose contacts the user modifies, is an obstacle (touching it, the ball is
+            // rapier's).
+            let same = |g: &GroundGeom| {
+                let user = self.flags.recorded_user_flags(colliders, g.handle);
+                self.registry
+                    .material_of(colliders, part.handle, g.handle)
+                    .friction
+                    == friction
+                    && self.registry.rolling_of(handle, g.handle, default)
+                        == (rolling_resistance, spinning_friction)
+                    && !user.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+            };
             let (pieces, obstacles): (Vec<&GroundGeom>, Vec<&GroundGeom>) = std::iter::once(gg)
                 .chain(others.iter().copied())
-                .partition(|g| plane_piece_of(g, &plane));
+                .partition(|g| (g.handle == gg.handle || same(g)) && plane_piece_of(g, &plane));
             let touching = |s: &State, t: f64| {
                 obstacles
                     .iter()
@@ -662,6 +688,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             if touching(on_ground, 0.0) {
                 return None;
             }
+            piece_handles = pieces.iter().map(|g| g.handle).collect();
             if !one_plane_under(&pieces, &plane, &p, &q, bow + COPLANAR_TOLERANCE) {
                 // Its contact point leaves the plane, but it may meet another ground first
                 // (rolling down into a crease, it touches the level ground while still on
@@ -675,6 +702,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 }
             }
         }
-        Some((motion, plane))
+        Some((motion, piece_handles))
     }
 }
