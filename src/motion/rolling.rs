@@ -294,9 +294,7 @@ impl Rolling {
                 let mu = self.friction * gn * (1.0 + k);
                 let cos_limit = (mu * mu - ka * ka - rg * rg) / (2.0 * ka * rg);
                 let stop = pursuit.stop_time();
-                let slides_at = (cos_limit < 1.0)
-                    .then(|| pursuit.time_at_angle(cos_limit))
-                    .flatten();
+                let slides_at = (cos_limit < 1.0).then(|| pursuit.time_at_angle(cos_limit));
                 let (until, then) = match (slides_at, stop) {
                     (Some(t), _) => (t, PhaseEnd::Slides),
                     (None, Some(t)) => (t, PhaseEnd::Rest),
