@@ -115,6 +115,25 @@ impl Rolling {
             .map(|end| self.absolute(&end, dt))
     }
 
+    /// The slope's tilt `a_t / g_n` (downhill, of length `tan(theta)`) if the ground holds a
+    /// ball at rest on it, `None` if no ball stays at rest there. On a slope of angle `theta`
+    /// the static friction `m |a_t|` at the contact point holds the centre, and its torque
+    /// `m |a_t| h` about the centre (`h` the friction's lever along the normal, `r` for a rigid
+    /// contact) is balanced by the normal force `N = m g_n` acting `h tan(theta)` downhill of
+    /// the contact point: the contact patch pressed harder on the side the ball would roll
+    /// to, the static form of the rolling resistance (which bounds that shift by `mu_r r`).
+    /// So a ball stays at rest where `tan(theta) <= mu_r` and `tan(theta) <= mu`, on a still
+    /// ground (zero tilt on level ground).
+    pub fn holding_tilt(&self) -> Option<Vector3<f64>> {
+        let n = self.normal;
+        let gn = -self.accel.dot(&n);
+        let at = self.accel - n * self.accel.dot(&n);
+        let holds = gn > 0.0
+            && self.ground_velocity == Vector3::zeros()
+            && at.norm() <= self.rolling_resistance.min(self.friction) * gn;
+        holds.then(|| at / gn)
+    }
+
     /// `s` in the ground's frame: the velocity relative to the ground (the frames coincide at
     /// the start).
     fn relative(&self, s: &State) -> State {
@@ -272,8 +291,13 @@ impl Rolling {
             st.v / speed
         } else if at.norm() > self.rolling_resistance * gn {
             at.normalize()
+        } else if at.norm() > self.friction * gn {
+            // The rolling resistance holds its turning but the friction cannot hold its
+            // centre (`mu < tan(theta) <= mu_r`): it would slide without turning, a phase the
+            // closed form does not follow.
+            return None;
         } else {
-            // Held at rest by the rolling resistance (or on level ground).
+            // Held at rest by the rolling resistance and the friction (or on level ground).
             let zero = Vector3::zeros();
             return Some(constant(zero, zero, f64::INFINITY, PhaseEnd::Continue));
         };
@@ -652,6 +676,44 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn at_rest_on_a_slope_the_normal_force_acts_h_tan_theta_downhill_while_it_holds() {
+        let mu_r: f64 = 0.05;
+        for (tan, mu, holds) in [
+            (0.5 * mu_r, 0.5, true),
+            (0.9 * mu_r, 0.5, true),
+            (2.0 * mu_r, 0.5, false),
+            // The rolling resistance holds the turning, the friction not the centre.
+            (0.5 * mu_r, 0.2 * mu_r, false),
+        ] {
+            let (rolling, down) = on_slope(tan.atan().to_degrees(), mu, mu_r, 0.0);
+            let tilt = rolling.holding_tilt();
+            assert_eq!(tilt.is_some(), holds, "tan {tan}, mu {mu}");
+            if let Some(offset) = tilt.map(|t| t * R) {
+                // Its torque about the centre cancels the friction's: (b d) x (N n) +
+                // (-r n) x (-m |a_t| d) = 0, with N = m g cos, m |a_t| = m g sin.
+                assert!((offset - down * (R * tan)).norm() < 1e-15, "{offset:?}");
+                let n = rolling.normal;
+                let th = tan.atan();
+                let torque =
+                    offset.cross(&(n * (G * th.cos()))) + (-R * n).cross(&(-down * (G * th.sin())));
+                assert!(torque.norm() < 1e-15, "{torque:?}");
+            }
+            let at_rest = state(&rolling, Vector3::zeros(), Vector3::zeros());
+            if mu < tan {
+                // Not the closed form's: it would slide without turning.
+                assert!(rolling.advance_checked(&at_rest, 0.01).is_none());
+            }
+        }
+        let (rolling, down) = on_slope((0.5 * mu_r).atan().to_degrees(), 0.5, mu_r, 0.0);
+        // A moving ground holds nothing still.
+        let belt = Rolling {
+            ground_velocity: down * 0.5,
+            ..rolling
+        };
+        assert_eq!(belt.holding_tilt(), None);
     }
 
     #[test]

@@ -13,7 +13,9 @@
 //!   user's filter still decides, when the colliders ask for it), and
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
 //!   platform), then sets its restitution to 0 (and the ground's friction override, if any):
-//!   the plugin owns every bounce off a ground;
+//!   the plugin owns every bounce off a ground. A ball the closed form holds at rest on a
+//!   slope (`StepData::holds`) also has its contact points moved to where the ground's
+//!   normal force acts, so that rapier's solver holds it still and rapier sleeps it;
 //! - a pair of two opted-in balls (`pair_plan.rs`): `Impact` out of rapier's solver as above
 //!   (the reconstruct stage moves the two together), `Resting` in it with zero restitution;
 //! - role `Filtered` (rapier would not solve the pair, or the user's filter refused it in
@@ -70,10 +72,35 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     self.user_hooks.modify_solver_contacts(context);
                 }
                 let over = self.registry.entry(key.1).and_then(|g| g.material);
+                let tilt = self.step.holds.get(&key).copied();
+                let ball = colliders.get(key.0).and_then(|co| co.parent());
+                let centre = ball
+                    .and_then(|b| bodies.get(b))
+                    .map(|rb| rb.center_of_mass());
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {
                         *rigid.friction = super::convert::to_real(m.friction);
+                    }
+                    // A ball held at rest on a slope: the normal force acts `h tan(theta)`
+                    // downhill of the contact point, as the rolling resistance's contact patch
+                    // presses it (`Rolling::holding_tilt`), `h` the friction's lever: rapier's
+                    // solver applies a contact at the midpoint of its two anchors (the gap
+                    // closed), so `h` is less than the radius by half the penetration. Both
+                    // anchors move alike: the gap along the normal is unchanged.
+                    if let (Some(tilt), Some(centre)) = (tilt, centre) {
+                        let normal = *rigid.normal;
+                        for contact in rigid.solver_contacts.iter_mut() {
+                            let closed = contact.anchor1
+                                + normal
+                                    * ((contact.anchor2 - contact.anchor1).dot(normal)
+                                        - contact.dist);
+                            let point = (closed + contact.anchor2) * 0.5;
+                            let lever = super::convert::to_f64((centre - point).dot(normal).abs());
+                            let offset = super::convert::vec_from_na(&(tilt * lever));
+                            contact.anchor1 += offset;
+                            contact.anchor2 += offset;
+                        }
                     }
                 }
             }

@@ -18,20 +18,22 @@ use super::commit::{Shadow, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
 use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
-use super::events::{ImpactEvent, ImpactTiming};
+use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{BodyGeom, GroundGeom, Hit, Search, SmallList, closest, first_impact};
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
-use super::observe::{Sets, body_geom, rapier_state, snapshot, surely_far, touches_other};
+use super::observe::{
+    Sets, body_geom, neighbours, rapier_state, snapshot, surely_far, touches_other,
+};
 use super::pair_plan::{self, pair_key};
 use super::pair_reconstruct;
-use super::plan::{Candidate, EndOfStep, Planner, StepData};
+use super::plan::{Candidate, EndOfStep, FirstHold, Planner, StepData};
 use super::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
 use super::reconstruct::{self, ccd_consistent};
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
+use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
 use super::settle::{Checked, Settle};
 use crate::motion::{Rolling, State};
 use crate::rapier::math::Vector;
@@ -125,7 +127,7 @@ pub struct ImpactPlugin<H = ()> {
     /// The grounds, the managed bodies and the ground index.
     pub(crate) registry: Registry,
     pub(crate) user_hooks: H,
-    step: StepData,
+    pub(crate) step: StepData,
     /// Where the plugin's hook flags are (see `hook_flags.rs`).
     pub(crate) flags: HookFlags,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
@@ -135,10 +137,8 @@ pub struct ImpactPlugin<H = ()> {
     prev_roles: HandleMap<PairKey, Role>,
     /// Last step's roles of the pairs between bodies (`pair_plan.rs`).
     prev_pair_roles: HandleMap<PairKey, Role>,
-    /// Managed bodies asleep at the start of the last step: the plugin had no roles for them,
-    /// so a body just woken is not taken for `Rolling` (a pile woken by a hit would lose its
-    /// ground support for a step).
-    prev_asleep: HandleSet<RigidBodyHandle>,
+    /// The pairs held at rest last step (`StepData::holds`).
+    prev_holds: HandleSet<PairKey>,
     events: Vec<ImpactEvent>,
 }
 
@@ -168,7 +168,7 @@ impl<H> ImpactPlugin<H> {
             spare: Spare::default(),
             prev_roles: HandleMap::default(),
             prev_pair_roles: HandleMap::default(),
-            prev_asleep: HandleSet::default(),
+            prev_holds: HandleSet::default(),
             events: Vec::new(),
         })
     }
@@ -211,7 +211,7 @@ impl<H> ImpactPlugin<H> {
             spare,
             prev_roles,
             prev_pair_roles,
-            prev_asleep,
+            prev_holds,
             events,
         } = self;
         let plugin = ImpactPlugin {
@@ -224,7 +224,7 @@ impl<H> ImpactPlugin<H> {
             spare,
             prev_roles,
             prev_pair_roles,
-            prev_asleep,
+            prev_holds,
             events,
         };
         (plugin, old)
@@ -421,6 +421,43 @@ impl<H> ImpactPlugin<H> {
             rb.set_angvel(w, true);
         }
         self.settle().remember(cand.body, rb, &s);
+    }
+
+    /// A ball's first step held at rest on a slope (`FirstHold`): put back where it stopped,
+    /// at rest, with its `EventKind::Hold` event, unless something else touched it in the step
+    /// (or it leaves faster than the resting speed), or rapier put it to sleep.
+    fn put_back_held(&mut self, bodies: &mut RigidBodySet, hold: &FirstHold, step: &EndOfStep) {
+        let Some(rb) = bodies.get(hold.body) else {
+            return;
+        };
+        let end = rapier_state(rb);
+        let slow = step.policy.resting_speed;
+        let still = end.v.norm() <= slow && end.w.norm() * hold.radius <= slow;
+        if rb.is_sleeping()
+            || !still
+            || (end.com == hold.start.com && end.rot == hold.start.rot)
+            || neighbours(hold.body, rb, &step.sets, &self.registry, &step.down).touching
+        {
+            return;
+        }
+        let dt = step.dt;
+        let rb = &mut bodies[hold.body];
+        write_state(rb, &hold.start, &hold.local_com, true);
+        let site = Site {
+            body: hold.body,
+            collider: hold.collider,
+            ground: hold.ground,
+            body2: None,
+            normal: hold.normal,
+            point: hold.start.com - hold.normal * hold.radius,
+        };
+        let inertia = Inertia::of(rb);
+        let event = correction(EventKind::Hold, &site, &inertia, &end, &hold.start, dt);
+        self.events.push(event);
+        if self.config.timing == TimingMode::Exact {
+            self.settle()
+                .remember(hold.body, &bodies[hold.body], &hold.start);
+        }
     }
 
     /// The end-of-step stage's view of the plugin.
@@ -915,7 +952,7 @@ impl<H> ImpactPlugin<H> {
             registry: &self.registry,
             flags: &self.flags,
             user_hooks: &self.user_hooks,
-            prev_asleep: &self.prev_asleep,
+            prev_holds: &self.prev_holds,
             events: &mut self.events,
         };
         for handle in handles {
@@ -997,6 +1034,8 @@ impl<H> ImpactPlugin<H> {
         step.active = false;
         self.prev_roles = std::mem::take(&mut step.roles);
         self.prev_pair_roles = std::mem::take(&mut step.data.pairs.roles);
+        self.prev_holds.clear();
+        self.prev_holds.extend(step.holds.keys().copied());
         // The grounds' actual motion over the step.
         let dt = step.dt;
         for i in self.registry.index.moving() {
@@ -1014,8 +1053,6 @@ impl<H> ImpactPlugin<H> {
                 }
             }
         }
-        self.prev_asleep.clear();
-        self.prev_asleep.extend(step.asleep.iter().copied());
         for handle in &step.asleep {
             let Some(rb) = bodies.get(*handle) else {
                 continue;
@@ -1250,6 +1287,9 @@ impl<H> ImpactPlugin<H> {
             {
                 self.settle().pair_end(bodies, colliders, pair, &step);
             }
+        }
+        for hold in &step.first_holds {
+            self.put_back_held(bodies, hold, &step);
         }
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);

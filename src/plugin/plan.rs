@@ -26,7 +26,7 @@ use super::hook_flags::HookFlags;
 use super::install::Lookup;
 use super::observe::{Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot};
 use super::pair_plan::PairPlan;
-use super::policy::{IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
+use super::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
 use super::registry::Registry;
 use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
 use crate::motion::{Flight, Rolling, State};
@@ -36,6 +36,37 @@ use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
+
+/// What the closed form makes of a ball resting on a plane ground (`Planner::rolling_of`).
+pub(crate) enum OnPlane {
+    /// It moves (`Role::Rolling`), on the plane of these grounds.
+    Rolls(Rolling, SmallList<ColliderHandle>),
+    /// It stays at rest on a slope of this tilt (`Rolling::holding_tilt`): rapier's resting
+    /// contact (`Role::Resting`) with these grounds, their normal force acting downhill of the
+    /// contact point so that rapier holds the ball still and sleeps it. (The closed form
+    /// writing the rest pose back after each step would move the collider, and rapier wakes
+    /// the body of every collider moved by hand.)
+    Held(Vector3<f64>, SmallList<ColliderHandle>),
+}
+
+/// A ball's first step held at rest on a slope (`OnPlane::Held`): rapier's resting contact
+/// starts without the impulses of a step before, and in its substeps lets the ball creep
+/// downhill and sink before it holds it (3.6e-5 m along a 3-degree slope at 30 Hz). After the
+/// step the ball is put back where it stopped, if nothing else moved it; from the next step
+/// rapier's contact holds it still (a few 1e-7 m while it sinks to its resting depth) and
+/// sleeps it.
+pub(crate) struct FirstHold {
+    pub body: RigidBodyHandle,
+    pub collider: ColliderHandle,
+    pub ground: ColliderHandle,
+    /// Where it stopped: the step's start, at rest.
+    pub start: State,
+    pub local_com: Vector3<f64>,
+    /// The ground's normal.
+    pub normal: Vector3<f64>,
+    /// From its centre to the contact point (m).
+    pub radius: f64,
+}
 
 /// A managed body's start-of-step snapshot.
 pub(crate) struct Candidate {
@@ -99,6 +130,12 @@ pub(crate) struct StepData {
     /// The unit direction of gravity (zero without gravity).
     pub down: Vector3<f64>,
     pub roles: HandleMap<PairKey, Role>,
+    /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
+    /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
+    /// where the normal force holds the ball (`hooks.rs`).
+    pub holds: HandleMap<PairKey, Vector3<f64>>,
+    /// The balls held at rest this step and not the last (`FirstHold`).
+    pub first_holds: Vec<FirstHold>,
     /// The pairs of opted-in balls and their roles (`pair_plan.rs`).
     pub pairs: PairPlan,
     pub grounds: Vec<GroundMotion>,
@@ -148,8 +185,8 @@ pub(crate) struct Planner<'a, H> {
     pub registry: &'a Registry,
     pub flags: &'a HookFlags,
     pub user_hooks: &'a H,
-    /// Managed bodies asleep at the start of the last step.
-    pub prev_asleep: &'a HandleSet<RigidBodyHandle>,
+    /// The pairs held at rest last step (`StepData::holds`).
+    pub prev_holds: &'a HandleSet<PairKey>,
     pub events: &'a mut Vec<ImpactEvent>,
 }
 
@@ -235,6 +272,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let mut closing = false;
         let mut turning_resting = SmallList::Empty;
         let mut rolling = None;
+        // Held at rest on a slope (`OnPlane::Held`): its pairs are rapier's.
+        let mut held = false;
         // The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
         let mut rolling_pieces: Option<SmallList<ColliderHandle>> = None;
         // How far a point of the body can move relative to a resting contact point in the
@@ -417,23 +456,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 // instead of rapier's resting contact, which turns the contact point with
                 // the ball (it hops and slips on: at 60 Hz still 1.1 cm/s of slip after
                 // three closed-form rolling times).
-                if role == Role::Resting && !turns_surface && rolling.is_none() {
+                if role == Role::Resting && !turns_surface && rolling.is_none() && !held {
                     // Within the resting gap of it (a `Step` impulse can leave a ball
                     // resting on its way down, up to a step's travel above the ground).
                     if let Some((dist, n, _)) =
                         contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
                     {
                         // What touches it is read from rapier's contact graph (in
-                        // `rolling_of`). A body just woken is not taken: rapier solved
-                        // nothing of it while it slept, and a pile woken by a hit would
-                        // lose its ground support for a step. A body new to the plugin
-                        // (just created, or first near the ground) is taken, and if
-                        // something touches it in the step, the settle stage puts it
-                        // back on the ground.
-                        let known = matches!(
-                            prev_roles.get(&key),
-                            Some(Role::Resting | Role::Impact | Role::Rolling)
-                        ) || !self.prev_asleep.contains(&handle);
+                        // `rolling_of`), which keeps a sleeping body's pairs: a ball of a
+                        // pile is not taken. A body new to the plugin (just created, first
+                        // near the ground, or just woken, such as a ball at rest putted by
+                        // setting its velocity: one step of rapier's contact sent it 6 %
+                        // too far at 30 Hz) is taken, and if something touches it in the
+                        // step, the settle stage puts it back on the ground.
                         let on_ground = State {
                             com: state.com - n * dist,
                             v: state.v - n * n.dot(&state.v),
@@ -444,14 +479,38 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             .filter(|(other, _)| other != gi)
                             .map(|(_, g)| g)
                             .collect();
-                        if let Some((motion, pieces)) = self.rolling_of(
+                        match self.rolling_of(
                             bodies, colliders, handle, part, gg, &others, &flight, &n, &on_ground,
-                            step, known, sets,
+                            step, sets,
                         ) {
-                            role = Role::Rolling;
-                            rolling_pieces = Some(pieces);
-                            rolling = Some((*gi, motion));
-                            state = on_ground;
+                            Some(OnPlane::Rolls(motion, pieces)) => {
+                                role = Role::Rolling;
+                                rolling_pieces = Some(pieces);
+                                rolling = Some((*gi, motion));
+                                state = on_ground;
+                            }
+                            Some(OnPlane::Held(tilt, pieces)) => {
+                                held = true;
+                                if !self.prev_holds.contains(&key) {
+                                    step.first_holds.push(FirstHold {
+                                        body: handle,
+                                        collider: part.handle,
+                                        ground: gg.handle,
+                                        start: State {
+                                            v: Vector3::zeros(),
+                                            w: Vector3::zeros(),
+                                            ..state
+                                        },
+                                        local_com,
+                                        normal: n,
+                                        radius: geom.radius,
+                                    });
+                                }
+                                for piece in pieces.iter() {
+                                    step.holds.insert((part.handle, *piece), tilt);
+                                }
+                            }
+                            None => {}
                         }
                     }
                 }
@@ -524,18 +583,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         filter::user_refuses(self.user_hooks, flags, bodies, colliders, key)
     }
 
-    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on the
-    /// ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal speed), when
-    /// it applies: a ground at rest (or moving along its plane without turning, in its frame) whose
-    /// one flat face (a half-space, or a cuboid's face the ball stays over: `flat_relative`) is
-    /// all it can meet in the step, or with `others` near too, the faces of those in its plane
-    /// under the ball's path (`one_plane_under`: a flush seam between tiles) up to where it first
-    /// touches one of the others (a crease, a wall: not touching it at the start), a pair whose
-    /// crowding was measured last step (`known`), gravity (and any constant force) along `-n`, no
-    /// damping, torque or contact modification by the user, isotropic inertia with no locked axis,
-    /// nothing but grounds near it last step, and a ball that slips (faster than 1 mm/s) or rolls
-    /// faster than the resting speed (slower, it is rapier's, which brings it to rest and to
-    /// sleep).
+    /// The closed-form motion of a ball (`part`, the body's only collider, centred) sliding on
+    /// the ground `gg` with normal `n`, from the state `on_ground` (touching it, no normal
+    /// speed), when it applies: a ground at rest (or moving along its plane without turning, in
+    /// its frame) whose one flat face (a half-space, or a cuboid's face the ball stays over:
+    /// `flat_relative`) is all it can meet in the step, or with `others` near too, the faces of
+    /// those in its plane under the ball's path (`one_plane_under`: a flush seam between tiles)
+    /// up to where it first touches one of the others (a crease, a wall: not touching it at the
+    /// start), gravity (and any constant force) along `-n`, no damping, torque or contact
+    /// modification by the user, isotropic inertia with no locked axis, nothing but grounds
+    /// near it last step, and a ball that slips (faster than 1 mm/s) or rolls faster than the
+    /// resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or, at
+    /// rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
     #[allow(clippy::too_many_arguments)]
     fn rolling_of(
         &self,
@@ -549,14 +608,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         n: &Vector3<f64>,
         on_ground: &State,
         step: &StepData,
-        known: bool,
         sets: &Sets,
-    ) -> Option<(Rolling, SmallList<ColliderHandle>)> {
+    ) -> Option<OnPlane> {
         let rb = &bodies[handle];
         let member = step.pairs.members.contains(&handle);
-        if !known && !member {
-            return None;
-        }
         let ball = part.shape.as_ball()?;
         let radius = to_f64(ball.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
@@ -630,7 +685,25 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             accel: flight.accel,
             ground_velocity: u,
         };
+        // At rest on a slope that holds it (its closed-form stop, or placed there): rapier's
+        // contact holds it, nothing else touching it.
         let to_plane = n * (radius - gg.skin);
+        if !level && !member {
+            let at_rest = v.norm() <= HELD_SPEED && on_ground.w.norm() * radius <= HELD_SPEED;
+            if let Some(tilt) = motion.holding_tilt().filter(|_| at_rest) {
+                let plane = PlaneNear {
+                    n: *n,
+                    height: n.dot(&(on_ground.com - to_plane)),
+                    centre: on_ground.com,
+                    reach: radius + step.policy.resting_gap,
+                };
+                return self
+                    .held_on(
+                        colliders, handle, part, gg, others, &plane, on_ground, friction, step,
+                    )
+                    .map(|pieces| OnPlane::Held(tilt, pieces));
+            }
+        }
         let at = flight.accel - n * an;
         // The acceleration along the ground is at most gravity's along it and the friction.
         let accel_bound = at.norm() - friction * an;
@@ -650,7 +723,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && (rolling_resistance <= friction
                 || motion.advance_checked(on_ground, step.dt).is_some())
         {
-            return Some((motion, SmallList::One(gg.handle)));
+            return Some(OnPlane::Rolls(motion, SmallList::One(gg.handle)));
         }
         let mut piece_handles = SmallList::One(gg.handle);
         // Only where the closed form reaches (on a slope, the band where a ball can neither
@@ -702,6 +775,48 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 }
             }
         }
-        Some((motion, piece_handles))
+        Some(OnPlane::Rolls(motion, piece_handles))
+    }
+
+    /// The grounds holding a ball at rest on `plane`, the plane of `gg`, `gg` first: the
+    /// others within the resting gap of it must be pieces of that plane with the same
+    /// coefficients (a flush seam: `friction` and `gg`'s rolling ones), or it is not held (a
+    /// ball resting in a crease is rapier's).
+    #[allow(clippy::too_many_arguments)]
+    fn held_on(
+        &self,
+        colliders: &ColliderSet,
+        handle: RigidBodyHandle,
+        part: &BodyPart,
+        gg: &GroundGeom,
+        others: &[&GroundGeom],
+        plane: &PlaneNear,
+        on_ground: &State,
+        friction: f64,
+        step: &StepData,
+    ) -> Option<SmallList<ColliderHandle>> {
+        let mut pieces = SmallList::One(gg.handle);
+        let default = (
+            self.config.rolling_resistance,
+            self.config.spinning_friction,
+        );
+        for og in others {
+            let gap = step.policy.resting_gap;
+            if matches!(contact_checked(part, og, on_ground, 0.0, gap), Ok(None)) {
+                continue;
+            }
+            let same = self
+                .registry
+                .material_of(colliders, part.handle, og.handle)
+                .friction
+                == friction
+                && self.registry.rolling_of(handle, og.handle, default)
+                    == self.registry.rolling_of(handle, gg.handle, default);
+            if !same || !plane_piece_of(og, plane) {
+                return None;
+            }
+            pieces.push(og.handle);
+        }
+        Some(pieces)
     }
 }

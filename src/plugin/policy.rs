@@ -14,6 +14,15 @@ use super::config::ImpactConfig;
 /// brings it to rest and to sleep.
 pub(crate) const ROLLING_MIN_SLIP: f64 = 1e-3;
 
+/// Speed (m/s) of a ball's centre, and of its surface about the centre, below which a ball on
+/// a slope that holds it (`motion::Rolling::holding_tilt`) counts as at rest and is left to
+/// rapier's resting contact, which holds it there and sleeps it. The closed form stops it
+/// exactly (zero); rapier's contact leaves a held ball up to 1.1e-6 m/s while it sinks to its
+/// resting depth (measured on a 3-degree slope at 30 Hz), which must not hand it back. A ball
+/// the closed form would still roll, slower than this, stops at most `v^2 (1 + k) / (2 a)`
+/// short (`a` its deceleration): 6e-9 m at 0.3 m/s^2.
+pub(crate) const HELD_SPEED: f64 = 1e-4;
+
 /// Largest velocity along a ground's normal, relative to its speed, for the ground to count as
 /// moving along its own plane (a conveyor, a sliding platform) that a ball can roll on in
 /// closed form: the rounding of an in-plane velocity given in `f32`.
