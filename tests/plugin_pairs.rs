@@ -75,6 +75,55 @@ fn pair_events(plugin: &ImpactPlugin) -> Vec<rapier_impact::ImpactEvent> {
         .collect()
 }
 
+/// A pair approaching slower than the resting speed is no impact: rapier's contact as it is,
+/// its own restitution included (its bounce, `e` times an approach below the resting speed,
+/// cannot rise above the resting gap), so the plugin neither moves the balls nor hooks the
+/// pair, and rapier recycles its contacts. At a restitution of 1 rapier would bounce it
+/// whenever it approaches, and the plugin hooks it: zero restitution.
+#[test]
+fn a_slow_pair_is_rapiers_contact_as_it_is_unless_rapier_bounces_it_for_ever() {
+    // Without gravity the resting speed is 1 mm/s: 0.6 mm/s is below it.
+    let slow = 6e-4;
+    for e in [0.8, 1.0] {
+        for mode in MODES {
+            let make = || {
+                let mut w = world(0.0);
+                let zero = Vector3::zeros();
+                let a = ball(&mut w, zero, Vector3::x() * slow, zero, 0.05, e, 0.0);
+                let b = ball(&mut w, Vector3::x() * 0.1005, zero, zero, 0.05, e, 0.0);
+                (w, a, b)
+            };
+            let (mut alone, (a0, _), (b0, _)) = make();
+            let (mut w, (a, ca), (b, cb)) = make();
+            let mut p = plugin(mode);
+            p.set_all_dynamic_bodies_impact(true);
+            for _ in 0..120 {
+                alone.step();
+                p.step(&mut w);
+                assert!(pair_events(&p).is_empty(), "{mode:?}, e {e}: no impact");
+            }
+            let hooked = w.colliders[ca].active_hooks() | w.colliders[cb].active_hooks();
+            let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
+            if e < 1.0 {
+                // rapier's contact, bitwise: rapier's own bounce.
+                assert_eq!(hooked, ActiveHooks::empty(), "{mode:?}: not hooked");
+                assert_eq!(
+                    (va, vb),
+                    (
+                        na(alone.bodies[a0].linvel()).x,
+                        na(alone.bodies[b0].linvel()).x
+                    )
+                );
+                assert!(vb > 0.5 * slow, "{mode:?}: rapier bounced it, {va} {vb}");
+            } else {
+                // Hooked while approaching, zero restitution: they move on together.
+                assert!((va - vb).abs() <= 1e-3 * slow, "{mode:?}: {va} {vb}");
+                assert!((va + vb - slow).abs() <= 1e-3 * slow, "{mode:?}: momentum");
+            }
+        }
+    }
+}
+
 #[test]
 fn only_dynamic_bodies_opt_in() {
     let mut w = world(0.0);

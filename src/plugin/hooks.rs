@@ -17,7 +17,8 @@
 //!   slope (`StepData::holds`) also has its contact points moved to where the ground's
 //!   normal force acts, so that rapier's solver holds it still and rapier sleeps it;
 //! - a pair of two opted-in balls (`pair_plan.rs`): `Impact` out of rapier's solver as above
-//!   (the reconstruct stage moves the two together), `Resting` in it with zero restitution;
+//!   (the reconstruct stage moves the two together), `Resting` in it with zero restitution (only
+//!   the resting pairs rapier would bounce above the resting gap are hooked: `pair_plan.rs`);
 //! - role `Filtered` (rapier would not solve the pair, or the user's filter refused it in
 //!   `before_step`): the user's hook and rapier have it, unchanged, and the plugin resolves
 //!   no impact for it;

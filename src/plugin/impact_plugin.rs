@@ -27,7 +27,7 @@ use super::install::{Looked, Lookup};
 use super::observe::{
     Sets, body_geom, neighbours, rapier_state, snapshot, surely_far, touches_other,
 };
-use super::pair_plan::{self, pair_key};
+use super::pair_plan::{self, PairIndex, pair_key};
 use super::pair_reconstruct;
 use super::plan::{Candidate, EndOfStep, FirstHold, Planner, StepData};
 use super::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
@@ -139,6 +139,8 @@ pub struct ImpactPlugin<H = ()> {
     prev_pair_roles: HandleMap<PairKey, Role>,
     /// The pairs held at rest last step (`StepData::holds`).
     prev_holds: HandleSet<PairKey>,
+    /// The opted-in balls' swept spheres, refitted each step (`pair_plan.rs`).
+    pair_index: PairIndex,
     events: Vec<ImpactEvent>,
 }
 
@@ -169,6 +171,7 @@ impl<H> ImpactPlugin<H> {
             prev_roles: HandleMap::default(),
             prev_pair_roles: HandleMap::default(),
             prev_holds: HandleSet::default(),
+            pair_index: PairIndex::default(),
             events: Vec::new(),
         })
     }
@@ -212,6 +215,7 @@ impl<H> ImpactPlugin<H> {
             prev_roles,
             prev_pair_roles,
             prev_holds,
+            pair_index,
             events,
         } = self;
         let plugin = ImpactPlugin {
@@ -225,6 +229,7 @@ impl<H> ImpactPlugin<H> {
             prev_roles,
             prev_pair_roles,
             prev_holds,
+            pair_index,
             events,
         };
         (plugin, old)
@@ -884,6 +889,7 @@ impl<H> ImpactPlugin<H> {
         // balls of `Impact` pairs are planned whatever their distance to the grounds.
         let prev_pairs = std::mem::take(&mut self.prev_pair_roles);
         step.pairs = pair_plan::plan_pairs(
+            &mut self.pair_index,
             &self.registry,
             &self.flags,
             &self.user_hooks,
@@ -973,13 +979,14 @@ impl<H> ImpactPlugin<H> {
                 far_bodies.push(handle);
             }
         }
-        // The balls of every planned pair: `Impact` pairs leave rapier's solver, `Resting`
-        // ones get zero restitution, both through the hooks.
+        // The balls of the planned pairs that need the hooks (`PlannedPair::hooked`): `Impact`
+        // pairs leave rapier's solver, `Resting` ones rapier would bounce get zero restitution.
         let mut seen: HandleSet<RigidBodyHandle> = HandleSet::default();
         let members: Vec<RigidBodyHandle> = step
             .pairs
             .pairs
             .iter()
+            .filter(|pair| pair.hooked)
             .flat_map(|pair| [pair.a, pair.b])
             .filter(|body| seen.insert(*body))
             .collect();

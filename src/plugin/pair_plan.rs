@@ -2,11 +2,14 @@
 //! what each pair's role is.
 //!
 //! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
-//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs whose spheres, swept
-//! over the step, overlap (a BVH over the swept spheres: the cost grows with the pairs that can
+//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs of a ball faster
+//! than half the resting speed whose spheres, swept over the step, overlap (a BVH over the swept
+//! spheres, refitted from step to step, [`PairIndex`]: the cost grows with the pairs that can
 //! meet, not with the square of the bodies), skips the pairs rapier would not solve or the user's
-//! filter refuses, and gives every other pair a role: `Resting` (touching and slow, or pressed, as
-//! `Policy::rests` decides for a ground: rapier's solver keeps it with zero restitution) or
+//! filter refuses, and gives every other pair a role: `Resting` (pressed or held, as
+//! `Policy::rests` decides for a ground: rapier's solver keeps it, with zero restitution where
+//! rapier would bounce it above the resting gap; a pair slower than the resting speed is
+//! rapier's as it is, and not planned unless a chain reaches it) or
 //! `Impact` (it may meet in the step: out of rapier's solver, resolved by the reconstruct stage,
 //! `pair_reconstruct.rs`); a resting pair side by side with a ball of an `Impact` pair joins it (a
 //! chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an `Impact` pair may
@@ -14,18 +17,18 @@
 
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;
-use super::ground_index::build_bvh;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::observe::{Sets, neighbours, pressed_besides};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
-use super::resolve::PairKey;
+use super::resolve::{PairKey, material};
 use crate::motion::State;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
+use crate::rapier::parry::partitioning::{Bvh, BvhWorkspace};
 use crate::rapier::prelude::{
-    ActiveHooks, ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -41,6 +44,11 @@ pub(crate) struct PlannedPair {
     /// Unit line of centres at the step's start, from `a` to `b`.
     pub normal: Vector3<f64>,
     pub role: Role,
+    /// Its balls need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
+    /// `Resting` one that rapier would bounce higher than the resting gap gets zero
+    /// restitution. A pair with hook flags is never recycled by rapier: flagging every
+    /// resting pair of a pile made rapier's contact detection 2.8 times as costly.
+    pub hooked: bool,
 }
 
 /// The pairs of the step.
@@ -51,6 +59,85 @@ pub(crate) struct PairPlan {
     pub roles: HandleMap<PairKey, Role>,
     /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
     pub members: HandleSet<RigidBodyHandle>,
+}
+
+/// The opted-in balls' swept spheres, kept from step to step: each step updates every ball's
+/// leaf (keyed by its body's slot) and refits the tree (a binned rebuild over 1 000 balls every
+/// step was two thirds of the plan's cost).
+#[derive(Default)]
+pub(crate) struct PairIndex {
+    tree: Bvh,
+    workspace: BvhWorkspace,
+    /// The body slots with a leaf in the tree.
+    slots: Vec<bool>,
+    /// This step's ball (index in its list) by body slot, `u32::MAX` for none.
+    ball_of: Vec<u32>,
+}
+
+impl PairIndex {
+    /// The tree over these leaves (body slot, swept box): leaves of bodies no longer listed
+    /// are removed.
+    fn update(&mut self, leaves: &[(u32, Aabb)]) {
+        let len = leaves
+            .iter()
+            .map(|(s, _)| *s as usize + 1)
+            .max()
+            .unwrap_or(0);
+        if self.ball_of.len() < len {
+            self.ball_of.resize(len, u32::MAX);
+        }
+        for (k, (slot, _)) in leaves.iter().enumerate() {
+            self.ball_of[*slot as usize] = k as u32;
+        }
+        for slot in 0..self.slots.len() {
+            let listed = self.ball_of.get(slot).is_some_and(|b| *b != u32::MAX);
+            if self.slots[slot] && !listed {
+                self.tree.remove(slot as u32);
+                self.slots[slot] = false;
+            }
+        }
+        if self.slots.len() < len {
+            self.slots.resize(len, false);
+        }
+        for (slot, aabb) in leaves {
+            self.tree.insert_or_update_partially(*aabb, *slot, 0.0);
+            self.slots[*slot as usize] = true;
+        }
+        self.tree.refit(&mut self.workspace);
+        self.tree.optimize_incremental(&mut self.workspace);
+    }
+
+    /// Every pair of balls (indices in this step's list, the smaller first) whose boxes meet:
+    /// one traversal of the tree against itself.
+    fn overlapping(&mut self) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let ball_of = &self.ball_of;
+        self.tree
+            .traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |s1, s2| {
+                let (i, j) = (ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
+                out.push((i.min(j), i.max(j)));
+            });
+        out
+    }
+
+    /// This step's ball (index in its list) of a body in it.
+    fn ball_of_body(&self, body: RigidBodyHandle) -> usize {
+        self.ball_of[slot_of_body(body) as usize] as usize
+    }
+
+    /// The balls (indices in this step's list) whose boxes meet `aabb`.
+    fn meeting<'a>(&'a self, aabb: &'a Aabb) -> impl Iterator<Item = usize> + 'a {
+        self.tree
+            .intersect_aabb(aabb)
+            .map(|slot| self.ball_of[slot as usize] as usize)
+    }
+
+    /// Forgets this step's list (the tree stays).
+    fn clear_list(&mut self, leaves: &[(u32, Aabb)]) {
+        for (slot, _) in leaves {
+            self.ball_of[*slot as usize] = u32::MAX;
+        }
+    }
 }
 
 /// The key of the pair of two body colliders, the same whichever comes first.
@@ -71,10 +158,6 @@ struct Ball {
     /// Radius, skin included (m).
     radius: f64,
     asleep: bool,
-    /// The hook flags the user set on its collider.
-    user: ActiveHooks,
-    /// It has a joint (only then can a joint disable its contacts).
-    jointed: bool,
     /// The acceleration of its user force (m/s^2).
     force_accel: f64,
 }
@@ -83,6 +166,7 @@ struct Ball {
 /// rapier held at rest stays resting unless clearly hit, as for grounds).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_pairs<H: PhysicsHooks>(
+    index: &mut PairIndex,
     registry: &Registry,
     flags: &HookFlags,
     user_hooks: &H,
@@ -95,7 +179,12 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     policy: &Policy,
 ) -> PairPlan {
     let mut plan = PairPlan::default();
-    if !registry.any_pairs() {
+    // Two sleeping balls cannot meet: with none awake, no pair.
+    if !registry.any_pairs()
+        || !bodies
+            .iter()
+            .any(|(handle, rb)| !rb.is_sleeping() && registry.takes_pairs(handle, rb))
+    {
         return plan;
     }
     let balls: Vec<Ball> = bodies
@@ -125,9 +214,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 v: vec_to_na(rb.linvel()),
                 radius: radius + to_f64(co.contact_skin()),
                 asleep: rb.is_sleeping(),
-                user: flags.recorded_user_flags(colliders, *collider),
-                jointed: sets.impulse_joints.attached_joints(handle).next().is_some()
-                    || sets.multibody_joints.rigid_body_link(handle).is_some(),
                 force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
             })
         })
@@ -141,22 +227,33 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     let margin = policy.resting_gap.max(policy.prediction);
     let swept =
         |b: &Ball| b.radius + b.v.norm() * dt + (gravity.norm() + b.force_accel) * dt * dt + margin;
-    let leaves: Vec<(usize, Aabb)> = balls
+    let leaves: Vec<(u32, Aabb)> = balls
         .iter()
-        .enumerate()
-        .map(|(i, b)| {
+        .map(|b| {
             let half = to_real(swept(b));
             (
-                i,
+                slot_of_body(b.body),
                 Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
             )
         })
         .collect();
-    let tree = build_bvh(leaves.clone());
+    index.update(&leaves);
     let down = gravity.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
+    // Has rapier's solver held the pair in contact (an impulse last step)?
+    let held = |a: &Ball, b: &Ball| {
+        sets.narrow_phase
+            .contact_pair(a.collider, b.collider)
+            .is_some_and(|pair| {
+                pair.manifolds()
+                    .iter()
+                    .any(|m| m.points.iter().any(|p| p.data.impulse > 0.0))
+            })
+    };
     // The pair of balls `i < j` with its role, or `None` when rapier would not solve it, the
-    // user's filter refuses it, or it cannot meet in the step.
-    let evaluate = |i: usize, j: usize| -> Option<PlannedPair> {
+    // user's filter refuses it, it cannot meet in the step, or it is slow and rapier's
+    // resting contact as it is (unless `chain`: side by side with a ball of an impact, it may
+    // pass the impact on).
+    let evaluate = |i: usize, j: usize, chain: bool| -> Option<PlannedPair> {
         let (a, b) = (&balls[i], &balls[j]);
         let reach = a.radius + b.radius;
         let d = b.com - a.com;
@@ -167,17 +264,40 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         if gap > travel {
             return None;
         }
+        // Closing speed along the line of centres (a ball's spin does not move its surface
+        // along the normal).
+        let closing = if len > 0.0 {
+            (a.v - b.v).dot(&(d / len))
+        } else {
+            0.0
+        };
+        let forces = a.force_accel + b.force_accel;
+        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
-        let user = a.user | b.user;
+        // rapier's own bounce of a pair it solves: `e` times the approach, the step the
+        // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
+        // cannot rise above the resting gap (below the pressed speed) it is rapier's resting
+        // noise, and the pair keeps rapier's restitution.
+        let rapier_bounces = closing > 0.0 && closes && {
+            let e = material(ca, cb, None).restitution;
+            e >= 1.0 || e * closing > policy.pressed_speed && !held(a, b)
+        };
+        // Slower than the resting speed it is no impact: rapier's resting contact (a pile's
+        // neighbours, balls drifting together), left as it is where rapier's bounce of it is
+        // noise, and not planned (most pairs of a pile: their planning was most of its cost).
+        let slow = closing <= policy.resting_speed;
+        if slow && !chain && !rapier_bounces {
+            return None;
+        }
+        let user = flags.recorded_user_flags(colliders, a.collider)
+            | flags.recorded_user_flags(colliders, b.collider);
         if !filter::rapier_solves(bodies, ca, cb)
-            || a.jointed
-                && b.jointed
-                && filter::joint_disables_contacts(
-                    sets.impulse_joints,
-                    sets.multibody_joints,
-                    a.body,
-                    b.body,
-                )
+            || filter::joint_disables_contacts(
+                sets.impulse_joints,
+                sets.multibody_joints,
+                a.body,
+                b.body,
+            )
             || filter::user_refuses(
                 user_hooks,
                 user,
@@ -189,14 +309,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             return None;
         }
         let key = pair_key(a.collider, b.collider);
-        // Closing speed along the line of centres (a ball's spin does not move its surface
-        // along the normal).
-        let closing = if len > 0.0 {
-            (a.v - b.v).dot(&(d / len))
-        } else {
-            0.0
-        };
-        let was_resting = prev.get(&key) == Some(&Role::Resting);
+        // Held at rest last step: planned `Resting`, or (slow pairs are not planned) touching
+        // in rapier's solver.
+        let was_resting = || prev.get(&key) == Some(&Role::Resting) || held(a, b);
         // Pressed, as a ground pair is: a ball that touched something else after the last
         // step (a ball in a pile) is pushed by it, and rapier's solver holds the pile.
         // (Not by each other: their own contact does not press them together.)
@@ -206,13 +321,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         };
         // An impact: approaching faster than the resting speed, closing the gap within the
         // step (both balls fall alike; a user force adds its acceleration), and not resting
-        // or pressed. Anything slower is rapier's with e = 0 (`Resting`), as a slow ground
-        // contact is: a pile's neighbours, balls drifting together.
-        let forces = a.force_accel + b.force_accel;
-        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
-        let impact = closing > policy.resting_speed
-            && closes
-            && !policy.rests(gap, closing, was_resting, pressed);
+        // or pressed. Anything else is rapier's (`Resting`), with e = 0 where rapier would
+        // bounce it.
+        let impact = !slow && closes && !policy.rests(gap, closing, was_resting(), pressed);
         Some(PlannedPair {
             a: a.body,
             b: b.body,
@@ -220,6 +331,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             reach,
             normal: if len > 0.0 { d / len } else { Vector3::zeros() },
             role: if impact { Role::Impact } else { Role::Resting },
+            hooked: impact || rapier_bounces,
         })
     };
     let mut woken: Vec<RigidBodyHandle> = Vec::new();
@@ -236,17 +348,41 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         plan.roles.insert(pair.key, pair.role);
         plan.pairs.push(pair);
     };
-    // Every pair with an awake ball (two sleeping balls cannot meet, unless a chain reaches
-    // them: below).
-    for (i, aabb) in &leaves {
-        for j in tree.intersect_aabb(aabb) {
-            let j = j as usize;
-            if j <= *i || balls[*i].asleep && balls[j].asleep {
-                continue;
+    // The pairs that may be impacts, or that rapier would bounce: approaching faster than
+    // the resting speed, so with a ball faster than half of it (a mover), unless some ball's
+    // restitution reaches 1 (rapier then bounces any approach). Two sleeping balls cannot
+    // meet, unless a chain reaches them (below).
+    let mover = |b: &Ball| 2.0 * b.v.norm() > policy.resting_speed;
+    let any_elastic = balls
+        .iter()
+        .any(|b| colliders[b.collider].restitution() >= 1.0);
+    let movers = balls.iter().filter(|b| mover(b)).count();
+    // One traversal of the tree against itself costs about as much as three balls' queries
+    // per ball (measured on a pile of 1 000).
+    let candidates: Vec<(usize, usize)> = if any_elastic || 3 * movers > balls.len() {
+        index
+            .overlapping()
+            .into_iter()
+            .filter(|(i, j)| any_elastic || mover(&balls[*i]) || mover(&balls[*j]))
+            .collect()
+    } else {
+        let mut out = Vec::new();
+        for (m, _) in balls.iter().enumerate().filter(|(_, b)| mover(b)) {
+            for j in index.meeting(&leaves[m].1) {
+                // A pair of two movers once, from the first.
+                if j != m && (j > m || !mover(&balls[j])) {
+                    out.push((m.min(j), m.max(j)));
+                }
             }
-            if let Some(pair) = evaluate(*i, j) {
-                add(&mut plan, &mut woken, pair);
-            }
+        }
+        out
+    };
+    for (i, j) in candidates {
+        if balls[i].asleep && balls[j].asleep {
+            continue;
+        }
+        if let Some(pair) = evaluate(i, j, false) {
+            add(&mut plan, &mut woken, pair);
         }
     }
     // Chains: a resting pair side by side with a ball of an impact joins it (the ball hit
@@ -262,32 +398,27 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .entry(h)
                 .or_insert_with(|| neighbours(h, &bodies[h], sets, registry, &down).loaded)
     };
-    let mut expanded: HandleSet<RigidBodyHandle> = HandleSet::default();
-    // Built only for a chain: the balls by body, and the pairs of two sleeping balls seen.
-    let index: HandleMap<RigidBodyHandle, usize> = if plan.members.is_empty() {
-        HandleMap::default()
-    } else {
-        balls.iter().enumerate().map(|(i, b)| (b.body, i)).collect()
-    };
-    let mut sleeping_seen: Vec<(usize, usize)> = Vec::new();
+    // The members whose pairs were all planned, by index in `balls`.
+    let mut expanded = vec![false; balls.len()];
     loop {
-        // The pairs around each new member that the first pass left out (two sleeping balls).
-        let fresh: Vec<RigidBodyHandle> = plan
+        // The pairs around each new member that the first pass left out (slow ones, and two
+        // sleeping balls): each once, from the member expanded first.
+        let fresh: Vec<usize> = plan
             .members
             .iter()
-            .filter(|h| !expanded.contains(*h))
-            .copied()
+            .map(|h| index.ball_of_body(*h))
+            .filter(|m| !expanded[*m])
             .collect();
-        for h in fresh {
-            expanded.insert(h);
-            let m = index[&h];
-            for j in tree.intersect_aabb(&leaves[m].1) {
-                // The first pass took every pair with an awake ball.
-                let (i, j) = (m.min(j as usize), m.max(j as usize));
-                if i != j && balls[i].asleep && balls[j].asleep && !sleeping_seen.contains(&(i, j))
-                {
-                    sleeping_seen.push((i, j));
-                    if let Some(pair) = evaluate(i, j) {
+        for m in fresh {
+            expanded[m] = true;
+            for j in index.meeting(&leaves[m].1) {
+                let (lo, hi) = (m.min(j), m.max(j));
+                if j == m || expanded[j] {
+                    continue;
+                }
+                let key = pair_key(balls[lo].collider, balls[hi].collider);
+                if !plan.roles.contains_key(&key) {
+                    if let Some(pair) = evaluate(lo, hi, true) {
                         add(&mut plan, &mut woken, pair);
                     }
                 }
@@ -303,22 +434,34 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 && !is_loaded(pair.b);
             if joins {
                 plan.pairs[k].role = Role::Impact;
+                plan.pairs[k].hooked = true;
                 plan.roles.insert(pair.key, Role::Impact);
                 join(&mut plan, &mut woken, pair.a);
                 join(&mut plan, &mut woken, pair.b);
                 grown = true;
             }
         }
-        if !grown && plan.members.iter().all(|h| expanded.contains(h)) {
+        if !grown
+            && plan
+                .members
+                .iter()
+                .all(|h| expanded[index.ball_of_body(*h)])
+        {
             break;
         }
     }
+    index.clear_list(&leaves);
     for handle in woken {
         if let Some(rb) = bodies.get_mut(handle) {
             rb.wake_up(true);
         }
     }
     plan
+}
+
+/// A body's slot in the body set, the key of its leaf in the `PairIndex`.
+fn slot_of_body(handle: RigidBodyHandle) -> u32 {
+    handle.into_raw_parts().0
 }
 
 /// `Step` mode: the impulses of the step's `Impact` pairs at the step's start, to the
