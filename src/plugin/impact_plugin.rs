@@ -1215,11 +1215,17 @@ impl<H> ImpactPlugin<H> {
                 }
             }
             let rb = &bodies[cand.body];
-            let free = !touches_other(rb, narrow_phase)
+            // Nothing but its flight moved it: no contact in rapier's solver, joint, torque or
+            // `Step` impulse. A body whose linear velocity rapier changed otherwise than its
+            // flight does was pushed (a ball resting in a pile), and its contacts are not
+            // walked (that walk of rapier's contact graph for every body of a pile was 14 % of
+            // an `Exact` run).
+            let free = (has_grounds || reconstruct::moved_as_flown(rb, cand, step.dt))
                 && impulse_joints.attached_joints(cand.body).next().is_none()
                 && multibody_joints.rigid_body_link(cand.body).is_none()
                 && rb.user_torque() == Vector::ZERO
-                && !cand.touched;
+                && !cand.touched
+                && !touches_other(rb, narrow_phase);
             // Before any geometry: a body with no ground left to search, or whose search
             // would find the step clear (`Candidate::closing`) and that rapier's CCD did not
             // cut short, only flies (exactly, in `Exact` mode).

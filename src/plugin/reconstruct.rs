@@ -176,6 +176,24 @@ pub(crate) fn rest_on_ground(
     true
 }
 
+/// Did rapier's step change the body's linear velocity only as its flight does (gravity and
+/// any force, damping), to rapier's rounding? An impulse from a contact shows as more: a
+/// resting contact takes back all of `|g| dt`.
+pub(crate) fn moved_as_flown(rb: &RigidBody, cand: &Candidate, dt: f64) -> bool {
+    let flown = cand.flight.advance(&cand.start, dt).v;
+    let actual = vec_to_na(rb.linvel());
+    // rapier adds the step's velocity change in its substeps, in its precision, and damps
+    // by `1 / (1 + c h)` a substep where the flight decays exactly (`(c dt)^2 / 2` apart).
+    let scale = cand.start.v.norm() + flown.norm() + cand.flight.accel.norm() * dt;
+    let damping = (cand.flight.linear_damping * dt).powi(2);
+    (actual - flown).norm() <= (MOVED_AS_FLOWN_ROUNDING + damping) * scale
+}
+
+/// How far (relative to the speeds) rapier's linear velocity may differ from a free flight's
+/// for the body to count as having flown freely: twenty times rapier's `f32` rounding over
+/// its substeps (a few ulps), far below a contact's impulse (all of `|g| dt` at rest).
+const MOVED_AS_FLOWN_ROUNDING: f64 = 1e-5;
+
 /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its first
 /// ground impact at `t_first`? If rapier clamped it earlier, something other than a ground
 /// stopped it, and re-integrating its flight would undo that.
