@@ -28,7 +28,8 @@ use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::parry::partitioning::{Bvh, BvhWorkspace};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    CoefficientCombineRule, ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle,
+    RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -349,13 +350,16 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         plan.pairs.push(pair);
     };
     // The pairs that may be impacts, or that rapier would bounce: approaching faster than
-    // the resting speed, so with a ball faster than half of it (a mover), unless some ball's
-    // restitution reaches 1 (rapier then bounces any approach). Two sleeping balls cannot
-    // meet, unless a chain reaches them (below).
+    // the resting speed, so with a ball faster than half of it (a mover), unless a pair's
+    // combined restitution can reach 1 (rapier then bounces any approach: a ball's own
+    // restitution of 1, or two summed). Two sleeping balls cannot meet, unless a chain
+    // reaches them (below).
     let mover = |b: &Ball| 2.0 * b.v.norm() > policy.resting_speed;
-    let any_elastic = balls
-        .iter()
-        .any(|b| colliders[b.collider].restitution() >= 1.0);
+    let any_elastic = balls.iter().any(|b| {
+        let co = &colliders[b.collider];
+        co.restitution() >= 1.0
+            || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
+    });
     let movers = balls.iter().filter(|b| mover(b)).count();
     // One traversal of the tree against itself costs about as much as three balls' queries
     // per ball (measured on a pile of 1 000).
