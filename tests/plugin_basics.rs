@@ -2,7 +2,7 @@
 //! pairs that are not managed ground contacts; bodies the plugin does not manage move
 //! bitwise as in rapier alone; bad settings are refused where they are set; moving ground,
 //! sloped ground and every ground shape bounce by the closed form; flat landings do not spin;
-//! resting bodies rest and sleep.
+//! resting bodies rest and sleep; `Exact` mode flies a damped ball in closed form.
 
 // Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
 // widening in one build are identities in the other.
@@ -1087,4 +1087,40 @@ fn a_hook_swapped_in_for_each_step_gives_the_trace_of_a_hook_held_throughout() {
         "the ghost fell through the ground: y = {ghost_y}"
     );
     assert!(impacts > 0, "the ball never bounced");
+}
+
+/// `Exact` mode flies a damped ball in closed form, `v(t) = g/c + (v0 - g/c) e^(-c t)`,
+/// although rapier damps its own way (once a step, `(v + g dt) / (1 + c dt)`): the difference
+/// (first order in `c dt`) must not take the ball for one something pushed.
+#[test]
+fn exact_mode_flies_a_damped_ball_in_closed_form() {
+    let (c, v0, y0, dt) = (0.5, 3.0, 10.0, 1.0 / 60.0);
+    let mut world = PhysicsWorld {
+        gravity: Vector::new(0.0, real(-G), 0.0),
+        ..Default::default()
+    };
+    world.integration_parameters.dt = real(dt);
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, real(y0), 0.0))
+            .linvel(Vector::new(0.0, real(v0), 0.0))
+            .linear_damping(real(c)),
+        ColliderBuilder::ball(0.1),
+    );
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
+    let steps = 60;
+    for _ in 0..steps {
+        p.step(&mut world);
+    }
+    let t = steps as f64 * dt;
+    let v_inf = -G / c;
+    let decay = (-c * t).exp();
+    let v = v_inf + (v0 - v_inf) * decay;
+    let y = y0 + v_inf * t + (v0 - v_inf) * (1.0 - decay) / c;
+    let rb = &world.bodies[ball];
+    let tol = if F64 { 1e-12 } else { 1e-6 };
+    let (vy, yy) = (wide(rb.linvel().y), wide(rb.translation().y));
+    assert!((vy - v).abs() <= tol * v0, "speed {vy} vs {v}");
+    assert!((yy - y).abs() <= tol * y0, "height {yy} vs {y}");
 }

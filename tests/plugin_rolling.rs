@@ -223,9 +223,9 @@ fn on_a_slope_gentler_than_mu_r_a_ball_at_rest_stays_and_sleeps() {
     }
 }
 
-/// The ugly cases of the hold: a ball held asleep on a slope and then set rolling downhill
+/// The ugly case of the hold: a ball held asleep on a slope and then set rolling downhill
 /// (woken by the user) leaves the hold, rolls to the closed-form stop from where it lay, and is
-/// held and asleep again; a ball another ball rolls into is not held while they touch.
+/// held and asleep again.
 #[test]
 fn a_held_ball_set_rolling_again_stops_where_the_closed_form_says_and_is_held_again() {
     let (mu_r, slope, v1) = (0.08f64, 3.0f64, 0.6);

@@ -94,7 +94,9 @@ impl Rolling {
     ///   across the fall line `v` is a pursuit too, which stops where `tan(theta) < mu_r`. It
     ///   rolls as long as the friction this needs, `m (dv/dt - a_t)`, stays within `mu N`, and
     ///   then slides down the fall line;
-    /// - at rest: it stays where `|a_t| <= mu_r g_n` (`tan(theta) <= mu_r`), else rolls down;
+    /// - at rest: it stays where `|a_t| <= mu_r g_n` and `<= mu g_n` (`tan(theta) <= mu_r`,
+    ///   `mu`), else rolls down; where only the friction falls short it would slide without
+    ///   turning, out of reach (`None`);
     /// - the spin about the normal `w.n` decays at `mu_sp g_n / (k r)` to zero
     ///   (`5 mu_sp g / (2 r)` for a solid ball on level ground), whatever the ball does, and
     ///   moves nothing else (it does not turn the contact point).

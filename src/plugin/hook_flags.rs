@@ -15,8 +15,9 @@
 //!
 //! The plugin takes the first while every dynamic body in the world is managed (the usual
 //! scene), and the second from the first step some dynamic, enabled body is not. In either,
-//! the balls of the step's impacts between bodies (`pair_plan.rs`) are flagged too: the
-//! plugin takes those pairs from rapier's solver. The flags the user had set are recorded and
+//! the balls of the step's impacts between bodies, and of the resting pairs rapier would
+//! bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), are flagged too: the
+//! plugin takes the impact pairs from rapier's solver and zeroes the others' restitution. The flags the user had set are recorded and
 //! handed back: the wrapped hook is called exactly when they ask for it.
 
 use super::geometry::SmallList;
@@ -58,8 +59,8 @@ impl HookFlags {
 
     /// Puts the flags where this step needs them (see the module's documentation):
     /// `near` are the managed bodies that can reach a ground in the step, `pairs` the bodies
-    /// of the step's impacts between bodies (flagged in either arrangement: the plugin takes
-    /// those pairs from rapier's solver), `unmanaged` whether the world holds a dynamic,
+    /// of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
+    /// arrangement), `unmanaged` whether the world holds a dynamic,
     /// enabled body the plugin does not manage. `registry.flags_stale` is read here and
     /// cleared by the caller.
     pub fn update(

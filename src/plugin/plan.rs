@@ -499,7 +499,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                         start: State {
                                             v: Vector3::zeros(),
                                             w: Vector3::zeros(),
-                                            ..state
+                                            ..on_ground
                                         },
                                         local_com,
                                         normal: n,
@@ -640,9 +640,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // Without rolling resistance or spinning friction, a ball rolling slower than the
         // resting speed is rapier's, which brings it to rest and to sleep. With them, rapier
         // would roll it on (it has neither): the closed form takes it to a stop; at rest on
-        // level ground it is rapier's again, and sleeps. On a slope the closed form holds it
-        // (rapier would roll it down), awake: rapier's sleep test reads the speed gravity
-        // gives it inside its step, which the closed form takes back.
+        // level ground it is rapier's again, and sleeps. On a slope that holds it, rapier's
+        // contact holds it too, its normal force moved downhill (`OnPlane::Held`), and sleeps
+        // it.
         let slow = slip.norm() <= ROLLING_MIN_SLIP && v.norm() <= step.policy.resting_speed;
         let resisted = rolling_resistance > 0.0 && (v.norm() > 0.0 || !level)
             || spinning_friction > 0.0 && on_ground.w.dot(n) != 0.0;
@@ -697,10 +697,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     centre: on_ground.com,
                     reach: radius + step.policy.resting_gap,
                 };
-                return self
-                    .held_on(
-                        colliders, handle, part, gg, others, &plane, on_ground, friction, step,
-                    )
+                // Its own ground one flat face under it, or one plane near it (not a crease
+                // inside a mesh).
+                let one_face =
+                    flat_relative(part, gg, on_ground, 0.0, radius) || plane_piece_of(gg, &plane);
+                return one_face
+                    .then(|| {
+                        self.held_on(
+                            colliders, handle, part, gg, others, &plane, on_ground, friction, step,
+                        )
+                    })
+                    .flatten()
                     .map(|pieces| OnPlane::Held(tilt, pieces));
             }
         }
@@ -811,7 +818,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 .friction
                 == friction
                 && self.registry.rolling_of(handle, og.handle, default)
-                    == self.registry.rolling_of(handle, gg.handle, default);
+                    == self.registry.rolling_of(handle, gg.handle, default)
+                && !self
+                    .flags
+                    .recorded_user_flags(colliders, og.handle)
+                    .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
             if !same || !plane_piece_of(og, plane) {
                 return None;
             }

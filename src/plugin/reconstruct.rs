@@ -183,10 +183,12 @@ pub(crate) fn moved_as_flown(rb: &RigidBody, cand: &Candidate, dt: f64) -> bool 
     let flown = cand.flight.advance(&cand.start, dt).v;
     let actual = vec_to_na(rb.linvel());
     // rapier adds the step's velocity change in its substeps, in its precision, and damps
-    // by `1 / (1 + c h)` a substep where the flight decays exactly (`(c dt)^2 / 2` apart).
+    // once at the step's end, `(v0 + a dt) / (1 + c dt)`, where the flight decays exactly:
+    // `v0 (c dt)^2 / 2` and `|a| dt c dt / 2` apart (twice those allowed).
     let scale = cand.start.v.norm() + flown.norm() + cand.flight.accel.norm() * dt;
-    let damping = (cand.flight.linear_damping * dt).powi(2);
-    (actual - flown).norm() <= (MOVED_AS_FLOWN_ROUNDING + damping) * scale
+    let x = cand.flight.linear_damping * dt;
+    let damping = x * x * cand.start.v.norm() + x * cand.flight.accel.norm() * dt;
+    (actual - flown).norm() <= MOVED_AS_FLOWN_ROUNDING * scale + damping
 }
 
 /// How far (relative to the speeds) rapier's linear velocity may differ from a free flight's
