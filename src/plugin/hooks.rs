@@ -73,11 +73,14 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     self.user_hooks.modify_solver_contacts(context);
                 }
                 let over = self.registry.entry(key.1).and_then(|g| g.material);
-                let tilt = self.step.holds.get(&key).copied();
-                let ball = colliders.get(key.0).and_then(|co| co.parent());
-                let centre = ball
-                    .and_then(|b| bodies.get(b))
-                    .map(|rb| rb.center_of_mass());
+                // Asked of every resting pair every step: nothing more while none is held.
+                let centre = || {
+                    let ball = colliders.get(key.0).and_then(|co| co.parent())?;
+                    Some(bodies.get(ball)?.center_of_mass())
+                };
+                let hold = (!self.step.holds.is_empty())
+                    .then(|| Some((*self.step.holds.get(&key)?, centre()?)))
+                    .flatten();
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {
@@ -89,7 +92,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     // solver applies a contact at the midpoint of its two anchors (the gap
                     // closed), so `h` is less than the radius by half the penetration. Both
                     // anchors move alike: the gap along the normal is unchanged.
-                    if let (Some(tilt), Some(centre)) = (tilt, centre) {
+                    if let Some((tilt, centre)) = hold {
                         let normal = *rigid.normal;
                         for contact in rigid.solver_contacts.iter_mut() {
                             let closed = contact.anchor1
