@@ -27,7 +27,7 @@ impl Motion {
     }
 
     /// A bound on how fast the centre's velocity changes (m/s^2), from `s` on.
-    fn accel_bound(&self, s: &State) -> f64 {
+    pub fn accel_bound(&self, s: &State) -> f64 {
         match self {
             Motion::Flight(f) => f.accel.norm() + f.linear_damping * (s.v.norm() + 1.0),
             // The pull along a slope and kinetic friction at most: |a_t| + mu |a.n|.
@@ -35,6 +35,16 @@ impl Motion {
                 let an = r.accel.dot(&r.normal);
                 (r.accel - r.normal * an).norm() + r.friction * an.abs()
             }
+        }
+    }
+
+    /// A bound on the angular speed (rad/s) from `s` on: a flight's (`Flight::max_angular_speed`);
+    /// a rolling ball's spin changes, but a centred ball's spin moves none of its surface
+    /// towards anything, so callers do not ask it of one.
+    pub fn max_angular_speed(&self, s: &State) -> f64 {
+        match self {
+            Motion::Flight(f) => f.max_angular_speed(s),
+            Motion::Rolling(_) => s.w.norm(),
         }
     }
 

@@ -547,7 +547,7 @@ pub(crate) fn closest(
 }
 
 /// How close to a ground [`first_impact`] counts as touching (m), for a body of `radius`.
-fn close_tolerance(radius: f64) -> f64 {
+pub(crate) fn close_tolerance(radius: f64) -> f64 {
     (1e-3 * radius).clamp(1e-7, 1e-3)
 }
 

@@ -908,6 +908,7 @@ impl<H> ImpactPlugin<H> {
                 colliders,
                 self.config.law,
                 self.config.max_impacts_per_step,
+                self.config.flat_tolerance,
                 &step.policy,
                 dt,
             );

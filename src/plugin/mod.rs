@@ -3,6 +3,7 @@
 //! events. The only module that touches rapier types; the impulses come from
 //! [`crate::model`]. See [`crate::docs::integration`].
 
+mod body_contact;
 mod commit;
 mod config;
 mod convert;

@@ -1,25 +1,31 @@
-//! Plan, for impacts between bodies: which pairs of opted-in balls may meet in the step, and
+//! Plan, for impacts between bodies: which pairs of opted-in bodies may meet in the step, and
 //! what each pair's role is.
 //!
 //! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
-//! (`Registry::takes_pairs`) that are one centred ball each, finds the pairs of a ball faster
-//! than half the resting speed whose spheres, swept over the step, overlap (a BVH over the swept
-//! spheres, refitted from step to step, [`PairIndex`]: the cost grows with the pairs that can
-//! meet, not with the square of the bodies), skips the pairs rapier would not solve or the user's
-//! filter refuses, and gives every other pair a role: `Resting` (pressed or held, as
-//! `Policy::rests` decides for a ground: rapier's solver keeps it, with zero restitution where
-//! rapier would bounce it above the resting gap; a pair slower than the resting speed is
-//! rapier's as it is, and not planned unless a chain reaches it) or
-//! `Impact` (it may meet in the step: out of rapier's solver, resolved by the reconstruct stage,
-//! `pair_reconstruct.rs`); a resting pair side by side with a ball of an `Impact` pair joins it (a
-//! chain, [`CHAIN_MAX_TILT_SIN`]). Its one write into rapier: a sleeping ball an `Impact` pair may
-//! reach is woken, so that the step plans it as an awake body.
+//! (`Registry::takes_pairs`) that have one enabled, solid collider each (a ball centred on the
+//! centre of mass, met in closed form; or any other shape, a die or a pin, met through parry's
+//! contact, `body_contact.rs`), finds the pairs of a body faster than half the resting speed
+//! whose bounding spheres, swept over the step, overlap (a BVH over the swept spheres, refitted
+//! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
+//! square of the bodies), skips the pairs rapier would not solve or the user's filter refuses,
+//! and gives every other pair a role: `Resting` (pressed or held, as `Policy::rests` decides
+//! for a ground: rapier's solver keeps it, with zero restitution where rapier would bounce it
+//! above the resting gap; a pair slower than the resting speed is rapier's as it is, and not
+//! planned unless a chain reaches it) or `Impact` (it may meet in the step: out of rapier's
+//! solver, resolved by the reconstruct stage, `pair_reconstruct.rs`); a resting pair side by
+//! side with a body of an `Impact` pair joins it (a chain, [`CHAIN_MAX_TILT_SIN`]). A pair's
+//! closing speed is along the line of centres for two balls, and for other shapes the contact
+//! points' along parry's normal plus what the bodies' turning can add (angular speed times
+//! bounding radius). Its one write into rapier: a sleeping body an `Impact` pair may reach is
+//! woken, so that the step plans it as an awake body.
 
+use super::body_contact::body_contact;
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;
+use super::geometry::BodyGeom;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, neighbours, pressed_besides};
+use super::observe::{Sets, body_geom, neighbours, pressed_besides, rapier_state};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::{PairKey, material};
@@ -33,16 +39,22 @@ use crate::rapier::prelude::{
 };
 use nalgebra::Vector3;
 
-/// A pair of balls with a role this step.
+/// A pair of bodies with a role this step.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PlannedPair {
     pub a: RigidBodyHandle,
     pub b: RigidBodyHandle,
     /// The pair's key ([`pair_key`] of the two ball colliders).
     pub key: PairKey,
-    /// The two radii summed, skins included (m): the centres' distance at contact.
+    /// Two centred balls: the line of centres is the contact normal, and `reach` the
+    /// centres' distance at contact. Otherwise any shapes (`body_contact.rs` finds the
+    /// contact).
+    pub balls: bool,
+    /// The two radii summed, skins included (m): the centres' distance at contact (balls;
+    /// for other shapes, their bounding radii summed).
     pub reach: f64,
-    /// Unit line of centres at the step's start, from `a` to `b`.
+    /// Unit contact normal at the step's start, from `a` to `b` (the line of centres for
+    /// balls).
     pub normal: Vector3<f64>,
     pub role: Role,
     /// Its balls need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
@@ -150,17 +162,20 @@ pub(crate) fn pair_key(c1: ColliderHandle, c2: ColliderHandle) -> PairKey {
     }
 }
 
-/// A ball that takes part in impacts between bodies, as the plan sees it at the step start.
-struct Ball {
+/// A body that takes part in impacts between bodies, as the plan sees it at the step start.
+struct Ball<'a> {
     body: RigidBodyHandle,
     collider: ColliderHandle,
     com: Vector3<f64>,
     v: Vector3<f64>,
-    /// Radius, skin included (m).
+    /// Radius, skin included (m): a centred ball's, or for any other shape the radius of a
+    /// sphere about the centre of mass that holds it (its rotation stays inside).
     radius: f64,
     asleep: bool,
     /// The acceleration of its user force (m/s^2).
     force_accel: f64,
+    /// Not a centred ball: its collider and state, for the contact queries.
+    shape: Option<(BodyGeom<'a>, State)>,
 }
 
 /// The step's pairs (see the module's contract). `prev` are last step's pair roles (a pair
@@ -197,25 +212,37 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 return None;
             };
             let co = colliders.get(*collider)?;
-            let ball = co.shape().as_ball()?;
-            let radius = to_f64(ball.radius);
-            // In the body's frame, where both are exact.
+            if !co.is_enabled() || co.is_sensor() {
+                return None;
+            }
+            // A ball centred on the centre of mass (in the body's frame, where both are
+            // exact) is met in closed form; any other shape through parry.
             let centre = co
                 .position_wrt_parent()
                 .map_or(Vector3::zeros(), |pose| vec_to_na(pose.translation));
-            let off_centre = (centre - vec_to_na(rb.local_center_of_mass())).norm();
-            if !co.is_enabled() || co.is_sensor() || off_centre > 1e-9 * radius {
-                return None;
-            }
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            let ball = co
+                .shape()
+                .as_ball()
+                .map(|b| to_f64(b.radius))
+                .filter(|r| (centre - local_com).norm() <= 1e-9 * r);
+            let (radius, shape) = match ball {
+                Some(r) => (r + to_f64(co.contact_skin()), None),
+                None => {
+                    let geom = body_geom(rb, colliders, &local_com);
+                    (geom.radius, Some((geom, rapier_state(rb))))
+                }
+            };
             let com = vec_to_na(rb.center_of_mass());
             Some(Ball {
                 body: handle,
                 collider: *collider,
                 com,
                 v: vec_to_na(rb.linvel()),
-                radius: radius + to_f64(co.contact_skin()),
+                radius,
                 asleep: rb.is_sleeping(),
                 force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
+                shape,
             })
         })
         .collect();
@@ -259,21 +286,44 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         let reach = a.radius + b.radius;
         let d = b.com - a.com;
         let len = d.norm();
-        let gap = len - reach;
         // Beyond reach: their spheres' travel cannot close the gap in the step.
         let travel = swept(a) - a.radius + swept(b) - b.radius;
-        if gap > travel {
+        if len - reach > travel {
             return None;
         }
-        // Closing speed along the line of centres (a ball's spin does not move its surface
-        // along the normal).
-        let closing = if len > 0.0 {
-            (a.v - b.v).dot(&(d / len))
-        } else {
-            0.0
-        };
         let forces = a.force_accel + b.force_accel;
-        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
+        let balls_only = a.shape.is_none() && b.shape.is_none();
+        let (gap, closing, normal, turn) = if balls_only {
+            // Closing speed along the line of centres (a ball's spin does not move its
+            // surface along the normal).
+            let closing = if len > 0.0 {
+                (a.v - b.v).dot(&(d / len))
+            } else {
+                0.0
+            };
+            let normal = if len > 0.0 { d / len } else { Vector3::zeros() };
+            (len - reach, closing, normal, 0.0)
+        } else {
+            // Any shapes: parry's contact at the step's start, and the contact points'
+            // closing speed; a turning body can bring a point closer by its angular speed
+            // times its radius.
+            let ((ga, sa), (gb, sb)) = (
+                geom_state(a, bodies, colliders),
+                geom_state(b, bodies, colliders),
+            );
+            let turn = |m: &Ball, s: &State| match m.shape {
+                Some(_) => s.w.norm() * m.radius * dt,
+                None => 0.0,
+            };
+            let turn = turn(a, &sa) + turn(b, &sb);
+            let touch = body_contact(ga.get(), &sa, gb.get(), &sb, travel + turn + margin)?;
+            // The closest points' closing speed, and what a turn can add to it: a turning
+            // body's other corner may swing in first (a cube that hit a cube with its corner,
+            // spun by the impact, meets it again). Without turning (a die lying on a die)
+            // it is the closest points' speed.
+            (touch.dist, -touch.rate + turn / dt, touch.normal, 0.0)
+        };
+        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + turn + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
         // rapier's own bounce of a pair it solves: `e` times the approach, the step the
         // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
@@ -329,8 +379,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             a: a.body,
             b: b.body,
             key,
+            balls: balls_only,
             reach,
-            normal: if len > 0.0 { d / len } else { Vector3::zeros() },
+            normal,
             role: if impact { Role::Impact } else { Role::Resting },
             hooked: impact || rapier_bounces,
         })
@@ -481,11 +532,10 @@ pub(crate) fn step_start_impulses(
     colliders: &ColliderSet,
     law: crate::model::Law,
     max_impacts: usize,
+    flat_tolerance: f64,
     policy: &Policy,
     dt: f64,
 ) -> Vec<super::events::ImpactEvent> {
-    use super::commit::write_state;
-    use super::observe::rapier_state;
     use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
     let mut events = Vec::new();
     let impacts: Vec<usize> = (0..plan.pairs.len())
@@ -499,6 +549,20 @@ pub(crate) fn step_start_impulses(
             let pair = plan.pairs[*k];
             let (ra, rb) = (&bodies[pair.a], &bodies[pair.b]);
             let (sa, sb) = (rapier_state(ra), rapier_state(rb));
+            if !pair.balls {
+                let Some((after_a, after_b, pair_events)) =
+                    step_start_bodies(&pair, bodies, colliders, law, flat_tolerance, policy, dt)
+                else {
+                    continue;
+                };
+                events.extend(pair_events);
+                write_velocities(bodies, [(pair.a, sa, after_a), (pair.b, sb, after_b)]);
+                any = true;
+                if events.len() >= 2 * cap {
+                    break 'passes;
+                }
+                continue;
+            }
             let d = sb.com - sa.com;
             let len = d.norm();
             if len == 0.0 {
@@ -554,21 +618,7 @@ pub(crate) fn step_start_impulses(
                 continue;
             };
             events.extend(pair_events);
-            for (h, s, after) in [(pair.a, sa, after_a), (pair.b, sb, after_b)] {
-                let rb = &mut bodies[h];
-                let local_com = vec_to_na(rb.local_center_of_mass());
-                // The velocities only: the pose stays rapier's.
-                write_state(
-                    rb,
-                    &State {
-                        v: after.v,
-                        w: after.w,
-                        ..s
-                    },
-                    &local_com,
-                    true,
-                );
-            }
+            write_velocities(bodies, [(pair.a, sa, after_a), (pair.b, sb, after_b)]);
             any = true;
             if events.len() >= 2 * cap {
                 break 'passes;
@@ -583,4 +633,125 @@ pub(crate) fn step_start_impulses(
         plan.roles.insert(plan.pairs[k].key, Role::Resting);
     }
     events
+}
+
+/// Writes each body's velocities after a step-start impulse; the pose stays rapier's.
+fn write_velocities<const N: usize>(
+    bodies: &mut RigidBodySet,
+    written: [(RigidBodyHandle, State, State); N],
+) {
+    use super::commit::write_state;
+    for (h, s, after) in written {
+        let rb = &mut bodies[h];
+        let local_com = vec_to_na(rb.local_center_of_mass());
+        write_state(
+            rb,
+            &State {
+                v: after.v,
+                w: after.w,
+                ..s
+            },
+            &local_com,
+            true,
+        );
+    }
+}
+
+/// `Step` mode's impulse for a pair of bodies not both centred balls: at their contact at
+/// the step's start (parry's, with the flat-landing points of `touch_point`), if they approach
+/// faster than the resting speed there and close the gap within the step. Both states after
+/// and the events.
+fn step_start_bodies(
+    pair: &PlannedPair,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    law: crate::model::Law,
+    flat_tolerance: f64,
+    policy: &Policy,
+    dt: f64,
+) -> Option<(State, State, [super::events::ImpactEvent; 2])> {
+    use super::body_contact::touch_point;
+    use super::resolve::{BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_bodies};
+    let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
+    let (sa, sb) = (rapier_state(ra), rapier_state(rb));
+    let (la, lb) = (
+        vec_to_na(ra.local_center_of_mass()),
+        vec_to_na(rb.local_center_of_mass()),
+    );
+    let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
+    let margin = policy.resting_gap.max(policy.prediction);
+    let turn = (sa.w.norm() * ga.radius + sb.w.norm() * gb.radius) * dt;
+    let reach = ((sa.v - sb.v).norm() * dt + turn + margin).max(margin);
+    let touch = body_contact(&ga, &sa, &gb, &sb, reach)?;
+    let closing = -touch.rate;
+    if closing <= policy.resting_speed || touch.dist > closing * dt + turn + margin {
+        return None;
+    }
+    let (ca, cb) = (
+        ga.parts[touch.parts.0].handle,
+        gb.parts[touch.parts.1].handle,
+    );
+    let (point, points) = touch_point(&ga, &sa, &gb, &sb, &touch, flat_tolerance);
+    let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+    let input = ImpactInput {
+        body: pair.a,
+        inertia: &ia,
+        law,
+        material: material(&colliders[ca], &colliders[cb], None),
+        resting_speed: policy.resting_speed,
+        force_settle: false,
+        timing: super::events::ImpactTiming::StepStart,
+    };
+    let side = |body, collider, inertia, state| PairSide {
+        body,
+        collider,
+        inertia,
+        state,
+        radius: 0.0,
+    };
+    resolve_bodies(
+        &input,
+        &side(pair.a, ca, &ia, sa),
+        &side(pair.b, cb, &ib, sb),
+        &BodyContactAt {
+            normal: touch.normal,
+            point,
+            points,
+        },
+        0.0,
+    )
+}
+
+/// A member's colliders and state for a contact query.
+fn geom_state<'g, 'a>(
+    m: &'g Ball<'a>,
+    bodies: &RigidBodySet,
+    colliders: &'a ColliderSet,
+) -> (GeomRef<'g, 'a>, State) {
+    match &m.shape {
+        Some((g, st)) => (GeomRef::Borrowed(g), *st),
+        None => {
+            let rb = &bodies[m.body];
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            (
+                GeomRef::Owned(body_geom(rb, colliders, &local_com)),
+                rapier_state(rb),
+            )
+        }
+    }
+}
+
+/// A body's colliders for a contact query: kept in the plan's list, or made for the query.
+enum GeomRef<'g, 'a> {
+    Borrowed(&'g BodyGeom<'a>),
+    Owned(BodyGeom<'a>),
+}
+
+impl<'a> GeomRef<'_, 'a> {
+    fn get(&self) -> &BodyGeom<'a> {
+        match self {
+            GeomRef::Borrowed(g) => g,
+            GeomRef::Owned(g) => g,
+        }
+    }
 }

@@ -1,24 +1,28 @@
-//! Reconstruct, for impacts between bodies: a cluster of balls (those joined by the step's
+//! Reconstruct, for impacts between bodies: a cluster of bodies (those joined by the step's
 //! `Impact` pairs) moved together over the step from their start states, as they would have
 //! moved had rapier not solved those pairs.
 //!
-//! Contract: [`move_clusters`] finds the clusters whose every ball moved alone in the step and
+//! Contract: [`move_clusters`] finds the clusters whose every body moved alone in the step and
 //! commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes a cluster
-//! each of whose balls moved alone in the step (no contact in rapier's solver, no joint or torque:
-//! checked by the caller) and moves every ball by its own motion (`crate::motion`: free flight, or
-//! rolling in closed form on its level ground) to the cluster's earliest event: a ball's ground
-//! impact (the in-step search of `geometry.rs`) or two balls touching (`motion::meeting`), resolved
-//! by the model (`resolve.rs`), then on to the next, in time order, both balls of a pair updated
-//! between events: a chain (a ball passing an impact on to the one it touches) is a sequence of
-//! impacts at the same time, in the order the touches are found; a touch slower than the resting
-//! speed is a resting contact from there on (rapier's next step). A ball rolling on its ground that
-//! an impact lifts flies from there; pressed into the ground, the ground takes the normal speed (a
-//! `Settle` event) and it rolls on. It returns every ball's state at the step's end and reports
-//! every impulse as an event, or `None` when the cluster cannot be moved alone (a search that
-//! stalls, more events than `max_impacts_per_step` per ball, a rolling ball leaving its plane): its
-//! events are then withdrawn, rapier's end state stands, and the settle stage checks the pairs. It
-//! writes nothing into rapier.
+//! each of whose bodies moved alone in the step (no contact in rapier's solver, no joint or
+//! torque: checked by the caller) and moves every body by its own motion (`crate::motion`: free
+//! flight, or for a ball rolling in closed form on its level ground) to the cluster's earliest
+//! event: a body's ground impact (the in-step search of `geometry.rs`) or two bodies touching
+//! (two centred balls in closed form, `motion::meeting`; any other pair by conservative
+//! advancement on parry's distance, `body_contact.rs`), resolved by the model (`resolve.rs`; a
+//! flat face on a face as one impact at the centroid of their overlap's corners), then on to the
+//! next, in time order, both bodies of a pair updated between events: a chain (a ball passing an
+//! impact on to the one it touches) is a sequence of impacts at the same time, in the order the
+//! touches are found; a touch slower than the resting speed is a resting contact from there on
+//! (rapier's next step). A ball rolling on its ground that an impact lifts flies from there;
+//! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
+//! on. It returns every body's state at the step's end and reports every impulse as an event,
+//! or `None` when the cluster cannot be moved alone (a search that stalls, more events than
+//! `max_impacts_per_step` per body, a rolling ball leaving its plane): its events are then
+//! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
+//! nothing into rapier.
 
+use super::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use super::commit::write_state;
 use super::config::TimingMode;
 use super::convert::to_f64;
@@ -33,7 +37,8 @@ use super::policy::{EndCheck, Role};
 use super::reconstruct::ccd_consistent;
 use super::reconstruct::rest_on_ground;
 use super::resolve::{
-    ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
+    BodyContactAt, ImpactInput, Inertia, PairSide, Site, correction, material, resolve,
+    resolve_balls, resolve_bodies,
 };
 use super::settle::Checked;
 use super::settle::Settle;
@@ -42,12 +47,14 @@ use crate::motion::{Flight, Motion, Moving, State};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 
-/// A ball of a cluster and what its motion needs.
+/// A body of a cluster (a ball, a die, a pin) and what its motion needs.
 pub(crate) struct ClusterBall<'a> {
     pub cand: &'a Candidate,
     pub collider: ColliderHandle,
-    /// Radius to the contact point, skin included (m).
-    pub radius: f64,
+    /// A ball centred on its centre of mass: its radius to the contact point, skin included
+    /// (m). Two such balls meet in closed form (`motion::meeting`); any other pair through
+    /// parry (`body_contact.rs`).
+    pub radius: Option<f64>,
     pub geom: BodyGeom<'a>,
     /// Its grounds: the `Impact` grounds, and the ground it rolls on (last).
     pub grounds: SmallList<GroundGeom<'a>>,
@@ -141,7 +148,12 @@ pub(crate) fn move_clusters(
                 let rb = &bodies[*h];
                 let geom = body_geom(rb, colliders, &cand.local_com);
                 let part = geom.parts.first()?;
-                let radius = to_f64(part.shape.as_ball()?.radius) + part.skin;
+                let radius = part
+                    .shape
+                    .as_ball()
+                    .map(|b| to_f64(b.radius))
+                    .filter(|r| part.local.translation.vector.norm() <= 1e-9 * r)
+                    .map(|r| r + part.skin);
                 let collider = part.handle;
                 let mut grounds = settle.impact_ground_geoms(cand, &geom, colliders, step);
                 let rolling_on = match &cand.rolling {
@@ -211,8 +223,9 @@ pub(crate) fn move_clusters(
 /// What happens next in the cluster.
 enum Next {
     Ground(usize, State, super::geometry::Hit),
-    /// The pair of this index in the cluster's pairs.
-    Touch(usize),
+    /// The pair of this index in the cluster's pairs, with parry's contact for a pair not
+    /// both centred balls.
+    Touch(usize, Option<BodyTouch>),
 }
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
@@ -282,12 +295,26 @@ fn move_cluster(
             if resting[p] {
                 continue;
             }
-            let reach = balls[*i].radius + balls[*j].radius;
             let limit = next.as_ref().map_or(dt, |(tn, _)| *tn);
-            // A search that gives up cannot say the balls stay apart: not moved alone.
-            if let Some(tc) = first_touch(&moving[*i], &moving[*j], reach, t, limit).ok()? {
+            // A search that gives up cannot say the bodies stay apart: not moved alone.
+            let found = match (balls[*i].radius, balls[*j].radius) {
+                (Some(ri), Some(rj)) => first_touch(&moving[*i], &moving[*j], ri + rj, t, limit)
+                    .ok()?
+                    .map(|tc| (tc, None)),
+                _ => {
+                    let mover = |k: usize| Mover {
+                        geom: &balls[k].geom,
+                        moving: &moving[k],
+                        turns: balls[k].radius.is_none(),
+                    };
+                    first_body_touch(&mover(*i), &mover(*j), t, limit)
+                        .ok()?
+                        .map(|(tc, touch)| (tc, Some(touch)))
+                }
+            };
+            if let Some((tc, touch)) = found {
                 if next.as_ref().is_none_or(|(tn, _)| tc < *tn) {
-                    next = Some((tc, Next::Touch(p)));
+                    next = Some((tc, Next::Touch(p, touch)));
                 }
             }
         }
@@ -310,14 +337,14 @@ fn move_cluster(
                     motion: Motion::Flight(flights[k]),
                 };
             }
-            Next::Touch(p) => {
+            Next::Touch(p, touch) => {
                 let (i, j) = pairs[p];
                 let side = |k: usize| PairSide {
                     body: balls[k].cand.body,
                     collider: balls[k].collider,
                     inertia: &balls[k].inertia,
                     state: moving[k].at(te),
-                    radius: balls[k].radius,
+                    radius: balls[k].radius.unwrap_or(0.0),
                 };
                 let input = ImpactInput {
                     body: balls[i].cand.body,
@@ -337,15 +364,39 @@ fn move_cluster(
                 // would not end: balls left touching at nearly the same speed behind a chain
                 // meet again and again, in ever smaller impacts.
                 let (si, sj) = (side(i), side(j));
-                let line = (sj.state.com - si.state.com).normalize();
-                if (si.state.v - sj.state.v).dot(&line) < step.policy.resting_speed {
+                let closing = match &touch {
+                    None => {
+                        let line = (sj.state.com - si.state.com).normalize();
+                        (si.state.v - sj.state.v).dot(&line)
+                    }
+                    Some(touch) => -touch.rate,
+                };
+                if closing < step.policy.resting_speed {
                     resting[p] = true;
                     continue;
                 }
                 // A touch the model finds not approaching (a graze at rounding level) is
                 // stepped over: the next search starts after it.
-                let Some((after_i, after_j, pair_events)) = resolve_balls(&input, &si, &sj, te)
-                else {
+                let resolved = match &touch {
+                    None => resolve_balls(&input, &si, &sj, te),
+                    Some(touch) => {
+                        let (point, points) = touch_point(
+                            &balls[i].geom,
+                            &si.state,
+                            &balls[j].geom,
+                            &sj.state,
+                            touch,
+                            view.config.flat_tolerance,
+                        );
+                        let at = BodyContactAt {
+                            normal: touch.normal,
+                            point,
+                            points,
+                        };
+                        resolve_bodies(&input, &si, &sj, &at, te)
+                    }
+                };
+                let Some((after_i, after_j, pair_events)) = resolved else {
                     t = next_after(te);
                     continue;
                 };
@@ -399,7 +450,7 @@ fn reaches_other_grounds(
     step: &EndOfStep,
 ) -> bool {
     let accel = ball.cand.flight.accel.norm();
-    let reach = ball.radius
+    let reach = ball.geom.radius
         + s.v.norm() * left
         + accel * left * left
         + step.policy.resting_gap.max(step.policy.prediction);

@@ -217,10 +217,8 @@ pub(crate) struct PairSide<'a> {
 }
 
 /// Resolves the impact of ball `a` on ball `b` (states at time `t`), their centres'
-/// distance the sum of their radii: the contact normal is the line of centres. `input` gives
-/// the law, the material and the resting speed (its `body` and `inertia` are not read).
-/// Returns both states after and an event for each body (each naming the other), or `None`
-/// when the balls do not approach or the model refuses the input.
+/// distance the sum of their radii: the contact normal is the line of centres, the point on
+/// it at `a`'s radius. See [`resolve_bodies`].
 pub(crate) fn resolve_balls(
     input: &ImpactInput,
     a: &PairSide,
@@ -228,12 +226,49 @@ pub(crate) fn resolve_balls(
     t: f64,
 ) -> Option<(State, State, [ImpactEvent; 2])> {
     let n = (b.state.com - a.state.com).try_normalize(0.0)?;
+    let point = a.state.com + n * a.radius;
+    resolve_bodies(
+        input,
+        a,
+        b,
+        &BodyContactAt {
+            normal: n,
+            point,
+            points: 1,
+        },
+        t,
+    )
+}
+
+/// Where two bodies touch at an impact between them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BodyContactAt {
+    /// Unit normal from body `a` towards body `b`.
+    pub normal: Vector3<f64>,
+    /// The contact point (m).
+    pub point: Vector3<f64>,
+    /// How many contact points it stands for (a flat landing of one on the other).
+    pub points: usize,
+}
+
+/// Resolves the impact of body `a` on body `b` (states at time `t`) at `contact`, with the
+/// model's two-body form (`model::resolve_pair`). `input` gives the law, the material and the
+/// resting speed (its `body` and `inertia` are not read). Returns both states after and an
+/// event for each body (each naming the other), or `None` when the bodies do not approach at
+/// the contact point or the model refuses the input. `PairSide::radius` is not read.
+pub(crate) fn resolve_bodies(
+    input: &ImpactInput,
+    a: &PairSide,
+    b: &PairSide,
+    at: &BodyContactAt,
+    t: f64,
+) -> Option<(State, State, [ImpactEvent; 2])> {
+    let (n, point) = (at.normal, at.point);
     let contact = model::PairContact {
         normal: n,
-        offset_a: n * a.radius,
-        offset_b: -n * b.radius,
+        offset_a: point - a.state.com,
+        offset_b: point - b.state.com,
     };
-    let point = a.state.com + contact.offset_a;
     let closing = n.dot(&(body_velocity_at(&a.state, &point) - body_velocity_at(&b.state, &point)));
     if closing.is_nan() || closing <= 0.0 {
         return None;
@@ -278,7 +313,7 @@ pub(crate) fn resolve_balls(
             point: vec_from_na(&point),
             // From the other ball into this one.
             normal: vec_from_na(&(n * sign)),
-            contact_points: 1,
+            contact_points: at.points,
             approach_speed: closing,
             impulse: vec_from_na(&impulse),
             normal_impulse: impact.normal_impulse,

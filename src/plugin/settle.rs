@@ -396,7 +396,7 @@ impl Settle<'_> {
     /// along that line (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
     /// the pressed speed for a ball touching something else), and both balls moved apart
     /// along it to touching, on the sides they started on, each by its inverse-mass share,
-    /// with a `PushOut` event each.
+    /// with a `PushOut` event each. Other shapes: [`Settle::pair_end_bodies`].
     pub fn pair_end(
         &mut self,
         bodies: &mut RigidBodySet,
@@ -404,6 +404,9 @@ impl Settle<'_> {
         pair: &PlannedPair,
         step: &EndOfStep,
     ) {
+        if !pair.balls {
+            return self.pair_end_bodies(bodies, colliders, pair, step);
+        }
         let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
             return;
         };
@@ -546,9 +549,127 @@ impl Settle<'_> {
                 step.dt,
             ));
         }
-        // Moved apart, a ball may be moved into a ground (a light ball pushed down by a heavy
-        // one): each is checked against the grounds near it, as rapier's end state is.
-        for (body, state) in [(pair.a, sa), (pair.b, sb)] {
+        self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
+    }
+
+    /// [`Settle::pair_end`] for a pair not both centred balls: where parry finds the two
+    /// bodies touching or overlapping at rapier's end state, the model's impulse at their
+    /// contact (the flat-landing points of `touch_point`; `ImpactTiming::StepEnd`, no bounce
+    /// slower than the resting speed, or the pressed speed for a body touching something
+    /// else) if they approach there, and both moved apart along the contact normal to
+    /// touching, each by its inverse-mass share, with a `PushOut` event each. (A pair that
+    /// passed through each other inside the step is not found: the step's end is all that is
+    /// checked, as rapier's solver would see it.)
+    fn pair_end_bodies(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        pair: &PlannedPair,
+        step: &EndOfStep,
+    ) {
+        use super::body_contact::{body_contact, touch_point};
+        use super::resolve::{BodyContactAt, resolve_bodies};
+        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+            return;
+        };
+        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let (la, lb) = (
+            super::convert::vec_to_na(ra.local_center_of_mass()),
+            super::convert::vec_to_na(rb.local_center_of_mass()),
+        );
+        let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
+        let Some(touch) = body_contact(&ga, &sa, &gb, &sb, 0.0) else {
+            return;
+        };
+        let (ca, cb) = (
+            ga.parts[touch.parts.0].handle,
+            gb.parts[touch.parts.1].handle,
+        );
+        let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
+            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
+        };
+        let touching = pressed(pair.a, ra) || pressed(pair.b, rb);
+        let input = ImpactInput {
+            body: pair.a,
+            inertia: &ia,
+            law: self.config.law,
+            material: material(&colliders[ca], &colliders[cb], None),
+            resting_speed: if touching {
+                step.policy.pressed_speed
+            } else {
+                step.policy.resting_speed
+            },
+            force_settle: false,
+            timing: ImpactTiming::StepEnd,
+        };
+        let (point, points) = touch_point(&ga, &sa, &gb, &sb, &touch, self.config.flat_tolerance);
+        let side = |body, collider, inertia, state| PairSide {
+            body,
+            collider,
+            inertia,
+            state,
+            radius: 0.0,
+        };
+        let at = BodyContactAt {
+            normal: touch.normal,
+            point,
+            points,
+        };
+        if let Some((after_a, after_b, events)) = resolve_bodies(
+            &input,
+            &side(pair.a, ca, &ia, sa),
+            &side(pair.b, cb, &ib, sb),
+            &at,
+            step.dt,
+        ) {
+            self.events.extend(events);
+            (sa, sb) = (after_a, after_b);
+        }
+        let overlap = (-touch.dist).max(0.0);
+        if overlap > 0.0 {
+            let n = touch.normal;
+            let (wa, wb) = (1.0 / ia.mass, 1.0 / ib.mass);
+            let share = |w: f64| overlap * w / (wa + wb);
+            let moves = [
+                (pair.a, ca, cb, pair.b, &ia, &mut sa, -n * share(wa), -n),
+                (pair.b, cb, ca, pair.a, &ib, &mut sb, n * share(wb), n),
+            ];
+            for (body, collider, other, body2, inertia, state, shift, normal) in moves {
+                let before = *state;
+                state.com += shift;
+                let site = Site {
+                    body,
+                    collider,
+                    ground: other,
+                    body2: Some(body2),
+                    normal,
+                    point: touch.point,
+                };
+                self.events.push(correction(
+                    EventKind::PushOut,
+                    &site,
+                    inertia,
+                    &before,
+                    state,
+                    step.dt,
+                ));
+            }
+        }
+        self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
+    }
+
+    /// Writes the two bodies of a pair resolved at the step's end: moved apart, a body may be
+    /// moved into a ground (a light ball pushed down by a heavy one), so each is checked
+    /// against the grounds near it, as rapier's end state is.
+    fn check_moved_apart(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        moved: [(RigidBodyHandle, State); 2],
+        step: &EndOfStep,
+    ) {
+        for (body, state) in moved {
             let rb = &bodies[body];
             let local_com = super::convert::vec_to_na(rb.local_center_of_mass());
             let geom = body_geom(rb, colliders, &local_com);

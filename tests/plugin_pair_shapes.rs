@@ -1,0 +1,548 @@
+//! Impacts between bodies that are not both balls (dice, a ball into a die): at their time of
+//! impact inside the step, at the contact parry finds, with the model's two-body form; against
+//! the closed forms (equal cubes face on: `(1 -+ e)/2`, no spin), against the model called on
+//! the analytic contact (a ball into a cube's face off its centre, with friction and spin), and
+//! against conservation (a cube's corner into a cube: momentum and angular momentum).
+
+mod plugin_support;
+
+use plugin_support::{F64, MODES, na, real, wide};
+use rapier_impact::model::{self, Body, BodyVelocity, Material, PairContact};
+use rapier_impact::na::{Matrix3, UnitQuaternion, Vector3};
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
+
+/// Tolerance on velocities, relative to the speed: parry's contact in rapier's precision.
+const V_TOL: f64 = if F64 { 1e-12 } else { 2e-6 };
+/// Tolerance on the impact time (s): parry's distance in rapier's precision over 2 m/s.
+const T_TOL: f64 = if F64 { 1e-12 } else { 1e-7 };
+
+fn world() -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    }
+}
+
+fn v3(v: Vector3<f64>) -> Vector {
+    Vector::new(real(v.x), real(v.y), real(v.z))
+}
+
+/// A dynamic body with one collider at `at`, rotated by `rot`, moving at `v`, spinning at `w`.
+fn body(
+    w: &mut PhysicsWorld,
+    collider: ColliderBuilder,
+    at: Vector3<f64>,
+    rot: UnitQuaternion<f64>,
+    v: Vector3<f64>,
+    spin: Vector3<f64>,
+) -> (RigidBodyHandle, ColliderHandle) {
+    let q = rot.quaternion();
+    w.insert(
+        RigidBodyBuilder::dynamic()
+            .pose(Pose::from_parts(
+                v3(at),
+                Rotation::from_xyzw(real(q.i), real(q.j), real(q.k), real(q.w)),
+            ))
+            .linvel(v3(v))
+            .angvel(v3(spin))
+            .can_sleep(false),
+        collider,
+    )
+}
+
+fn cube(h: f64, e: f64, mu: f64) -> ColliderBuilder {
+    ColliderBuilder::cuboid(real(h), real(h), real(h))
+        .density(1000.0)
+        .restitution(real(e))
+        .friction(real(mu))
+}
+
+fn plugin(mode: TimingMode) -> ImpactPlugin {
+    let mut p = ImpactPlugin::new(ImpactConfig {
+        timing: mode,
+        ..Default::default()
+    })
+    .unwrap();
+    p.set_all_dynamic_bodies_impact(true);
+    p
+}
+
+/// The pair impacts of the run, each with its time from the run's start.
+fn run(p: &mut ImpactPlugin, w: &mut PhysicsWorld, steps: usize) -> Vec<(f64, ImpactEvent)> {
+    let dt = wide(w.integration_parameters.dt);
+    let mut seen = Vec::new();
+    for k in 0..steps {
+        p.step(w);
+        for ev in p.events() {
+            if ev.body2.is_some() && ev.kind == EventKind::Impact {
+                seen.push((k as f64 * dt + ev.time, *ev));
+            }
+        }
+    }
+    seen
+}
+
+fn velocity(w: &PhysicsWorld, h: RigidBodyHandle) -> (Vector3<f64>, Vector3<f64>) {
+    (na(w.bodies[h].linvel()), na(w.bodies[h].angvel()))
+}
+
+/// The model's body for a rapier body: mass and world inertia (its principal inertia about
+/// the principal frame, turned to the world).
+fn model_body(w: &PhysicsWorld, h: RigidBodyHandle) -> Body {
+    Body::from_inertia(wide(w.bodies[h].mass()), world_inertia(w, h)).unwrap()
+}
+
+/// A rapier body's inertia tensor about its centre of mass in the world frame.
+fn world_inertia(w: &PhysicsWorld, h: RigidBodyHandle) -> Matrix3<f64> {
+    let rb = &w.bodies[h];
+    let props = rb.mass_properties().local_mprops;
+    let frame = props.principal_inertia_local_frame;
+    let rot = *rb.rotation() * frame;
+    let r = UnitQuaternion::from_quaternion(rapier_impact::na::Quaternion::new(
+        wide(rot.w),
+        wide(rot.x),
+        wide(rot.y),
+        wide(rot.z),
+    ))
+    .to_rotation_matrix();
+    let d = na(props.principal_inertia());
+    r.matrix() * Matrix3::from_diagonal(&d) * r.matrix().transpose()
+}
+
+/// Two equal cubes face on, the first at 2 m/s into the second at rest, frictionless: they
+/// touch when the gap has closed, and leave at `(1 -+ e)/2` of the speed with no spin (the
+/// four corners of the touching faces give one impact at the face centre).
+#[test]
+fn equal_cubes_face_on_exchange_speed_by_the_closed_form() {
+    // Centres 0.41 m apart: the touch falls inside a step (9.3 steps at 60 Hz).
+    let (h, e, speed, gap0) = (0.05, 0.8, 2.0, 0.41);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world();
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        let (a, _) = body(
+            &mut w,
+            cube(h, e, 0.0),
+            zero,
+            none,
+            Vector3::x() * speed,
+            zero,
+        );
+        let (b, _) = body(
+            &mut w,
+            cube(h, e, 0.0),
+            Vector3::x() * gap0,
+            none,
+            zero,
+            zero,
+        );
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 30);
+        assert_eq!(
+            seen.len(),
+            2,
+            "{mode:?}: one impact, an event each: {seen:?}"
+        );
+        let t_touch = (gap0 - 2.0 * h) / speed;
+        for (t, ev) in &seen {
+            assert!(
+                (t - t_touch).abs() <= T_TOL,
+                "{mode:?}: at {t}, expected {t_touch}"
+            );
+            assert_eq!(ev.timing, ImpactTiming::InStep);
+            assert_eq!(ev.contact_points, 4, "{mode:?}: the four corners of a face");
+            let point = na(ev.point);
+            let expected = Vector3::new(h + speed * t_touch, 0.0, 0.0);
+            assert!(
+                (point - expected).norm() <= T_TOL * speed * 10.0,
+                "{mode:?}: at {point}, expected {expected}"
+            );
+        }
+        let ((va, wa), (vb, wb)) = (velocity(&w, a), velocity(&w, b));
+        let tol = V_TOL * speed;
+        assert!(
+            (va - Vector3::x() * (1.0 - e) / 2.0 * speed).norm() <= tol,
+            "{mode:?}: {va}"
+        );
+        assert!(
+            (vb - Vector3::x() * (1.0 + e) / 2.0 * speed).norm() <= tol,
+            "{mode:?}: {vb}"
+        );
+        assert!(
+            wa.norm() <= tol / h && wb.norm() <= tol / h,
+            "{mode:?}: no spin {wa} {wb}"
+        );
+        // And flown on exactly after the impact: the gap opened at e times the approach.
+        let gap = na(w.bodies[b].translation()).x - na(w.bodies[a].translation()).x - 2.0 * h;
+        let t_end = 30.0 * wide(w.integration_parameters.dt);
+        let expected = e * speed * (t_end - t_touch);
+        assert!(
+            (gap - expected).abs() <= 10.0 * T_TOL * speed,
+            "{mode:?}: gap {gap}, {expected}"
+        );
+    }
+}
+
+/// A spinning ball with friction into the face of a cube at rest, off the face's centre: the
+/// plugin's velocities after the impact are the model's on the analytic contact (the ball's
+/// centre projected on the face, normal along the face's).
+#[test]
+fn a_ball_into_a_cube_face_off_centre_is_the_models_impact_at_the_analytic_contact() {
+    let (r, h, e, mu) = (0.03, 0.05, 0.7, 0.4);
+    let (offset, speed) = (0.02, 2.0);
+    let spin = Vector3::new(0.0, 30.0, -20.0);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world();
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        let ball = ColliderBuilder::ball(real(r))
+            .density(1000.0)
+            .restitution(real(e))
+            .friction(real(mu));
+        let start = Vector3::new(0.0, offset, 0.0);
+        let (a, _) = body(&mut w, ball, start, none, Vector3::x() * speed, spin);
+        let (b, _) = body(&mut w, cube(h, e, mu), Vector3::x() * 0.4, none, zero, zero);
+        // The model on the analytic contact, with the states just before it.
+        let (body_a, body_b) = (model_body(&w, a), model_body(&w, b));
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 30);
+        assert_eq!(seen.len(), 2, "{mode:?}: {seen:?}");
+        let t_touch = (0.4 - h - r) / speed;
+        assert!(
+            (seen[0].0 - t_touch).abs() <= T_TOL,
+            "{mode:?}: at {}",
+            seen[0].0
+        );
+        let point = Vector3::new(0.4 - h, offset, 0.0);
+        let centre_a = start + Vector3::x() * speed * t_touch;
+        let contact = PairContact {
+            normal: Vector3::x(),
+            offset_a: point - centre_a,
+            offset_b: point - Vector3::x() * 0.4,
+        };
+        let material = Material {
+            restitution: e,
+            friction: mu,
+        };
+        let before_a = BodyVelocity {
+            linear: Vector3::x() * speed,
+            angular: spin,
+        };
+        let expected = model::resolve_pair(
+            ImpactConfig::default().law,
+            &body_a,
+            &before_a,
+            &body_b,
+            &BodyVelocity::default(),
+            &contact,
+            &material,
+        )
+        .unwrap();
+        let ((va, wa), (vb, wb)) = (velocity(&w, a), velocity(&w, b));
+        let tol = V_TOL * speed;
+        assert!(
+            (va - expected.a.linear).norm() <= tol,
+            "{mode:?}: {va} {}",
+            expected.a.linear
+        );
+        assert!(
+            (vb - expected.b.linear).norm() <= tol,
+            "{mode:?}: {vb} {}",
+            expected.b.linear
+        );
+        assert!(
+            (wa - expected.a.angular).norm() <= tol / r,
+            "{mode:?}: {wa}"
+        );
+        assert!(
+            (wb - expected.b.angular).norm() <= tol / h,
+            "{mode:?}: {wb}"
+        );
+        // The impulse is the model's, and the event's energies are the states written.
+        let ev_b = seen.iter().find(|(_, ev)| ev.body == b).unwrap().1;
+        assert!((na(ev_b.impulse) - expected.impulse).norm() <= tol * wide(w.bodies[a].mass()));
+    }
+}
+
+/// A cube turned on its corner into the face of a cube at rest, with friction: linear
+/// momentum and angular momentum about the origin are conserved through the impacts, no
+/// energy is gained, the first impact happens with the corner on the face, and the cube hit
+/// turns.
+#[test]
+fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
+    let (h, e, mu, speed) = (0.05, 0.6, 0.5, 2.0);
+    let tilt = UnitQuaternion::from_euler_angles(0.3, 0.5, 0.7);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world();
+        let zero = Vector3::zeros();
+        let spin = Vector3::new(1.0, -2.0, 3.0);
+        let (a, _) = body(
+            &mut w,
+            cube(h, e, mu),
+            Vector3::new(0.0, 0.01, -0.02),
+            tilt,
+            Vector3::x() * speed,
+            spin,
+        );
+        let (b, _) = body(
+            &mut w,
+            cube(h, e, mu),
+            Vector3::x() * 0.4,
+            UnitQuaternion::identity(),
+            zero,
+            zero,
+        );
+        let momenta = |w: &PhysicsWorld| {
+            let mut p = Vector3::zeros();
+            let mut l = Vector3::zeros();
+            let mut energy = 0.0;
+            for h in [a, b] {
+                let rb = &w.bodies[h];
+                let (m, inertia) = (wide(rb.mass()), world_inertia(w, h));
+                let (v, om) = (na(rb.linvel()), na(rb.angvel()));
+                let c = na(rb.center_of_mass());
+                p += v * m;
+                l += c.cross(&(v * m)) + inertia * om;
+                energy += 0.5 * m * v.norm_squared() + 0.5 * om.dot(&(inertia * om));
+            }
+            (p, l, energy)
+        };
+        let (p0, l0, e0) = momenta(&w);
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 30);
+        // The corner's impact spins the cube, whose next corner meets the other cube in the
+        // next step: two impacts, each the model's (rapier's contact would not conserve the
+        // angular momentum: its speculative impulses act at two points apart).
+        assert_eq!(seen.len(), 4, "{mode:?}: {seen:?}");
+        let (p1, l1, e1) = momenta(&w);
+        let scale = p0.norm();
+        let tol = if F64 { 1e-12 } else { 1e-5 };
+        assert!((p1 - p0).norm() <= tol * scale, "{mode:?}: p {p0} -> {p1}");
+        assert!((l1 - l0).norm() <= tol * scale, "{mode:?}: L {l0} -> {l1}");
+        assert!(e1 <= e0 * (1.0 + tol), "{mode:?}: energy {e0} -> {e1}");
+        assert!(e1 < e0 * 0.999, "{mode:?}: some energy lost at e = {e}");
+        let ev = seen[0].1;
+        assert_eq!(ev.contact_points, 1, "{mode:?}: a corner is one point");
+        // The point is on b's face (x = 0.4 - h) within the search's tolerance.
+        let x = na(ev.point).x;
+        assert!(
+            (x - (0.4 - h)).abs() <= 1e-6,
+            "{mode:?}: contact at x = {x}"
+        );
+        assert!(
+            velocity(&w, b).1.norm() > 0.1,
+            "{mode:?}: the cube hit turns"
+        );
+    }
+}
+
+/// `Step` mode resolves the pair at the step's start; the cubes then leave at the closed-form
+/// speeds, rapier's resting contact holding them apart for that step.
+#[test]
+fn step_mode_resolves_a_cube_pair_at_the_step_start() {
+    let (h, e, speed) = (0.05, 0.8, 2.0);
+    let mut w = world();
+    let none = UnitQuaternion::identity();
+    let zero = Vector3::zeros();
+    let (a, _) = body(
+        &mut w,
+        cube(h, e, 0.0),
+        zero,
+        none,
+        Vector3::x() * speed,
+        zero,
+    );
+    let (b, _) = body(
+        &mut w,
+        cube(h, e, 0.0),
+        Vector3::x() * 0.4,
+        none,
+        zero,
+        zero,
+    );
+    let mut p = plugin(TimingMode::Step);
+    let seen = run(&mut p, &mut w, 30);
+    assert_eq!(seen.len(), 2, "{seen:?}");
+    assert!(
+        seen.iter()
+            .all(|(_, ev)| ev.timing == ImpactTiming::StepStart)
+    );
+    let (va, vb) = (velocity(&w, a).0.x, velocity(&w, b).0.x);
+    let tol = V_TOL * speed;
+    assert!((va - (1.0 - e) / 2.0 * speed).abs() <= tol, "{va}");
+    assert!((vb - (1.0 + e) / 2.0 * speed).abs() <= tol, "{vb}");
+}
+
+/// Two cubes whose collision groups exclude each other pass through each other in rapier
+/// alone, and with the plugin: no event, the first cube beyond the second at its speed.
+#[test]
+fn cubes_filtered_out_by_collision_groups_are_rapiers() {
+    for mode in MODES {
+        let mut w = world();
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        let groups =
+            InteractionGroups::new(Group::GROUP_1, Group::GROUP_2, InteractionTestMode::And);
+        let cube = || cube(0.05, 0.8, 0.0).collision_groups(groups);
+        let (a, _) = body(&mut w, cube(), zero, none, Vector3::x() * 2.0, zero);
+        let (b, _) = body(&mut w, cube(), Vector3::x() * 0.4, none, zero, zero);
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 30);
+        assert!(seen.is_empty(), "{mode:?}: {seen:?}");
+        let (xa, xb) = (
+            na(w.bodies[a].translation()).x,
+            na(w.bodies[b].translation()).x,
+        );
+        assert!(xa > xb + 0.5, "{mode:?}: passed through, {xa} {xb}");
+        assert_eq!(velocity(&w, a).0, Vector3::x() * 2.0, "{mode:?}");
+    }
+}
+
+/// Two dice falling under gravity, the lower one thrown up into the one above, face on:
+/// gravity moves both alike, so they meet when the closed form says and leave at
+/// `(1 -+ e)/2` of their relative speed, with no spin.
+#[test]
+fn dice_meeting_in_the_air_follow_the_closed_form() {
+    let (h, e, up) = (0.01, 0.5, 3.0);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = PhysicsWorld {
+            gravity: Vector::new(0.0, -9.81, 0.0),
+            ..Default::default()
+        };
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        let (low, _) = body(
+            &mut w,
+            cube(h, e, 0.3),
+            Vector3::y() * 1.0,
+            none,
+            Vector3::y() * up,
+            zero,
+        );
+        let (high, _) = body(
+            &mut w,
+            cube(h, e, 0.3),
+            Vector3::y() * 1.123,
+            none,
+            zero,
+            zero,
+        );
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 6);
+        assert_eq!(seen.len(), 2, "{mode:?}: {seen:?}");
+        let t_touch = (0.123 - 2.0 * h) / up;
+        assert!(
+            (seen[0].0 - t_touch).abs() <= T_TOL,
+            "{mode:?}: at {}",
+            seen[0].0
+        );
+        assert_eq!(seen[0].1.contact_points, 4, "{mode:?}");
+        // Both fell alike; relative to their common motion, `low` arrived at `up`.
+        let t_end = 6.0 * wide(w.integration_parameters.dt);
+        let fall = -9.81 * t_end;
+        let (vl, wl) = velocity(&w, low);
+        let (vh, wh) = velocity(&w, high);
+        let tol = V_TOL * up * 10.0;
+        assert!(
+            (vl.y - (fall + (1.0 - e) / 2.0 * up)).abs() <= tol,
+            "{mode:?}: {vl}"
+        );
+        assert!(
+            (vh.y - (fall + (1.0 + e) / 2.0 * up)).abs() <= tol,
+            "{mode:?}: {vh}"
+        );
+        assert!(
+            wl.norm() <= tol / h && wh.norm() <= tol / h,
+            "{mode:?}: {wl} {wh}"
+        );
+    }
+}
+
+/// A ball rolling on the lane into a pin standing on it (a box on the ground, the ground
+/// under it in rapier's solver): the pair is resolved at the step's end, in every mode, the
+/// events name both bodies, the pin is sent off, the two end apart, nothing is NaN, and no
+/// energy is made.
+#[test]
+fn a_ball_into_a_pin_standing_on_the_lane_knocks_it_off_without_overlap() {
+    for mode in MODES {
+        let mut w = PhysicsWorld {
+            gravity: Vector::new(0.0, -9.81, 0.0),
+            ..Default::default()
+        };
+        let (_, lane) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(plugin_support::up()).friction(0.3),
+        );
+        let r = 0.1;
+        let ball = ColliderBuilder::ball(real(r))
+            .density(1000.0)
+            .restitution(0.6)
+            .friction(0.2);
+        let (b, _) = body(
+            &mut w,
+            ball,
+            Vector3::new(0.0, r, 0.0),
+            UnitQuaternion::identity(),
+            Vector3::x() * 4.0,
+            Vector3::z() * (-4.0 / r),
+        );
+        let pin = ColliderBuilder::cuboid(0.03, 0.15, 0.03)
+            .density(500.0)
+            .restitution(0.6)
+            .friction(0.2);
+        let (pin, _) = body(
+            &mut w,
+            pin,
+            Vector3::new(0.6, 0.15, 0.0),
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            Vector3::zeros(),
+        );
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, lane).unwrap();
+        let energy = |w: &PhysicsWorld| -> f64 {
+            [b, pin]
+                .iter()
+                .map(|h| {
+                    let rb = &w.bodies[*h];
+                    let (m, v, om) = (wide(rb.mass()), na(rb.linvel()), na(rb.angvel()));
+                    let y = na(rb.center_of_mass()).y;
+                    0.5 * m * v.norm_squared()
+                        + 0.5 * om.dot(&(world_inertia(w, *h) * om))
+                        + m * 9.81 * y
+                })
+                .sum()
+        };
+        let e0 = energy(&w);
+        let seen = run(&mut p, &mut w, 30);
+        assert!(!seen.is_empty(), "{mode:?}: the ball hit the pin");
+        for (_, ev) in &seen {
+            let other = if ev.body == b { pin } else { b };
+            assert_eq!(ev.body2, Some(other), "{mode:?}");
+        }
+        for h in [b, pin] {
+            let rb = &w.bodies[h];
+            assert!(na(rb.linvel()).iter().all(|x| x.is_finite()), "{mode:?}");
+            assert!(
+                na(rb.translation()).iter().all(|x| x.is_finite()),
+                "{mode:?}"
+            );
+        }
+        assert!(
+            na(w.bodies[pin].linvel()).x > 0.5,
+            "{mode:?}: the pin is sent off"
+        );
+        let e1 = energy(&w);
+        assert!(e1 <= e0 * (1.0 + 1e-3), "{mode:?}: energy {e0} -> {e1}");
+        // Apart at the end: no contact deeper than rapier's own resting depth.
+        let (ca, cb) = (w.bodies[b].colliders()[0], w.bodies[pin].colliders()[0]);
+        if let Some(pair) = w.narrow_phase.contact_pair(ca, cb) {
+            for m in pair.manifolds() {
+                for pt in &m.points {
+                    assert!(wide(pt.dist) > -1e-3, "{mode:?}: overlap {}", pt.dist);
+                }
+            }
+        }
+    }
+}
