@@ -546,3 +546,57 @@ fn a_ball_into_a_pin_standing_on_the_lane_knocks_it_off_without_overlap() {
         }
     }
 }
+
+/// A stack of three opted-in dice dropped a little onto the ground: after the landing
+/// impacts the dice lie on each other, and those pairs stay rapier's resting contacts (no
+/// impact between them once at rest, no hook on them), the stack stands where rapier alone
+/// leaves it, and sleeps.
+#[test]
+fn a_stack_of_dice_lies_still_as_rapiers_resting_contact() {
+    let h = 0.02;
+    let make = || {
+        let mut w = PhysicsWorld {
+            gravity: Vector::new(0.0, -9.81, 0.0),
+            ..Default::default()
+        };
+        let (_, ground) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(plugin_support::up()),
+        );
+        let dice: Vec<RigidBodyHandle> = (0..3)
+            .map(|k| {
+                let y = h + k as f64 * (2.0 * h + 1e-4);
+                let (b, _) = w.insert(
+                    RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(y), 0.0)),
+                    cube(h, 0.5, 0.5),
+                );
+                b
+            })
+            .collect();
+        (w, ground, dice)
+    };
+    for mode in MODES {
+        let (mut alone, _, dice0) = make();
+        let (mut w, ground, dice) = make();
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+        let mut late = Vec::new();
+        for k in 0..240 {
+            alone.step();
+            let seen = run(&mut p, &mut w, 1);
+            if k >= 30 {
+                late.extend(seen);
+                for d in &dice {
+                    let c = w.bodies[*d].colliders()[0];
+                    assert_eq!(w.colliders[c].active_hooks(), ActiveHooks::empty(), "{mode:?}");
+                }
+            }
+        }
+        assert!(late.is_empty(), "{mode:?}: no impact between dice at rest: {late:?}");
+        for (d, d0) in dice.iter().zip(&dice0) {
+            let (y, y0) = (na(w.bodies[*d].translation()).y, na(alone.bodies[*d0].translation()).y);
+            assert!((y - y0).abs() <= 1e-4, "{mode:?}: at {y}, rapier alone {y0}");
+            assert!(w.bodies[*d].is_sleeping(), "{mode:?}: asleep");
+        }
+    }
+}
