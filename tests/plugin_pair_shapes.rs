@@ -588,14 +588,27 @@ fn a_stack_of_dice_lies_still_as_rapiers_resting_contact() {
                 late.extend(seen);
                 for d in &dice {
                     let c = w.bodies[*d].colliders()[0];
-                    assert_eq!(w.colliders[c].active_hooks(), ActiveHooks::empty(), "{mode:?}");
+                    assert_eq!(
+                        w.colliders[c].active_hooks(),
+                        ActiveHooks::empty(),
+                        "{mode:?}"
+                    );
                 }
             }
         }
-        assert!(late.is_empty(), "{mode:?}: no impact between dice at rest: {late:?}");
+        assert!(
+            late.is_empty(),
+            "{mode:?}: no impact between dice at rest: {late:?}"
+        );
         for (d, d0) in dice.iter().zip(&dice0) {
-            let (y, y0) = (na(w.bodies[*d].translation()).y, na(alone.bodies[*d0].translation()).y);
-            assert!((y - y0).abs() <= 1e-4, "{mode:?}: at {y}, rapier alone {y0}");
+            let (y, y0) = (
+                na(w.bodies[*d].translation()).y,
+                na(alone.bodies[*d0].translation()).y,
+            );
+            assert!(
+                (y - y0).abs() <= 1e-4,
+                "{mode:?}: at {y}, rapier alone {y0}"
+            );
             assert!(w.bodies[*d].is_sleeping(), "{mode:?}: asleep");
         }
     }

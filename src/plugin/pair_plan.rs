@@ -174,8 +174,9 @@ struct Ball<'a> {
     asleep: bool,
     /// The acceleration of its user force (m/s^2).
     force_accel: f64,
-    /// Not a centred ball: its collider and state, for the contact queries.
-    shape: Option<(BodyGeom<'a>, State)>,
+    /// Not a centred ball: its collider and state, for the contact queries (boxed: the list
+    /// of a thousand balls is built every step, and stays small).
+    shape: Option<Box<(BodyGeom<'a>, State)>>,
 }
 
 /// The step's pairs (see the module's contract). `prev` are last step's pair roles (a pair
@@ -230,7 +231,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 Some(r) => (r + to_f64(co.contact_skin()), None),
                 None => {
                     let geom = body_geom(rb, colliders, &local_com);
-                    (geom.radius, Some((geom, rapier_state(rb))))
+                    (geom.radius, Some(Box::new((geom, rapier_state(rb)))))
                 }
             };
             let com = vec_to_na(rb.center_of_mass());
@@ -729,7 +730,7 @@ fn geom_state<'g, 'a>(
     colliders: &'a ColliderSet,
 ) -> (GeomRef<'g, 'a>, State) {
     match &m.shape {
-        Some((g, st)) => (GeomRef::Borrowed(g), *st),
+        Some(shape) => (GeomRef::Borrowed(&shape.0), shape.1),
         None => {
             let rb = &bodies[m.body];
             let local_com = vec_to_na(rb.local_center_of_mass());
