@@ -217,7 +217,17 @@ pub(crate) fn first_body_touch(
         };
         if touch.dist <= close {
             if touch.rate < 0.0 {
-                return Ok(Some(polish(&at, t, touch, t_end)));
+                let (tp, found) = polish(&at, t, touch, t_end);
+                if found.rate < 0.0 {
+                    return Ok(Some((tp, found)));
+                }
+                // Newton's step passed a closest approach that never touched (a graze): on
+                // from there.
+                t = tp + close.max(found.dist) / speed.max(1e-12);
+                if t > t_end {
+                    return Ok(None);
+                }
+                continue;
             }
             // Touching and separating (a graze, or a pair just resolved): step past it.
             t += close.max(touch.dist) / speed.max(1e-12);
@@ -278,7 +288,8 @@ fn polish(
 /// The contact point of an impact between two bodies at a touch, resolved as one impact (as a
 /// flat landing on a ground is, see the integration guide): the points of parry's contact
 /// manifold of the two touching parts (for two faces, the corners of their overlap) that lie
-/// within `flat_tolerance x` the body's size of the closest one. Two or more give one impact at
+/// within `flat_tolerance x` the body's size of the closest one and approach there. Two or
+/// more give one impact at
 /// their centroid, moved onto the contact plane; otherwise the touch point. Returns the point
 /// and the count.
 pub(crate) fn touch_point(
@@ -321,7 +332,11 @@ pub(crate) fn touch_point(
                 let p1 = vec_to_na(p.local_p1);
                 let p2 = rel * Point3::from(vec_to_na(p.local_p2));
                 let x = (pose_a * Point3::from(0.5 * (p1 + p2.coords))).coords;
-                if !points.iter().any(|q| (q - x).norm() <= tol) {
+                // Only the points that approach (a tumbling face lands on some corners
+                // first), as for a landing on a ground.
+                let u = body_velocity_at(sa, &x) - body_velocity_at(sb, &x);
+                let approaching = touch.normal.dot(&u) > 0.0;
+                if approaching && !points.iter().any(|q| (q - x).norm() <= tol) {
                     points.push(x);
                 }
             }

@@ -897,6 +897,7 @@ impl<H> ImpactPlugin<H> {
             colliders,
             &sets,
             &prev_pairs,
+            &step.grounds,
             g,
             dt,
             &step.policy,

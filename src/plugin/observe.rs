@@ -205,6 +205,39 @@ pub(crate) fn ground_geom<'a>(
     })
 }
 
+/// Does rapier's solver hold `body` in contact with anything but `partner` after the last
+/// step, a ground included (a die lying on the table, a pin standing on the lane), or has it
+/// a joint? Such a body cannot be moved alone through an impact with `partner`, and its pair
+/// with it is left to rapier (`pair_plan.rs`).
+pub(crate) fn held_besides(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    partner: ColliderHandle,
+    sets: &Sets,
+) -> bool {
+    if sets.impulse_joints.attached_joints(body).next().is_some()
+        || sets.multibody_joints.rigid_body_link(body).is_some()
+    {
+        return true;
+    }
+    rb.colliders().iter().any(|ch| {
+        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            other != partner
+                && pair.solver_manifolds().iter().any(|m| {
+                    m.data
+                        .solver_flags
+                        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+                        && !m.data.solver_contacts.is_empty()
+                })
+        })
+    })
+}
+
 /// Did the body touch, in rapier's solver after the last step, anything but a ground and
 /// the collider `partner` (a ball's pair partner), or does it have a joint? What presses a
 /// pair of balls is a third body.

@@ -3,8 +3,9 @@
 //!
 //! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
 //! (`Registry::takes_pairs`) that have one enabled, solid collider each (a ball centred on the
-//! centre of mass, met in closed form; or any other shape, a die or a pin, met through parry's
-//! contact, `body_contact.rs`), finds the pairs of a body faster than half the resting speed
+//! centre of mass, met in closed form; or any other convex shape, a die or a pin, met through
+//! parry's contact, `body_contact.rs`; for those, a pair whose body rapier's solver holds
+//! against anything else, or that lies within the resting gap of a ground, is rapier's), finds the pairs of a body faster than half the resting speed
 //! whose bounding spheres, swept over the step, overlap (a BVH over the swept spheres, refitted
 //! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
 //! square of the bodies), skips the pairs rapier would not solve or the user's filter refuses,
@@ -23,9 +24,10 @@ use super::body_contact::body_contact;
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;
 use super::geometry::BodyGeom;
+use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, body_geom, neighbours, pressed_besides, rapier_state};
+use super::observe::{Sets, body_geom, held_besides, neighbours, pressed_besides, rapier_state};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::{PairKey, material};
@@ -44,7 +46,7 @@ use nalgebra::Vector3;
 pub(crate) struct PlannedPair {
     pub a: RigidBodyHandle,
     pub b: RigidBodyHandle,
-    /// The pair's key ([`pair_key`] of the two ball colliders).
+    /// The pair's key ([`pair_key`] of the two bodies' colliders).
     pub key: PairKey,
     /// Two centred balls: the line of centres is the contact normal, and `reach` the
     /// centres' distance at contact. Otherwise any shapes (`body_contact.rs` finds the
@@ -57,7 +59,7 @@ pub(crate) struct PlannedPair {
     /// balls).
     pub normal: Vector3<f64>,
     pub role: Role,
-    /// Its balls need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
+    /// Its bodies need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
     /// `Resting` one that rapier would bounce higher than the resting gap gets zero
     /// restitution. A pair with hook flags is never recycled by rapier: flagging every
     /// resting pair of a pile made rapier's contact detection 2.8 times as costly.
@@ -162,7 +164,8 @@ pub(crate) fn pair_key(c1: ColliderHandle, c2: ColliderHandle) -> PairKey {
     }
 }
 
-/// A body that takes part in impacts between bodies, as the plan sees it at the step start.
+/// A body that takes part in impacts between bodies, as the plan sees it at the step start
+/// (named for the common case).
 struct Ball<'a> {
     body: RigidBodyHandle,
     collider: ColliderHandle,
@@ -191,6 +194,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     colliders: &ColliderSet,
     sets: &Sets,
     prev: &HandleMap<PairKey, Role>,
+    grounds: &[GroundMotion],
     gravity: Vector3<f64>,
     dt: f64,
     policy: &Policy,
@@ -229,6 +233,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .filter(|r| (centre - local_com).norm() <= 1e-9 * r);
             let (radius, shape) = match ball {
                 Some(r) => (r + to_f64(co.contact_skin()), None),
+                // A compound or a mesh is rapier's: parry's contact manifolds between them are
+                // in their pieces' frames.
+                None if !co.shape().is_convex() => return None,
                 None => {
                     let geom = body_geom(rb, colliders, &local_com);
                     (geom.radius, Some(Box::new((geom, rapier_state(rb)))))
@@ -312,18 +319,46 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 geom_state(a, bodies, colliders),
                 geom_state(b, bodies, colliders),
             );
+            // A body rapier's solver holds against something else (a die lying on the table,
+            // a pin standing on the lane) cannot be moved alone through the impact, and out
+            // of rapier's solver the pair would be checked only at the step's end, where a
+            // fast die may have passed through: the pair is rapier's, as it is.
+            // So is one within the resting gap of a ground at the step's start (rapier's
+            // narrow phase may not hold the contact yet: a die just put on the table).
+            let on_ground = |m: &Ball| {
+                let half = to_real(m.radius + policy.resting_gap);
+                !registry
+                    .index
+                    .near(grounds, vec_from_na(&m.com), half)
+                    .is_empty()
+            };
+            if held_besides(a.body, &bodies[a.body], b.collider, sets)
+                || held_besides(b.body, &bodies[b.body], a.collider, sets)
+                || on_ground(a)
+                || on_ground(b)
+            {
+                return None;
+            }
             let turn = |m: &Ball, s: &State| match m.shape {
                 Some(_) => s.w.norm() * m.radius * dt,
                 None => 0.0,
             };
             let turn = turn(a, &sa) + turn(b, &sb);
             let touch = body_contact(ga.get(), &sa, gb.get(), &sb, travel + turn + margin)?;
-            // The closest points' closing speed, and what a turn can add to it: a turning
-            // body's other corner may swing in first (a cube that hit a cube with its corner,
-            // spun by the impact, meets it again). Without turning (a die lying on a die)
-            // it is the closest points' speed.
-            (touch.dist, -touch.rate + turn / dt, touch.normal, 0.0)
+            // The closest points' closing speed, and what a turn can add to it along the
+            // normal (the spin about the normal adds nothing): a turning body's other corner
+            // may swing in first (a cube that hit a cube with its corner, spun by the impact,
+            // meets it again). Without turning (a die lying on a die) it is the closest
+            // points' speed.
+            let n = touch.normal;
+            let tilt = |m: &Ball, s: &State| match m.shape {
+                Some(_) => (s.w - n * n.dot(&s.w)).norm() * m.radius,
+                None => 0.0,
+            };
+            let closing = -touch.rate + tilt(a, &sa) + tilt(b, &sb);
+            (touch.dist, closing, n, turn)
         };
+        // (A turn's reach, beyond the closing speed, for shapes that are not balls.)
         let closes = gap <= closing * dt + 0.5 * forces * dt * dt + turn + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
         // rapier's own bounce of a pair it solves: `e` times the approach, the step the

@@ -63,8 +63,8 @@ pub(crate) struct ClusterBall<'a> {
     pub inertia: Inertia,
 }
 
-/// The clusters of the step's `Impact` pairs between balls (joined through shared
-/// balls) whose every ball moved alone in the step (no contact in rapier's solver, no
+/// The clusters of the step's `Impact` pairs between bodies (joined through shared
+/// bodies) whose every body moved alone in the step (no contact in rapier's solver, no
 /// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
 /// `TimeOfImpact` and `Exact` modes: moved together from their start states
 /// (`pair_reconstruct.rs`), checked against their grounds (`EndCheck::Flown`) and
