@@ -264,23 +264,33 @@ pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {
     }
 }
 
-/// The impacts between two bodies in a step's events (one event per ball, side by side):
-/// the two balls together gain no kinetic energy when `e <= 1`.
+/// The impacts between two bodies in a step's events (one event per body, side by side, at
+/// the same point): the two bodies together gain no kinetic energy when `e <= 1`. The two
+/// events of one impact are taken together, and then both skipped: a pair resolved twice in
+/// a step (`Step` mode's passes along a chain) gives four events in a row, and the second and
+/// third are halves of different impacts.
 pub fn check_pair_energy(events: &[ImpactEvent], label: &str) {
-    for w in events.windows(2) {
-        let (a, b) = (&w[0], &w[1]);
+    let mut i = 0;
+    while i + 1 < events.len() {
+        let (a, b) = (&events[i], &events[i + 1]);
         let pair = a.kind == EventKind::Impact
             && b.kind == EventKind::Impact
             && a.body2 == Some(b.body)
             && b.body2 == Some(a.body)
-            && a.time == b.time;
-        if pair && a.restitution <= 1.0 {
+            && a.time == b.time
+            && a.point == b.point;
+        if !pair {
+            i += 1;
+            continue;
+        }
+        if a.restitution <= 1.0 {
             let (before, after) = (a.ke_before + b.ke_before, a.ke_after + b.ke_after);
             assert!(
                 after - before <= ENERGY_REL_TOL * before + ENERGY_ABS_TOL,
                 "{label}: impact between bodies gained energy: {before:e} -> {after:e} J: {a:?} {b:?}"
             );
         }
+        i += 2;
     }
 }
 
