@@ -799,3 +799,54 @@ fn a_stack_of_dice_lies_still_as_rapiers_resting_contact() {
         }
     }
 }
+
+/// A die spinning in place beside a die at rest, neither moving: its corner swings into the
+/// other's face. The spin makes it a body that can meet another (its corners move at the
+/// angular speed times its radius), so the impact is the model's, inside the step, and
+/// conserves angular momentum.
+#[test]
+fn a_die_spinning_in_place_hits_the_one_beside_it() {
+    let h = 0.05;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world();
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        let spin = Vector3::z() * 20.0;
+        let (a, _) = body(&mut w, cube(h, 0.5, 0.2), zero, none, zero, spin);
+        let (b, _) = body(
+            &mut w,
+            cube(h, 0.5, 0.2),
+            Vector3::x() * 0.115,
+            none,
+            zero,
+            zero,
+        );
+        let l0 = world_inertia(&w, a) * spin;
+        let mut p = plugin(mode);
+        let seen = run(&mut p, &mut w, 6);
+        assert!(
+            !seen.is_empty(),
+            "{mode:?}: the corner's impact is the model's"
+        );
+        assert_eq!(seen[0].1.timing, ImpactTiming::InStep, "{mode:?}");
+        // The corner (radius h sqrt 2) reaches the face at x = 0.065 when it has turned
+        // 45 - acos(0.065 / (h sqrt 2)) degrees.
+        let turn = std::f64::consts::FRAC_PI_4 - (0.065 / (h * 2f64.sqrt())).acos();
+        assert!(
+            (seen[0].0 - turn / 20.0).abs() <= 1e-6,
+            "{mode:?}: at {}",
+            seen[0].0
+        );
+        let mut l1 = Vector3::zeros();
+        for hnd in [a, b] {
+            let rb = &w.bodies[hnd];
+            let (m, v, om) = (wide(rb.mass()), na(rb.linvel()), na(rb.angvel()));
+            l1 += na(rb.center_of_mass()).cross(&(v * m)) + world_inertia(&w, hnd) * om;
+        }
+        let tol = if F64 { 1e-12 } else { 1e-5 };
+        assert!(
+            (l1 - l0).norm() <= tol * l0.norm(),
+            "{mode:?}: L {l0} -> {l1}"
+        );
+    }
+}

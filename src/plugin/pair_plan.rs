@@ -177,6 +177,9 @@ struct Ball<'a> {
     asleep: bool,
     /// The acceleration of its user force (m/s^2).
     force_accel: f64,
+    /// How fast its turning can move a surface point: the angular speed times the radius for
+    /// a shape that is not a ball, 0 for a ball (m/s).
+    turn_speed: f64,
     /// Not a centred ball: its collider and state, for the contact queries (boxed: the list
     /// of a thousand balls is built every step, and stays small).
     shape: Option<Box<(BodyGeom<'a>, State)>>,
@@ -250,6 +253,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 radius,
                 asleep: rb.is_sleeping(),
                 force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
+                turn_speed: match shape {
+                    Some(_) => to_f64(rb.angvel().length()) * radius,
+                    None => 0.0,
+                },
                 shape,
             })
         })
@@ -258,6 +265,18 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
         return plan;
     }
+    // The pairs that may be impacts, or that rapier would bounce: approaching faster than
+    // the resting speed, so with a body faster than half of it (a mover: its centre's speed
+    // and its turn's reach, `turn_speed`), unless a pair's combined restitution can reach 1
+    // (rapier then bounces any approach: a ball's own restitution of 1, or two summed). Two
+    // sleeping balls cannot meet, unless a chain reaches them (below).
+    let mover = |b: &Ball| 2.0 * (b.v.norm() + b.turn_speed) > policy.resting_speed;
+    let any_elastic = balls.iter().any(|b| {
+        let co = &colliders[b.collider];
+        co.restitution() >= 1.0
+            || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
+    });
+    let movers = balls.iter().filter(|b| mover(b)).count();
     // Each ball's sphere swept over the step: its travel under gravity and any force is at
     // most |v| dt + |a| dt^2 (a generous bound for a user force too, checked per pair below).
     let margin = policy.resting_gap.max(policy.prediction);
@@ -436,18 +455,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         plan.roles.insert(pair.key, pair.role);
         plan.pairs.push(pair);
     };
-    // The pairs that may be impacts, or that rapier would bounce: approaching faster than
-    // the resting speed, so with a ball faster than half of it (a mover), unless a pair's
-    // combined restitution can reach 1 (rapier then bounces any approach: a ball's own
-    // restitution of 1, or two summed). Two sleeping balls cannot meet, unless a chain
-    // reaches them (below).
-    let mover = |b: &Ball| 2.0 * b.v.norm() > policy.resting_speed;
-    let any_elastic = balls.iter().any(|b| {
-        let co = &colliders[b.collider];
-        co.restitution() >= 1.0
-            || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
-    });
-    let movers = balls.iter().filter(|b| mover(b)).count();
     // One traversal of the tree against itself costs about as much as three balls' queries
     // per ball (measured on a pile of 1 000).
     let candidates: Vec<(usize, usize)> = if any_elastic || 3 * movers > balls.len() {
