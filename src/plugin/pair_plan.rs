@@ -279,13 +279,20 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     let movers = balls.iter().filter(|b| mover(b)).count();
     // Each ball's sphere swept over the step: its travel under gravity and any force is at
     // most |v| dt + |a| dt^2 (a generous bound for a user force too, checked per pair below).
+    // Asked of every pair looked at (thousands a step in a pile): computed once a ball.
     let margin = policy.resting_gap.max(policy.prediction);
-    let swept =
-        |b: &Ball| b.radius + b.v.norm() * dt + (gravity.norm() + b.force_accel) * dt * dt + margin;
+    let g_len = gravity.norm();
+    let swept: Vec<f64> = balls
+        .iter()
+        .map(|b| b.radius + b.v.norm() * dt + (g_len + b.force_accel) * dt * dt + margin)
+        .collect();
+    let is_mover: Vec<bool> = balls.iter().map(mover).collect();
+    let mover = |k: usize| is_mover[k];
     let leaves: Vec<(u32, Aabb)> = balls
         .iter()
-        .map(|b| {
-            let half = to_real(swept(b));
+        .zip(&swept)
+        .map(|(b, swept)| {
+            let half = to_real(*swept);
             (
                 slot_of_body(b.body),
                 Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
@@ -310,14 +317,14 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // pass the impact on).
     let evaluate = |i: usize, j: usize, chain: bool| -> Option<PlannedPair> {
         let (a, b) = (&balls[i], &balls[j]);
-        let reach = a.radius + b.radius;
         let d = b.com - a.com;
-        let len = d.norm();
         // Beyond reach: their spheres' travel cannot close the gap in the step.
-        let travel = swept(a) - a.radius + swept(b) - b.radius;
-        if len - reach > travel {
+        let (reach, reach_swept) = (a.radius + b.radius, swept[i] + swept[j]);
+        if d.norm_squared() > reach_swept * reach_swept {
             return None;
         }
+        let len = d.norm();
+        let travel = reach_swept - reach;
         let forces = a.force_accel + b.force_accel;
         let balls_only = a.shape.is_none() && b.shape.is_none();
         let (gap, closing, normal, turn) = if balls_only {
@@ -461,14 +468,14 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         index
             .overlapping()
             .into_iter()
-            .filter(|(i, j)| any_elastic || mover(&balls[*i]) || mover(&balls[*j]))
+            .filter(|(i, j)| any_elastic || mover(*i) || mover(*j))
             .collect()
     } else {
         let mut out = Vec::new();
-        for (m, _) in balls.iter().enumerate().filter(|(_, b)| mover(b)) {
+        for m in (0..balls.len()).filter(|m| mover(*m)) {
             for j in index.meeting(&leaves[m].1) {
                 // A pair of two movers once, from the first.
-                if j != m && (j > m || !mover(&balls[j])) {
+                if j != m && (j > m || !mover(j)) {
                     out.push((m.min(j), m.max(j)));
                 }
             }
