@@ -222,12 +222,8 @@ pub(crate) fn first_body_touch(
                     return Ok(Some((tp, found)));
                 }
                 // Newton's step passed a closest approach that never touched (a graze): on
-                // from there.
-                t = tp + close.max(found.dist) / speed.max(1e-12);
-                if t > t_end {
-                    return Ok(None);
-                }
-                continue;
+                // from here by the safe step, as for a touch that separates (the polished
+                // iterate may lie past a dip of a turning corner).
             }
             // Touching and separating (a graze, or a pair just resolved): step past it.
             t += close.max(touch.dist) / speed.max(1e-12);

@@ -4,8 +4,9 @@
 //! Contract: [`plan_pairs`] reads the bodies opted in to impacts between bodies
 //! (`Registry::takes_pairs`) that have one enabled, solid collider each (a ball centred on the
 //! centre of mass, met in closed form; or any other convex shape, a die or a pin, met through
-//! parry's contact, `body_contact.rs`; for those, a pair whose body rapier's solver holds
-//! against anything else, or that lies within the resting gap of a ground, is rapier's), finds the pairs of a body faster than half the resting speed
+//! parry's contact, `body_contact.rs`; for those, a pair whose body rapier's solver held
+//! against anything else last step, or that lies within the resting gap of a ground by
+//! parry's distance, is rapier's), finds the pairs of a body faster than half the resting speed
 //! whose bounding spheres, swept over the step, overlap (a BVH over the swept spheres, refitted
 //! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
 //! square of the bodies), skips the pairs rapier would not solve or the user's filter refuses,
@@ -23,11 +24,13 @@
 use super::body_contact::body_contact;
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;
-use super::geometry::BodyGeom;
+use super::geometry::{BodyGeom, contact};
 use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
-use super::observe::{Sets, body_geom, held_besides, neighbours, pressed_besides, rapier_state};
+use super::observe::{
+    Sets, body_geom, ground_geom, held_besides, neighbours, pressed_besides, rapier_state,
+};
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
 use super::resolve::{PairKey, material};
@@ -287,6 +290,29 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         .map(|b| b.radius + b.v.norm() * dt + (g_len + b.force_accel) * dt * dt + margin)
         .collect();
     let is_mover: Vec<bool> = balls.iter().map(mover).collect();
+    // A body that is not a ball lying within the resting gap of a ground (parry's distance
+    // to the grounds near it): its pairs are rapier's (see `evaluate`).
+    let on_ground: Vec<bool> = balls
+        .iter()
+        .map(|m| {
+            let Some(shape) = &m.shape else {
+                return false;
+            };
+            let (geom, state) = (&shape.0, &shape.1);
+            let half = to_real(m.radius + policy.resting_gap);
+            registry
+                .index
+                .near(grounds, vec_from_na(&m.com), half)
+                .iter()
+                .any(|g| {
+                    ground_geom(&grounds[*g], colliders).is_some_and(|gg| {
+                        geom.parts.iter().any(|part| {
+                            contact(part, &gg, state, 0.0, policy.resting_gap).is_some()
+                        })
+                    })
+                })
+        })
+        .collect();
     let mover = |k: usize| is_mover[k];
     let leaves: Vec<(u32, Aabb)> = balls
         .iter()
@@ -327,7 +353,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         let travel = reach_swept - reach;
         let forces = a.force_accel + b.force_accel;
         let balls_only = a.shape.is_none() && b.shape.is_none();
-        let (gap, closing, normal, turn) = if balls_only {
+        let (gap, closing, normal) = if balls_only {
             // Closing speed along the line of centres (a ball's spin does not move its
             // surface along the normal).
             let closing = if len > 0.0 {
@@ -336,7 +362,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 0.0
             };
             let normal = if len > 0.0 { d / len } else { Vector3::zeros() };
-            (len - reach, closing, normal, 0.0)
+            (len - reach, closing, normal)
         } else {
             // Any shapes: parry's contact at the step's start, and the contact points'
             // closing speed; a turning body can bring a point closer by its angular speed
@@ -351,17 +377,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             // fast die may have passed through: the pair is rapier's, as it is.
             // So is one within the resting gap of a ground at the step's start (rapier's
             // narrow phase may not hold the contact yet: a die just put on the table).
-            let on_ground = |m: &Ball| {
-                let half = to_real(m.radius + policy.resting_gap);
-                !registry
-                    .index
-                    .near(grounds, vec_from_na(&m.com), half)
-                    .is_empty()
-            };
-            if held_besides(a.body, &bodies[a.body], b.collider, sets)
+            if on_ground[i]
+                || on_ground[j]
+                || held_besides(a.body, &bodies[a.body], b.collider, sets)
                 || held_besides(b.body, &bodies[b.body], a.collider, sets)
-                || on_ground(a)
-                || on_ground(b)
             {
                 return None;
             }
@@ -382,10 +401,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 None => 0.0,
             };
             let closing = -touch.rate + tilt(a, &sa) + tilt(b, &sb);
-            (touch.dist, closing, n, turn)
+            (touch.dist, closing, n)
         };
-        // (A turn's reach, beyond the closing speed, for shapes that are not balls.)
-        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + turn + margin;
+        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
         // rapier's own bounce of a pair it solves: `e` times the approach, the step the
         // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
