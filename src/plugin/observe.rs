@@ -215,27 +215,7 @@ pub(crate) fn held_besides(
     partner: ColliderHandle,
     sets: &Sets,
 ) -> bool {
-    if sets.impulse_joints.attached_joints(body).next().is_some()
-        || sets.multibody_joints.rigid_body_link(body).is_some()
-    {
-        return true;
-    }
-    rb.colliders().iter().any(|ch| {
-        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            let other = if pair.collider1 == *ch {
-                pair.collider2
-            } else {
-                pair.collider1
-            };
-            other != partner
-                && pair.solver_manifolds().iter().any(|m| {
-                    m.data
-                        .solver_flags
-                        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                        && !m.data.solver_contacts.is_empty()
-                })
-        })
-    })
+    solver_contact_besides(body, rb, partner, sets, |_| true)
 }
 
 /// Did the body touch, in rapier's solver after the last step, anything but a ground and
@@ -247,6 +227,20 @@ pub(crate) fn pressed_besides(
     partner: ColliderHandle,
     sets: &Sets,
     registry: &Registry,
+) -> bool {
+    solver_contact_besides(body, rb, partner, sets, |other| {
+        registry.entry(other).is_none()
+    })
+}
+
+/// Has the body a joint, or a pair in rapier's solver after the last step (solver contacts
+/// with rigid impulses) with a collider other than `partner` that `counts`?
+fn solver_contact_besides(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    partner: ColliderHandle,
+    sets: &Sets,
+    counts: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
     if sets.impulse_joints.attached_joints(body).next().is_some()
         || sets.multibody_joints.rigid_body_link(body).is_some()
@@ -261,7 +255,7 @@ pub(crate) fn pressed_besides(
                 pair.collider1
             };
             other != partner
-                && registry.entry(other).is_none()
+                && counts(other)
                 && pair.solver_manifolds().iter().any(|m| {
                     m.data
                         .solver_flags

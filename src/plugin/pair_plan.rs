@@ -604,85 +604,22 @@ pub(crate) fn step_start_impulses(
     policy: &Policy,
     dt: f64,
 ) -> Vec<super::events::ImpactEvent> {
-    use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
     let mut events = Vec::new();
     let impacts: Vec<usize> = (0..plan.pairs.len())
         .filter(|k| plan.pairs[*k].role == Role::Impact)
         .collect();
     let cap = max_impacts * plan.members.len().max(1);
-    let margin = policy.resting_gap.max(policy.prediction);
     'passes: for _ in 0..cap {
         let mut any = false;
         for k in &impacts {
             let pair = plan.pairs[*k];
-            let (ra, rb) = (&bodies[pair.a], &bodies[pair.b]);
-            let (sa, sb) = (rapier_state(ra), rapier_state(rb));
-            if !pair.balls {
-                let Some((after_a, after_b, pair_events)) =
-                    step_start_bodies(&pair, bodies, colliders, law, flat_tolerance, policy, dt)
-                else {
-                    continue;
-                };
-                events.extend(pair_events);
-                write_velocities(bodies, [(pair.a, sa, after_a), (pair.b, sb, after_b)]);
-                any = true;
-                if events.len() >= 2 * cap {
-                    break 'passes;
-                }
-                continue;
-            }
-            let d = sb.com - sa.com;
-            let len = d.norm();
-            if len == 0.0 {
-                continue;
-            }
-            let closing = (sa.v - sb.v).dot(&(d / len));
-            let gap = len - pair.reach;
-            if closing <= policy.resting_speed || gap > closing * dt + margin {
-                continue;
-            }
-            // The key orders the colliders by slot: match them to the bodies.
-            let (ca, cb) = if ra.colliders().contains(&pair.key.0) {
-                pair.key
+            let (sa, sb) = (rapier_state(&bodies[pair.a]), rapier_state(&bodies[pair.b]));
+            let resolved = if pair.balls {
+                step_start_balls(&pair, bodies, colliders, law, policy, dt)
             } else {
-                (pair.key.1, pair.key.0)
+                step_start_bodies(&pair, bodies, colliders, law, flat_tolerance, policy, dt)
             };
-            let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
-            let radius = |c: ColliderHandle| {
-                colliders.get(c).and_then(|co| {
-                    Some(to_f64(co.shape().as_ball()?.radius) + to_f64(co.contact_skin()))
-                })
-            };
-            let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
-                continue;
-            };
-            let input = ImpactInput {
-                body: pair.a,
-                inertia: &ia,
-                law,
-                material: material(&colliders[ca], &colliders[cb], None),
-                resting_speed: policy.resting_speed,
-                force_settle: false,
-                timing: super::events::ImpactTiming::StepStart,
-            };
-            // At the contact: the states moved along the line of centres to touching.
-            let shift = d / len * (gap.max(0.0) * 0.5);
-            let side = |body, collider, inertia, state: State, radius, shift| PairSide {
-                body,
-                collider,
-                inertia,
-                state: State {
-                    com: state.com + shift,
-                    ..state
-                },
-                radius,
-            };
-            let Some((after_a, after_b, pair_events)) = resolve_balls(
-                &input,
-                &side(pair.a, ca, &ia, sa, rad_a, shift),
-                &side(pair.b, cb, &ib, sb, rad_b, -shift),
-                0.0,
-            ) else {
+            let Some((after_a, after_b, pair_events)) = resolved else {
                 continue;
             };
             events.extend(pair_events);
@@ -725,6 +662,64 @@ fn write_velocities<const N: usize>(
     }
 }
 
+/// `Step` mode's impulse for a pair of centred balls: along their line of centres, the
+/// states moved along it to touching, if they approach faster than the resting speed and
+/// close the gap within the step. Both states after and the events.
+fn step_start_balls(
+    pair: &PlannedPair,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    law: crate::model::Law,
+    policy: &Policy,
+    dt: f64,
+) -> Option<(State, State, [super::events::ImpactEvent; 2])> {
+    use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
+    let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
+    let (sa, sb) = (rapier_state(ra), rapier_state(rb));
+    let margin = policy.resting_gap.max(policy.prediction);
+    let d = sb.com - sa.com;
+    let len = d.norm();
+    if len == 0.0 {
+        return None;
+    }
+    let closing = (sa.v - sb.v).dot(&(d / len));
+    let gap = len - pair.reach;
+    if closing <= policy.resting_speed || gap > closing * dt + margin {
+        return None;
+    }
+    // The key orders the colliders by slot: match them to the bodies.
+    let (ca, cb) = if ra.colliders().contains(&pair.key.0) {
+        pair.key
+    } else {
+        (pair.key.1, pair.key.0)
+    };
+    let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+    let radius = |c: ColliderHandle| {
+        colliders
+            .get(c)
+            .and_then(|co| Some(to_f64(co.shape().as_ball()?.radius) + to_f64(co.contact_skin())))
+    };
+    let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
+        return None;
+    };
+    // At the contact: the states moved along the line of centres to touching.
+    let shift = d / len * (gap.max(0.0) * 0.5);
+    let moved = |s: State, by: Vector3<f64>| State {
+        com: s.com + by,
+        ..s
+    };
+    let side_a = PairSide::new(pair.a, ca, &ia, moved(sa, shift), rad_a);
+    let side_b = PairSide::new(pair.b, cb, &ib, moved(sb, -shift), rad_b);
+    let input = ImpactInput::between(
+        &side_a,
+        law,
+        material(&colliders[ca], &colliders[cb], None),
+        policy.resting_speed,
+        super::events::ImpactTiming::StepStart,
+    );
+    resolve_balls(&input, &side_a, &side_b, 0.0)
+}
+
 /// `Step` mode's impulse for a pair of bodies not both centred balls: at their contact at
 /// the step's start (parry's, with the flat-landing points of `touch_point`), if they approach
 /// faster than the resting speed there and close the gap within the step. Both states after
@@ -761,26 +756,21 @@ fn step_start_bodies(
     );
     let (point, points) = touch_point(&ga, &sa, &gb, &sb, &touch, flat_tolerance);
     let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
-    let input = ImpactInput {
-        body: pair.a,
-        inertia: &ia,
+    let (side_a, side_b) = (
+        PairSide::new(pair.a, ca, &ia, sa, 0.0),
+        PairSide::new(pair.b, cb, &ib, sb, 0.0),
+    );
+    let input = ImpactInput::between(
+        &side_a,
         law,
-        material: material(&colliders[ca], &colliders[cb], None),
-        resting_speed: policy.resting_speed,
-        force_settle: false,
-        timing: super::events::ImpactTiming::StepStart,
-    };
-    let side = |body, collider, inertia, state| PairSide {
-        body,
-        collider,
-        inertia,
-        state,
-        radius: 0.0,
-    };
+        material(&colliders[ca], &colliders[cb], None),
+        policy.resting_speed,
+        super::events::ImpactTiming::StepStart,
+    );
     resolve_bodies(
         &input,
-        &side(pair.a, ca, &ia, sa),
-        &side(pair.b, cb, &ib, sb),
+        &side_a,
+        &side_b,
         &BodyContactAt {
             normal: touch.normal,
             point,

@@ -339,31 +339,28 @@ fn move_cluster(
             }
             Next::Touch(p, touch) => {
                 let (i, j) = pairs[p];
-                let side = |k: usize| PairSide {
-                    body: balls[k].cand.body,
-                    collider: balls[k].collider,
-                    inertia: &balls[k].inertia,
-                    state: moving[k].at(te),
-                    radius: balls[k].radius.unwrap_or(0.0),
+                let side = |k: usize| {
+                    let ball = &balls[k];
+                    let radius = ball.radius.unwrap_or(0.0);
+                    let state = moving[k].at(te);
+                    PairSide::new(ball.cand.body, ball.collider, &ball.inertia, state, radius)
                 };
-                let input = ImpactInput {
-                    body: balls[i].cand.body,
-                    inertia: &balls[i].inertia,
-                    law: view.config.law,
-                    material: material(
+                let (si, sj) = (side(i), side(j));
+                let input = ImpactInput::between(
+                    &si,
+                    view.config.law,
+                    material(
                         &colliders[balls[i].collider],
                         &colliders[balls[j].collider],
                         None,
                     ),
-                    resting_speed: step.policy.resting_speed,
-                    force_settle: false,
-                    timing: ImpactTiming::InStep,
-                };
+                    step.policy.resting_speed,
+                    ImpactTiming::InStep,
+                );
                 // A touch slower than the resting speed is a resting contact from here: the
                 // next step hands it to rapier's solver (`Resting`). Resolving it with e = 0
                 // would not end: balls left touching at nearly the same speed behind a chain
                 // meet again and again, in ever smaller impacts.
-                let (si, sj) = (side(i), side(j));
                 let closing = match &touch {
                     None => {
                         let line = (sj.state.com - si.state.com).normalize();

@@ -206,7 +206,7 @@ pub(crate) fn resolve(
     Some((after, event))
 }
 
-/// One ball of an impact between two balls, at the impact.
+/// One body of an impact between two bodies, at the impact.
 pub(crate) struct PairSide<'a> {
     pub body: RigidBodyHandle,
     pub collider: ColliderHandle,
@@ -214,6 +214,47 @@ pub(crate) struct PairSide<'a> {
     pub state: State,
     /// Radius to the contact point, skin included (m).
     pub radius: f64,
+}
+
+impl<'a> PairSide<'a> {
+    pub fn new(
+        body: RigidBodyHandle,
+        collider: ColliderHandle,
+        inertia: &'a Inertia,
+        state: State,
+        radius: f64,
+    ) -> Self {
+        Self {
+            body,
+            collider,
+            inertia,
+            state,
+            radius,
+        }
+    }
+}
+
+impl<'a> ImpactInput<'a> {
+    /// The input of an impact between body `a` and another ([`resolve_balls`],
+    /// [`resolve_bodies`], which read the law, the material, the resting speed and the timing;
+    /// `body` and `inertia` are `a`'s), never forced to settle.
+    pub fn between(
+        a: &PairSide<'a>,
+        law: Law,
+        material: Material,
+        resting_speed: f64,
+        timing: ImpactTiming,
+    ) -> Self {
+        Self {
+            body: a.body,
+            inertia: a.inertia,
+            law,
+            material,
+            resting_speed,
+            force_settle: false,
+            timing,
+        }
+    }
 }
 
 /// Resolves the impact of ball `a` on ball `b` (states at time `t`), their centres'

@@ -462,36 +462,10 @@ impl Settle<'_> {
         let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
             return;
         };
-        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
-            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
-        };
-        let touching = pressed(pair.a, ra) || pressed(pair.b, rb);
-        let input = ImpactInput {
-            body: pair.a,
-            inertia: &ia,
-            law: self.config.law,
-            material: material(&colliders[ca], &colliders[cb], None),
-            resting_speed: if touching {
-                step.policy.pressed_speed
-            } else {
-                step.policy.resting_speed
-            },
-            force_settle: false,
-            timing: ImpactTiming::StepEnd,
-        };
-        let side = |body, collider, inertia, state, radius| PairSide {
-            body,
-            collider,
-            inertia,
-            state,
-            radius,
-        };
-        if let Some((after_a, after_b, events)) = resolve_balls(
-            &input,
-            &side(pair.a, ca, &ia, sa, rad_a),
-            &side(pair.b, cb, &ib, touching_b, rad_b),
-            step.dt,
-        ) {
+        let side_a = PairSide::new(pair.a, ca, &ia, sa, rad_a);
+        let side_b = PairSide::new(pair.b, cb, &ib, touching_b, rad_b);
+        let input = self.step_end_input(&side_a, (ra, rb), &side_b, colliders, step);
+        if let Some((after_a, after_b, events)) = resolve_balls(&input, &side_a, &side_b, step.dt) {
             self.events.extend(events);
             sa = after_a;
             sb = State {
@@ -499,56 +473,19 @@ impl Settle<'_> {
                 ..after_b
             };
         }
-        let (wa, wb) = (1.0 / ia.mass, 1.0 / ib.mass);
-        let share = |w: f64| overlap * w / (wa + wb);
-        let moves = [
-            (
-                pair.a,
-                ca,
-                cb,
-                pair.b,
-                &ia,
-                &mut sa,
-                -n * share(wa),
-                -n,
-                rad_a,
-            ),
-            (
-                pair.b,
-                cb,
-                ca,
-                pair.a,
-                &ib,
-                &mut sb,
-                n * share(wb),
-                n,
-                rad_b,
-            ),
-        ];
-        for (body, collider, other, body2, inertia, state, shift, normal, radius) in moves {
-            if overlap == 0.0 {
-                break;
-            }
-            let before = *state;
-            state.com += shift;
-            let site = Site {
-                body,
-                collider,
-                ground: other,
-                body2: Some(body2),
-                normal,
-                // Its surface point facing the other ball.
-                point: before.com - normal * radius,
-            };
-            self.events.push(correction(
-                EventKind::PushOut,
-                &site,
-                inertia,
-                &before,
-                state,
-                step.dt,
-            ));
-        }
+        // Each ball's push-out at its surface point facing the other ball.
+        let facing =
+            |side: &Pushed, before: &State, normal: Vector3<f64>| before.com - normal * side.radius;
+        self.push_apart(
+            [
+                Pushed::new(pair.a, ca, &ia, &mut sa, rad_a),
+                Pushed::new(pair.b, cb, &ib, &mut sb, rad_b),
+            ],
+            n,
+            overlap,
+            facing,
+            step.dt,
+        );
         self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
     }
 
@@ -586,77 +523,101 @@ impl Settle<'_> {
             gb.parts[touch.parts.1].handle,
         );
         let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
-        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
-            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
-        };
-        let touching = pressed(pair.a, ra) || pressed(pair.b, rb);
-        let input = ImpactInput {
-            body: pair.a,
-            inertia: &ia,
-            law: self.config.law,
-            material: material(&colliders[ca], &colliders[cb], None),
-            resting_speed: if touching {
-                step.policy.pressed_speed
-            } else {
-                step.policy.resting_speed
-            },
-            force_settle: false,
-            timing: ImpactTiming::StepEnd,
-        };
         let (point, points) = touch_point(&ga, &sa, &gb, &sb, &touch, self.config.flat_tolerance);
-        let side = |body, collider, inertia, state| PairSide {
-            body,
-            collider,
-            inertia,
-            state,
-            radius: 0.0,
-        };
+        let side_a = PairSide::new(pair.a, ca, &ia, sa, 0.0);
+        let side_b = PairSide::new(pair.b, cb, &ib, sb, 0.0);
+        let input = self.step_end_input(&side_a, (ra, rb), &side_b, colliders, step);
         let at = BodyContactAt {
             normal: touch.normal,
             point,
             points,
         };
-        if let Some((after_a, after_b, events)) = resolve_bodies(
-            &input,
-            &side(pair.a, ca, &ia, sa),
-            &side(pair.b, cb, &ib, sb),
-            &at,
-            step.dt,
-        ) {
+        if let Some((after_a, after_b, events)) =
+            resolve_bodies(&input, &side_a, &side_b, &at, step.dt)
+        {
             self.events.extend(events);
             (sa, sb) = (after_a, after_b);
         }
         let overlap = (-touch.dist).max(0.0);
-        if overlap > 0.0 {
-            let n = touch.normal;
-            let (wa, wb) = (1.0 / ia.mass, 1.0 / ib.mass);
-            let share = |w: f64| overlap * w / (wa + wb);
-            let moves = [
-                (pair.a, ca, cb, pair.b, &ia, &mut sa, -n * share(wa), -n),
-                (pair.b, cb, ca, pair.a, &ib, &mut sb, n * share(wb), n),
-            ];
-            for (body, collider, other, body2, inertia, state, shift, normal) in moves {
-                let before = *state;
-                state.com += shift;
-                let site = Site {
-                    body,
-                    collider,
-                    ground: other,
-                    body2: Some(body2),
-                    normal,
-                    point: touch.point,
-                };
-                self.events.push(correction(
-                    EventKind::PushOut,
-                    &site,
-                    inertia,
-                    &before,
-                    state,
-                    step.dt,
-                ));
-            }
-        }
+        self.push_apart(
+            [
+                Pushed::new(pair.a, ca, &ia, &mut sa, 0.0),
+                Pushed::new(pair.b, cb, &ib, &mut sb, 0.0),
+            ],
+            touch.normal,
+            overlap,
+            |_: &Pushed, _: &State, _| touch.point,
+            step.dt,
+        );
         self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
+    }
+
+    /// Moves the two bodies of a pair apart along `n` (from the first towards the second) by
+    /// `overlap` (m), each by its inverse-mass share, with a `PushOut` event each at the point
+    /// `point` gives (from the body, its state before and the normal into it).
+    fn push_apart(
+        &mut self,
+        pair: [Pushed; 2],
+        n: Vector3<f64>,
+        overlap: f64,
+        point: impl Fn(&Pushed, &State, Vector3<f64>) -> Vector3<f64>,
+        dt: f64,
+    ) {
+        if overlap <= 0.0 {
+            return;
+        }
+        let [a, b] = pair;
+        let (wa, wb) = (1.0 / a.inertia.mass, 1.0 / b.inertia.mass);
+        let (ha, ca, hb, cb) = (a.body, a.collider, b.body, b.collider);
+        let moves = [(a, -n, wa, hb, cb), (b, n, wb, ha, ca)];
+        for (side, normal, w, body2, other) in moves {
+            let before = *side.state;
+            side.state.com += normal * (overlap * w / (wa + wb));
+            let site = Site {
+                body: side.body,
+                collider: side.collider,
+                ground: other,
+                body2: Some(body2),
+                normal,
+                point: point(&side, &before, normal),
+            };
+            self.events.push(correction(
+                EventKind::PushOut,
+                &site,
+                side.inertia,
+                &before,
+                side.state,
+                dt,
+            ));
+        }
+    }
+
+    /// The model's input for a pair resolved at the step's end (`ImpactTiming::StepEnd`): no
+    /// bounce slower than the resting speed, or the pressed speed if either body touched
+    /// something else in the step.
+    fn step_end_input<'a>(
+        &self,
+        a: &PairSide<'a>,
+        (ra, rb): (&RigidBody, &RigidBody),
+        b: &PairSide,
+        colliders: &ColliderSet,
+        step: &EndOfStep,
+    ) -> ImpactInput<'a> {
+        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
+            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
+        };
+        let touching = pressed(a.body, ra) || pressed(b.body, rb);
+        ImpactInput::between(
+            a,
+            self.config.law,
+            material(&colliders[a.collider], &colliders[b.collider], None),
+            if touching {
+                step.policy.pressed_speed
+            } else {
+                step.policy.resting_speed
+            },
+            ImpactTiming::StepEnd,
+        )
     }
 
     /// Writes the two bodies of a pair resolved at the step's end: moved apart, a body may be
@@ -744,6 +705,34 @@ fn pivot_pushed(
         let u = super::geometry::body_velocity_at(s, &p) - ground.velocity_at(&p, step.dt);
         hit.normal.dot(&u) < -step.policy.pressed_speed
     })
+}
+
+/// A body of a pair moved apart at the step's end (`Settle::push_apart`).
+struct Pushed<'s> {
+    body: RigidBodyHandle,
+    collider: ColliderHandle,
+    inertia: &'s Inertia,
+    state: &'s mut State,
+    /// A ball's radius to its contact point (m; 0 for other shapes).
+    radius: f64,
+}
+
+impl<'s> Pushed<'s> {
+    fn new(
+        body: RigidBodyHandle,
+        collider: ColliderHandle,
+        inertia: &'s Inertia,
+        state: &'s mut State,
+        radius: f64,
+    ) -> Self {
+        Self {
+            body,
+            collider,
+            inertia,
+            state,
+            radius,
+        }
+    }
 }
 
 #[cfg(test)]
