@@ -83,17 +83,15 @@ fn part_contact(
 /// points on a and on b.
 type ManifoldPoint = (f64, Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
-/// The deepest point of parry's contact manifolds of two parts (`rel`: b's pose in a's
-/// frame), within `prediction`: distance (skins not deducted), world normal from a to b, and
-/// the points on a and b. `None` when parry has no manifold for the pair (the caller asks its
-/// contact query then) or no point within reach.
-fn manifold_contact(
+/// The points of parry's contact manifolds of two parts (`rel`: b's pose in a's frame) within
+/// `prediction`, in the world frame. `None` when parry has no manifold for the pair.
+fn manifold_points(
     pa: &BodyPart,
     pb: &BodyPart,
     pose_a: &Isometry3<f64>,
     rel: &Isometry3<f64>,
     prediction: f64,
-) -> Option<ManifoldPoint> {
+) -> Option<Vec<ManifoldPoint>> {
     let mut manifolds: Vec<ContactManifold<(), ()>> = Vec::new();
     DefaultQueryDispatcher
         .contact_manifolds(
@@ -105,22 +103,33 @@ fn manifold_contact(
             &mut None,
         )
         .ok()?;
-    let mut best: Option<ManifoldPoint> = None;
+    let mut points = Vec::new();
     for m in &manifolds {
-        let n = vec_to_na(m.local_n1);
-        let Some(n) = n.try_normalize(0.5) else {
+        let Some(n) = vec_to_na(m.local_n1).try_normalize(0.5) else {
             continue;
         };
         for p in &m.points {
-            let dist = to_f64(p.dist);
-            if dist <= prediction && best.is_none_or(|b| dist < b.0) {
-                let p1 = pose_a * Point3::from(vec_to_na(p.local_p1));
-                let p2 = pose_a * (rel * Point3::from(vec_to_na(p.local_p2)));
-                best = Some((dist, pose_a.rotation * n, p1.coords, p2.coords));
-            }
+            let p1 = pose_a * Point3::from(vec_to_na(p.local_p1));
+            let p2 = pose_a * (rel * Point3::from(vec_to_na(p.local_p2)));
+            points.push((to_f64(p.dist), pose_a.rotation * n, p1.coords, p2.coords));
         }
     }
-    best
+    Some(points)
+}
+
+/// The deepest of [`manifold_points`] within `prediction`, or `None` (the caller asks parry's
+/// contact query then).
+fn manifold_contact(
+    pa: &BodyPart,
+    pb: &BodyPart,
+    pose_a: &Isometry3<f64>,
+    rel: &Isometry3<f64>,
+    prediction: f64,
+) -> Option<ManifoldPoint> {
+    manifold_points(pa, pb, pose_a, rel, prediction)?
+        .into_iter()
+        .filter(|p| p.0 <= prediction)
+        .min_by(|p, q| p.0.total_cmp(&q.0))
 }
 
 /// The closest contact over every part of `a` and `b` at states `sa`, `sb`, if within
@@ -187,10 +196,9 @@ pub(crate) fn first_body_touch(
     // each other a touch that separates is stepped over by it, and one that closes is
     // polished to rounding.
     let close = close_tolerance(a.geom.radius.min(b.geom.radius));
-    let bound = |t: f64| {
-        let (sa, sb) = (a.moving.at(t), b.moving.at(t));
+    let bound = |t: f64, sa: &State, sb: &State| {
         let left = (t_end - t).max(0.0);
-        let accel = a.moving.motion.accel_bound(&sa) + b.moving.motion.accel_bound(&sb);
+        let accel = a.moving.motion.accel_bound(sa) + b.moving.motion.accel_bound(sb);
         let turn = |m: &Mover, s: &State| {
             if m.turns {
                 m.moving.motion.max_angular_speed(s) * m.geom.radius
@@ -198,21 +206,23 @@ pub(crate) fn first_body_touch(
                 0.0
             }
         };
-        (sb.v - sa.v).norm() + accel * left + turn(a, &sa) + turn(b, &sb)
+        (sb.v - sa.v).norm() + accel * left + turn(a, sa) + turn(b, sb)
     };
+    let states = |t: f64| (a.moving.at(t), b.moving.at(t));
     let at = |t: f64, reach: f64| {
-        let (sa, sb) = (a.moving.at(t), b.moving.at(t));
+        let (sa, sb) = states(t);
         body_contact(a.geom, &sa, b.geom, &sb, reach)
     };
     let mut t = t;
     for _ in 0..MAX_ADVANCE {
         let prev = t;
-        let speed = bound(t);
+        let (sa, sb) = states(t);
+        let speed = bound(t, &sa, &sb);
         if !speed.is_finite() {
             return Err(BodyStalled);
         }
         let reach = speed * (t_end - t) + close;
-        let Some(touch) = at(t, reach) else {
+        let Some(touch) = body_contact(a.geom, &sa, b.geom, &sb, reach) else {
             return Ok(None);
         };
         if touch.dist <= close {
@@ -285,9 +295,8 @@ fn polish(
 /// flat landing on a ground is, see the integration guide): the points of parry's contact
 /// manifold of the two touching parts (for two faces, the corners of their overlap) that lie
 /// within `flat_tolerance x` the body's size of the closest one and approach there. Two or
-/// more give one impact at
-/// their centroid, moved onto the contact plane; otherwise the touch point. Returns the point
-/// and the count.
+/// more give one impact at their centroid, moved onto the contact plane; otherwise the touch
+/// point. Returns the point and the count.
 pub(crate) fn touch_point(
     a: &BodyGeom,
     sa: &State,
@@ -306,36 +315,23 @@ pub(crate) fn touch_point(
     let size = a.radius.min(b.radius);
     let tol = flat_tolerance * size + 1e-9 * (1.0 + size);
     let skins = pa.skin + pb.skin;
-    let mut manifolds: Vec<ContactManifold<(), ()>> = Vec::new();
-    let found = DefaultQueryDispatcher.contact_manifolds(
-        &pose_from_na(&rel),
-        pa.shape,
-        pb.shape,
-        to_real(touch.dist.max(0.0) + skins + tol),
-        &mut manifolds,
-        &mut None,
-    );
-    if found.is_err() {
+    let prediction = touch.dist.max(0.0) + skins + tol;
+    let Some(found) = manifold_points(pa, pb, &pose_a, &rel, prediction) else {
         return (touch.point, 1);
-    }
+    };
     // The points, each once: parry clips each face against the other, and two faces'
-    // coinciding corners come back from both.
+    // coinciding corners come back from both. Only the points that approach (a tumbling
+    // face lands on some corners first), as for a landing on a ground.
     let mut points: Vec<Vector3<f64>> = Vec::new();
-    for m in &manifolds {
-        for p in &m.points {
-            let d = to_f64(p.dist) - skins;
-            if d - touch.dist <= tol {
-                let p1 = vec_to_na(p.local_p1);
-                let p2 = rel * Point3::from(vec_to_na(p.local_p2));
-                let x = (pose_a * Point3::from(0.5 * (p1 + p2.coords))).coords;
-                // Only the points that approach (a tumbling face lands on some corners
-                // first), as for a landing on a ground.
-                let u = body_velocity_at(sa, &x) - body_velocity_at(sb, &x);
-                let approaching = touch.normal.dot(&u) > 0.0;
-                if approaching && !points.iter().any(|q| (q - x).norm() <= tol) {
-                    points.push(x);
-                }
-            }
+    for (dist, _, p1, p2) in found {
+        let x = 0.5 * (p1 + p2);
+        let u = body_velocity_at(sa, &x) - body_velocity_at(sb, &x);
+        let approaching = touch.normal.dot(&u) > 0.0;
+        if dist - skins - touch.dist <= tol
+            && approaching
+            && !points.iter().any(|q| (q - x).norm() <= tol)
+        {
+            points.push(x);
         }
     }
     if points.len() < 2 {

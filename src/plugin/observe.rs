@@ -180,9 +180,15 @@ pub(crate) fn rapier_state(rb: &RigidBody) -> State {
 /// Is the part a ball centred on the body's centre of mass (it cannot swing about a
 /// contact)?
 pub(crate) fn centred_ball(part: &BodyPart) -> bool {
-    part.shape.as_ball().is_some_and(|b| {
-        part.local.translation.vector.norm() <= 1e-9 * crate::plugin::convert::to_f64(b.radius)
-    })
+    part.shape
+        .as_ball()
+        .is_some_and(|b| centred(&part.local.translation.vector, to_f64(b.radius)))
+}
+
+/// Is a ball of `radius` whose centre lies `offset` from the body's centre of mass centred
+/// on it (to rounding of the body frame's coordinates)?
+pub(crate) fn centred(offset: &Vector3<f64>, radius: f64) -> bool {
+    offset.norm() <= 1e-9 * radius
 }
 
 /// A ground's geometry for the queries, if its collider still exists.

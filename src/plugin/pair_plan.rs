@@ -29,7 +29,7 @@ use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::observe::{
-    Sets, body_geom, ground_geom, held_besides, neighbours, pressed_besides, rapier_state,
+    Sets, body_geom, centred, ground_geom, held_besides, neighbours, pressed_besides, rapier_state,
 };
 use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
 use super::registry::Registry;
@@ -43,6 +43,7 @@ use crate::rapier::prelude::{
     RigidBodySet,
 };
 use nalgebra::Vector3;
+use std::cell::OnceCell;
 
 /// A pair of bodies with a role this step.
 #[derive(Clone, Copy, Debug)]
@@ -236,7 +237,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .shape()
                 .as_ball()
                 .map(|b| to_f64(b.radius))
-                .filter(|r| (centre - local_com).norm() <= 1e-9 * r);
+                .filter(|r| centred(&(centre - local_com), *r));
             let (radius, shape) = match ball {
                 Some(r) => (r + to_f64(co.contact_skin()), None),
                 // A compound or a mesh is rapier's: parry's contact manifolds between them are
@@ -273,13 +274,17 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // and its turn's reach, `turn_speed`), unless a pair's combined restitution can reach 1
     // (rapier then bounces any approach: a ball's own restitution of 1, or two summed). Two
     // sleeping balls cannot meet, unless a chain reaches them (below).
-    let mover = |b: &Ball| 2.0 * (b.v.norm() + b.turn_speed) > policy.resting_speed;
+    let is_mover: Vec<bool> = balls
+        .iter()
+        .map(|b| 2.0 * (b.v.norm() + b.turn_speed) > policy.resting_speed)
+        .collect();
+    let mover = |k: usize| is_mover[k];
     let any_elastic = balls.iter().any(|b| {
         let co = &colliders[b.collider];
         co.restitution() >= 1.0
             || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
     });
-    let movers = balls.iter().filter(|b| mover(b)).count();
+    let movers = is_mover.iter().filter(|m| **m).count();
     // Each ball's sphere swept over the step: its travel under gravity and any force is at
     // most |v| dt + |a| dt^2 (a generous bound for a user force too, checked per pair below).
     // Asked of every pair looked at (thousands a step in a pile): computed once a ball.
@@ -289,12 +294,13 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         .iter()
         .map(|b| b.radius + b.v.norm() * dt + (g_len + b.force_accel) * dt * dt + margin)
         .collect();
-    let is_mover: Vec<bool> = balls.iter().map(mover).collect();
     // A body that is not a ball lying within the resting gap of a ground (parry's distance
-    // to the grounds near it): its pairs are rapier's (see `evaluate`).
-    let on_ground: Vec<bool> = balls
-        .iter()
-        .map(|m| {
+    // to the grounds near it): its pairs are rapier's (see `evaluate`). Asked only of the
+    // bodies of a pair looked at, once a step each.
+    let lying: Vec<OnceCell<bool>> = balls.iter().map(|_| OnceCell::new()).collect();
+    let on_ground = |k: usize| {
+        *lying[k].get_or_init(|| {
+            let m = &balls[k];
             let Some(shape) = &m.shape else {
                 return false;
             };
@@ -312,8 +318,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                     })
                 })
         })
-        .collect();
-    let mover = |k: usize| is_mover[k];
+    };
     let leaves: Vec<(u32, Aabb)> = balls
         .iter()
         .zip(&swept)
@@ -364,6 +369,19 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             let normal = if len > 0.0 { d / len } else { Vector3::zeros() };
             (len - reach, closing, normal)
         } else {
+            // A body rapier's solver holds against something else (a die lying on the table,
+            // a pin standing on the lane) cannot be moved alone through the impact, and out
+            // of rapier's solver the pair would be checked only at the step's end, where a
+            // fast die may have passed through: the pair is rapier's, as it is.
+            // So is one within the resting gap of a ground at the step's start (rapier's
+            // narrow phase may not hold the contact yet: a die just put on the table).
+            if on_ground(i)
+                || on_ground(j)
+                || held_besides(a.body, &bodies[a.body], b.collider, sets)
+                || held_besides(b.body, &bodies[b.body], a.collider, sets)
+            {
+                return None;
+            }
             // Any shapes: parry's contact at the step's start, and the contact points'
             // closing speed; a turning body can bring a point closer by its angular speed
             // times its radius.
@@ -371,19 +389,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 geom_state(a, bodies, colliders),
                 geom_state(b, bodies, colliders),
             );
-            // A body rapier's solver holds against something else (a die lying on the table,
-            // a pin standing on the lane) cannot be moved alone through the impact, and out
-            // of rapier's solver the pair would be checked only at the step's end, where a
-            // fast die may have passed through: the pair is rapier's, as it is.
-            // So is one within the resting gap of a ground at the step's start (rapier's
-            // narrow phase may not hold the contact yet: a die just put on the table).
-            if on_ground[i]
-                || on_ground[j]
-                || held_besides(a.body, &bodies[a.body], b.collider, sets)
-                || held_besides(b.body, &bodies[b.body], a.collider, sets)
-            {
-                return None;
-            }
             let turn = |m: &Ball, s: &State| match m.shape {
                 Some(_) => s.w.norm() * m.radius * dt,
                 None => 0.0,
@@ -614,10 +619,20 @@ pub(crate) fn step_start_impulses(
         for k in &impacts {
             let pair = plan.pairs[*k];
             let (sa, sb) = (rapier_state(&bodies[pair.a]), rapier_state(&bodies[pair.b]));
+            let states = (sa, sb);
             let resolved = if pair.balls {
-                step_start_balls(&pair, bodies, colliders, law, policy, dt)
+                step_start_balls(&pair, states, bodies, colliders, law, policy, dt)
             } else {
-                step_start_bodies(&pair, bodies, colliders, law, flat_tolerance, policy, dt)
+                step_start_bodies(
+                    &pair,
+                    states,
+                    bodies,
+                    colliders,
+                    law,
+                    flat_tolerance,
+                    policy,
+                    dt,
+                )
             };
             let Some((after_a, after_b, pair_events)) = resolved else {
                 continue;
@@ -667,6 +682,7 @@ fn write_velocities<const N: usize>(
 /// close the gap within the step. Both states after and the events.
 fn step_start_balls(
     pair: &PlannedPair,
+    (sa, sb): (State, State),
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     law: crate::model::Law,
@@ -675,7 +691,6 @@ fn step_start_balls(
 ) -> Option<(State, State, [super::events::ImpactEvent; 2])> {
     use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
     let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
-    let (sa, sb) = (rapier_state(ra), rapier_state(rb));
     let margin = policy.resting_gap.max(policy.prediction);
     let d = sb.com - sa.com;
     let len = d.norm();
@@ -724,8 +739,10 @@ fn step_start_balls(
 /// the step's start (parry's, with the flat-landing points of `touch_point`), if they approach
 /// faster than the resting speed there and close the gap within the step. Both states after
 /// and the events.
+#[allow(clippy::too_many_arguments)]
 fn step_start_bodies(
     pair: &PlannedPair,
+    (sa, sb): (State, State),
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     law: crate::model::Law,
@@ -736,7 +753,6 @@ fn step_start_bodies(
     use super::body_contact::touch_point;
     use super::resolve::{BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_bodies};
     let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
-    let (sa, sb) = (rapier_state(ra), rapier_state(rb));
     let (la, lb) = (
         vec_to_na(ra.local_center_of_mass()),
         vec_to_na(rb.local_center_of_mass()),
@@ -744,7 +760,7 @@ fn step_start_bodies(
     let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
     let margin = policy.resting_gap.max(policy.prediction);
     let turn = (sa.w.norm() * ga.radius + sb.w.norm() * gb.radius) * dt;
-    let reach = ((sa.v - sb.v).norm() * dt + turn + margin).max(margin);
+    let reach = (sa.v - sb.v).norm() * dt + turn + margin;
     let touch = body_contact(&ga, &sa, &gb, &sb, reach)?;
     let closing = -touch.rate;
     if closing <= policy.resting_speed || touch.dist > closing * dt + turn + margin {

@@ -31,7 +31,7 @@ use super::geometry::{
     BodyGeom, GroundGeom, Search, SmallList, closest, first_impact, landing_point,
 };
 use super::handles::{HandleMap, HandleSet};
-use super::observe::{body_geom, touches_other};
+use super::observe::{body_geom, centred_ball, touches_other};
 use super::plan::{Candidate, EndOfStep};
 use super::policy::{EndCheck, Role};
 use super::reconstruct::ccd_consistent;
@@ -151,9 +151,8 @@ pub(crate) fn move_clusters(
                 let radius = part
                     .shape
                     .as_ball()
-                    .map(|b| to_f64(b.radius))
-                    .filter(|r| part.local.translation.vector.norm() <= 1e-9 * r)
-                    .map(|r| r + part.skin);
+                    .filter(|_| centred_ball(part))
+                    .map(|b| to_f64(b.radius) + part.skin);
                 let collider = part.handle;
                 let mut grounds = settle.impact_ground_geoms(cand, &geom, colliders, step);
                 let rolling_on = match &cand.rolling {

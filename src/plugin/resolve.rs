@@ -212,11 +212,13 @@ pub(crate) struct PairSide<'a> {
     pub collider: ColliderHandle,
     pub inertia: &'a Inertia,
     pub state: State,
-    /// Radius to the contact point, skin included (m).
+    /// A ball's radius to the contact point, skin included (m): read by [`resolve_balls`]
+    /// only (0 for other shapes).
     pub radius: f64,
 }
 
 impl<'a> PairSide<'a> {
+    /// A body of a pair at `state`.
     pub fn new(
         body: RigidBodyHandle,
         collider: ColliderHandle,
