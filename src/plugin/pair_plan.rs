@@ -408,6 +408,14 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             let closing = -touch.rate + tilt(a, &sa) + tilt(b, &sb);
             (touch.dist, closing, n)
         };
+        let slow = closing <= policy.resting_speed;
+        // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
+        // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
+        // pair is not planned. A pile's resting neighbours leave here, before their colliders
+        // and contacts are read.
+        if slow && !chain && !any_elastic {
+            return None;
+        }
         let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
         // rapier's own bounce of a pair it solves: `e` times the approach, the step the
@@ -421,7 +429,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         // Slower than the resting speed it is no impact: rapier's resting contact (a pile's
         // neighbours, balls drifting together), left as it is where rapier's bounce of it is
         // noise, and not planned (most pairs of a pile: their planning was most of its cost).
-        let slow = closing <= policy.resting_speed;
         if slow && !chain && !rapier_bounces {
             return None;
         }

@@ -24,7 +24,9 @@ use super::ground_index::GroundMotion;
 use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookFlags;
 use super::install::Lookup;
-use super::observe::{Sets, body_geom, centred_ball, ground_geom, neighbours, snapshot};
+use super::observe::{
+    Sets, body_geom, centred_ball, ground_geom, near_other, snapshot, touched_by_other,
+};
 use super::pair_plan::PairPlan;
 use super::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
 use super::registry::Registry;
@@ -377,10 +379,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                         // with e = 0 (`Policy::rests`). What touched the body is asked
                         // only where it decides (rarely: most resting pairs are slow),
                         // and only of a body measured after the last step.
-                        let pressed = || {
-                            measured
-                                && neighbours(handle, rb, sets, self.registry, &step.down).touching
-                        };
+                        let pressed =
+                            || measured && touched_by_other(handle, rb, sets, self.registry);
                         if step.policy.rests(dist, arrival, was_resting, pressed) {
                             Role::Resting
                         } else if self.config.timing == TimingMode::Step
@@ -657,7 +657,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): the contact graph.
-        if !member && neighbours(handle, rb, sets, self.registry, &step.down).near {
+        if !member && near_other(handle, rb, sets, self.registry) {
             return None;
         }
         let friction = self

@@ -24,7 +24,9 @@ use super::geometry::{BodyGeom, GroundGeom, SmallList, closest, landing_point};
 use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
-use super::observe::{NonGround, body_geom, ground_geom, neighbours, rapier_state};
+use super::observe::{
+    NonGround, body_geom, ground_geom, neighbours, rapier_state, touched_by_other,
+};
 use super::pair_plan::PlannedPair;
 use super::plan::{Candidate, EndOfStep, StepData};
 use super::policy::{EndAction, EndCheck, Role, Surroundings};
@@ -276,7 +278,7 @@ impl Settle<'_> {
     ) -> bool {
         let grounds = &step.grounds;
         if rb.user_torque() != Vector::ZERO
-            || neighbours(cand.body, rb, &step.sets, self.registry, &step.down).touching
+            || touched_by_other(cand.body, rb, &step.sets, self.registry)
         {
             return false;
         }
@@ -603,9 +605,8 @@ impl Settle<'_> {
         colliders: &ColliderSet,
         step: &EndOfStep,
     ) -> ImpactInput<'a> {
-        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
-            neighbours(h, rb, &step.sets, self.registry, &step.down).touching
-        };
+        let pressed =
+            |h: RigidBodyHandle, rb: &RigidBody| touched_by_other(h, rb, &step.sets, self.registry);
         let touching = pressed(a.body, ra) || pressed(b.body, rb);
         ImpactInput::between(
             a,
