@@ -2,7 +2,8 @@
 //! impact inside the step, at the contact parry finds, with the model's two-body form; against
 //! the closed forms (equal cubes face on: `(1 -+ e)/2`, no spin), against the model called on
 //! the analytic contact (a ball into a cube's face off its centre, with friction and spin), and
-//! against conservation (a cube's corner into a cube: momentum and angular momentum).
+//! against conservation (a cube's corner into a cube: momentum and angular momentum); a face
+//! turning flat onto a face is struck at the corners that approach only.
 
 mod plugin_support;
 
@@ -940,4 +941,107 @@ fn a_die_spinning_in_place_hits_the_one_beside_it() {
             "{mode:?}: L {l0} -> {l1}"
         );
     }
+}
+
+/// A cube turning fast against the face of a cube it touches, in `Step` mode (the impulse at
+/// the step's start, where the two touch): its face is flat on the other's to within the flat
+/// tolerance, but its turn (about the axis across the normal) drives the face's one edge in
+/// at 3 m/s while the other edge leaves at 1 m/s. The impact is at the midpoint of the edge
+/// that approaches, its two corners, with `model::resolve_pair`'s impulse there: the corners
+/// that leave are no part of a landing. Counted with them it would be the face's centre.
+#[test]
+fn a_face_turning_flat_onto_a_face_is_struck_at_the_corners_that_approach() {
+    let (h, e, mu, speed, turn) = (0.05, 0.6, 0.3, 1.0, 40.0);
+    // Turned about z so that the edge at -y leads, by 5e-6 m: well inside the flat tolerance
+    // (1e-3 of the cube's 8.7 cm bounding radius).
+    let tilt: f64 = 5e-5;
+    let lead = h * tilt.cos() + h * tilt.sin();
+    let gap = 1e-7;
+    let mut w = world();
+    let spin = Vector3::z() * turn;
+    let (a, _) = body(
+        &mut w,
+        cube(h, e, mu),
+        Vector3::zeros(),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), tilt),
+        Vector3::x() * speed,
+        spin,
+    );
+    let centre_b = Vector3::x() * (lead + h + gap);
+    let none = UnitQuaternion::identity();
+    let (b, _) = body(
+        &mut w,
+        cube(h, e, mu),
+        centre_b,
+        none,
+        Vector3::zeros(),
+        Vector3::zeros(),
+    );
+    let (body_a, body_b) = (model_body(&w, a), model_body(&w, b));
+    let mut p = plugin(TimingMode::Step);
+    p.step(&mut w);
+    let seen: Vec<ImpactEvent> = p
+        .events()
+        .iter()
+        .filter(|ev| ev.body2.is_some() && ev.kind == EventKind::Impact)
+        .copied()
+        .collect();
+    assert_eq!(seen.len(), 2, "one impact, an event each: {seen:?}");
+    // The midpoint of the leading edge's two corners, in the middle of the gap.
+    let corner = |z: f64| Vector3::new(lead, -h * tilt.cos() + h * tilt.sin(), z);
+    let point = 0.5 * (corner(h) + corner(-h)) + Vector3::x() * gap / 2.0;
+    let tol_point = if F64 { 1e-9 } else { 1e-6 };
+    for ev in &seen {
+        assert_eq!(ev.timing, ImpactTiming::StepStart);
+        assert_eq!(
+            ev.contact_points, 2,
+            "the two corners that approach: {ev:?}"
+        );
+        assert!(
+            (na(ev.point) - point).norm() <= tol_point,
+            "at {}, expected {point}",
+            na(ev.point)
+        );
+    }
+    // The normal is either face's (parry takes one as the reference face, `f32` and `f64`
+    // differ): both are a landing's normal within the flat tolerance. The model is asked on
+    // the one reported.
+    let ev_b = *seen.iter().find(|ev| ev.body == b).unwrap();
+    let normal = na(ev_b.normal);
+    let faces = [Vector3::x(), Vector3::new(tilt.cos(), tilt.sin(), 0.0)];
+    let tol_normal = if F64 { 1e-12 } else { 1e-6 };
+    assert!(
+        faces.iter().any(|f| (normal - f).norm() <= tol_normal),
+        "normal {normal}"
+    );
+    let contact = PairContact {
+        normal,
+        offset_a: point,
+        offset_b: point - centre_b,
+    };
+    let expected = model::resolve_pair(
+        ImpactConfig::default().law,
+        &body_a,
+        &BodyVelocity {
+            linear: Vector3::x() * speed,
+            angular: spin,
+        },
+        &body_b,
+        &BodyVelocity::default(),
+        &contact,
+        &Material {
+            restitution: e,
+            friction: mu,
+        },
+    )
+    .unwrap();
+    let scale = wide(w.bodies[a].mass()) * speed;
+    assert!(
+        (na(ev_b.impulse) - expected.impulse).norm() <= V_TOL * scale,
+        "{} expected {}",
+        na(ev_b.impulse),
+        expected.impulse
+    );
+    // Struck off its centre, the cube hit turns.
+    assert!(expected.b.angular.z.abs() > 1.0, "{}", expected.b.angular);
 }
