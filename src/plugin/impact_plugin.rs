@@ -25,7 +25,7 @@ use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
 use super::observe::{
-    Sets, body_geom, rapier_state, snapshot, surely_far, touched_by_other, touches_other,
+    Sets, body_geom, rapier_state, snapshot, surely_far, touched_besides_grounds, touches_other,
 };
 use super::pair_plan::{self, PairIndex, pair_key};
 use super::pair_reconstruct;
@@ -441,7 +441,7 @@ impl<H> ImpactPlugin<H> {
         if rb.is_sleeping()
             || !still
             || (end.com == hold.start.com && end.rot == hold.start.rot)
-            || touched_by_other(hold.body, rb, &step.sets, &self.registry)
+            || touched_besides_grounds(hold.body, rb, &step.sets, &self.registry)
         {
             return;
         }

@@ -221,7 +221,7 @@ pub(crate) fn held_besides(
     partner: ColliderHandle,
     sets: &Sets,
 ) -> bool {
-    solver_contact_besides(body, rb, partner, sets, |_| true)
+    solver_contact_besides(body, rb, Some(partner), sets, |_| true)
 }
 
 /// Did the body touch, in rapier's solver after the last step, anything but a ground and
@@ -234,7 +234,21 @@ pub(crate) fn pressed_besides(
     sets: &Sets,
     registry: &Registry,
 ) -> bool {
-    solver_contact_besides(body, rb, partner, sets, |other| {
+    solver_contact_besides(body, rb, Some(partner), sets, |other| {
+        registry.entry(other).is_none()
+    })
+}
+
+/// Did the body touch, in rapier's solver after the last step, anything but a ground, or
+/// does it have a joint? [`pressed_besides`] without a partner: the walk stops at the first
+/// contact.
+pub(crate) fn touched_besides_grounds(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    sets: &Sets,
+    registry: &Registry,
+) -> bool {
+    solver_contact_besides(body, rb, None, sets, |other| {
         registry.entry(other).is_none()
     })
 }
@@ -244,7 +258,7 @@ pub(crate) fn pressed_besides(
 fn solver_contact_besides(
     body: RigidBodyHandle,
     rb: &RigidBody,
-    partner: ColliderHandle,
+    partner: Option<ColliderHandle>,
     sets: &Sets,
     counts: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
@@ -260,7 +274,7 @@ fn solver_contact_besides(
             } else {
                 pair.collider1
             };
-            other != partner
+            Some(other) != partner
                 && counts(other)
                 && pair.solver_manifolds().iter().any(|m| {
                     m.data
@@ -317,7 +331,6 @@ impl NonGround {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Asked {
     Near,
-    Touching,
     Loaded,
 }
 
@@ -362,9 +375,6 @@ fn non_ground_contacts(
                     continue;
                 }
                 found.touching = true;
-                if asked == Asked::Touching {
-                    return found;
-                }
                 // rapier pushes the first collider's body along -normal, the second's along
                 // +normal.
                 let normal = vec_to_na(m.data.normal);
@@ -408,16 +418,6 @@ pub(crate) fn near_other(
     registry: &Registry,
 ) -> bool {
     walk_neighbours(body, rb, sets, registry, &Vector3::zeros(), Asked::Near).near
-}
-
-/// [`NonGround::touching`] of [`neighbours`], the walk stopped at the first contact.
-pub(crate) fn touched_by_other(
-    body: RigidBodyHandle,
-    rb: &RigidBody,
-    sets: &Sets,
-    registry: &Registry,
-) -> bool {
-    walk_neighbours(body, rb, sets, registry, &Vector3::zeros(), Asked::Touching).touching
 }
 
 fn walk_neighbours(

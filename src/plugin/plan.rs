@@ -25,7 +25,7 @@ use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookFlags;
 use super::install::Lookup;
 use super::observe::{
-    Sets, body_geom, centred_ball, ground_geom, near_other, snapshot, touched_by_other,
+    Sets, body_geom, centred_ball, ground_geom, near_other, snapshot, touched_besides_grounds,
 };
 use super::pair_plan::PairPlan;
 use super::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
@@ -380,7 +380,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                         // only where it decides (rarely: most resting pairs are slow),
                         // and only of a body measured after the last step.
                         let pressed =
-                            || measured && touched_by_other(handle, rb, sets, self.registry);
+                            || measured && touched_besides_grounds(handle, rb, sets, self.registry);
                         if step.policy.rests(dist, arrival, was_resting, pressed) {
                             Role::Resting
                         } else if self.config.timing == TimingMode::Step

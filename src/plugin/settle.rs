@@ -25,7 +25,7 @@ use super::ground_index::GroundMotion;
 use super::handles::HandleMap;
 use super::hook_flags::HookFlags;
 use super::observe::{
-    NonGround, body_geom, ground_geom, neighbours, rapier_state, touched_by_other,
+    NonGround, body_geom, ground_geom, neighbours, rapier_state, touched_besides_grounds,
 };
 use super::pair_plan::PlannedPair;
 use super::plan::{Candidate, EndOfStep, StepData};
@@ -278,7 +278,7 @@ impl Settle<'_> {
     ) -> bool {
         let grounds = &step.grounds;
         if rb.user_torque() != Vector::ZERO
-            || touched_by_other(cand.body, rb, &step.sets, self.registry)
+            || touched_besides_grounds(cand.body, rb, &step.sets, self.registry)
         {
             return false;
         }
@@ -605,8 +605,9 @@ impl Settle<'_> {
         colliders: &ColliderSet,
         step: &EndOfStep,
     ) -> ImpactInput<'a> {
-        let pressed =
-            |h: RigidBodyHandle, rb: &RigidBody| touched_by_other(h, rb, &step.sets, self.registry);
+        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
+            touched_besides_grounds(h, rb, &step.sets, self.registry)
+        };
         let touching = pressed(a.body, ra) || pressed(b.body, rb);
         ImpactInput::between(
             a,
