@@ -981,17 +981,25 @@ impl<H> ImpactPlugin<H> {
                 far_bodies.push(handle);
             }
         }
-        // The balls of the planned pairs that need the hooks (`PlannedPair::hooked`): `Impact`
-        // pairs leave rapier's solver, `Resting` ones rapier would bounce get zero restitution.
-        let mut seen: HandleSet<RigidBodyHandle> = HandleSet::default();
-        let members: Vec<RigidBodyHandle> = step
-            .pairs
-            .pairs
-            .iter()
-            .filter(|pair| pair.hooked)
-            .flat_map(|pair| [pair.a, pair.b])
-            .filter(|body| seen.insert(*body))
-            .collect();
+        // The planned pairs that need the hooks (`PlannedPair::hooked`): `Impact` pairs leave
+        // rapier's solver, `Resting` ones rapier would bounce get zero restitution. rapier
+        // hooks a pair when either collider is flagged, and every pair of a flagged ball loses
+        // its recycling: one ball of each pair is flagged, one already flagged where there is
+        // one (a flag put on or taken off is a change rapier's next step processes).
+        let mut chosen: HandleSet<RigidBodyHandle> = HandleSet::default();
+        let mut members: Vec<RigidBodyHandle> = Vec::new();
+        for pair in step.pairs.pairs.iter().filter(|pair| pair.hooked) {
+            if chosen.contains(&pair.a) || chosen.contains(&pair.b) {
+                continue;
+            }
+            let body = if self.flags.hooked().contains_key(&pair.b) {
+                pair.b
+            } else {
+                pair.a
+            };
+            chosen.insert(body);
+            members.push(body);
+        }
         self.flags.update(
             &self.registry,
             &near_bodies,

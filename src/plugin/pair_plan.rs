@@ -68,6 +68,9 @@ pub(crate) struct PlannedPair {
     /// restitution. A pair with hook flags is never recycled by rapier: flagging every
     /// resting pair of a pile made rapier's contact detection 2.8 times as costly.
     pub hooked: bool,
+    /// rapier's filtering and the user's were asked of it, and accept it (they are asked
+    /// only of a pair the plugin changes: see `plan_pairs`).
+    pub screened: bool,
 }
 
 /// The pairs of the step.
@@ -156,6 +159,41 @@ impl PairIndex {
         for (slot, _) in leaves {
             self.ball_of[*slot as usize] = u32::MAX;
         }
+    }
+}
+
+/// The pairs whose swept boxes overlap, as each ball's list of the others (both ways).
+struct Overlaps {
+    /// Ball `k`'s others are `others[start[k]..start[k + 1]]`.
+    start: Vec<u32>,
+    others: Vec<u32>,
+}
+
+impl Overlaps {
+    fn new(balls: usize, pairs: &[(usize, usize)]) -> Self {
+        let mut start = vec![0u32; balls + 1];
+        for (i, j) in pairs {
+            start[*i + 1] += 1;
+            start[*j + 1] += 1;
+        }
+        for k in 0..balls {
+            start[k + 1] += start[k];
+        }
+        let mut next = start.clone();
+        let mut others = vec![0u32; start[balls] as usize];
+        for (i, j) in pairs {
+            for (from, to) in [(*i, *j), (*j, *i)] {
+                others[next[from] as usize] = to as u32;
+                next[from] += 1;
+            }
+        }
+        Overlaps { start, others }
+    }
+
+    /// The balls whose swept boxes overlap ball `k`'s.
+    fn of(&self, k: usize) -> impl Iterator<Item = usize> + '_ {
+        let range = self.start[k] as usize..self.start[k + 1] as usize;
+        self.others[range].iter().map(|j| *j as usize)
     }
 }
 
@@ -342,6 +380,15 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                     .any(|m| m.points.iter().any(|p| p.data.impulse > 0.0))
             })
     };
+    // Would rapier not solve the pair `key` of the bodies' colliders, or the user's filter
+    // refuse it? (`filter.rs`; every test there is symmetric in the two.)
+    let refused = |key: PairKey, a: RigidBodyHandle, b: RigidBodyHandle| {
+        let user = flags.recorded_user_flags(colliders, key.0)
+            | flags.recorded_user_flags(colliders, key.1);
+        !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+            || filter::joint_disables_contacts(sets.impulse_joints, sets.multibody_joints, a, b)
+            || filter::user_refuses(user_hooks, user, bodies, colliders, key)
+    };
     // The pair of balls `i < j` with its role, or `None` when rapier would not solve it, the
     // user's filter refuses it, it cannot meet in the step, or it is slow and rapier's
     // resting contact as it is (unless `chain`: side by side with a ball of an impact, it may
@@ -418,13 +465,16 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         }
         let closes = gap <= closing * dt + 0.5 * forces * dt * dt + margin;
         let (ca, cb) = (&colliders[a.collider], &colliders[b.collider]);
+        // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
+        let held_last_step = OnceCell::new();
+        let held_pair = || *held_last_step.get_or_init(|| held(a, b));
         // rapier's own bounce of a pair it solves: `e` times the approach, the step the
         // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
         // cannot rise above the resting gap (below the pressed speed) it is rapier's resting
         // noise, and the pair keeps rapier's restitution.
         let rapier_bounces = closing > 0.0 && closes && {
             let e = material(ca, cb, None).restitution;
-            e >= 1.0 || e * closing > policy.pressed_speed && !held(a, b)
+            e >= 1.0 || e * closing > policy.pressed_speed && !held_pair()
         };
         // Slower than the resting speed it is no impact: rapier's resting contact (a pile's
         // neighbours, balls drifting together), left as it is where rapier's bounce of it is
@@ -432,29 +482,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         if slow && !chain && !rapier_bounces {
             return None;
         }
-        let user = flags.recorded_user_flags(colliders, a.collider)
-            | flags.recorded_user_flags(colliders, b.collider);
-        if !filter::rapier_solves(bodies, ca, cb)
-            || filter::joint_disables_contacts(
-                sets.impulse_joints,
-                sets.multibody_joints,
-                a.body,
-                b.body,
-            )
-            || filter::user_refuses(
-                user_hooks,
-                user,
-                bodies,
-                colliders,
-                (a.collider, b.collider),
-            )
-        {
-            return None;
-        }
         let key = pair_key(a.collider, b.collider);
         // Held at rest last step: planned `Resting`, or (slow pairs are not planned) touching
         // in rapier's solver.
-        let was_resting = || prev.get(&key) == Some(&Role::Resting) || held(a, b);
+        let was_resting = || prev.get(&key) == Some(&Role::Resting) || held_pair();
         // Pressed, as a ground pair is: a ball that touched something else after the last
         // step (a ball in a pile) is pushed by it, and rapier's solver holds the pile.
         // (Not by each other: their own contact does not press them together.)
@@ -467,6 +498,15 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         // or pressed. Anything else is rapier's (`Resting`), with e = 0 where rapier would
         // bounce it.
         let impact = !slow && closes && !policy.rests(gap, closing, was_resting(), pressed);
+        let hooked = impact || rapier_bounces;
+        // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
+        // solver or changes: an impact, a pair it zeroes, one a chain may take. A resting pair
+        // it leaves as it is stays rapier's whatever they say (the hooks ask the user's
+        // filter of it, `hooks.rs`); most of a pile's planned pairs are such.
+        let screened = hooked || chain;
+        if screened && refused(key, a.body, b.body) {
+            return None;
+        }
         Some(PlannedPair {
             a: a.body,
             b: b.body,
@@ -475,7 +515,8 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             reach,
             normal,
             role: if impact { Role::Impact } else { Role::Resting },
-            hooked: impact || rapier_bounces,
+            hooked,
+            screened,
         })
     };
     let mut woken: Vec<RigidBodyHandle> = Vec::new();
@@ -494,12 +535,18 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     };
     // One traversal of the tree against itself costs about as much as three balls' queries
     // per ball (measured on a pile of 1 000).
+    // The traversal's pairs, kept as each ball's neighbours for the chains below (a query of
+    // the tree per member of a chain cost more than the traversal itself).
+    let mut overlaps: Option<Overlaps> = None;
     let candidates: Vec<(usize, usize)> = if any_elastic || 3 * movers > balls.len() {
-        index
-            .overlapping()
-            .into_iter()
+        let all = index.overlapping();
+        let candidates = all
+            .iter()
+            .copied()
             .filter(|(i, j)| any_elastic || mover(*i) || mover(*j))
-            .collect()
+            .collect();
+        overlaps = Some(Overlaps::new(balls.len(), &all));
+        candidates
     } else {
         let mut out = Vec::new();
         for m in (0..balls.len()).filter(|m| mover(*m)) {
@@ -535,6 +582,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     };
     // The members whose pairs were all planned, by index in `balls`.
     let mut expanded = vec![false; balls.len()];
+    let mut around: Vec<usize> = Vec::new();
+    // The resting pairs that may still join a chain: side by side (a level normal), by index
+    // in `plan.pairs`; `listed` pairs were looked at.
+    let (mut level, mut listed): (Vec<usize>, usize) = (Vec::new(), 0);
     loop {
         // The pairs around each new member that the first pass left out (slow ones, and two
         // sleeping balls): each once, from the member expanded first.
@@ -546,7 +597,12 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             .collect();
         for m in fresh {
             expanded[m] = true;
-            for j in index.meeting(&leaves[m].1) {
+            around.clear();
+            match &overlaps {
+                Some(overlaps) => around.extend(overlaps.of(m)),
+                None => around.extend(index.meeting(&leaves[m].1)),
+            }
+            for &j in &around {
                 let (lo, hi) = (m.min(j), m.max(j));
                 if j == m || expanded[j] {
                     continue;
@@ -559,23 +615,40 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 }
             }
         }
+        // The level resting pairs planned since the last pass join the candidates.
+        level.extend((listed..plan.pairs.len()).filter(|k| {
+            let pair = &plan.pairs[*k];
+            pair.role == Role::Resting && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
+        }));
+        listed = plan.pairs.len();
         let mut grown = false;
-        for k in 0..plan.pairs.len() {
-            let pair = plan.pairs[k];
-            let joins = pair.role == Role::Resting
-                && (plan.members.contains(&pair.a) || plan.members.contains(&pair.b))
-                && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
-                && !is_loaded(pair.a)
-                && !is_loaded(pair.b);
+        let mut kept = 0;
+        for n in 0..level.len() {
+            let k = level[n];
+            let PlannedPair {
+                a,
+                b,
+                key,
+                screened,
+                ..
+            } = plan.pairs[k];
+            let joins = (plan.members.contains(&a) || plan.members.contains(&b))
+                && !is_loaded(a)
+                && !is_loaded(b)
+                && (screened || !refused(key, a, b));
             if joins {
                 plan.pairs[k].role = Role::Impact;
                 plan.pairs[k].hooked = true;
-                plan.roles.insert(pair.key, Role::Impact);
-                join(&mut plan, &mut woken, pair.a);
-                join(&mut plan, &mut woken, pair.b);
+                plan.roles.insert(key, Role::Impact);
+                join(&mut plan, &mut woken, a);
+                join(&mut plan, &mut woken, b);
                 grown = true;
+            } else {
+                level[kept] = k;
+                kept += 1;
             }
         }
+        level.truncate(kept);
         if !grown
             && plan
                 .members
