@@ -227,6 +227,40 @@ fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
     }
 }
 
+/// rapier hooks a pair when either collider asks for it, and never recycles the contacts of
+/// any pair of a flagged collider: the plugin flags one ball of a pair it takes out of
+/// rapier's solver, and the impact is the model's all the same.
+#[test]
+fn one_ball_of_an_impact_pair_carries_the_hook_flags() {
+    let e = 0.9;
+    let plugin_flags = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world(0.0);
+        let ((a, ca), (b, cb)) = closing_pair(&mut w, e);
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        let mut impact_steps = 0;
+        for k in 0..20 {
+            p.step(&mut w);
+            let flagged = [ca, cb]
+                .iter()
+                .filter(|c| w.colliders[**c].active_hooks().contains(plugin_flags))
+                .count();
+            if pair_events(&p).is_empty() {
+                assert!(flagged <= 1, "{mode:?}, step {k}: {flagged} balls flagged");
+            } else {
+                impact_steps += 1;
+                assert_eq!(flagged, 1, "{mode:?}, step {k}: the impact's step");
+            }
+        }
+        assert_eq!(impact_steps, 1, "{mode:?}: one impact");
+        // Equal masses, head on: (1 -+ e)/2 of the 2 m/s.
+        let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
+        assert!((va - (1.0 - e)).abs() <= V_TOL * 2.0, "{mode:?}: va {va}");
+        assert!((vb - (1.0 + e)).abs() <= V_TOL * 2.0, "{mode:?}: vb {vb}");
+    }
+}
+
 #[test]
 fn balls_not_opted_in_or_filtered_out_are_rapiers() {
     let run = |opt_in: bool, groups: bool| {

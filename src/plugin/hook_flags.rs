@@ -15,8 +15,9 @@
 //!
 //! The plugin takes the first while every dynamic body in the world is managed (the usual
 //! scene), and the second from the first step some dynamic, enabled body is not. In either,
-//! the balls of the step's impacts between bodies, and of the resting pairs rapier would
-//! bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), are flagged too: the
+//! one ball of each of the step's impacts between bodies, and of each resting pair rapier
+//! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
+//! too (rapier hooks a pair when either collider asks): the
 //! plugin takes the impact pairs from rapier's solver and zeroes the others' restitution. The flags the user had set are recorded and
 //! handed back: the wrapped hook is called exactly when they ask for it.
 
@@ -58,7 +59,7 @@ impl HookFlags {
     }
 
     /// Puts the flags where this step needs them (see the module's documentation):
-    /// `near` are the managed bodies that can reach a ground in the step, `pairs` the bodies
+    /// `near` are the managed bodies that can reach a ground in the step, `pairs` a body of each
     /// of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
     /// arrangement), `unmanaged` whether the world holds a dynamic,
     /// enabled body the plugin does not manage. `registry.flags_stale` is read here and

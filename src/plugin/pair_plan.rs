@@ -9,8 +9,9 @@
 //! parry's distance, is rapier's), finds the pairs of a body faster than half the resting speed
 //! whose bounding spheres, swept over the step, overlap (a BVH over the swept spheres, refitted
 //! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
-//! square of the bodies), skips the pairs rapier would not solve or the user's filter refuses,
-//! and gives every other pair a role: `Resting` (pressed or held, as `Policy::rests` decides
+//! square of the bodies), skips the pairs it would change (an impact, a zeroed restitution, a
+//! chain's) that rapier would not solve or the user's filter refuses (a resting pair left as
+//! it is, rapier's whatever they say, is not asked), and gives every other pair a role: `Resting` (pressed or held, as `Policy::rests` decides
 //! for a ground: rapier's solver keeps it, with zero restitution where rapier would bounce it
 //! above the resting gap; a pair slower than the resting speed is rapier's as it is, and not
 //! planned unless a chain reaches it) or `Impact` (it may meet in the step: out of rapier's
