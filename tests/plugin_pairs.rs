@@ -296,6 +296,65 @@ fn balls_not_opted_in_or_filtered_out_are_rapiers() {
     assert!((va - 2.0).abs() < 1e-6, "passed through: {va}");
 }
 
+/// A chain passes an impact on only along links rapier would solve: in a row of touching
+/// balls struck at e = 1, the last ball's solver groups leave its contact with the row
+/// without impulses (rapier computes it, and solves none), so the ball before it leaves with
+/// the striker's speed and the last one stays at rest, as in rapier alone.
+#[test]
+fn a_chain_stops_at_a_link_rapier_would_not_solve() {
+    let (r, e) = (0.02, 1.0);
+    let apart = InteractionGroups::new(Group::GROUP_1, Group::NONE, InteractionTestMode::And);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world(0.0);
+        let zero = Vector3::zeros();
+        let striker = Vector3::new(-2.0 * r - 0.1, 0.0, 0.0);
+        let mut balls = vec![ball(
+            &mut w,
+            striker,
+            Vector3::new(1.0, 0.0, 0.0),
+            zero,
+            r,
+            e,
+            0.0,
+        )];
+        for k in 0..3 {
+            let at = Vector3::new(2.0 * r * k as f64, 0.0, 0.0);
+            balls.push(ball(&mut w, at, zero, zero, r, e, 0.0));
+        }
+        w.colliders[balls[3].1].set_solver_groups(apart);
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        let mut seen = Vec::new();
+        for _ in 0..7 {
+            p.step(&mut w);
+            seen.extend(pair_events(&p));
+            if !seen.is_empty() {
+                break;
+            }
+        }
+        assert_eq!(
+            seen.len(),
+            4,
+            "{mode:?}: two impacts, two events each: {seen:?}"
+        );
+        assert!(
+            seen.iter().all(|ev| ev.body != balls[3].0),
+            "{mode:?}: the last ball is in no impact"
+        );
+        let vx: Vec<f64> = balls
+            .iter()
+            .map(|(h, _)| na(w.bodies[*h].linvel()).x)
+            .collect();
+        for (k, expected) in [0.0, 0.0, 1.0, 0.0].into_iter().enumerate() {
+            assert!(
+                (vx[k] - expected).abs() <= V_TOL,
+                "{mode:?}: ball {k} at {}, expected {expected}",
+                vx[k]
+            );
+        }
+    }
+}
+
 /// A cue ball rolling at 2 m/s into an object ball at rest on a table (pool balls, e = 0.95,
 /// no ball-ball friction): right after the impact the object ball leaves at (1 + e) / 2 v =
 /// 1.95 m/s and the cue ball keeps (1 - e) / 2 v = 0.05 m/s with all its topspin.

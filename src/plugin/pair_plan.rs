@@ -69,9 +69,6 @@ pub(crate) struct PlannedPair {
     /// restitution. A pair with hook flags is never recycled by rapier: flagging every
     /// resting pair of a pile made rapier's contact detection 2.8 times as costly.
     pub hooked: bool,
-    /// rapier's filtering and the user's were asked of it, and accept it (they are asked
-    /// only of a pair the plugin changes: see `plan_pairs`).
-    pub screened: bool,
 }
 
 /// The pairs of the step.
@@ -390,10 +387,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             || filter::joint_disables_contacts(sets.impulse_joints, sets.multibody_joints, a, b)
             || filter::user_refuses(user_hooks, user, bodies, colliders, key)
     };
-    // The pair of balls `i < j` with its role, or `None` when rapier would not solve it, the
-    // user's filter refuses it, it cannot meet in the step, or it is slow and rapier's
-    // resting contact as it is (unless `chain`: side by side with a ball of an impact, it may
-    // pass the impact on).
+    // The pair of balls `i < j` with its role, or `None` when it cannot meet in the step, it is
+    // slow and rapier's resting contact as it is (unless `chain`: side by side with a ball of
+    // an impact, it may pass the impact on), or it is hooked and rapier would not solve it or
+    // the user's filter refuses it.
     let evaluate = |i: usize, j: usize, chain: bool| -> Option<PlannedPair> {
         let (a, b) = (&balls[i], &balls[j]);
         let d = b.com - a.com;
@@ -501,11 +498,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         let impact = !slow && closes && !policy.rests(gap, closing, was_resting(), pressed);
         let hooked = impact || rapier_bounces;
         // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
-        // solver or changes: an impact, a pair it zeroes, one a chain may take. A resting pair
-        // it leaves as it is stays rapier's whatever they say (the hooks ask the user's
-        // filter of it, `hooks.rs`); most of a pile's planned pairs are such.
-        let screened = hooked || chain;
-        if screened && refused(key, a.body, b.body) {
+        // solver or changes: an impact, a pair it zeroes (and one a chain takes, asked there).
+        // A resting pair it leaves as it is stays rapier's whatever they say (the hooks ask
+        // the user's filter of it, `hooks.rs`); most of a pile's planned pairs are such.
+        if hooked && refused(key, a.body, b.body) {
             return None;
         }
         Some(PlannedPair {
@@ -517,7 +513,6 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             normal,
             role: if impact { Role::Impact } else { Role::Resting },
             hooked,
-            screened,
         })
     };
     let mut woken: Vec<RigidBodyHandle> = Vec::new();
@@ -535,10 +530,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         plan.pairs.push(pair);
     };
     // One traversal of the tree against itself costs about as much as three balls' queries
-    // per ball (measured on a pile of 1 000).
-    // The traversal's pairs, kept as each ball's neighbours for the chains below (a query of
-    // the tree per member of a chain cost more than the traversal itself).
-    let mut overlaps: Option<Overlaps> = None;
+    // per ball (measured on a pile of 1 000). Its pairs are kept for the chains below, as each
+    // ball's neighbours once a chain asks (a query of the tree per member of a chain cost
+    // more than the traversal itself).
+    let mut traversed: Option<Vec<(usize, usize)>> = None;
     let candidates: Vec<(usize, usize)> = if any_elastic || 3 * movers > balls.len() {
         let all = index.overlapping();
         let candidates = all
@@ -546,7 +541,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             .copied()
             .filter(|(i, j)| any_elastic || mover(*i) || mover(*j))
             .collect();
-        overlaps = Some(Overlaps::new(balls.len(), &all));
+        traversed = Some(all);
         candidates
     } else {
         let mut out = Vec::new();
@@ -584,6 +579,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // The members whose pairs were all planned, by index in `balls`.
     let mut expanded = vec![false; balls.len()];
     let mut around: Vec<usize> = Vec::new();
+    let overlaps: OnceCell<Overlaps> = OnceCell::new();
     // The resting pairs that may still join a chain: side by side (a level normal), by index
     // in `plan.pairs`; `listed` pairs were looked at.
     let (mut level, mut listed): (Vec<usize>, usize) = (Vec::new(), 0);
@@ -599,8 +595,12 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         for m in fresh {
             expanded[m] = true;
             around.clear();
-            match &overlaps {
-                Some(overlaps) => around.extend(overlaps.of(m)),
+            match &traversed {
+                Some(pairs) => around.extend(
+                    overlaps
+                        .get_or_init(|| Overlaps::new(balls.len(), pairs))
+                        .of(m),
+                ),
                 None => around.extend(index.meeting(&leaves[m].1)),
             }
             for &j in &around {
@@ -626,17 +626,11 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         let mut kept = 0;
         for n in 0..level.len() {
             let k = level[n];
-            let PlannedPair {
-                a,
-                b,
-                key,
-                screened,
-                ..
-            } = plan.pairs[k];
+            let PlannedPair { a, b, key, .. } = plan.pairs[k];
             let joins = (plan.members.contains(&a) || plan.members.contains(&b))
                 && !is_loaded(a)
                 && !is_loaded(b)
-                && (screened || !refused(key, a, b));
+                && !refused(key, a, b);
             if joins {
                 plan.pairs[k].role = Role::Impact;
                 plan.pairs[k].hooked = true;
