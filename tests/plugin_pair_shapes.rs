@@ -8,7 +8,7 @@
 mod plugin_support;
 
 use plugin_support::{F64, MODES, na, real, wide};
-use rapier_impact::model::{self, Body, BodyVelocity, Material, PairContact};
+use rapier_impact::model::{self, Body, BodyVelocity, Material, PairContact, PairImpact};
 use rapier_impact::na::{Matrix3, UnitQuaternion, Vector3};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
@@ -102,6 +102,38 @@ fn velocity(w: &PhysicsWorld, h: RigidBodyHandle) -> (Vector3<f64>, Vector3<f64>
 /// the principal frame, turned to the world).
 fn model_body(w: &PhysicsWorld, h: RigidBodyHandle) -> Body {
     Body::from_inertia(wide(w.bodies[h].mass()), world_inertia(w, h)).unwrap()
+}
+
+/// The model's impact (the plugin's law) of body `a` moving at `v`, turning at `w`, into
+/// body `b` at rest, at `contact`, restitution `e` and friction `mu`.
+fn struck_at_rest(
+    a: &Body,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+    b: &Body,
+    contact: &PairContact,
+    e: f64,
+    mu: f64,
+) -> PairImpact {
+    let before_a = BodyVelocity {
+        linear: v,
+        angular: w,
+    };
+    let material = Material {
+        restitution: e,
+        friction: mu,
+    };
+    let law = ImpactConfig::default().law;
+    model::resolve_pair(
+        law,
+        a,
+        &before_a,
+        b,
+        &BodyVelocity::default(),
+        contact,
+        &material,
+    )
+    .unwrap()
 }
 
 /// A rapier body's inertia tensor about its centre of mass in the world frame.
@@ -232,24 +264,15 @@ fn a_ball_into_a_cube_face_off_centre_is_the_models_impact_at_the_analytic_conta
             offset_a: point - centre_a,
             offset_b: point - Vector3::x() * 0.4,
         };
-        let material = Material {
-            restitution: e,
-            friction: mu,
-        };
-        let before_a = BodyVelocity {
-            linear: Vector3::x() * speed,
-            angular: spin,
-        };
-        let expected = model::resolve_pair(
-            ImpactConfig::default().law,
+        let expected = struck_at_rest(
             &body_a,
-            &before_a,
+            Vector3::x() * speed,
+            spin,
             &body_b,
-            &BodyVelocity::default(),
             &contact,
-            &material,
-        )
-        .unwrap();
+            e,
+            mu,
+        );
         let ((va, wa), (vb, wb)) = (velocity(&w, a), velocity(&w, b));
         let tol = V_TOL * speed;
         assert!(
@@ -402,22 +425,8 @@ fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
             offset_a: point - centre,
             offset_b: point - Vector3::x() * 0.4,
         };
-        let expected = model::resolve_pair(
-            ImpactConfig::default().law,
-            &model_body(&w, a),
-            &BodyVelocity {
-                linear: v0,
-                angular: w0,
-            },
-            &model_body(&w, b),
-            &BodyVelocity::default(),
-            &contact,
-            &Material {
-                restitution: e,
-                friction: mu,
-            },
-        )
-        .unwrap();
+        let (body_a, body_b) = (model_body(&w, a), model_body(&w, b));
+        let expected = struck_at_rest(&body_a, v0, w0, &body_b, &contact, e, mu);
         let tol = V_TOL * speed;
         let ev_b = seen.iter().find(|(_, ev)| ev.body == b).unwrap().1;
         let mass = wide(w.bodies[a].mass());
@@ -1019,22 +1028,15 @@ fn a_face_turning_flat_onto_a_face_is_struck_at_the_corners_that_approach() {
         offset_a: point,
         offset_b: point - centre_b,
     };
-    let expected = model::resolve_pair(
-        ImpactConfig::default().law,
+    let expected = struck_at_rest(
         &body_a,
-        &BodyVelocity {
-            linear: Vector3::x() * speed,
-            angular: spin,
-        },
+        Vector3::x() * speed,
+        spin,
         &body_b,
-        &BodyVelocity::default(),
         &contact,
-        &Material {
-            restitution: e,
-            friction: mu,
-        },
-    )
-    .unwrap();
+        e,
+        mu,
+    );
     let scale = wide(w.bodies[a].mass()) * speed;
     assert!(
         (na(ev_b.impulse) - expected.impulse).norm() <= V_TOL * scale,

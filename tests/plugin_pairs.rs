@@ -75,6 +75,22 @@ fn pair_events(plugin: &ImpactPlugin) -> Vec<rapier_impact::ImpactEvent> {
         .collect()
 }
 
+/// Steps until a step reports impacts between bodies (at most `steps`), and returns them.
+fn first_pair_events(
+    p: &mut ImpactPlugin,
+    w: &mut PhysicsWorld,
+    steps: usize,
+) -> Vec<rapier_impact::ImpactEvent> {
+    for _ in 0..steps {
+        p.step(w);
+        let seen = pair_events(p);
+        if !seen.is_empty() {
+            return seen;
+        }
+    }
+    Vec::new()
+}
+
 /// A pair approaching slower than the resting speed is no impact: rapier's contact as it is,
 /// its own restitution included (its bounce, `e` times an approach below the resting speed,
 /// cannot rise above the resting gap), so the plugin neither moves the balls nor hooks the
@@ -324,14 +340,7 @@ fn a_chain_stops_at_a_link_rapier_would_not_solve() {
         w.colliders[balls[3].1].set_solver_groups(apart);
         let mut p = plugin(mode);
         p.set_all_dynamic_bodies_impact(true);
-        let mut seen = Vec::new();
-        for _ in 0..7 {
-            p.step(&mut w);
-            seen.extend(pair_events(&p));
-            if !seen.is_empty() {
-                break;
-            }
-        }
+        let seen = first_pair_events(&mut p, &mut w, 7);
         assert_eq!(
             seen.len(),
             4,
@@ -467,17 +476,10 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
                 p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
             }
             p.set_all_dynamic_bodies_impact(true);
-            let mut seen = Vec::new();
             // The first ball reaches the row in 0.1 s; the chain is over in that step, and
             // the velocities are read right after it (the balls left touching slowly behind it
             // are rapier's resting contacts from the next step, with e = 0).
-            for _ in 0..7 {
-                p.step(&mut w);
-                seen.extend(pair_events(&p));
-                if !seen.is_empty() {
-                    break;
-                }
-            }
+            let seen = first_pair_events(&mut p, &mut w, 7);
             let case = format!("{mode:?}, g = {gravity}, e = {e}");
             assert_eq!(
                 seen.len(),
