@@ -952,6 +952,66 @@ fn a_die_spinning_in_place_hits_the_one_beside_it() {
     }
 }
 
+/// A die lying face on against another (no gravity), spinning at 20 rad/s: about the contact
+/// normal its corners sweep along the face and none comes closer, so the pair is no impact
+/// and stays rapier's resting contact, unhooked; about an axis across the normal the same
+/// spin drives a corner into the face at once, an impact the plugin takes out of rapier's
+/// solver (hooked) and resolves. The closing speed of a turning body counts the spin across
+/// the normal only.
+#[test]
+fn a_die_spinning_about_the_contact_normal_does_not_close_on_the_face_it_touches() {
+    let h = 0.05;
+    let plugin_flags = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    // (hooked in the first step, pair impacts over three steps) for a spin about `axis`.
+    let run_spin = |mode: TimingMode, axis: Vector3<f64>| {
+        let mut w = world();
+        let none = UnitQuaternion::identity();
+        let zero = Vector3::zeros();
+        // Touching to within a tenth of a millimetre: inside rapier's prediction distance,
+        // so rapier holds the contact from the first step.
+        let (_, ca) = body(&mut w, cube(h, 0.5, 0.2), zero, none, zero, axis * 20.0);
+        let (_, cb) = body(
+            &mut w,
+            cube(h, 0.5, 0.2),
+            Vector3::y() * (2.0 * h + 1e-4),
+            none,
+            zero,
+            zero,
+        );
+        let mut p = plugin(mode);
+        let mut hooked = false;
+        let mut impacts = 0;
+        for k in 0..3 {
+            p.step(&mut w);
+            if k == 0 {
+                hooked = [ca, cb]
+                    .iter()
+                    .any(|c| w.colliders[*c].active_hooks().contains(plugin_flags));
+            }
+            impacts += p
+                .events()
+                .iter()
+                .filter(|ev| ev.body2.is_some() && ev.kind == EventKind::Impact)
+                .count();
+        }
+        (hooked, impacts)
+    };
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let (hooked, impacts) = run_spin(mode, Vector3::y());
+        assert!(!hooked, "{mode:?}: a spin about the normal hooked the pair");
+        assert_eq!(
+            impacts, 0,
+            "{mode:?}: a spin about the normal made an impact"
+        );
+        let (hooked, impacts) = run_spin(mode, Vector3::x());
+        assert!(hooked, "{mode:?}: a spin across the normal is not planned");
+        assert!(
+            impacts > 0,
+            "{mode:?}: a spin across the normal made no impact"
+        );
+    }
+}
+
 /// A cube turning fast against the face of a cube it touches, in `Step` mode (the impulse at
 /// the step's start, where the two touch): its face is flat on the other's to within the flat
 /// tolerance, but its turn (about the axis across the normal) drives the face's one edge in
