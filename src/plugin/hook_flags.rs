@@ -17,9 +17,9 @@
 //! scene), and the second from the first step some dynamic, enabled body is not. In either,
 //! one ball of each of the step's impacts between bodies, and of each resting pair rapier
 //! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
-//! too (rapier hooks a pair when either collider asks): the
-//! plugin takes the impact pairs from rapier's solver and zeroes the others' restitution. The flags the user had set are recorded and
-//! handed back: the wrapped hook is called exactly when they ask for it.
+//! too (rapier hooks a pair when either collider asks): the plugin takes the impact pairs
+//! from rapier's solver and zeroes the others' restitution. The flags the user had set are
+//! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
 use super::geometry::SmallList;
 use super::handles::{HandleMap, SlotTable};
@@ -59,10 +59,10 @@ impl HookFlags {
     }
 
     /// Puts the flags where this step needs them (see the module's documentation):
-    /// `near` are the managed bodies that can reach a ground in the step, `pairs` a body of each
-    /// of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
-    /// arrangement), `unmanaged` whether the world holds a dynamic,
-    /// enabled body the plugin does not manage. `registry.flags_stale` is read here and
+    /// `near` are the managed bodies that can reach a ground in the step, `pairs` a body of
+    /// each of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
+    /// arrangement), `unmanaged` whether the world holds a dynamic, enabled body the plugin
+    /// does not manage. `registry.flags_stale` is read here and
     /// cleared by the caller.
     pub fn update(
         &mut self,

@@ -17,8 +17,8 @@ use super::registry::Registry;
 use crate::motion::{Flight, Gyro, State};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, ImpulseJointSet, LockedAxes, MultibodyJointSet, NarrowPhase,
-    RigidBody, RigidBodyHandle, SolverFlags,
+    ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet, LockedAxes,
+    MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -274,31 +274,30 @@ fn solver_contact_besides(
             } else {
                 pair.collider1
             };
-            Some(other) != partner
-                && counts(other)
-                && pair.solver_manifolds().iter().any(|m| {
-                    m.data
-                        .solver_flags
-                        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                        && !m.data.solver_contacts.is_empty()
-                })
+            Some(other) != partner && counts(other) && in_solver(pair)
         })
     })
+}
+
+/// Has the pair solver contacts with rigid impulses (rapier's solver holds it)?
+fn in_solver(pair: &ContactPair) -> bool {
+    pair.solver_manifolds().iter().any(solved)
+}
+
+/// Has the manifold solver contacts with rigid impulses?
+fn solved(m: &ContactManifold) -> bool {
+    m.data
+        .solver_flags
+        .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
+        && !m.data.solver_contacts.is_empty()
 }
 
 /// Does the body have a contact in rapier's solver this step (other than the pairs taken
 /// from it)?
 pub(crate) fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
-    rb.colliders().iter().any(|ch| {
-        narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            pair.solver_manifolds().iter().any(|m| {
-                m.data
-                    .solver_flags
-                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                    && !m.data.solver_contacts.is_empty()
-            })
-        })
-    })
+    rb.colliders()
+        .iter()
+        .any(|ch| narrow_phase.contact_pairs_with(*ch).any(in_solver))
 }
 
 /// What touches a body besides its grounds, from rapier's contact graph after a step.
@@ -365,15 +364,7 @@ fn non_ground_contacts(
             if asked == Asked::Near {
                 return found;
             }
-            for m in pair.solver_manifolds() {
-                if !m
-                    .data
-                    .solver_flags
-                    .contains(SolverFlags::COMPUTE_RIGID_IMPULSES)
-                    || m.data.solver_contacts.is_empty()
-                {
-                    continue;
-                }
+            for m in pair.solver_manifolds().iter().filter(|m| solved(m)) {
                 found.touching = true;
                 // rapier pushes the first collider's body along -normal, the second's along
                 // +normal.

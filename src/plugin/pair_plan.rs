@@ -11,8 +11,9 @@
 //! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
 //! square of the bodies), skips the pairs it would change (an impact, a zeroed restitution, a
 //! chain's) that rapier would not solve or the user's filter refuses (a resting pair left as
-//! it is, rapier's whatever they say, is not asked), and gives every other pair a role: `Resting` (pressed or held, as `Policy::rests` decides
-//! for a ground: rapier's solver keeps it, with zero restitution where rapier would bounce it
+//! it is, rapier's whatever they say, is not asked), and gives every other pair a role:
+//! `Resting` (pressed or held, as `Policy::rests` decides for a ground: rapier's solver keeps
+//! it, with zero restitution where rapier would bounce it
 //! above the resting gap; a pair slower than the resting speed is rapier's as it is, and not
 //! planned unless a chain reaches it) or `Impact` (it may meet in the step: out of rapier's
 //! solver, resolved by the reconstruct stage, `pair_reconstruct.rs`); a resting pair side by
@@ -622,25 +623,25 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             pair.role == Role::Resting && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
         }));
         listed = plan.pairs.len();
+        // A pair beside a member is decided once: it joins, or it never will (something lies
+        // on a ball, or rapier or the user's filter would not solve it) and leaves the list.
         let mut grown = false;
         let mut kept = 0;
         for n in 0..level.len() {
             let k = level[n];
             let PlannedPair { a, b, key, .. } = plan.pairs[k];
-            let joins = (plan.members.contains(&a) || plan.members.contains(&b))
-                && !is_loaded(a)
-                && !is_loaded(b)
-                && !refused(key, a, b);
-            if joins {
+            if !plan.members.contains(&a) && !plan.members.contains(&b) {
+                level[kept] = k;
+                kept += 1;
+                continue;
+            }
+            if !is_loaded(a) && !is_loaded(b) && !refused(key, a, b) {
                 plan.pairs[k].role = Role::Impact;
                 plan.pairs[k].hooked = true;
                 plan.roles.insert(key, Role::Impact);
                 join(&mut plan, &mut woken, a);
                 join(&mut plan, &mut woken, b);
                 grown = true;
-            } else {
-                level[kept] = k;
-                kept += 1;
             }
         }
         level.truncate(kept);
