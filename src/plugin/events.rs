@@ -49,6 +49,13 @@ pub enum EventKind {
     /// creep (3.6e-5 m along a 3-degree slope at 30 Hz). From then on rapier's contact holds
     /// it and sleeps it.
     Hold,
+    /// A ball the closed form rolled (rolling resistance, spinning friction, sliding) handed
+    /// to rapier's resting contact: another body or collider can touch it within the step
+    /// (`timing` `StepStart`: nothing is written), or touched it in the step (`StepEnd`:
+    /// rapier's end state stands, corrected only as the settle stage corrects any). The
+    /// closed form takes the ball again once nothing can reach it. `impulse` zero,
+    /// `ke_before` equal to `ke_after`.
+    Released,
 }
 
 /// One change the plugin made to a body in the last step: a ground impact resolved by the

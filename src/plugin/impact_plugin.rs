@@ -25,7 +25,8 @@ use super::handles::{HandleMap, HandleSet, slot_of};
 use super::hook_flags::HookFlags;
 use super::install::{Looked, Lookup};
 use super::observe::{
-    Sets, body_geom, rapier_state, snapshot, surely_far, touched_besides_grounds, touches_other,
+    Sets, body_geom, pushed_by_other, rapier_state, snapshot, surely_far, touched_besides_grounds,
+    touches_other,
 };
 use super::pair_plan::{self, PairIndex, pair_key};
 use super::pair_reconstruct;
@@ -33,7 +34,7 @@ use super::plan::{Candidate, EndOfStep, FirstHold, Planner, StepData};
 use super::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
 use super::reconstruct::{self, ccd_consistent};
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, resolve};
+use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, released, resolve};
 use super::settle::{Checked, Settle};
 use crate::motion::{Rolling, State};
 use crate::rapier::math::Vector;
@@ -856,6 +857,7 @@ impl<H> ImpactPlugin<H> {
                 to_f64(params.prediction_distance()),
             ),
             down: g.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
+            gravity: g,
             ..Default::default()
         };
         if !step.active {
@@ -1170,7 +1172,7 @@ impl<H> ImpactPlugin<H> {
                 // stopping it short (against a thin body).
                 let disturbed = impulse_joints.attached_joints(cand.body).next().is_some()
                     || multibody_joints.rigid_body_link(cand.body).is_some()
-                    || touches_other(rb, narrow_phase)
+                    || pushed_by_other(rb, narrow_phase)
                     || !ccd_consistent(rb, cand, step.dt, step.dt, &step);
                 if !disturbed && !cand.impact_grounds.is_empty() {
                     // A ground it may roll into: where it does, that impact, and on from
@@ -1199,6 +1201,12 @@ impl<H> ImpactPlugin<H> {
                     }
                 } else {
                     // rapier's end state stands, in which the ball flew without its ground.
+                    if disturbed {
+                        let site = (geom.parts[0].handle, grounds[0].handle);
+                        let rb = &bodies[cand.body];
+                        self.events
+                            .push(released_at_end(cand, rb, site, motion, step.dt));
+                    }
                     let fall = -motion.accel.dot(&motion.normal) * step.dt;
                     let why = EndCheck::DisturbedRolling { fall };
                     self.settle_rapier_end(bodies, colliders, cand, &geom, &grounds, why, &step);
@@ -1318,4 +1326,25 @@ impl<H> ImpactPlugin<H> {
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.spare.candidates = std::mem::take(&mut step.data.candidates);
     }
+}
+
+/// The [`EventKind::Released`] event of a rolling ball that something besides its ground
+/// touched in the step: rapier's end state, unchanged.
+fn released_at_end(
+    cand: &Candidate,
+    rb: &crate::rapier::prelude::RigidBody,
+    (collider, ground): PairKey,
+    motion: &Rolling,
+    dt: f64,
+) -> ImpactEvent {
+    let end = rapier_state(rb);
+    let site = Site {
+        body: cand.body,
+        collider,
+        ground,
+        body2: None,
+        normal: motion.normal,
+        point: end.com - motion.normal * motion.radius,
+    };
+    released(&site, &Inertia::of(rb), &end, dt)
 }

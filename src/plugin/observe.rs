@@ -15,10 +15,12 @@ use super::handles::HandleMap;
 use super::policy::LOADED_COS;
 use super::registry::Registry;
 use crate::motion::{Flight, Gyro, State};
+use crate::parry::query;
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet, LockedAxes,
-    MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, SolverFlags,
+    Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,
+    LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, RigidBodySet,
+    SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -300,13 +302,23 @@ pub(crate) fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool 
         .any(|ch| narrow_phase.contact_pairs_with(*ch).any(in_solver))
 }
 
+/// Did rapier's solver push the body in the step through a contact it kept (a pair the plugin
+/// did not take out of the solver)? A speculative contact that stayed open has zero impulse.
+pub(crate) fn pushed_by_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
+    rb.colliders().iter().any(|ch| {
+        narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            pair.solver_manifolds()
+                .iter()
+                .filter(|m| solved(m))
+                .any(|m| m.points.iter().any(|p| p.data.impulse != 0.0))
+        })
+    })
+}
+
 /// What touches a body besides its grounds, from rapier's contact graph after a step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct NonGround {
-    /// A pair with something other than a ground (another body, a wall) in the narrow phase
-    /// (their bounding boxes overlap, touching or not).
-    pub near: bool,
-    /// Such a pair with solver contacts.
+    /// A pair with something other than a ground (another body, a wall) with solver contacts.
     pub touching: bool,
     /// One of those contacts pushes the body within 60 degrees of `down` (something lies on
     /// it), or any does without gravity (`down` zero). Balls side by side or a wall push it
@@ -315,34 +327,21 @@ pub(crate) struct NonGround {
 }
 
 impl NonGround {
-    /// A body with a joint: treated as touched, loaded and crowded.
+    /// A body with a joint: treated as touched and loaded.
     pub const JOINTED: Self = Self {
-        near: true,
         touching: true,
         loaded: true,
     };
 }
 
-/// How much of [`NonGround`] a decision asks for: the walk of the body's pairs stops as soon
-/// as that is known. The walk's cost is reading rapier's contact pairs, scattered in memory
-/// (a pile's per-body walks were a tenth of the plugin's time for a fifth of a percent of its
-/// instructions), and `Near` reads no manifold at all.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Asked {
-    Near,
-    Loaded,
-}
-
 /// The body's pairs with colliders that are not grounds, in rapier's narrow phase after a step
-/// (see [`NonGround`]), walked until what is `asked` is known: the fields it does not ask for
-/// may be left `false`.
+/// (see [`NonGround`]), walked until something is found lying on it.
 fn non_ground_contacts(
     rb: &RigidBody,
     narrow_phase: &NarrowPhase,
     index: &GroundIndex,
     grounds: &HandleMap<ColliderHandle, GroundEntry>,
     down: &Vector3<f64>,
-    asked: Asked,
 ) -> NonGround {
     let is_ground = |c: &ColliderHandle| {
         index
@@ -359,10 +358,6 @@ fn non_ground_contacts(
             };
             if is_ground(&other) {
                 continue;
-            }
-            found.near = true;
-            if asked == Asked::Near {
-                return found;
             }
             for m in pair.solver_manifolds().iter().filter(|m| solved(m)) {
                 found.touching = true;
@@ -398,27 +393,6 @@ pub(crate) fn neighbours(
     registry: &Registry,
     down: &Vector3<f64>,
 ) -> NonGround {
-    walk_neighbours(body, rb, sets, registry, down, Asked::Loaded)
-}
-
-/// [`NonGround::near`] of [`neighbours`], without reading a manifold.
-pub(crate) fn near_other(
-    body: RigidBodyHandle,
-    rb: &RigidBody,
-    sets: &Sets,
-    registry: &Registry,
-) -> bool {
-    walk_neighbours(body, rb, sets, registry, &Vector3::zeros(), Asked::Near).near
-}
-
-fn walk_neighbours(
-    body: RigidBodyHandle,
-    rb: &RigidBody,
-    sets: &Sets,
-    registry: &Registry,
-    down: &Vector3<f64>,
-    asked: Asked,
-) -> NonGround {
     let jointed = sets.impulse_joints.attached_joints(body).next().is_some()
         || sets.multibody_joints.rigid_body_link(body).is_some();
     if jointed {
@@ -430,6 +404,124 @@ fn walk_neighbours(
         &registry.index,
         &registry.grounds,
         down,
-        asked,
     )
+}
+
+/// A body's motion over the step as [`within_reach_of_other`] bounds it: its velocity (m/s),
+/// its acceleration in flight (`accel`: gravity and the user's force over its mass) and a
+/// bound on what its contacts with its grounds add to that (`support`, m/s^2).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OwnMotion {
+    pub v: Vector3<f64>,
+    pub accel: Vector3<f64>,
+    pub support: f64,
+    /// The world's gravity (m/s^2), which the other body feels times its gravity scale.
+    pub gravity: Vector3<f64>,
+}
+
+/// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
+/// pairs a body with everything whose fattened bounding box overlaps its own (up to about
+/// 10 cm apart at rapier's default length unit), and its narrow phase makes speculative
+/// solver contacts up to its prediction distance (2 cm) apart, which push nothing unless the
+/// two close: neither says the two touch. For each such pair: the gap between the two
+/// colliders now, against how far the two can close in the step. The closing is bounded by
+/// the relative velocity of the centres of mass, each body's spin times how far its surface
+/// lies from its centre of mass (none for a ball turning about its centre), and half the step
+/// squared times their accelerations' difference plus `own.support` (which also covers
+/// rapier's own step of the body, in which it flies without the grounds the plugin takes).
+/// What a third body does to the other one during the step is not bounded: the reconstruct
+/// stage reads rapier's contact impulses after the step ([`pushed_by_other`]). For a centred
+/// ball (`body` must be one: its own spin is not counted); a pair parry cannot measure, and
+/// any joint, is within reach.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn within_reach_of_other(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    own: &OwnMotion,
+    bodies: &RigidBodySet,
+    colliders: &ColliderSet,
+    sets: &Sets,
+    registry: &Registry,
+    dt: f64,
+) -> bool {
+    if sets.impulse_joints.attached_joints(body).next().is_some()
+        || sets.multibody_joints.rigid_body_link(body).is_some()
+    {
+        return true;
+    }
+    let index = &registry.index;
+    let is_ground = |c: &ColliderHandle| {
+        index
+            .entry(*c)
+            .map_or_else(|()| registry.grounds.contains_key(c), |e| e.is_some())
+    };
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        for pair in sets.narrow_phase.contact_pairs_with(*ch) {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            if is_ground(&other) {
+                continue;
+            }
+            let Some(oc) = colliders.get(other) else {
+                continue;
+            };
+            if !oc.is_enabled() {
+                continue;
+            }
+            let Ok(found) = query::distance(co.position(), co.shape(), oc.position(), oc.shape())
+            else {
+                return true;
+            };
+            let gap =
+                to_f64(found.distance) - to_f64(co.contact_skin()) - to_f64(oc.contact_skin());
+            if gap <= closing_bound(own, oc, bodies, dt) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// How much a body of motion `own` (a centred ball) and the collider `other` can close in
+/// `dt` (see [`within_reach_of_other`]); infinite when the other's motion cannot be read.
+fn closing_bound(own: &OwnMotion, other: &Collider, bodies: &RigidBodySet, dt: f64) -> f64 {
+    let Some(ob) = other.parent().and_then(|p| bodies.get(p)) else {
+        // A collider without a body: it stays where it is.
+        return own.v.norm() * dt + 0.5 * (own.accel.norm() + own.support) * dt * dt;
+    };
+    let com = vec_to_na(ob.center_of_mass());
+    let bs = other.shape().compute_local_bounding_sphere();
+    let centre = vec_to_na(other.position().transform_point(bs.center));
+    let offset = (centre - com).norm();
+    // A ball turning about its centre does not move its surface.
+    let arm = if other.shape().as_ball().is_some() {
+        offset
+    } else {
+        offset + to_f64(bs.radius)
+    };
+    let mut v_rel = (own.v - vec_to_na(ob.linvel())).norm();
+    let mut turn = to_f64(ob.angvel().length()) * arm;
+    let mut accel = own.accel.norm();
+    if ob.is_dynamic() {
+        let theirs = own.gravity * to_f64(ob.gravity_scale())
+            + vec_to_na(ob.user_force()) / to_f64(ob.mass());
+        accel = (own.accel - theirs).norm();
+    } else if ob.is_kinematic() {
+        // A position-based kinematic body is moved to its next pose whatever its velocity.
+        let next = ob.next_position();
+        let shift = vec_to_na(next.translation - ob.position().translation).norm();
+        v_rel = v_rel.max(own.v.norm() + shift / dt);
+        let turned = to_f64(next.rotation.angle_between(ob.position().rotation));
+        turn = turn.max(turned / dt * arm);
+    }
+    if !(v_rel.is_finite() && turn.is_finite() && accel.is_finite()) {
+        return f64::INFINITY;
+    }
+    (v_rel + turn) * dt + 0.5 * (accel + own.support) * dt * dt
 }

@@ -25,12 +25,13 @@ use super::handles::{HandleMap, HandleSet};
 use super::hook_flags::HookFlags;
 use super::install::Lookup;
 use super::observe::{
-    Sets, body_geom, centred_ball, ground_geom, near_other, snapshot, touched_besides_grounds,
+    OwnMotion, Sets, body_geom, centred_ball, ground_geom, snapshot, touched_besides_grounds,
+    within_reach_of_other,
 };
 use super::pair_plan::PairPlan;
 use super::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
 use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, resolve};
+use super::resolve::{ImpactInput, Inertia, PairKey, Site, released, resolve};
 use crate::motion::{Flight, Rolling, State};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
@@ -49,6 +50,9 @@ pub(crate) enum OnPlane {
     /// writing the rest pose back after each step would move the collider, and rapier wakes
     /// the body of every collider moved by hand.)
     Held(Vector3<f64>, SmallList<ColliderHandle>),
+    /// It would move, but something besides its grounds can touch it within the step
+    /// (`observe::within_reach_of_other`): rapier's resting contact, as any resting pair.
+    Reached,
 }
 
 /// A ball's first step held at rest on a slope (`OnPlane::Held`): rapier's resting contact
@@ -131,6 +135,8 @@ pub(crate) struct StepData {
     pub policy: Policy,
     /// The unit direction of gravity (zero without gravity).
     pub down: Vector3<f64>,
+    /// The world's gravity (m/s^2).
+    pub gravity: Vector3<f64>,
     pub roles: HandleMap<PairKey, Role>,
     /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
@@ -459,7 +465,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 if role == Role::Resting && !turns_surface && rolling.is_none() && !held {
                     // Within the resting gap of it (a `Step` impulse can leave a ball
                     // resting on its way down, up to a step's travel above the ground).
-                    if let Some((dist, n, _)) =
+                    if let Some((dist, n, point)) =
                         contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
                     {
                         // What touches it is read from rapier's contact graph (in
@@ -510,7 +516,23 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                     step.holds.insert((part.handle, *piece), tilt);
                                 }
                             }
-                            None => {}
+                            // Rolled in closed form last step: the event says it is
+                            // rapier's from here.
+                            Some(OnPlane::Reached)
+                                if prev_roles.get(&key) == Some(&Role::Rolling) =>
+                            {
+                                let site = Site {
+                                    body: handle,
+                                    collider: part.handle,
+                                    ground: gg.handle,
+                                    body2: None,
+                                    normal: n,
+                                    point,
+                                };
+                                let inertia = Inertia::of(&bodies[handle]);
+                                self.events.push(released(&site, &inertia, &state, 0.0));
+                            }
+                            Some(OnPlane::Reached) | None => {}
                         }
                     }
                 }
@@ -656,16 +678,35 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         if !(an < 0.0 && plain) || !member && slow && !resisted && !carried || user_modifies {
             return None;
         }
-        // After the cheap refusals (most resting balls are at rest): the contact graph.
-        if !member && near_other(handle, rb, sets, self.registry) {
-            return None;
-        }
         let friction = self
             .registry
             .material_of(colliders, part.handle, gg.handle)
             .friction;
         if !(friction.is_finite() && friction >= 0.0) {
             return None;
+        }
+        // After the cheap refusals (most resting balls are at rest): nothing besides its
+        // grounds can touch it in the step. Its ground holds it (`|an|`) and pulls it along
+        // the plane by at most `mu |an|` (slip) or `mu_r |an|` (rolling resistance).
+        let own = OwnMotion {
+            v: on_ground.v,
+            accel: flight.accel,
+            support: -an * (1.0 + friction.max(rolling_resistance)),
+            gravity: step.gravity,
+        };
+        if !member
+            && within_reach_of_other(
+                handle,
+                rb,
+                &own,
+                bodies,
+                colliders,
+                sets,
+                self.registry,
+                step.dt,
+            )
+        {
+            return Some(OnPlane::Reached);
         }
         // The ground's one flat face under the ball for the whole step (a half-space, or a
         // cuboid's face the ball stays well inside of), or the faces in one plane under its

@@ -473,5 +473,15 @@ pub(crate) fn correction(
     }
 }
 
+/// The [`EventKind::Released`] event of a rolling ball handed to rapier's contact at `time`
+/// (`StepStart` at 0, or `StepEnd` at `dt`) in `state`, which the plugin does not change.
+pub(crate) fn released(site: &Site, inertia: &Inertia, state: &State, time: f64) -> ImpactEvent {
+    let mut event = correction(EventKind::Released, site, inertia, state, state, time);
+    if time == 0.0 {
+        event.timing = ImpactTiming::StepStart;
+    }
+    event
+}
+
 /// The collider handle pair key of a body collider and a ground collider.
 pub(crate) type PairKey = (ColliderHandle, ColliderHandle);

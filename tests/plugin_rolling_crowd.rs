@@ -1,0 +1,204 @@
+//! Rolling resistance among other balls: a ball rolls to its closed-form stop beside others
+//! exactly as it does alone, as long as nothing can touch it; one that something can touch is
+//! handed to rapier's contact with an `EventKind::Released` event.
+//!
+//! rapier's broad phase pairs every two balls whose fattened bounding boxes overlap (up to
+//! about 8 cm apart), so a pair in its contact graph is no sign of contact: the plugin
+//! measures the gap against how far the two can close in the step.
+
+mod plugin_support;
+
+use plugin_support::{F64, G, na, real};
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
+
+const R: f64 = 0.05;
+/// Solid balls: `I = k m R^2`.
+const K: f64 = 0.4;
+const MU_R: f64 = 0.05;
+
+/// The closed form's stopping distance of a ball rolling without slip at `v0` on level
+/// ground under rolling resistance `MU_R`: `v0^2 (1 + k) / (2 mu_r g)`.
+fn stopping_distance(v0: f64) -> f64 {
+    v0 * v0 * (1.0 + K) / (2.0 * MU_R * G)
+}
+
+/// The bound on a stop in `Exact` mode, relative to the distance.
+const X_TOL: f64 = if F64 { 1e-12 } else { 1e-5 };
+
+/// Balls of radius `R` at `starts` (x, z) on a half-space ground, each rolling along +x
+/// without slip at `v0`; the plugin in `Exact` mode with rolling resistance `MU_R`.
+fn scene(starts: &[(f64, f64)], v0: f64) -> (PhysicsWorld, ImpactPlugin, Vec<RigidBodyHandle>) {
+    let mut w = PhysicsWorld {
+        gravity: Vector::new(0.0, real(-G), 0.0),
+        ..Default::default()
+    };
+    let (_, ground) = w.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(plugin_support::up()).friction(0.5),
+    );
+    let balls = starts
+        .iter()
+        .map(|&(x, z)| {
+            w.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(real(x), real(R), real(z)))
+                    .linvel(Vector::new(real(v0), 0.0, 0.0))
+                    .angvel(Vector::new(0.0, 0.0, real(-v0 / R))),
+                ColliderBuilder::ball(real(R)).friction(0.5),
+            )
+            .0
+        })
+        .collect();
+    let mut p = ImpactPlugin::new(ImpactConfig {
+        timing: TimingMode::Exact,
+        rolling_resistance: MU_R,
+        ..Default::default()
+    })
+    .unwrap();
+    p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+    (w, p, balls)
+}
+
+/// What a run did: steps with some ball awake, and the plugin's events by kind.
+#[derive(Debug, Default)]
+struct Run {
+    awake_steps: usize,
+    released: usize,
+    others: usize,
+}
+
+fn run(w: &mut PhysicsWorld, p: &mut ImpactPlugin, steps: usize) -> Run {
+    let mut run = Run::default();
+    for _ in 0..steps {
+        p.step(w);
+        for e in p.events() {
+            match e.kind {
+                EventKind::Released => run.released += 1,
+                _ => run.others += 1,
+            }
+        }
+        if w.bodies
+            .iter()
+            .any(|(_, rb)| rb.is_dynamic() && !rb.is_sleeping())
+        {
+            run.awake_steps += 1;
+        }
+    }
+    run
+}
+
+/// Every ball stopped `stopping_distance(v0)` along +x from where it started, within
+/// `X_TOL`, asleep, and nothing else moved it (no event).
+fn assert_each_stopped_at_the_closed_form(
+    label: &str,
+    w: &PhysicsWorld,
+    balls: &[RigidBodyHandle],
+    starts: &[(f64, f64)],
+    v0: f64,
+    run: &Run,
+) {
+    let d = stopping_distance(v0);
+    let mut worst = 0.0f64;
+    for (ball, &(x0, z0)) in balls.iter().zip(starts) {
+        let rb = &w.bodies[*ball];
+        let at = na(rb.center_of_mass());
+        let err = ((at.x - x0 - d) / d).abs().max(((at.z - z0) / d).abs());
+        worst = worst.max(err);
+        assert!(
+            err <= X_TOL,
+            "{label}: ball from ({x0}, {z0}) stopped at x - x0 = {}, closed form {d} (relative {err:.2e})",
+            at.x - x0
+        );
+        assert!(rb.is_sleeping(), "{label}: ball from ({x0}, {z0}) asleep");
+    }
+    assert_eq!((run.released, run.others), (0, 0), "{label}: {run:?}");
+    println!("{label}: worst relative stop error {worst:.2e}, {run:?}");
+}
+
+/// The steps to the stop, then 2 s of rapier's rest to sleep.
+fn steps_to_sleep(v0: f64) -> usize {
+    ((v0 * (1.0 + K) / (MU_R * G) + 2.0) * 60.0) as usize
+}
+
+#[test]
+fn two_balls_side_by_side_roll_to_their_closed_form_stops() {
+    // 5 cm apart, then 1 cm apart: rapier's broad phase pairs both.
+    for gap in [0.05, 0.01] {
+        let starts = [(0.0, 0.0), (0.0, 2.0 * R + gap)];
+        let v0 = 1.0;
+        let (mut w, mut p, balls) = scene(&starts, v0);
+        let run = run(&mut w, &mut p, steps_to_sleep(v0));
+        let label = format!("side by side, {gap} m apart");
+        assert_each_stopped_at_the_closed_form(&label, &w, &balls, &starts, v0, &run);
+    }
+}
+
+#[test]
+fn a_row_of_ten_balls_one_behind_the_other_rolls_to_the_closed_form_stops() {
+    let starts: Vec<_> = (0..10).map(|i| (0.15 * i as f64, 0.0)).collect();
+    let v0 = 1.0;
+    let (mut w, mut p, balls) = scene(&starts, v0);
+    let run = run(&mut w, &mut p, steps_to_sleep(v0));
+    assert_each_stopped_at_the_closed_form("a row of ten", &w, &balls, &starts, v0, &run);
+}
+
+/// `many_balls --scene rolling --count 500 --rolling-resistance 0.05`: a 23 x 23 grid, 15 cm
+/// apart, each ball jittered by up to 2 cm (so down to 1 cm apart).
+#[test]
+fn five_hundred_balls_on_a_grid_each_stop_at_the_closed_form_and_sleep() {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut jitter = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 * 0.04 - 0.02
+    };
+    let per_row = 23;
+    let starts: Vec<_> = (0..500)
+        .map(|i| {
+            let (row, col) = (i / per_row, i % per_row);
+            (0.15 * col as f64 + jitter(), 0.15 * row as f64 + jitter())
+        })
+        .collect();
+    let v0 = 1.0;
+    let (mut w, mut p, balls) = scene(&starts, v0);
+    let steps = steps_to_sleep(v0);
+    let run = run(&mut w, &mut p, steps);
+    assert!(run.awake_steps < steps, "{run:?}");
+    assert_each_stopped_at_the_closed_form("500 balls", &w, &balls, &starts, v0, &run);
+}
+
+/// A ball rolling into a ball at rest is handed to rapier's contact before it can touch it
+/// (one `Released` event, at the step's start), and the other ball is pushed: rapier's
+/// collision. Nothing is rolled through the other ball.
+#[test]
+fn a_ball_rolling_into_a_ball_at_rest_is_released_to_rapier_before_it_touches() {
+    let v0 = 1.0;
+    let starts = [(0.0, 0.0), (0.3, 0.0)];
+    let (mut w, mut p, balls) = scene(&starts, v0);
+    w.bodies[balls[1]].set_linvel(Vector::ZERO, true);
+    w.bodies[balls[1]].set_angvel(Vector::ZERO, true);
+    let mut released = Vec::new();
+    let mut closest = f64::INFINITY;
+    let mut pushed = 0.0f64;
+    for n in 0..120 {
+        p.step(&mut w);
+        for e in p.events() {
+            assert_eq!(e.kind, EventKind::Released, "step {n}: {e:?}");
+            assert_eq!(e.body, balls[0]);
+            assert_eq!(e.ke_before, e.ke_after);
+            released.push(n);
+        }
+        let gap = (na(w.bodies[balls[1]].center_of_mass())
+            - na(w.bodies[balls[0]].center_of_mass()))
+        .norm()
+            - 2.0 * R;
+        closest = closest.min(gap);
+        pushed = pushed.max(na(w.bodies[balls[1]].linvel()).x);
+    }
+    assert_eq!(released.len(), 1, "released in steps {released:?}");
+    assert!(pushed > 0.3 * v0, "the ball at rest was struck: {pushed}");
+    // rapier's contact lets balls overlap by its allowed error (1 mm) at most.
+    assert!(closest > -2e-3, "closest approach {closest}");
+}
