@@ -17,7 +17,9 @@
 //! above the resting gap; a pair slower than the resting speed is rapier's as it is, and not
 //! planned unless a chain reaches it) or `Impact` (it may meet in the step: out of rapier's
 //! solver, resolved by the reconstruct stage, `pair_reconstruct.rs`); a resting pair side by
-//! side with a body of an `Impact` pair joins it (a chain, [`CHAIN_MAX_TILT_SIN`]). A pair's
+//! side with a body of an `Impact` pair that can pass it on joins it, touching at the step's
+//! start (a chain, [`CHAIN_MAX_TILT_SIN`]; two balls closing slower than the pressed speed
+//! start none). A pair's
 //! closing speed is along the line of centres for two balls, and for other shapes the contact
 //! points' along parry's normal plus what the bodies' turning can add (angular speed times
 //! bounding radius). Its one write into rapier: a sleeping body an `Impact` pair may reach is
@@ -568,7 +570,31 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // passes the impact on inside the step: Newton's cradle, a row of balls on a table),
     // and so on along the row, sleeping balls included. A ball lying on another stays
     // rapier's, and so does a ball something lies on: a pile's layers are held by rapier's
-    // solver.
+    // solver. Only an impact that can pass anything on starts a chain: two balls closing
+    // faster than the pressed speed (what a slower one passes on rises less than the resting
+    // gap), or bodies of other shapes; and only a pair touching at the step's start (within
+    // the resting gap) carries it on. Without those two rules, every slow meeting of two
+    // balls rolling in a crowd on the floor took the whole crowd out of rapier's solver.
+    let closing_gap = |a: RigidBodyHandle, b: RigidBodyHandle| {
+        let (ba, bb) = (&balls[index.ball_of_body(a)], &balls[index.ball_of_body(b)]);
+        let d = bb.com - ba.com;
+        let len = d.norm();
+        let closing = if len > 0.0 {
+            (ba.v - bb.v).dot(&(d / len))
+        } else {
+            0.0
+        };
+        (closing, len - (ba.radius + bb.radius))
+    };
+    // The balls an impact reaches that can pass it on.
+    let mut carriers: HandleSet<RigidBodyHandle> = plan
+        .pairs
+        .iter()
+        .filter(|p| {
+            p.role == Role::Impact && (!p.balls || closing_gap(p.a, p.b).0 > policy.pressed_speed)
+        })
+        .flat_map(|p| [p.a, p.b])
+        .collect();
     let mut loaded: HandleMap<RigidBodyHandle, bool> = HandleMap::default();
     // (Without gravity nothing lies on anything.)
     let mut is_loaded = |h: RigidBodyHandle| {
@@ -577,7 +603,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .entry(h)
                 .or_insert_with(|| neighbours(h, &bodies[h], sets, registry, &down).loaded)
     };
-    // The members whose pairs were all planned, by index in `balls`.
+    // The carriers whose pairs were all planned, by index in `balls`.
     let mut expanded = vec![false; balls.len()];
     let mut around: Vec<usize> = Vec::new();
     let overlaps: OnceCell<Overlaps> = OnceCell::new();
@@ -585,10 +611,9 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // in `plan.pairs`; `listed` pairs were looked at.
     let (mut level, mut listed): (Vec<usize>, usize) = (Vec::new(), 0);
     loop {
-        // The pairs around each new member that the first pass left out (slow ones, and two
-        // sleeping balls): each once, from the member expanded first.
-        let fresh: Vec<usize> = plan
-            .members
+        // The pairs around each new carrier that the first pass left out (slow ones, and two
+        // sleeping balls): each once, from the carrier expanded first.
+        let fresh: Vec<usize> = carriers
             .iter()
             .map(|h| index.ball_of_body(*h))
             .filter(|m| !expanded[*m])
@@ -623,19 +648,23 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             pair.role == Role::Resting && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
         }));
         listed = plan.pairs.len();
-        // A pair beside a member is decided once: it joins, or it never will (something lies
-        // on a ball, or rapier or the user's filter would not solve it) and leaves the list.
+        // A pair beside a carrier is decided once: it joins, or it never will (it is apart,
+        // something lies on a ball, or rapier or the user's filter would not solve it) and
+        // leaves the list.
         let mut grown = false;
         let mut kept = 0;
         for n in 0..level.len() {
             let k = level[n];
             let PlannedPair { a, b, key, .. } = plan.pairs[k];
-            if !plan.members.contains(&a) && !plan.members.contains(&b) {
+            if !carriers.contains(&a) && !carriers.contains(&b) {
                 level[kept] = k;
                 kept += 1;
                 continue;
             }
-            if !is_loaded(a) && !is_loaded(b) && !refused(key, a, b) {
+            let apart = plan.pairs[k].balls && closing_gap(a, b).1 > policy.resting_gap;
+            if !apart && !is_loaded(a) && !is_loaded(b) && !refused(key, a, b) {
+                carriers.insert(a);
+                carriers.insert(b);
                 plan.pairs[k].role = Role::Impact;
                 plan.pairs[k].hooked = true;
                 plan.roles.insert(key, Role::Impact);
@@ -645,12 +674,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             }
         }
         level.truncate(kept);
-        if !grown
-            && plan
-                .members
-                .iter()
-                .all(|h| expanded[index.ball_of_body(*h)])
-        {
+        if !grown && carriers.iter().all(|h| expanded[index.ball_of_body(*h)]) {
             break;
         }
     }

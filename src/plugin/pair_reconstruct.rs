@@ -11,7 +11,9 @@
 //! (two centred balls in closed form, `motion::meeting`; any other pair by conservative
 //! advancement on parry's distance, `body_contact.rs`), resolved by the model (`resolve.rs`; a
 //! flat face on a face as one impact at the centroid of their overlap's corners), then on to the
-//! next, in time order, both bodies of a pair updated between events: a chain (a ball passing an
+//! next, in time order, both bodies of a pair updated between events (each body's and pair's
+//! next event is searched once and again only when one of its bodies changed, so an event
+//! costs the searches of its two bodies, not of the whole cluster): a chain (a ball passing an
 //! impact on to the one it touches) is a sequence of impacts at the same time, in the order the
 //! touches are found; a touch slower than the resting speed is a resting contact from there on
 //! (rapier's next step). A ball rolling on its ground that an impact lifts flies from there;
@@ -46,6 +48,8 @@ use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// A body of a cluster (a ball, a die, a pin) and what its motion needs.
 pub(crate) struct ClusterBall<'a> {
@@ -110,19 +114,32 @@ pub(crate) fn move_clusters(
             parent.insert(ra, rb);
         }
     }
-    let mut clusters: Vec<(RigidBodyHandle, Vec<RigidBodyHandle>)> = Vec::new();
+    // Each cluster's members in the order the pairs list them, and each body's place there.
+    let mut clusters: Vec<Vec<RigidBodyHandle>> = Vec::new();
+    let mut cluster_of: HandleMap<RigidBodyHandle, usize> = HandleMap::default();
+    let mut place: HandleMap<RigidBodyHandle, usize> = HandleMap::default();
     for pair in &impacts {
         for body in [pair.a, pair.b] {
-            let r = root(&mut parent, body);
-            match clusters.iter_mut().find(|(c, _)| *c == r) {
-                Some((_, members)) if members.contains(&body) => {}
-                Some((_, members)) => members.push(body),
-                None => clusters.push((r, vec![body])),
+            if place.contains_key(&body) {
+                continue;
             }
+            let r = root(&mut parent, body);
+            let c = *cluster_of.entry(r).or_insert_with(|| {
+                clusters.push(Vec::new());
+                clusters.len() - 1
+            });
+            place.insert(body, clusters[c].len());
+            clusters[c].push(body);
         }
     }
+    // Each cluster's pairs, as indices into its members.
+    let mut cluster_pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); clusters.len()];
+    for pair in &impacts {
+        let c = cluster_of[&root(&mut parent, pair.a)];
+        cluster_pairs[c].push((place[&pair.a], place[&pair.b]));
+    }
     let sets = &step.sets;
-    for (_, members) in clusters {
+    for (members, pairs) in clusters.iter().zip(&cluster_pairs) {
         let free = members.iter().all(|h| {
             let (Some(rb), Some(k)) = (bodies.get(*h), index.get(h)) else {
                 return false;
@@ -176,16 +193,8 @@ pub(crate) fn move_clusters(
         let Some(balls) = balls else {
             continue;
         };
-        let pairs: Vec<(usize, usize)> = impacts
-            .iter()
-            .filter_map(|p| {
-                let i = members.iter().position(|h| *h == p.a)?;
-                let j = members.iter().position(|h| *h == p.b)?;
-                Some((i, j))
-            })
-            .collect();
         let from = view.events.len();
-        let Some(ends) = through_pair_impacts(view, colliders, &balls, &pairs, step) else {
+        let Some(ends) = through_pair_impacts(view, colliders, &balls, pairs, step) else {
             continue;
         };
         for (ball, end) in balls.iter().zip(ends) {
@@ -266,66 +275,29 @@ fn move_cluster(
     let mut flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
     // Pairs left touching slowly: resting for the rest of the step.
     let mut resting = vec![false; pairs.len()];
+    // Each body's pairs, by index in `pairs`.
+    let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); balls.len()];
+    for (p, (i, j)) in pairs.iter().enumerate() {
+        pairs_of[*i].push(p);
+        pairs_of[*j].push(p);
+    }
     let max_events = view.config.max_impacts_per_step * balls.len();
     let mut events = 0usize;
-    let mut t = 0.0;
-    loop {
-        // The earliest event: ties go to the ball or pair found first, the same every run.
-        let mut next: Option<(f64, Next)> = None;
-        for (k, ball) in balls.iter().enumerate() {
-            let Motion::Flight(flight) = moving[k].motion else {
-                continue;
-            };
-            if ball.grounds.is_empty() {
-                continue;
-            }
-            let m = &moving[k];
-            match first_impact(&ball.geom, &ball.grounds, &flight, &m.state, m.t0, t, dt) {
-                Search::Hit(th, s, hit) => {
-                    if next.as_ref().is_none_or(|(tn, _)| th < *tn) {
-                        next = Some((th, Next::Ground(k, s, hit)));
-                    }
-                }
-                Search::Stalled(..) => return None,
-                Search::Clear => {}
-            }
-        }
-        for (p, (i, j)) in pairs.iter().enumerate() {
-            if resting[p] {
-                continue;
-            }
-            let limit = next.as_ref().map_or(dt, |(tn, _)| *tn);
-            // A search that gives up cannot say the bodies stay apart: not moved alone.
-            let found = match (balls[*i].radius, balls[*j].radius) {
-                (Some(ri), Some(rj)) => first_touch(&moving[*i], &moving[*j], ri + rj, t, limit)
-                    .ok()?
-                    .map(|tc| (tc, None)),
-                _ => {
-                    let mover = |k: usize| Mover {
-                        geom: &balls[k].geom,
-                        moving: &moving[k],
-                        turns: balls[k].radius.is_none(),
-                    };
-                    first_body_touch(&mover(*i), &mover(*j), t, limit)
-                        .ok()?
-                        .map(|(tc, touch)| (tc, Some(touch)))
-                }
-            };
-            if let Some((tc, touch)) = found {
-                if next.as_ref().is_none_or(|(tn, _)| tc < *tn) {
-                    next = Some((tc, Next::Touch(p, touch)));
-                }
-            }
-        }
-        let Some((te, event)) = next else {
-            break;
-        };
+    let mut agenda = Agenda::new(balls.len(), pairs.len());
+    let search = Searches { balls, pairs, dt };
+    for (k, m) in moving.iter().enumerate() {
+        agenda.ground(k, search.ground(k, m, 0.0).ok()?);
+    }
+    for p in 0..pairs.len() {
+        agenda.touch(p, search.touch(p, &moving, 0.0).ok()?);
+    }
+    while let Some((te, event)) = agenda.pop() {
         events += 1;
         if events > max_events {
             return None;
         }
-        t = te;
-        match event {
+        // The bodies whose motion changed: their ground and pairs are searched again.
+        let (changed, count) = match event {
             Next::Ground(k, s, hit) => {
                 let ball = &balls[k];
                 let after =
@@ -335,6 +307,7 @@ fn move_cluster(
                     t0: te,
                     motion: Motion::Flight(flights[k]),
                 };
+                ([k, k], 1)
             }
             Next::Touch(p, touch) => {
                 let (i, j) = pairs[p];
@@ -372,7 +345,7 @@ fn move_cluster(
                     continue;
                 }
                 // A touch the model finds not approaching (a graze at rounding level) is
-                // stepped over: the next search starts after it.
+                // stepped over: the pair's next search starts after it.
                 let resolved = match &touch {
                     None => resolve_balls(&input, &si, &sj, te),
                     Some(touch) => {
@@ -393,7 +366,7 @@ fn move_cluster(
                     }
                 };
                 let Some((after_i, after_j, pair_events)) = resolved else {
-                    t = next_after(te);
+                    agenda.touch(p, search.touch(p, &moving, next_after(te)).ok()?);
                     continue;
                 };
                 view.events.extend(pair_events);
@@ -404,11 +377,29 @@ fn move_cluster(
                     moving[k] = on_after_touch(view, balls, k, &moving[k], after, te, step)?;
                 }
                 // A ball that moved on may drive into a pair it rested in.
-                for (q, (a, b)) in pairs.iter().enumerate() {
-                    if [*a, *b].iter().any(|x| *x == i || *x == j) {
-                        resting[q] = false;
-                    }
+                for q in pairs_of[i].iter().chain(&pairs_of[j]) {
+                    resting[*q] = false;
                 }
+                ([i, j], 2)
+            }
+        };
+        let changed = &changed[..count];
+        for &k in changed {
+            agenda.ground(k, search.ground(k, &moving[k], te).ok()?);
+        }
+        for (n, &k) in changed.iter().enumerate() {
+            for &q in &pairs_of[k] {
+                // The pair of the two changed bodies once.
+                let (a, b) = pairs[q];
+                if n == 1 && (a == changed[0] || b == changed[0]) {
+                    continue;
+                }
+                let found = if resting[q] {
+                    None
+                } else {
+                    search.touch(q, &moving, te).ok()?
+                };
+                agenda.touch(q, found);
             }
         }
     }
@@ -432,6 +423,153 @@ fn move_cluster(
         }
     }
     Some(ends)
+}
+
+/// The searches for a cluster's next events, over what is left of the step.
+struct Searches<'c, 'a> {
+    balls: &'c [ClusterBall<'a>],
+    pairs: &'c [(usize, usize)],
+    dt: f64,
+}
+
+impl Searches<'_, '_> {
+    /// Body `k`'s first ground impact after `t` (none while it rolls: its one plane is all it
+    /// meets), `Err` where the search gave up (the cluster is not moved alone).
+    fn ground(&self, k: usize, m: &Moving, t: f64) -> Result<Option<(f64, Next)>, ()> {
+        let ball = &self.balls[k];
+        let Motion::Flight(flight) = m.motion else {
+            return Ok(None);
+        };
+        if ball.grounds.is_empty() {
+            return Ok(None);
+        }
+        match first_impact(
+            &ball.geom,
+            &ball.grounds,
+            &flight,
+            &m.state,
+            m.t0,
+            t,
+            self.dt,
+        ) {
+            Search::Hit(th, s, hit) => Ok(Some((th, Next::Ground(k, s, hit)))),
+            Search::Stalled(..) => Err(()),
+            Search::Clear => Ok(None),
+        }
+    }
+
+    /// Pair `p`'s first touch after `t` while approaching, `Err` where the search gave up.
+    fn touch(&self, p: usize, moving: &[Moving], t: f64) -> Result<Option<(f64, Next)>, ()> {
+        let (i, j) = self.pairs[p];
+        let (bi, bj) = (&self.balls[i], &self.balls[j]);
+        let found = match (bi.radius, bj.radius) {
+            (Some(ri), Some(rj)) => first_touch(&moving[i], &moving[j], ri + rj, t, self.dt)
+                .map_err(|_| ())?
+                .map(|tc| (tc, None)),
+            _ => {
+                let mover = |k: usize| Mover {
+                    geom: &self.balls[k].geom,
+                    moving: &moving[k],
+                    turns: self.balls[k].radius.is_none(),
+                };
+                first_body_touch(&mover(i), &mover(j), t, self.dt)
+                    .map_err(|_| ())?
+                    .map(|(tc, touch)| (tc, Some(touch)))
+            }
+        };
+        Ok(found.map(|(tc, touch)| (tc, Next::Touch(p, touch))))
+    }
+}
+
+/// A cluster's next events, each found once and searched again only when one of its bodies
+/// changed: an event costs the searches of its bodies' ground and pairs, not of every pair of
+/// the cluster. The earliest comes first; ties go to a ground impact before a touch, then to
+/// the lowest index, the same every run.
+struct Agenda {
+    queue: BinaryHeap<Reverse<Due>>,
+    /// The event found for each body's ground, then for each pair (by `Due::slot`), and the
+    /// number of its search: an entry in the queue from an earlier search is stale.
+    found: Vec<(u32, Option<Next>)>,
+    bodies: usize,
+}
+
+/// An entry of the [`Agenda`]'s queue.
+#[derive(Clone, Copy, Debug)]
+struct Due {
+    t: f64,
+    /// A body's ground impact (its index) before a pair's touch (the body count plus its index).
+    slot: usize,
+    search: u32,
+}
+
+impl PartialEq for Due {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for Due {}
+
+impl PartialOrd for Due {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Due {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.t
+            .total_cmp(&other.t)
+            .then(self.slot.cmp(&other.slot))
+            .then(self.search.cmp(&other.search))
+    }
+}
+
+impl Agenda {
+    fn new(bodies: usize, pairs: usize) -> Self {
+        Self {
+            queue: BinaryHeap::with_capacity(bodies + pairs),
+            found: (0..bodies + pairs).map(|_| (0, None)).collect(),
+            bodies,
+        }
+    }
+
+    /// Body `k`'s ground impact, as last searched.
+    fn ground(&mut self, k: usize, next: Option<(f64, Next)>) {
+        self.set(k, next);
+    }
+
+    /// Pair `p`'s touch, as last searched (`None` also for a pair resting from here).
+    fn touch(&mut self, p: usize, next: Option<(f64, Next)>) {
+        self.set(self.bodies + p, next);
+    }
+
+    fn set(&mut self, slot: usize, next: Option<(f64, Next)>) {
+        let entry = &mut self.found[slot];
+        entry.0 += 1;
+        entry.1 = None;
+        if let Some((t, event)) = next {
+            entry.1 = Some(event);
+            self.queue.push(Reverse(Due {
+                t,
+                slot,
+                search: entry.0,
+            }));
+        }
+    }
+
+    /// The earliest event still current, taken off the agenda.
+    fn pop(&mut self) -> Option<(f64, Next)> {
+        while let Some(Reverse(due)) = self.queue.pop() {
+            let entry = &mut self.found[due.slot];
+            if entry.0 == due.search {
+                if let Some(event) = entry.1.take() {
+                    return Some((due.t, event));
+                }
+            }
+        }
+        None
+    }
 }
 
 /// Can ball `ball`, leaving an impact at `s` with `left` seconds of the step to go, reach a
