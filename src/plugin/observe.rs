@@ -459,28 +459,40 @@ pub(crate) fn within_reach_of_other(
         let Some(co) = colliders.get(*ch) else {
             continue;
         };
+        let ball = co.shape().as_ball();
         for pair in sets.narrow_phase.contact_pairs_with(*ch) {
             let other = if pair.collider1 == *ch {
                 pair.collider2
             } else {
                 pair.collider1
             };
-            if is_ground(&other) {
-                continue;
-            }
             let Some(oc) = colliders.get(other) else {
                 continue;
             };
             if !oc.is_enabled() {
                 continue;
             }
-            let Ok(found) = query::distance(co.position(), co.shape(), oc.position(), oc.shape())
-            else {
-                return true;
+            let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
+            let gap = match (ball, oc.shape().as_ball()) {
+                // Two balls (most neighbours in a crowd): their centres, without parry; the
+                // ground lookup only for one within reach (a ball marked as ground).
+                (Some(a), Some(b)) => {
+                    let d = vec_to_na(oc.position().translation - co.position().translation);
+                    let gap = d.norm() - to_f64(a.radius) - to_f64(b.radius) - skins;
+                    if gap > closing_bound(own, oc, true, bodies, dt) || is_ground(&other) {
+                        continue;
+                    }
+                    return true;
+                }
+                // Its own grounds (a half-space under every ball) before parry's distance.
+                _ if is_ground(&other) => continue,
+                _ => match query::distance(co.position(), co.shape(), oc.position(), oc.shape()) {
+                    Ok(found) => to_f64(found.distance) - skins,
+                    Err(_) => return true,
+                },
             };
-            let gap =
-                to_f64(found.distance) - to_f64(co.contact_skin()) - to_f64(oc.contact_skin());
-            if gap <= closing_bound(own, oc, bodies, dt) {
+            let other_ball = oc.shape().as_ball().is_some();
+            if gap <= closing_bound(own, oc, other_ball, bodies, dt) {
                 return true;
             }
         }
@@ -490,20 +502,25 @@ pub(crate) fn within_reach_of_other(
 
 /// How much a body of motion `own` (a centred ball) and the collider `other` can close in
 /// `dt` (see [`within_reach_of_other`]); infinite when the other's motion cannot be read.
-fn closing_bound(own: &OwnMotion, other: &Collider, bodies: &RigidBodySet, dt: f64) -> f64 {
+fn closing_bound(
+    own: &OwnMotion,
+    other: &Collider,
+    other_ball: bool,
+    bodies: &RigidBodySet,
+    dt: f64,
+) -> f64 {
     let Some(ob) = other.parent().and_then(|p| bodies.get(p)) else {
         // A collider without a body: it stays where it is.
         return own.v.norm() * dt + 0.5 * (own.accel.norm() + own.support) * dt * dt;
     };
-    let com = vec_to_na(ob.center_of_mass());
-    let bs = other.shape().compute_local_bounding_sphere();
-    let centre = vec_to_na(other.position().transform_point(bs.center));
-    let offset = (centre - com).norm();
-    // A ball turning about its centre does not move its surface.
-    let arm = if other.shape().as_ball().is_some() {
-        offset
+    let com = ob.center_of_mass();
+    // How far its surface lies from its centre of mass: a ball turning about its centre does
+    // not move its surface.
+    let arm = if other_ball {
+        to_f64((other.position().translation - com).length())
     } else {
-        offset + to_f64(bs.radius)
+        let bs = other.shape().compute_local_bounding_sphere();
+        to_f64((other.position().transform_point(bs.center) - com).length() + bs.radius)
     };
     let mut v_rel = (own.v - vec_to_na(ob.linvel())).norm();
     let mut turn = to_f64(ob.angvel().length()) * arm;
