@@ -603,22 +603,29 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 .entry(h)
                 .or_insert_with(|| neighbours(h, &bodies[h], sets, registry, &down).loaded)
     };
-    // The carriers whose pairs were all planned, by index in `balls`.
+    // The carriers whose pairs were all planned, by index in `balls`, and those still to
+    // expand, in the order they became carriers.
     let mut expanded = vec![false; balls.len()];
+    let mut to_expand: Vec<RigidBodyHandle> = carriers.iter().copied().collect();
     let mut around: Vec<usize> = Vec::new();
     let overlaps: OnceCell<Overlaps> = OnceCell::new();
-    // The resting pairs that may still join a chain: side by side (a level normal), by index
-    // in `plan.pairs`; `listed` pairs were looked at.
-    let (mut level, mut listed): (Vec<usize>, usize) = (Vec::new(), 0);
-    loop {
+    // The level resting pairs (side by side: a level normal, by index in `plan.pairs`) that
+    // wait for a ball of theirs to become a carrier, by ball; `listed` pairs were looked at,
+    // and a pair beside a carrier is decided once (`decided`).
+    let mut waiting: HandleMap<RigidBodyHandle, Vec<usize>> = HandleMap::default();
+    let mut decided: Vec<bool> = Vec::new();
+    let mut ready: Vec<usize> = Vec::new();
+    let mut listed = 0;
+    // Each carrier is expanded once and each pair decided once: the chain grows in time
+    // linear in its pairs.
+    while !to_expand.is_empty() {
         // The pairs around each new carrier that the first pass left out (slow ones, and two
         // sleeping balls): each once, from the carrier expanded first.
-        let fresh: Vec<usize> = carriers
-            .iter()
-            .map(|h| index.ball_of_body(*h))
-            .filter(|m| !expanded[*m])
-            .collect();
-        for m in fresh {
+        for h in std::mem::take(&mut to_expand) {
+            let m = index.ball_of_body(h);
+            if expanded[m] {
+                continue;
+            }
             expanded[m] = true;
             around.clear();
             match &traversed {
@@ -642,40 +649,42 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
                 }
             }
         }
-        // The level resting pairs planned since the last pass join the candidates.
-        level.extend((listed..plan.pairs.len()).filter(|k| {
+        // The level resting pairs planned since: decided now if a ball of theirs carries a
+        // chain, else waiting for one to.
+        decided.resize(plan.pairs.len(), false);
+        ready.extend((listed..plan.pairs.len()).filter(|k| {
             let pair = &plan.pairs[*k];
             pair.role == Role::Resting && pair.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN
         }));
         listed = plan.pairs.len();
-        // A pair beside a carrier is decided once: it joins, or it never will (it is apart,
-        // something lies on a ball, or rapier or the user's filter would not solve it) and
-        // leaves the list.
-        let mut grown = false;
-        let mut kept = 0;
-        for n in 0..level.len() {
-            let k = level[n];
+        // A pair beside a carrier joins, or it never will (it is apart, something lies on a
+        // ball, or rapier or the user's filter would not solve it).
+        while let Some(k) = ready.pop() {
             let PlannedPair { a, b, key, .. } = plan.pairs[k];
-            if !carriers.contains(&a) && !carriers.contains(&b) {
-                level[kept] = k;
-                kept += 1;
+            if decided[k] {
                 continue;
             }
-            let apart = plan.pairs[k].balls && closing_gap(a, b).1 > policy.resting_gap;
-            if !apart && !is_loaded(a) && !is_loaded(b) && !refused(key, a, b) {
-                carriers.insert(a);
-                carriers.insert(b);
-                plan.pairs[k].role = Role::Impact;
-                plan.pairs[k].hooked = true;
-                plan.roles.insert(key, Role::Impact);
-                join(&mut plan, &mut woken, a);
-                join(&mut plan, &mut woken, b);
-                grown = true;
+            if !carriers.contains(&a) && !carriers.contains(&b) {
+                waiting.entry(a).or_default().push(k);
+                waiting.entry(b).or_default().push(k);
+                continue;
             }
-        }
-        level.truncate(kept);
-        if !grown && carriers.iter().all(|h| expanded[index.ball_of_body(*h)]) {
-            break;
+            decided[k] = true;
+            let apart = plan.pairs[k].balls && closing_gap(a, b).1 > policy.resting_gap;
+            if apart || is_loaded(a) || is_loaded(b) || refused(key, a, b) {
+                continue;
+            }
+            plan.pairs[k].role = Role::Impact;
+            plan.pairs[k].hooked = true;
+            plan.roles.insert(key, Role::Impact);
+            join(&mut plan, &mut woken, a);
+            join(&mut plan, &mut woken, b);
+            for ball in [a, b] {
+                if carriers.insert(ball) {
+                    to_expand.push(ball);
+                    ready.extend(waiting.remove(&ball).unwrap_or_default());
+                }
+            }
         }
     }
     index.clear_list(&leaves);
