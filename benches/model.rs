@@ -56,10 +56,7 @@ fn stick_batch(rng: &mut Rng) -> Vec<Sample> {
                     rng.uniform(-2.0, 2.0),
                     rng.uniform(-2.0, 2.0),
                 ),
-                Material {
-                    restitution: rng.uniform(0.2, 0.9),
-                    friction: rng.uniform(0.5, 1.0),
-                },
+                Material::new(rng.uniform(0.2, 0.9), rng.uniform(0.5, 1.0)),
             )
         })
         .collect()
@@ -77,10 +74,7 @@ fn slip_batch(rng: &mut Rng) -> Vec<Sample> {
                     rng.uniform(-3.0, -1.0),
                 ),
                 Vector3::zeros(),
-                Material {
-                    restitution: rng.uniform(0.2, 0.9),
-                    friction: rng.uniform(0.05, 0.2),
-                },
+                Material::new(rng.uniform(0.2, 0.9), rng.uniform(0.05, 0.2)),
             )
         })
         .collect()
@@ -101,10 +95,7 @@ fn swerve_batch(rng: &mut Rng) -> Vec<Sample> {
                     linear: across + Vector3::new(0.0, 0.0, rng.uniform(-3.0, -1.0)),
                     angular: Vector3::zeros(),
                 },
-                material: Material {
-                    restitution: rng.uniform(0.2, 0.9),
-                    friction: rng.uniform(0.1, 0.3),
-                },
+                material: Material::new(rng.uniform(0.2, 0.9), rng.uniform(0.1, 0.3)),
             }
         })
         .collect()
@@ -126,10 +117,7 @@ fn fallback_batch(rng: &mut Rng) -> Vec<Sample> {
                     linear: Vector3::new(rng.uniform(0.4, 0.8), 0.0, -1.0),
                     angular: Vector3::zeros(),
                 },
-                material: Material {
-                    restitution: 1.0,
-                    friction: 1.0,
-                },
+                material: Material::new(1.0, 1.0),
             }
         })
         .collect()
@@ -162,10 +150,10 @@ fn effect_batch(rng: &mut Rng, friction: bool, spin: bool) -> Vec<Sample> {
                     linear: -n * rng.uniform(1.0, 5.0) + rng.direction(),
                     angular: rng.direction(),
                 },
-                material: Material {
-                    restitution: rng.uniform(0.2, 0.9),
-                    friction: if friction { rng.uniform(0.1, 1.0) } else { 0.0 },
-                },
+                material: Material::new(
+                    rng.uniform(0.2, 0.9),
+                    if friction { rng.uniform(0.1, 1.0) } else { 0.0 },
+                ),
             }
         })
         .collect()

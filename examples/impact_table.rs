@@ -38,10 +38,7 @@ fn cases() -> Vec<Case> {
         body: ball,
         contact: ball_contact,
         velocity: landing,
-        material: Material {
-            restitution: 0.8,
-            friction: 0.5,
-        },
+        material: Material::new(0.8, 0.5),
     });
     out.push(Case {
         name: "sphere, slip",
@@ -49,10 +46,7 @@ fn cases() -> Vec<Case> {
         body: ball,
         contact: ball_contact,
         velocity: landing,
-        material: Material {
-            restitution: 0.8,
-            friction: 0.1,
-        },
+        material: Material::new(0.8, 0.1),
     });
 
     // Thin rod, m = 1 kg, L = 1 m, at 45 deg, landing on its lower end (planar: only
@@ -76,10 +70,7 @@ fn cases() -> Vec<Case> {
             linear: Vector3::new(0.0, 0.0, -1.0),
             angular: Vector3::zeros(),
         },
-        material: Material {
-            restitution: 0.8,
-            friction: 0.0,
-        },
+        material: Material::new(0.8, 0.0),
     });
     out.push(Case {
         name: "rod 45 deg, energy gain",
@@ -90,10 +81,7 @@ fn cases() -> Vec<Case> {
             linear: Vector3::new(0.6, 0.0, -1.0),
             angular: Vector3::zeros(),
         },
-        material: Material {
-            restitution: 1.0,
-            friction: 1.0,
-        },
+        material: Material::new(1.0, 1.0),
     });
 
     // Unit cube, m = 1 kg, a = 1 m, tilted so a corner is lowest; isotropic I = m a^2/6.
@@ -111,10 +99,7 @@ fn cases() -> Vec<Case> {
             linear: Vector3::new(1.0, 0.5, -3.0),
             angular: Vector3::new(0.0, 2.0, 0.0),
         },
-        material: Material {
-            restitution: 0.5,
-            friction: 0.3,
-        },
+        material: Material::new(0.5, 0.3),
     });
 
     // A swerving slip: the contact offset is not in the plane of the slip.
@@ -127,10 +112,7 @@ fn cases() -> Vec<Case> {
             linear: Vector3::new(0.3, -0.4, -2.0),
             angular: Vector3::new(1.0, 0.0, 0.5),
         },
-        material: Material {
-            restitution: 0.7,
-            friction: 0.6,
-        },
+        material: Material::new(0.7, 0.6),
     });
     out
 }

@@ -144,10 +144,7 @@ fn check_ball(
         angular: Vector3::new(0.0, wy, 0.0),
     };
     let c = Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -radius));
-    let m = Material {
-        restitution: e,
-        friction: mu,
-    };
+    let m = Material::new(e, mu);
     for (law, i) in all_laws(&body, &vel, &c, &m, q) {
         let expected: Vec<Regime> = if stick {
             vec![Regime::Stick, Regime::SlipThenStick]
@@ -306,10 +303,7 @@ fn frictionless_rod_bounces_by_the_closed_form_at_every_angle() {
             angular: Vector3::zeros(),
         };
         let c = Contact::fixed(Vector3::z(), r);
-        let m = Material {
-            restitution: e,
-            friction: 0.0,
-        };
+        let m = Material::new(e, 0.0);
         for (law, i) in all_laws(&body, &vel, &c, &m, &rng.rotation()) {
             assert_close(
                 &format!("{law} normal impulse: {tag}"),
@@ -456,10 +450,7 @@ fn cube_landing_on_a_corner_matches_the_hand_derivation() {
             angular: Vector3::zeros(),
         };
         let c = Contact::fixed(Vector3::z(), r);
-        let m = Material {
-            restitution: e,
-            friction: mu,
-        };
+        let m = Material::new(e, mu);
         for (law, i) in all_laws(&body, &vel, &c, &m, &rng.rotation()) {
             assert_vec_close(
                 &format!("{law} impulse: {tag}"),
@@ -537,10 +528,7 @@ fn non_rotating_body_is_a_point_mass_at_the_contact() {
             linear: -n * rng.uniform(0.5, 5.0) + rng.vector(3.0),
             angular: rng.vector(2.0),
         };
-        let m = Material {
-            restitution: rng.uniform(0.0, 1.0),
-            friction: rng.uniform(0.0, 1.0),
-        };
+        let m = Material::new(rng.uniform(0.0, 1.0), rng.uniform(0.0, 1.0));
         let u1 = contact_velocity(&vel, &c);
         let un = n.dot(&u1);
         if un >= -1e-3 {

@@ -222,10 +222,7 @@ fn consistent_equals_document_on_spheres_with_any_normal() {
         };
         let un = n.dot(&contact_velocity(&v, &c));
         v.linear -= n * (un + rng.uniform(1e-3, 5.0));
-        let m = Material {
-            restitution: rng.unit(),
-            friction: rng.uniform(0.0, 1.5),
-        };
+        let m = Material::new(rng.unit(), rng.uniform(0.0, 1.5));
         let (d, doc, con) = consistent_vs_document(&body, &v, &c, &m);
         assert!(
             d <= 1e-9,

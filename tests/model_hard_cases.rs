@@ -26,10 +26,7 @@ fn v(linear: Vector3<f64>, angular: Vector3<f64>) -> BodyVelocity {
 }
 
 fn mat(e: f64, mu: f64) -> Material {
-    Material {
-        restitution: e,
-        friction: mu,
-    }
+    Material::new(e, mu)
 }
 
 /// `K x = x/m + (I^-1 (r × x)) × r`, written here independently of the model.

@@ -41,10 +41,7 @@ fn jam_resolutions_stay_in_the_cone_and_dissipate() {
         };
         let un = n.dot(&(velocity.linear + velocity.angular.cross(&r)));
         velocity.linear -= n * (un + rng.uniform(1e-3, 5.0));
-        let material = Material {
-            restitution: rng.uniform(0.0, 1.0),
-            friction: rng.uniform(0.0, 3.0),
-        };
+        let material = Material::new(rng.uniform(0.0, 1.0), rng.uniform(0.0, 3.0));
         let contact = Contact::fixed(n, r);
         let impact = resolve(Law::Guarded, &body, &velocity, &contact, &material)
             .expect("valid input resolves");

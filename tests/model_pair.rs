@@ -54,10 +54,7 @@ fn spheres(normal: Vector3<f64>, ra: f64, rb: f64) -> PairContact {
 }
 
 fn material(e: f64, mu: f64) -> Material {
-    Material {
-        restitution: e,
-        friction: mu,
-    }
+    Material::new(e, mu)
 }
 
 #[track_caller]

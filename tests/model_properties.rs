@@ -70,7 +70,7 @@ prop_compose! {
         let mut velocity = BodyVelocity { linear: Vector3::from(v), angular: Vector3::from(w) };
         let un = n.dot(&model_support::contact_velocity(&velocity, &contact));
         velocity.linear -= n * (un + approach);
-        Case { body, inertia, velocity, contact, material: Material { restitution: e, friction: mu } }
+        Case { body, inertia, velocity, contact, material: Material::new(e, mu) }
     }
 }
 

@@ -142,10 +142,7 @@ fn cases(rng: &mut Rng) -> Vec<Case> {
                 linear: across + Vector3::new(0.0, 0.0, rng.uniform(-3.0, -1.0)),
                 angular: Vector3::zeros(),
             },
-            material: Material {
-                restitution: rng.uniform(0.0, 1.0),
-                friction: rng.uniform(0.1, 0.3),
-            },
+            material: Material::new(rng.uniform(0.0, 1.0), rng.uniform(0.1, 0.3)),
         });
     }
     for _ in 0..150 {
@@ -166,10 +163,7 @@ fn cases(rng: &mut Rng) -> Vec<Case> {
                 linear: -n * rng.uniform(1.0, 5.0) + rng.direction() * rng.uniform(1.0, 4.0),
                 angular: rng.direction() * rng.uniform(0.0, 2.0),
             },
-            material: Material {
-                restitution: rng.uniform(0.0, 1.0),
-                friction: rng.uniform(0.05, 0.5),
-            },
+            material: Material::new(rng.uniform(0.0, 1.0), rng.uniform(0.05, 0.5)),
         });
     }
     out

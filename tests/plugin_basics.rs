@@ -844,10 +844,7 @@ fn a_cube_corner_landing_is_the_models_single_point_impact() {
                 angular: Vector3::zeros(),
             };
             let contact = Contact::fixed(Vector3::y(), point - com);
-            let material = Material {
-                restitution: e,
-                friction: mu,
-            };
+            let material = Material::new(e, mu);
             let model = resolve(Law::Guarded, &body, &velocity, &contact, &material).unwrap();
             let got = na(ev.impulse);
             let err = (got - model.impulse).norm() / model.impulse.norm();

@@ -189,10 +189,7 @@ fn model_impact(t: &Throw, b: &Built, time: f64) -> model::Impact {
             angular: Vector3::zeros(),
         },
         &Contact::fixed(Vector3::y(), offset),
-        &Material {
-            restitution: t.e,
-            friction: t.mu,
-        },
+        &Material::new(t.e, t.mu),
     )
     .unwrap()
 }

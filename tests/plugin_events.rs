@@ -49,10 +49,7 @@ fn find_jam() -> Jam {
         // Approaching at 1 to 3 m/s at the contact point.
         let un = n.dot(&(velocity.linear + velocity.angular.cross(&offset)));
         velocity.linear -= n * (un + rng.uniform(1.0, 3.0));
-        let material = Material {
-            restitution: 0.3,
-            friction: rng.uniform(1.0, 3.0),
-        };
+        let material = Material::new(0.3, rng.uniform(1.0, 3.0));
         let contact = Contact::fixed(n, offset);
         if let Err(ModelError::Jam { denominator }) =
             resolve(Law::Document, &body, &velocity, &contact, &material)

@@ -498,10 +498,7 @@ fn check_ramp(label: &str, shape: ColliderBuilder) {
             angular: Vector3::zeros(),
         },
         &Contact::fixed(n, -n * radius),
-        &Material {
-            restitution: e,
-            friction: mu,
-        },
+        &Material::new(e, mu),
     )
     .unwrap();
     let (tt, tv) = tol();

@@ -119,10 +119,7 @@ fn struck_at_rest(
         linear: v,
         angular: w,
     };
-    let material = Material {
-        restitution: e,
-        friction: mu,
-    };
+    let material = Material::new(e, mu);
     let law = ImpactConfig::default().law;
     model::resolve_pair(
         law,

@@ -59,10 +59,7 @@ fn model_inputs_and_outputs_round_trip() {
         Vector3::new(0.0, 0.6, 0.8),
         Vector3::new(0.01, -0.03, -0.02),
     );
-    let material = Material {
-        restitution: 0.8,
-        friction: 0.3,
-    };
+    let material = Material::new(0.8, 0.3);
     round_trip(&body);
     round_trip(&velocity);
     round_trip(&contact);

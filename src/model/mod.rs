@@ -44,7 +44,7 @@ pub const ENERGY_GAIN_TOLERANCE: f64 = 1e-12;
 /// let body = Body::isotropic(1.0, 0.4 * 0.1 * 0.1);
 /// let contact = Contact::fixed(Vector3::z(), Vector3::new(0.0, 0.0, -0.1));
 /// let velocity = BodyVelocity { linear: Vector3::new(5.0, 0.0, -5.0), angular: Vector3::zeros() };
-/// let material = Material { restitution: 0.8, friction: 0.5 };
+/// let material = Material::new(0.8, 0.5);
 /// let impact = resolve(Law::Guarded, &body, &velocity, &contact, &material).unwrap();
 /// assert_eq!(impact.regime, Regime::Stick);
 /// // Rolling after the bounce: vx' = vx / (1 + 2/5) (MODEL-NOTES, closed forms).

@@ -102,7 +102,7 @@ impl PairImpact {
 ///     offset_a: Vector3::new(r, 0.0, 0.0),
 ///     offset_b: Vector3::new(-r, 0.0, 0.0),
 /// };
-/// let material = Material { restitution: 0.95, friction: 0.05 };
+/// let material = Material::new(0.95, 0.05);
 /// let hit = resolve_pair(Law::Guarded, &ball, &va, &ball, &BodyVelocity::default(), &contact, &material).unwrap();
 /// // Equal masses head-on: v_a' = v (1 - e) / 2, v_b' = v (1 + e) / 2.
 /// assert!((hit.a.linear.x - 2.0 * 0.05 / 2.0).abs() < 1e-12);

@@ -22,6 +22,12 @@ pub struct Body {
 }
 
 impl Body {
+    /// A body of mass `mass` (kg) and world-frame inverse inertia tensor `inv_inertia`
+    /// (1/(kg m^2)), as the fields say; checked by [`Body::validate`].
+    pub fn new(mass: f64, inv_inertia: Matrix3<f64>) -> Self {
+        Self { mass, inv_inertia }
+    }
+
     /// A body with an isotropic inertia `inertia` (kg m^2), such as a sphere or a cube.
     pub fn isotropic(mass: f64, inertia: f64) -> Self {
         Self {
@@ -210,6 +216,17 @@ pub struct Contact {
 }
 
 impl Contact {
+    /// A contact of unit normal `normal` (from the ground into the body) at `offset` from
+    /// the body's centre of mass, on a ground whose material point there moves at
+    /// `ground_velocity` (m/s).
+    pub fn new(normal: Vector3<f64>, offset: Vector3<f64>, ground_velocity: Vector3<f64>) -> Self {
+        Self {
+            normal,
+            offset,
+            ground_velocity,
+        }
+    }
+
     /// A contact on a fixed ground.
     pub fn fixed(normal: Vector3<f64>, offset: Vector3<f64>) -> Self {
         Self {
@@ -237,11 +254,16 @@ impl Contact {
 }
 
 /// The contact's material: Newton's coefficient of restitution and Coulomb's friction.
+///
+/// Build it with [`Material::new`] (or [`Default`], rapier's collider defaults) and set
+/// fields after: it is `#[non_exhaustive]`, so that a coefficient added later breaks no
+/// caller.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub struct Material {
     /// Coefficient of restitution `e >= 0` (1 = elastic; above 1 adds energy on purpose).
     pub restitution: f64,
@@ -249,7 +271,23 @@ pub struct Material {
     pub friction: f64,
 }
 
+impl Default for Material {
+    /// rapier's collider defaults: `e = 0`, `mu = 0.5`.
+    fn default() -> Self {
+        Self::new(0.0, 0.5)
+    }
+}
+
 impl Material {
+    /// Restitution `e` and friction `mu` (checked by [`Material::validate`], and by the
+    /// model when it resolves an impact).
+    pub fn new(restitution: f64, friction: f64) -> Self {
+        Self {
+            restitution,
+            friction,
+        }
+    }
+
     /// Checks `e >= 0`, `mu >= 0`, both finite.
     pub fn validate(&self) -> Result<(), ModelError> {
         check_coefficients(self.restitution, self.friction)

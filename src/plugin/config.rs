@@ -68,10 +68,7 @@ impl GroundMaterial {
     }
 
     pub(crate) fn to_model(self) -> Material {
-        Material {
-            restitution: self.restitution,
-            friction: self.friction,
-        }
+        Material::new(self.restitution, self.friction)
     }
 }
 

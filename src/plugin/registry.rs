@@ -249,10 +249,7 @@ impl Registry {
         let over = self.grounds.get(&ground).and_then(|g| g.material);
         match (colliders.get(body), colliders.get(ground)) {
             (Some(b), Some(g)) => material(b, g, over),
-            _ => over.unwrap_or(Material {
-                restitution: 0.0,
-                friction: 0.0,
-            }),
+            _ => over.unwrap_or(Material::new(0.0, 0.0)),
         }
     }
 }

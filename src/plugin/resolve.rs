@@ -95,10 +95,7 @@ pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material
         body.friction_combine_rule(),
         ground.friction_combine_rule(),
     );
-    Material {
-        restitution: clean(to_f64(e)),
-        friction: clean(to_f64(mu)),
-    }
+    Material::new(clean(to_f64(e)), clean(to_f64(mu)))
 }
 
 /// Everything about one impact that is not geometry.
@@ -125,7 +122,7 @@ impl ImpactInput<'_> {
             } else {
                 self.material.restitution
             },
-            friction: self.material.friction,
+            ..self.material
         };
         (settled, material)
     }

@@ -135,10 +135,7 @@ pub fn general_from_seed(s: &SeedInput) -> (Body, BodyVelocity, Contact, Materia
             angular: s.w1,
         },
         Contact::fixed(Vector3::z(), Vector3::new(s.lx, s.ly, -s.h)),
-        Material {
-            restitution: s.restitution,
-            friction: s.friction,
-        },
+        Material::new(s.restitution, s.friction),
     )
 }
 
@@ -401,9 +398,6 @@ pub fn random_general(rng: &mut Rng) -> (Body, Matrix3<f64>, BodyVelocity, Conta
     };
     let un = n.dot(&contact_velocity(&v, &contact));
     v.linear -= n * (un + rng.uniform(1e-3, 5.0));
-    let material = Material {
-        restitution: rng.unit(),
-        friction: rng.uniform(0.0, 1.5),
-    };
+    let material = Material::new(rng.unit(), rng.uniform(0.0, 1.5));
     (body, inertia, v, contact, material)
 }
