@@ -14,10 +14,10 @@
 //!   checked: `EndCheck`), then the commit of one state per body (woken up), and moves the
 //!   colliders.
 
-use super::commit::{Shadow, write_state};
+use super::commit::{Shadow, write_flight, write_state};
 use super::config::GroundMaterial;
 use super::config::{ConfigError, ImpactConfig, TimingMode};
-use super::convert::{pose_to_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
+use super::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
 use super::events::{EventKind, ImpactEvent, ImpactTiming};
 use super::filter;
 use super::geometry::{BodyGeom, GroundGeom, Hit, Search, SmallList, closest, first_impact};
@@ -420,12 +420,7 @@ impl<H> ImpactPlugin<H> {
             },
             ..end
         };
-        write_state(rb, &s, &cand.local_com, false);
-        // Written only where rapier drifted (a write queues the body for rapier's update).
-        let w = vec_from_na(&s.w);
-        if exact_spin && rb.angvel() != w {
-            rb.set_angvel(w, true);
-        }
+        write_flight(rb, &s, &cand.local_com, exact_spin);
         self.settle().remember(cand.body, rb, &s);
     }
 

@@ -26,6 +26,7 @@
 //! woken, so that the step plans it as an awake body.
 
 use super::body_contact::body_contact;
+use super::commit::wake;
 use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use super::filter;
 use super::geometry::{BodyGeom, contact};
@@ -690,7 +691,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     index.clear_list(&leaves);
     for handle in woken {
         if let Some(rb) = bodies.get_mut(handle) {
-            rb.wake_up(true);
+            wake(rb);
         }
     }
     plan
