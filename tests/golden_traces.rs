@@ -62,7 +62,7 @@ impl Fnv {
     }
 
     fn real(&mut self, x: Real) {
-        self.u64(f64::from(x).to_bits());
+        self.u64(scene_support::wide(x).to_bits());
     }
 }
 
@@ -375,7 +375,10 @@ fn tiles() -> Scene {
     }
 }
 
-const SCENES: [(&str, fn() -> Scene); 8] = [
+/// A scene's name and how it is built.
+type NamedScene = (&'static str, fn() -> Scene);
+
+const SCENES: [NamedScene; 8] = [
     ("drop", drop),
     ("spin", spin),
     ("dice", dice),
