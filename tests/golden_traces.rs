@@ -20,7 +20,7 @@ mod scene_support;
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
-use scene_support::{real, up};
+use scene_support::{real, up, walled_box};
 use std::fmt::Write as _;
 
 /// Steps between two kept values of a run's chained hash.
@@ -304,20 +304,7 @@ fn roll() -> Scene {
 fn pile() -> Scene {
     let mut w = world();
     let floor = halfspace(&mut w, 0.7, 0.5);
-    let half = 0.25;
-    for (x, z, hx, hz) in [
-        (half + 0.05, 0.0, 0.05, half + 0.1),
-        (-half - 0.05, 0.0, 0.05, half + 0.1),
-        (0.0, half + 0.05, half + 0.1, 0.05),
-        (0.0, -half - 0.05, half + 0.1, 0.05),
-    ] {
-        w.insert(
-            RigidBodyBuilder::fixed().translation(Vector::new(real(x), 1.0, real(z))),
-            ColliderBuilder::cuboid(real(hx), 1.0, real(hz))
-                .restitution(0.7)
-                .friction(0.5),
-        );
-    }
+    walled_box(&mut w, 0.25);
     for k in 0..60 {
         let (layer, cell) = (k / 16, k % 16);
         let at = [

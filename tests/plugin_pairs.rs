@@ -550,19 +550,7 @@ fn a_pile_of_opted_in_balls_comes_to_rest() {
                 .friction(0.5),
         );
         let half = 0.3;
-        for (x, z, hx, hz) in [
-            (half + 0.05, 0.0, 0.05, half + 0.1),
-            (-half - 0.05, 0.0, 0.05, half + 0.1),
-            (0.0, half + 0.05, half + 0.1, 0.05),
-            (0.0, -half - 0.05, half + 0.1, 0.05),
-        ] {
-            w.insert(
-                RigidBodyBuilder::fixed().translation(Vector::new(real(x), 1.0, real(z))),
-                ColliderBuilder::cuboid(real(hx), 1.0, real(hz))
-                    .restitution(0.7)
-                    .friction(0.5),
-            );
-        }
+        plugin_support::walled_box(&mut w, half);
         let mut balls = Vec::new();
         for k in 0..100 {
             let (layer, cell) = (k / 25, k % 25);

@@ -8,7 +8,7 @@
 
 mod plugin_support;
 
-use plugin_support::{F64, G, na, real};
+use plugin_support::{F64, G, jitter, na, real};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
 
@@ -147,13 +147,7 @@ fn a_row_of_ten_balls_one_behind_the_other_rolls_to_the_closed_form_stops() {
 /// apart, each ball jittered by up to 2 cm (so down to 1 cm apart).
 #[test]
 fn five_hundred_balls_on_a_grid_each_stop_at_the_closed_form_and_sleep() {
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut jitter = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 * 0.04 - 0.02
-    };
+    let mut jitter = jitter(0x2545_f491_4f6c_dd1du64, 0.02);
     let per_row = 23;
     let starts: Vec<_> = (0..500)
         .map(|i| {

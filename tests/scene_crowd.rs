@@ -28,13 +28,7 @@ fn crowd() -> (PhysicsWorld, ColliderHandle, Vec<RigidBodyHandle>) {
             .restitution(0.7)
             .friction(0.5),
     );
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut jitter = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 * 0.04 - 0.02
-    };
+    let mut jitter = jitter(0x9e37_79b9_7f4a_7c15u64, 0.02);
     let balls = (0..COUNT)
         .map(|i| {
             let (layer, cell) = (i / 400, i % 400);

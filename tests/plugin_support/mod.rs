@@ -19,7 +19,9 @@ use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use std::sync::Mutex;
 
-pub use scene_support::{F64, G, plugin, plugin_on, plugin_with_material, real, up, wide};
+pub use scene_support::{
+    F64, G, jitter, plugin, plugin_on, plugin_with_material, real, up, walled_box, wide,
+};
 
 /// The three timing modes.
 pub const MODES: [rapier_impact::TimingMode; 3] = [

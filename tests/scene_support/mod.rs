@@ -490,3 +490,33 @@ pub fn slab_ground(half: f64, thick: f64) -> ColliderBuilder {
         0.0,
     ))
 }
+
+/// Four fixed walls, 10 cm thick and 2 m high, around the square `|x|, |z| < half` (m), of
+/// restitution 0.7 and friction 0.5: the box a pile is dropped into.
+pub fn walled_box(world: &mut PhysicsWorld, half: f64) {
+    for (x, z, hx, hz) in [
+        (half + 0.05, 0.0, 0.05, half + 0.1),
+        (-half - 0.05, 0.0, 0.05, half + 0.1),
+        (0.0, half + 0.05, half + 0.1, 0.05),
+        (0.0, -half - 0.05, half + 0.1, 0.05),
+    ] {
+        world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(real(x), 1.0, real(z))),
+            ColliderBuilder::cuboid(real(hx), 1.0, real(hz))
+                .restitution(0.7)
+                .friction(0.5),
+        );
+    }
+}
+
+/// A fixed sequence of numbers uniform in `[-half_width, half_width]` (xorshift64 from
+/// `seed`, non-zero): the jitter of a scene's layout, the same on every run.
+pub fn jitter(seed: u64, half_width: f64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * half_width
+    }
+}
