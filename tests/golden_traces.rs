@@ -80,9 +80,16 @@ fn fold_step(h: &mut Fnv, world: &PhysicsWorld, events: &[ImpactEvent]) {
         h.u64(u64::from(rb.is_sleeping()));
     }
     for e in events {
-        h.bytes(format!("{:?}{:?}", e.kind, e.timing).as_bytes());
+        let what = (e.kind, e.timing, e.regime, e.law, e.fallback, e.settled);
+        h.bytes(format!("{what:?}").as_bytes());
         h.u64(u64::from(e.body.into_raw_parts().0));
         h.u64(u64::from(e.collider.into_raw_parts().0));
+        h.u64(u64::from(e.ground.into_raw_parts().0));
+        h.u64(
+            e.body2
+                .map_or(u64::MAX, |b| u64::from(b.into_raw_parts().0)),
+        );
+        h.u64(e.contact_points as u64);
         for x in [
             e.time,
             e.approach_speed,
@@ -93,9 +100,12 @@ fn fold_step(h: &mut Fnv, world: &PhysicsWorld, events: &[ImpactEvent]) {
         ] {
             h.u64(x.to_bits());
         }
-        for x in [e.point.x, e.point.y, e.point.z, e.impulse.x, e.impulse.y] {
-            h.real(x);
+        for v in [e.point, e.normal, e.impulse, e.tangent_impulse] {
+            for x in [v.x, v.y, v.z] {
+                h.real(x);
+            }
         }
+        h.u64(e.friction.to_bits());
     }
 }
 

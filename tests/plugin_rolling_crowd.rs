@@ -10,7 +10,7 @@ mod plugin_support;
 
 use plugin_support::{F64, G, jitter, na, real};
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode};
 
 const R: f64 = 0.05;
 /// Solid balls: `I = k m R^2`.
@@ -123,8 +123,12 @@ fn steps_to_sleep(v0: f64) -> usize {
 
 #[test]
 fn two_balls_side_by_side_roll_to_their_closed_form_stops() {
-    // 5 cm apart, then 1 cm apart: rapier's broad phase pairs both.
-    for gap in [0.05, 0.01] {
+    // 5 cm, 1 cm, 1 mm apart: rapier's broad phase pairs all three, and its narrow phase
+    // makes speculative contacts (up to 2 cm) for the last two. Side by side they close along
+    // their line of centres no faster than their relative velocity there (none), whatever
+    // their ground and rapier's step (in which a ball taken from its ground falls) do across
+    // it.
+    for gap in [0.05, 0.01, 0.001] {
         let starts = [(0.0, 0.0), (0.0, 2.0 * R + gap)];
         let v0 = 1.0;
         let (mut w, mut p, balls) = scene(&starts, v0);
@@ -177,11 +181,20 @@ fn a_ball_rolling_into_a_ball_at_rest_is_released_to_rapier_before_it_touches() 
     let mut closest = f64::INFINITY;
     let mut pushed = 0.0f64;
     for n in 0..120 {
+        let gap_before = (na(w.bodies[balls[1]].center_of_mass())
+            - na(w.bodies[balls[0]].center_of_mass()))
+        .norm()
+            - 2.0 * R;
         p.step(&mut w);
         for e in p.events() {
             assert_eq!(e.kind, EventKind::Released, "step {n}: {e:?}");
             assert_eq!(e.body, balls[0]);
+            assert_eq!(e.timing, ImpactTiming::StepStart, "step {n}: {e:?}");
             assert_eq!(e.ke_before, e.ke_after);
+            assert!(
+                gap_before > 0.0,
+                "step {n}: released at a gap of {gap_before}"
+            );
             released.push(n);
         }
         let gap = (na(w.bodies[balls[1]].center_of_mass())
@@ -195,4 +208,42 @@ fn a_ball_rolling_into_a_ball_at_rest_is_released_to_rapier_before_it_touches() 
     assert!(pushed > 0.3 * v0, "the ball at rest was struck: {pushed}");
     // rapier's contact lets balls overlap by its allowed error (1 mm) at most.
     assert!(closest > -2e-3, "closest approach {closest}");
+}
+
+/// A rolling ball beside a ball at rest (3 mm apart, across its path) is in closed form; a
+/// third ball, rapier's, strikes the resting one into it within a step. rapier's solver
+/// pushes the rolling ball through their speculative contact: it is released at the step's
+/// end, once (the next step's plan, finding the struck ball within reach, does not release it
+/// again), and rapier's end state stands.
+#[test]
+fn a_rolling_ball_pushed_within_the_step_is_released_at_the_step_end_once() {
+    let v0 = 1.0;
+    let side = 2.0 * R + 0.003;
+    let starts = [(0.0, 0.0), (0.0, side), (0.0, 2.0 * side + 0.01)];
+    let (mut w, mut p, balls) = scene(&starts, v0);
+    for (k, v) in [(1, 0.0), (2, -3.0)] {
+        w.bodies[balls[k]].set_linvel(Vector::new(0.0, 0.0, real(v)), true);
+        w.bodies[balls[k]].set_angvel(Vector::ZERO, true);
+    }
+    p.remove_impact_body(balls[2]);
+    let mut released = Vec::new();
+    for n in 0..30 {
+        p.step(&mut w);
+        // (The striker, sliding in closed form itself, is released as it strikes; rapier's end
+        // state of the pushed ball, flown without its ground, is put back on it: `PushOut`.)
+        for e in p.events().iter().filter(|e| e.body == balls[0]) {
+            if e.kind == EventKind::Released {
+                assert_eq!(e.ke_before, e.ke_after);
+                released.push((n, e.timing));
+            }
+        }
+    }
+    assert_eq!(
+        released,
+        [(0, ImpactTiming::StepEnd)],
+        "released once, at the end of the step of the strike"
+    );
+    // Struck towards -z, through the resting ball.
+    let vz = na(w.bodies[balls[0]].linvel()).z;
+    assert!(vz < -0.1, "the rolling ball was pushed: vz {vz}");
 }

@@ -138,8 +138,9 @@ fn a_crowd_of_opted_in_balls_settles_without_chatter() {
             "{timing:?}: impacts between resting balls: {s:?}"
         );
         // A ball meets a few neighbours as the crowd lands and spreads (2.4 impacts a ball
-        // and 24 at most, measured); chatter made 83 for one ball here, and thousands in all
-        // in larger crowds.
+        // and 24 at most, measured); a ball chattering against its resting neighbours meets
+        // them every few steps (83 times in this scene when slow impacts chained through the
+        // crowd).
         assert!(
             s.pair_impacts <= 4 * COUNT && s.most_pair_impacts_of_a_ball <= 40,
             "{timing:?}: {s:?}"

@@ -51,10 +51,10 @@ pub enum EventKind {
     Hold,
     /// A ball the closed form rolled (rolling resistance, spinning friction, sliding) handed
     /// to rapier's resting contact: another body or collider can touch it within the step
-    /// (`timing` `StepStart`: nothing is written), or touched it in the step (`StepEnd`:
-    /// rapier's end state stands, corrected only as the settle stage corrects any). The
-    /// closed form takes the ball again once nothing can reach it. `impulse` zero,
-    /// `ke_before` equal to `ke_after`.
+    /// (`timing` `StepStart`: nothing is written), or in the step a contact pushed it, a joint
+    /// held it or rapier's CCD stopped it short (`StepEnd`: rapier's end state stands,
+    /// corrected only as the settle stage corrects any). The closed form takes the ball again
+    /// once nothing can reach it. `impulse` zero, `ke_before` equal to `ke_after`.
     Released,
 }
 

@@ -1196,11 +1196,14 @@ impl<H> ImpactPlugin<H> {
                     }
                 } else {
                     // rapier's end state stands, in which the ball flew without its ground.
-                    if disturbed {
-                        let site = (geom.parts[0].handle, grounds[0].handle);
+                    if let (true, Some(part)) = (disturbed, geom.parts.first()) {
+                        let key = (part.handle, grounds[0].handle);
                         let rb = &bodies[cand.body];
                         self.events
-                            .push(released_at_end(cand, rb, site, motion, step.dt));
+                            .push(released_at_end(cand, rb, key, motion, step.dt));
+                        // Released here: the next step's plan, finding it within reach,
+                        // does not release it again.
+                        self.prev_roles.insert(key, Role::Resting);
                     }
                     let fall = -motion.accel.dot(&motion.normal) * step.dt;
                     let why = EndCheck::DisturbedRolling { fall };

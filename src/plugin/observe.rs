@@ -407,14 +407,21 @@ pub(crate) fn neighbours(
     )
 }
 
-/// A body's motion over the step as [`within_reach_of_other`] bounds it: its velocity (m/s),
-/// its acceleration in flight (`accel`: gravity and the user's force over its mass) and a
-/// bound on what its contacts with its grounds add to that (`support`, m/s^2).
+/// A centred ball's motion over the step as [`within_reach_of_other`] bounds it: its
+/// velocity (m/s), its acceleration in flight (`accel`: gravity and the user's force over its
+/// mass), and what its ground adds to that: a push along the ground's `normal` of `pressed`
+/// (m/s^2), and a drag of at most `dragged` (m/s^2) against one of the unit directions
+/// `drag_along` (on level ground: friction against the slip, whose direction stays, then
+/// rolling resistance against the motion), or in any direction (`None`: on a slope the ball's
+/// path curves).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct OwnMotion {
     pub v: Vector3<f64>,
     pub accel: Vector3<f64>,
-    pub support: f64,
+    pub normal: Vector3<f64>,
+    pub pressed: f64,
+    pub dragged: f64,
+    pub drag_along: Option<[Vector3<f64>; 2]>,
     /// The world's gravity (m/s^2), which the other body feels times its gravity scale.
     pub gravity: Vector3<f64>,
 }
@@ -424,15 +431,14 @@ pub(crate) struct OwnMotion {
 /// 10 cm apart at rapier's default length unit), and its narrow phase makes speculative
 /// solver contacts up to its prediction distance (2 cm) apart, which push nothing unless the
 /// two close: neither says the two touch. For each such pair: the gap between the two
-/// colliders now, against how far the two can close in the step. The closing is bounded by
-/// the relative velocity of the centres of mass, each body's spin times how far its surface
-/// lies from its centre of mass (none for a ball turning about its centre), and half the step
-/// squared times their accelerations' difference plus `own.support` (which also covers
-/// rapier's own step of the body, in which it flies without the grounds the plugin takes).
-/// What a third body does to the other one during the step is not bounded: the reconstruct
-/// stage reads rapier's contact impulses after the step ([`pushed_by_other`]). For a centred
-/// ball (`body` must be one: its own spin is not counted); a pair parry cannot measure, and
-/// any joint, is within reach.
+/// colliders now, against how far the two can close in the step ([`closing_bound`]). The
+/// pairs are rapier's as its last step's start found them: a body more than about 10 cm away
+/// then, that closes that much in two steps, is not seen (it meets the ball as it would
+/// under rapier alone, a step late, and the ball is rapier's from the next step). What a third
+/// body does to the other one during the step is not bounded either: the reconstruct stage
+/// reads rapier's contact impulses after the step ([`pushed_by_other`]). For a centred ball
+/// (`body` must be one: its own spin is not counted); a pair parry cannot measure, and any
+/// joint, is within reach.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn within_reach_of_other(
     body: RigidBodyHandle,
@@ -478,8 +484,12 @@ pub(crate) fn within_reach_of_other(
                 // ground lookup only for one within reach (a ball marked as ground).
                 (Some(a), Some(b)) => {
                     let d = vec_to_na(oc.position().translation - co.position().translation);
-                    let gap = d.norm() - to_f64(a.radius) - to_f64(b.radius) - skins;
-                    if gap > closing_bound(own, oc, true, bodies, dt) || is_ground(&other) {
+                    let len = d.norm();
+                    let gap = len - to_f64(a.radius) - to_f64(b.radius) - skins;
+                    // Two centres close no faster than along their line now:
+                    // |d + x| >= |d| + x.d/|d| for any relative displacement x.
+                    let line = (len > 0.0).then(|| d / len);
+                    if gap > closing_bound(own, oc, true, line, bodies, dt) || is_ground(&other) {
                         continue;
                     }
                     return true;
@@ -492,7 +502,7 @@ pub(crate) fn within_reach_of_other(
                 },
             };
             let other_ball = oc.shape().as_ball().is_some();
-            if gap <= closing_bound(own, oc, other_ball, bodies, dt) {
+            if gap <= closing_bound(own, oc, other_ball, None, bodies, dt) {
                 return true;
             }
         }
@@ -501,17 +511,34 @@ pub(crate) fn within_reach_of_other(
 }
 
 /// How much a body of motion `own` (a centred ball) and the collider `other` can close in
-/// `dt` (see [`within_reach_of_other`]); infinite when the other's motion cannot be read.
+/// `dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
+/// or in any direction; infinite when the other's motion cannot be read. The relative speed
+/// of the centres of mass, the other's spin times how far its surface lies from its centre
+/// of mass, and the step squared times the accelerations' difference and what `own`'s ground
+/// adds: rapier's substeps move a body by `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`.
 fn closing_bound(
     own: &OwnMotion,
     other: &Collider,
     other_ball: bool,
+    line: Option<Vector3<f64>>,
     bodies: &RigidBodySet,
     dt: f64,
 ) -> f64 {
+    // Along the line, the part of a vector that closes the gap; else its length.
+    let closing = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).max(0.0));
+    let across = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).abs());
+    let pushed = match line {
+        Some(l) => {
+            let drag = own
+                .drag_along
+                .map_or(1.0, |[a, b]| a.dot(&l).abs().max(b.dot(&l).abs()));
+            own.pressed * own.normal.dot(&l).abs() + own.dragged * drag
+        }
+        None => own.pressed + own.dragged,
+    };
     let Some(ob) = other.parent().and_then(|p| bodies.get(p)) else {
         // A collider without a body: it stays where it is.
-        return own.v.norm() * dt + 0.5 * (own.accel.norm() + own.support) * dt * dt;
+        return closing(own.v) * dt + (across(own.accel) + pushed) * dt * dt;
     };
     let com = ob.center_of_mass();
     // How far its surface lies from its centre of mass: a ball turning about its centre does
@@ -522,23 +549,27 @@ fn closing_bound(
         let bs = other.shape().compute_local_bounding_sphere();
         to_f64((other.position().transform_point(bs.center) - com).length() + bs.radius)
     };
-    let mut v_rel = (own.v - vec_to_na(ob.linvel())).norm();
+    let mut approach = closing(own.v - vec_to_na(ob.linvel()));
     let mut turn = to_f64(ob.angvel().length()) * arm;
-    let mut accel = own.accel.norm();
+    let mut accel = across(own.accel);
     if ob.is_dynamic() {
         let theirs = own.gravity * to_f64(ob.gravity_scale())
             + vec_to_na(ob.user_force()) / to_f64(ob.mass());
-        accel = (own.accel - theirs).norm();
+        accel = across(own.accel - theirs);
     } else if ob.is_kinematic() {
-        // A position-based kinematic body is moved to its next pose whatever its velocity.
+        // A position-based kinematic body is moved to its next pose whatever its velocity:
+        // its centre of mass's shift, and its turn.
+        let local = ob.local_center_of_mass();
         let next = ob.next_position();
-        let shift = vec_to_na(next.translation - ob.position().translation).norm();
-        v_rel = v_rel.max(own.v.norm() + shift / dt);
+        let shift = vec_to_na(next.transform_point(local) - ob.position().transform_point(local));
+        approach = approach.max(own.v.norm() + shift.norm() / dt);
         let turned = to_f64(next.rotation.angle_between(ob.position().rotation));
         turn = turn.max(turned / dt * arm);
     }
-    if !(v_rel.is_finite() && turn.is_finite() && accel.is_finite()) {
-        return f64::INFINITY;
+    let bound = (approach + turn) * dt + (accel + pushed) * dt * dt;
+    if bound.is_finite() {
+        bound
+    } else {
+        f64::INFINITY
     }
-    (v_rel + turn) * dt + 0.5 * (accel + own.support) * dt * dt
 }

@@ -571,11 +571,13 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // passes the impact on inside the step: Newton's cradle, a row of balls on a table),
     // and so on along the row, sleeping balls included. A ball lying on another stays
     // rapier's, and so does a ball something lies on: a pile's layers are held by rapier's
-    // solver. Only an impact that can pass anything on starts a chain: two balls closing
-    // faster than the pressed speed (what a slower one passes on rises less than the resting
-    // gap), or bodies of other shapes; and only a pair touching at the step's start (within
-    // the resting gap) carries it on. Without those two rules, every slow meeting of two
-    // balls rolling in a crowd on the floor took the whole crowd out of rapier's solver.
+    // solver. A chain is the balls an impact reaches within the step: only a pair touching
+    // at the step's start (within the resting gap) carries it on. An impact of bodies other
+    // than two balls, or of two balls closing faster than the pressed speed, passes on to
+    // every side (a rack broken by the cue ball); a slower impact of two balls side by side
+    // passes on only along its own line (a cradle struck gently, not every ball touching the
+    // struck one in a crowd on the floor, whose contacts rapier's solver holds); a slower
+    // landing of a ball on another passes nothing on.
     let closing_gap = |a: RigidBodyHandle, b: RigidBodyHandle| {
         let (ba, bb) = (&balls[index.ball_of_body(a)], &balls[index.ball_of_body(b)]);
         let d = bb.com - ba.com;
@@ -587,15 +589,28 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         };
         (closing, len - (ba.radius + bb.radius))
     };
-    // The balls an impact reaches that can pass it on.
-    let mut carriers: HandleSet<RigidBodyHandle> = plan
-        .pairs
-        .iter()
-        .filter(|p| {
-            p.role == Role::Impact && (!p.balls || closing_gap(p.a, p.b).0 > policy.pressed_speed)
-        })
-        .flat_map(|p| [p.a, p.b])
-        .collect();
+    // The balls an impact reaches that can pass it on, and the line it passes along (`None`:
+    // every side).
+    let mut carriers: HandleMap<RigidBodyHandle, Option<Vector3<f64>>> = HandleMap::default();
+    for p in plan.pairs.iter().filter(|p| p.role == Role::Impact) {
+        let along = if !p.balls || closing_gap(p.a, p.b).0 > policy.pressed_speed {
+            None
+        } else if p.normal.dot(&down).abs() <= CHAIN_MAX_TILT_SIN {
+            Some(p.normal)
+        } else {
+            continue;
+        };
+        for ball in [p.a, p.b] {
+            let line = carriers.entry(ball).or_insert(along);
+            if along.is_none() {
+                *line = None;
+            }
+        }
+    }
+    // Can a carrier's impact pass to the pair of this normal?
+    let passes = |line: &Option<Vector3<f64>>, normal: &Vector3<f64>| {
+        line.is_none_or(|d| d.cross(normal).norm() <= CHAIN_MAX_TILT_SIN)
+    };
     let mut loaded: HandleMap<RigidBodyHandle, bool> = HandleMap::default();
     // (Without gravity nothing lies on anything.)
     let mut is_loaded = |h: RigidBodyHandle| {
@@ -607,7 +622,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     // The carriers whose pairs were all planned, by index in `balls`, and those still to
     // expand, in the order they became carriers.
     let mut expanded = vec![false; balls.len()];
-    let mut to_expand: Vec<RigidBodyHandle> = carriers.iter().copied().collect();
+    let mut to_expand: Vec<RigidBodyHandle> = carriers.keys().copied().collect();
     let mut around: Vec<usize> = Vec::new();
     let overlaps: OnceCell<Overlaps> = OnceCell::new();
     // The level resting pairs (side by side: a level normal, by index in `plan.pairs`) that
@@ -665,11 +680,21 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             if decided[k] {
                 continue;
             }
-            if !carriers.contains(&a) && !carriers.contains(&b) {
+            let normal = plan.pairs[k].normal;
+            // The line the impact reaches it along, from the ball of the pair that passes it
+            // on (every side first).
+            let from = [a, b]
+                .iter()
+                .filter_map(|ball| carriers.get(ball))
+                .filter(|line| passes(line, &normal))
+                .min_by_key(|line| line.is_some())
+                .copied();
+            let Some(along) = from else {
+                // Until a ball of the pair carries an impact that passes to it.
                 waiting.entry(a).or_default().push(k);
                 waiting.entry(b).or_default().push(k);
                 continue;
-            }
+            };
             decided[k] = true;
             let apart = plan.pairs[k].balls && closing_gap(a, b).1 > policy.resting_gap;
             if apart || is_loaded(a) || is_loaded(b) || refused(key, a, b) {
@@ -681,7 +706,10 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
             join(&mut plan, &mut woken, a);
             join(&mut plan, &mut woken, b);
             for ball in [a, b] {
-                if carriers.insert(ball) {
+                // A new carrier, or one that now passes on to every side.
+                let was = carriers.get(&ball).copied();
+                if was.is_none() || was.is_some_and(|line| line.is_some() && along.is_none()) {
+                    carriers.insert(ball, along);
                     to_expand.push(ball);
                     ready.extend(waiting.remove(&ball).unwrap_or_default());
                 }

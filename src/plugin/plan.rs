@@ -613,10 +613,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// those in its plane under the ball's path (`one_plane_under`: a flush seam between tiles)
     /// up to where it first touches one of the others (a crease, a wall: not touching it at the
     /// start), gravity (and any constant force) along `-n`, no damping, torque or contact
-    /// modification by the user, isotropic inertia with no locked axis, nothing but grounds
-    /// near it last step, and a ball that slips (faster than 1 mm/s) or rolls faster than the
-    /// resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or, at
-    /// rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
+    /// modification by the user, isotropic inertia with no locked axis, nothing besides its
+    /// grounds able to touch it within the step (`observe::within_reach_of_other`; else
+    /// `OnPlane::Reached`), and a ball that slips (faster than 1 mm/s) or rolls faster than
+    /// the resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or,
+    /// at rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
     #[allow(clippy::too_many_arguments)]
     fn rolling_of(
         &self,
@@ -686,12 +687,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         // After the cheap refusals (most resting balls are at rest): nothing besides its
-        // grounds can touch it in the step. Its ground holds it (`|an|`) and pulls it along
-        // the plane by at most `mu |an|` (slip) or `mu_r |an|` (rolling resistance).
+        // grounds can touch it in the step. Its ground holds it (`|an|` along `n`) and pulls
+        // it along the plane by at most `mu |an|` (slip) or `mu_r |an|` (rolling resistance).
         let own = OwnMotion {
             v: on_ground.v,
             accel: flight.accel,
-            support: -an * (1.0 + friction.max(rolling_resistance)),
+            normal: *n,
+            pressed: -an,
+            dragged: -an * friction.max(rolling_resistance),
+            drag_along: level.then(|| {
+                [
+                    slip.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
+                    v.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
+                ]
+            }),
             gravity: step.gravity,
         };
         if !member
