@@ -115,7 +115,7 @@ fn run(timing: Option<TimingMode>) -> Settling {
 }
 
 /// The balls land and spread within the first 250 steps (measured: the last impact between
-/// balls at steps 191 and 214 in `f32`, 217 and 189 in `f64`); an impact between balls after
+/// balls at steps 185 and 213 in `f32`, 184 and 207 in `f64`); an impact between balls after
 /// this step, with the crowd lying on the floor, would be chatter.
 const LANDED: usize = 300;
 
