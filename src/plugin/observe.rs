@@ -556,6 +556,14 @@ fn closing_bound(
         let theirs = own.gravity * to_f64(ob.gravity_scale())
             + vec_to_na(ob.user_force()) / to_f64(ob.mass());
         accel = across(own.accel - theirs);
+        // Torque-free, an anisotropic body's spin grows by at most I_max / I_min; a user
+        // torque adds at most |tau| / I_min over the step.
+        let inv = ob.mass_properties().local_mprops.inv_principal_inertia;
+        if !other_ball && inv.min_element() > 0.0 {
+            let spin_up = inv.max_element() / inv.min_element();
+            let torque = to_f64(ob.user_torque().length() * inv.max_element());
+            turn = (turn * to_f64(spin_up) + torque * dt * arm) * 1.02;
+        }
     } else if ob.is_kinematic() {
         // A position-based kinematic body is moved to its next pose whatever its velocity:
         // its centre of mass's shift, and its turn.
