@@ -3,7 +3,7 @@
 //! handed to rapier's contact with an `EventKind::Released` event.
 //!
 //! rapier's broad phase pairs every two balls whose fattened bounding boxes overlap (up to
-//! about 8 cm apart), so a pair in its contact graph is no sign of contact: the plugin
+//! about 10 cm apart), so a pair in its contact graph is no sign of contact: the plugin
 //! measures the gap against how far the two can close in the step.
 
 mod plugin_support;
