@@ -14,29 +14,36 @@
 //!   checked: `EndCheck`), then the commit of one state per body (woken up), and moves the
 //!   colliders.
 
-use super::commit::{Shadow, write_flight, write_state};
-use super::config::GroundMaterial;
-use super::config::{ConfigError, ImpactConfig, TimingMode};
-use super::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
-use super::events::{EventKind, ImpactEvent, ImpactTiming};
-use super::filter;
-use super::geometry::{BodyGeom, GroundGeom, Hit, Search, SmallList, closest, first_impact};
-use super::handles::{HandleMap, HandleSet, slot_of};
-use super::hook_flags::HookFlags;
-use super::install::{Looked, Lookup};
-use super::observe::{
+use crate::motion::{Rolling, State};
+use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
+use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, released, resolve};
+use crate::plugin::config::GroundMaterial;
+use crate::plugin::config::{ConfigError, ImpactConfig, TimingMode};
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::hooks::lookup::{Looked, Lookup};
+use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, Search, closest, first_impact};
+use crate::plugin::queries::observe::{
     Sets, body_geom, pushed_by_other, rapier_state, snapshot, surely_far, touched_besides_grounds,
     touches_other,
 };
-use super::pair_plan::{self, PairIndex, pair_key};
-use super::pair_reconstruct;
-use super::plan::{Candidate, EndOfStep, FirstHold, Planner, StepData};
-use super::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Policy, Role};
-use super::reconstruct::{self, ccd_consistent};
-use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, correction, released, resolve};
-use super::settle::{Checked, Settle};
-use crate::motion::{Rolling, State};
+use crate::plugin::stages::commit::{write_flight, write_state};
+use crate::plugin::stages::pair_plan::{self, PairIndex, pair_key};
+use crate::plugin::stages::pair_reconstruct;
+use crate::plugin::stages::plan::Planner;
+use crate::plugin::stages::reconstruct::{self, ccd_consistent};
+use crate::plugin::stages::settle::{Checked, Settle};
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::handles::{HandleMap, HandleSet, slot_of};
+use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::registry::Registry;
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::Candidate;
+use crate::plugin::state::step::EndOfStep;
+use crate::plugin::state::step::FirstHold;
+use crate::plugin::state::step::StepData;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters,
@@ -129,7 +136,7 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) registry: Registry,
     pub(crate) user_hooks: H,
     pub(crate) step: StepData,
-    /// Where the plugin's hook flags are (see `hook_flags.rs`).
+    /// Where the plugin's hook flags are (see `hooks/flags.rs`).
     pub(crate) flags: HookFlags,
     shadows: HandleMap<RigidBodyHandle, Shadow>,
     /// Last step's tables, cleared and filled again by the next (their allocations kept).
@@ -880,7 +887,9 @@ impl<H> ImpactPlugin<H> {
         // The awake managed bodies that may reach a ground. A body surely far from every
         // ground needs no snapshot, inertia or geometry (only its flight in `Exact` mode); a
         // body without collider is skipped.
-        let margin = super::convert::to_real(step.policy.resting_gap.max(step.policy.prediction));
+        let margin = crate::plugin::bridge::convert::to_real(
+            step.policy.resting_gap.max(step.policy.prediction),
+        );
         let g_len = gravity.length();
         // The pairs of opted-in balls first: a sleeping ball a pair may reach is woken, and the
         // balls of `Impact` pairs are planned whatever their distance to the grounds.

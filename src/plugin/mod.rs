@@ -1,30 +1,29 @@
-//! The rapier adapter: ground registry and materials, the `PhysicsHooks` implementation, the
-//! per-step driver (snapshot, step, time of impact, impulse, write back) and the impact
-//! events. The only module that touches rapier types; the impulses come from
-//! [`crate::model`]. See [`crate::docs::integration`].
+//! The rapier adapter: everything that touches rapier types. The impulses come from
+//! [`crate::model`]; the motions between impacts from `crate::motion`. See
+//! `docs/architecture.md` for the stage list and [`crate::docs::integration`] for what a step
+//! does.
+//!
+//! - [`ImpactPlugin`] (`impact_plugin.rs`), its configuration (`config.rs`) and its events
+//!   (`events.rs`): the public face.
+//! - `stages/`: the step, as its stages in order (plan before rapier's step; reconstruct,
+//!   settle and commit after it).
+//! - `hooks/`: what runs inside rapier's step (the `PhysicsHooks` impl, its flags and tables).
+//! - `queries/`: read-only questions the stages share (contact geometry and time of impact,
+//!   the ground index, rapier's filtering, what the step observes of rapier).
+//! - `state/`: what the plugin keeps (the registry of grounds and bodies, handle-keyed tables).
+//! - `bridge/`: the hand-over to the model and the conversions between rapier's and the
+//!   model's numbers.
+//! - `policy.rs`: every threshold, named once.
 
-mod body_contact;
-mod commit;
+mod bridge;
 mod config;
-mod convert;
 mod events;
-mod filter;
-mod geometry;
-mod ground_index;
-mod handles;
-mod hook_flags;
 mod hooks;
 mod impact_plugin;
-mod install;
-mod observe;
-mod pair_plan;
-mod pair_reconstruct;
-mod plan;
 mod policy;
-mod reconstruct;
-mod registry;
-mod resolve;
-mod settle;
+mod queries;
+mod stages;
+mod state;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
 pub use events::{EventKind, ImpactEvent, ImpactTiming};

@@ -7,7 +7,7 @@
 //! [`Policy::end_action`]) read nothing else and write nothing, so they are unit-tested on
 //! synthetic inputs below.
 
-use super::config::ImpactConfig;
+use crate::plugin::config::ImpactConfig;
 
 /// Slip speed (m/s) below which a ball on the ground counts as rolling without slip: a
 /// rolling ball slower than the resting speed is left to rapier's resting contact, which

@@ -25,21 +25,22 @@
 //! bounding radius). Its one write into rapier: a sleeping body an `Impact` pair may reach is
 //! woken, so that the step plans it as an awake body.
 
-use super::body_contact::body_contact;
-use super::commit::wake;
-use super::convert::{to_f64, to_real, vec_from_na, vec_to_na};
-use super::filter;
-use super::geometry::{BodyGeom, contact};
-use super::ground_index::GroundMotion;
-use super::handles::{HandleMap, HandleSet, slot_of};
-use super::hook_flags::HookFlags;
-use super::observe::{
+use crate::motion::State;
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use crate::plugin::bridge::resolve::material;
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
+use crate::plugin::queries::body_contact::body_contact;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{BodyGeom, contact};
+use crate::plugin::queries::ground_index::GroundMotion;
+use crate::plugin::queries::observe::{
     Sets, body_geom, centred, ground_geom, held_besides, neighbours, pressed_besides, rapier_state,
 };
-use super::policy::{CHAIN_MAX_TILT_SIN, Policy, Role};
-use super::registry::Registry;
-use super::resolve::{PairKey, material};
-use crate::motion::State;
+use crate::plugin::stages::commit::wake;
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::handles::{HandleMap, HandleSet, slot_of};
+use crate::plugin::state::registry::Registry;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::parry::partitioning::{Bvh, BvhWorkspace};
@@ -504,7 +505,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
         // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
         // solver or changes: an impact, a pair it zeroes (and one a chain takes, asked there).
         // A resting pair it leaves as it is stays rapier's whatever they say (the hooks ask
-        // the user's filter of it, `hooks.rs`); most of a pile's planned pairs are such.
+        // the user's filter of it, `hooks/mod.rs`); most of a pile's planned pairs are such.
         if hooked && refused(key, a.body, b.body) {
             return None;
         }
@@ -746,7 +747,7 @@ pub(crate) fn step_start_impulses(
     flat_tolerance: f64,
     policy: &Policy,
     dt: f64,
-) -> Vec<super::events::ImpactEvent> {
+) -> Vec<crate::plugin::events::ImpactEvent> {
     let mut events = Vec::new();
     let impacts: Vec<usize> = (0..plan.pairs.len())
         .filter(|k| plan.pairs[*k].role == Role::Impact)
@@ -798,7 +799,7 @@ fn write_velocities<const N: usize>(
     bodies: &mut RigidBodySet,
     written: [(RigidBodyHandle, State, State); N],
 ) {
-    use super::commit::write_state;
+    use crate::plugin::stages::commit::write_state;
     for (h, s, after) in written {
         let rb = &mut bodies[h];
         let local_com = vec_to_na(rb.local_center_of_mass());
@@ -826,8 +827,8 @@ fn step_start_balls(
     law: crate::model::Law,
     policy: &Policy,
     dt: f64,
-) -> Option<(State, State, [super::events::ImpactEvent; 2])> {
-    use super::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
+) -> Option<(State, State, [crate::plugin::events::ImpactEvent; 2])> {
+    use crate::plugin::bridge::resolve::{ImpactInput, Inertia, PairSide, material, resolve_balls};
     let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
     let margin = policy.resting_gap.max(policy.prediction);
     let d = sb.com - sa.com;
@@ -868,7 +869,7 @@ fn step_start_balls(
         law,
         material(&colliders[ca], &colliders[cb], None),
         policy.resting_speed,
-        super::events::ImpactTiming::StepStart,
+        crate::plugin::events::ImpactTiming::StepStart,
     );
     resolve_balls(&input, &side_a, &side_b, 0.0)
 }
@@ -887,9 +888,11 @@ fn step_start_bodies(
     flat_tolerance: f64,
     policy: &Policy,
     dt: f64,
-) -> Option<(State, State, [super::events::ImpactEvent; 2])> {
-    use super::body_contact::touch_point;
-    use super::resolve::{BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_bodies};
+) -> Option<(State, State, [crate::plugin::events::ImpactEvent; 2])> {
+    use crate::plugin::bridge::resolve::{
+        BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_bodies,
+    };
+    use crate::plugin::queries::body_contact::touch_point;
     let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
     let (la, lb) = (
         vec_to_na(ra.local_center_of_mass()),
@@ -919,7 +922,7 @@ fn step_start_bodies(
         law,
         material(&colliders[ca], &colliders[cb], None),
         policy.resting_speed,
-        super::events::ImpactTiming::StepStart,
+        crate::plugin::events::ImpactTiming::StepStart,
     );
     resolve_bodies(
         &input,

@@ -3,36 +3,37 @@
 //!
 //! Contract: [`Planner::plan_body`] takes one awake managed body that may reach a ground and
 //! gives each of its pairs with the grounds near it a role (`Role`, decided by
-//! `super::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
+//! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
 //! the body a [`Candidate`] (its start state, flight, and which grounds may reach it) for the
 //! stages after rapier's step. In `Step` mode it also applies the impulses of the contacts
 //! that close in the step, the only write of this stage, each with its event. It reads rapier
 //! and the registry and calls the user's filter where the colliders ask for it; [`StepData`]
 //! carries the step's thresholds, roles and candidates.
 
-use super::commit::{Shadow, write_state};
-use super::config::{ImpactConfig, TimingMode};
-use super::convert::{to_f64, vec_from_na};
-use super::events::{ImpactEvent, ImpactTiming};
-use super::filter;
-use super::geometry::{
-    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, SmallList,
-    cannot_close, contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under,
-    plane_piece_of,
+use crate::plugin::bridge::convert::{to_f64, vec_from_na};
+use crate::plugin::config::{ImpactConfig, TimingMode};
+use crate::plugin::events::{ImpactEvent, ImpactTiming};
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, cannot_close,
+    contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under, plane_piece_of,
 };
-use super::ground_index::GroundMotion;
-use super::handles::{HandleMap, HandleSet};
-use super::hook_flags::HookFlags;
-use super::install::Lookup;
-use super::observe::{
+use crate::plugin::stages::commit::write_state;
+use crate::plugin::state::handles::{HandleMap, HandleSet};
+use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::{Candidate, FirstHold, StepData};
+
+use crate::motion::{Flight, Rolling, State};
+use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, released, resolve};
+use crate::plugin::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, ROLLING_MIN_SLIP, Role};
+use crate::plugin::queries::observe::{
     OwnMotion, Sets, body_geom, centred_ball, ground_geom, snapshot, touched_besides_grounds,
     within_reach_of_other,
 };
-use super::pair_plan::PairPlan;
-use super::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, Policy, ROLLING_MIN_SLIP, Role};
-use super::registry::Registry;
-use super::resolve::{ImpactInput, Inertia, PairKey, Site, released, resolve};
-use crate::motion::{Flight, Rolling, State};
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::registry::Registry;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
@@ -53,123 +54,6 @@ pub(crate) enum OnPlane {
     /// It would move, but something besides its grounds can touch it within the step
     /// (`observe::within_reach_of_other`): rapier's resting contact, as any resting pair.
     Reached,
-}
-
-/// A ball's first step held at rest on a slope (`OnPlane::Held`): rapier's resting contact
-/// starts without the impulses of a step before, and in its substeps lets the ball creep
-/// downhill and sink before it holds it (3.6e-5 m along a 3-degree slope at 30 Hz). After the
-/// step the ball is put back where it stopped, if nothing else moved it; from the next step
-/// rapier's contact holds it still (a few 1e-7 m while it sinks to its resting depth) and
-/// sleeps it.
-pub(crate) struct FirstHold {
-    pub body: RigidBodyHandle,
-    pub collider: ColliderHandle,
-    pub ground: ColliderHandle,
-    /// Where it stopped: the step's start, at rest.
-    pub start: State,
-    pub local_com: Vector3<f64>,
-    /// The ground's normal.
-    pub normal: Vector3<f64>,
-    /// From its centre to the contact point (m).
-    pub radius: f64,
-}
-
-/// A managed body's start-of-step snapshot.
-pub(crate) struct Candidate {
-    pub body: RigidBodyHandle,
-    pub start: State,
-    pub flight: Flight,
-    pub local_com: Vector3<f64>,
-    /// Indices (in `StepData::grounds`) of the grounds its swept bounding sphere meets.
-    pub near: SmallList<usize>,
-    /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
-    pub impact_grounds: SmallList<usize>,
-    /// Step mode: impulses were applied at the start.
-    pub touched: bool,
-    /// Some pair with an `impact_grounds` ground may meet in the step (else the search from
-    /// the start state would find it clear: see `geometry::cannot_close`).
-    pub closing: bool,
-    /// Resting pairs of a body turning fast enough that a point of it could go deeper than
-    /// the resting gap in the step (a box tipping off its edge, a capsule swinging down at a
-    /// wall, a ball spun fast): each ground's index (in `StepData::grounds`) and the resting
-    /// contact point in the body's frame (from its centre of mass). Checked after the step
-    /// (`EndCheck::TurningResting`).
-    pub turning_resting: SmallList<(usize, Vector3<f64>)>,
-    /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `EndCheck::TurningResting` and `ImpactPlugin::turned_end`.
-    pub turns_surface: bool,
-    /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
-    /// `StepData::grounds`) and the motion. `start` then touches the ground.
-    pub rolling: Option<(usize, Rolling)>,
-}
-
-impl Candidate {
-    /// A body that no ground can reach in the step (only its flight, in `Exact` mode).
-    pub fn flying(
-        body: RigidBodyHandle,
-        start: State,
-        flight: Flight,
-        local_com: Vector3<f64>,
-    ) -> Self {
-        Self {
-            body,
-            start,
-            flight,
-            local_com,
-            near: SmallList::Empty,
-            impact_grounds: SmallList::Empty,
-            touched: false,
-            closing: false,
-            turning_resting: SmallList::Empty,
-            turns_surface: false,
-            rolling: None,
-        }
-    }
-}
-
-#[derive(Default)]
-pub(crate) struct StepData {
-    pub active: bool,
-    pub dt: f64,
-    /// The step's thresholds.
-    pub policy: Policy,
-    /// The unit direction of gravity (zero without gravity).
-    pub down: Vector3<f64>,
-    /// The world's gravity (m/s^2).
-    pub gravity: Vector3<f64>,
-    pub roles: HandleMap<PairKey, Role>,
-    /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
-    /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
-    /// where the normal force holds the ball (`hooks.rs`).
-    pub holds: HandleMap<PairKey, Vector3<f64>>,
-    /// The balls held at rest this step and not the last (`FirstHold`).
-    pub first_holds: Vec<FirstHold>,
-    /// The pairs of opted-in balls and their roles (`pair_plan.rs`).
-    pub pairs: PairPlan,
-    pub grounds: Vec<GroundMotion>,
-    pub candidates: Vec<Candidate>,
-    /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).
-    pub asleep: Vec<RigidBodyHandle>,
-    pub lookup: Lookup,
-}
-
-/// The step's data in `after_step`, with rapier's sets after its step.
-pub(crate) struct EndOfStep<'a> {
-    pub data: StepData,
-    pub sets: Sets<'a>,
-}
-
-impl std::ops::Deref for EndOfStep<'_> {
-    type Target = StepData;
-    fn deref(&self) -> &StepData {
-        &self.data
-    }
-}
-
-impl std::ops::DerefMut for EndOfStep<'_> {
-    fn deref_mut(&mut self) -> &mut StepData {
-        &mut self.data
-    }
 }
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
@@ -228,7 +112,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let reach = speed * dt + step.policy.resting_gap.max(step.policy.prediction);
         let sphere = Aabb::from_half_extents(
             vec_from_na(&start.com),
-            Vector::splat(super::convert::to_real(geom.radius + reach)),
+            Vector::splat(crate::plugin::bridge::convert::to_real(geom.radius + reach)),
         );
         let near =
             self.registry
@@ -347,8 +231,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     Err(_) => Role::Rapier,
                     Ok(None) => Role::Impact,
                     Ok(Some((dist, n, p))) => {
-                        let u =
-                            super::geometry::body_velocity_at(&state, &p) - gg.velocity_at(&p, 0.0);
+                        let u = crate::plugin::queries::geometry::body_velocity_at(&state, &p)
+                            - gg.velocity_at(&p, 0.0);
                         let un = n.dot(&u);
                         // The normal speed the contact will have on reaching the ground
                         // (gravity, or any acceleration towards it, included).
@@ -394,7 +278,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             && un < 0.0
                         {
                             // Step mode: the impulse at the start of the step.
-                            let hit = super::geometry::Hit {
+                            let hit = crate::plugin::queries::geometry::Hit {
                                 part: 0,
                                 ground: 0,
                                 dist,
@@ -442,8 +326,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                     // bounced in turn at the step's start and end, come
                                     // to rest by the energy cap instead.)
                                     let un2 = n.dot(
-                                        &(super::geometry::body_velocity_at(&state, &point)
-                                            - gg.velocity_at(&point, 0.0)),
+                                        &(crate::plugin::queries::geometry::body_velocity_at(
+                                            &state, &point,
+                                        ) - gg.velocity_at(&point, 0.0)),
                                     );
                                     if un2 <= step.policy.resting_speed {
                                         Role::Resting

@@ -21,9 +21,9 @@
 //! from rapier's solver and zeroes the others' restitution. The flags the user had set are
 //! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
-use super::geometry::SmallList;
-use super::handles::{HandleMap, SlotTable};
-use super::registry::Registry;
+use crate::plugin::state::handles::{HandleMap, SlotTable};
+use crate::plugin::state::registry::Registry;
+use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
 };

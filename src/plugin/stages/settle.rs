@@ -3,7 +3,7 @@
 //!
 //! Contract: [`Settle::check`] takes a body's end state (rapier's, or the in-step impacts'
 //! from `reconstruct.rs`), the reason it is checked ([`EndCheck`], a row group of the table
-//! [`super::policy::Policy::end_action`]) and the grounds to check it against; it finds the
+//! [`crate::plugin::policy::Policy::end_action`]) and the grounds to check it against; it finds the
 //! deepest point, asks the table, and returns the corrected state: a push-out
 //! (`EventKind::PushOut`), step-end impacts from the model (`EventKind::Impact`,
 //! `ImpactTiming::StepEnd`), and an energy cap (`EventKind::EnergyCap`), each reported as an
@@ -15,26 +15,31 @@
 //! [`capped_energy`] scales a state's velocities so that its mechanical energy is no more
 //! than another's.
 
-use super::commit::{Shadow, write_state};
-use super::config::ImpactConfig;
-use super::convert::to_f64;
-use super::events::{EventKind, ImpactEvent, ImpactTiming};
-use super::filter;
-use super::geometry::{BodyGeom, GroundGeom, SmallList, closest, landing_point};
-use super::ground_index::GroundMotion;
-use super::handles::HandleMap;
-use super::hook_flags::HookFlags;
-use super::observe::{
+use crate::motion::{Flight, State};
+use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::bridge::resolve::{
+    ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
+};
+use crate::plugin::config::ImpactConfig;
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, closest, landing_point};
+use crate::plugin::queries::ground_index::GroundMotion;
+use crate::plugin::queries::observe::{
     NonGround, body_geom, ground_geom, neighbours, rapier_state, touched_besides_grounds,
 };
-use super::pair_plan::PlannedPair;
-use super::plan::{Candidate, EndOfStep, StepData};
-use super::policy::{EndAction, EndCheck, Role, Surroundings};
-use super::registry::Registry;
-use super::resolve::{
-    ImpactInput, Inertia, PairKey, PairSide, Site, correction, material, resolve, resolve_balls,
-};
-use crate::motion::{Flight, State};
+use crate::plugin::stages::commit::write_state;
+use crate::plugin::stages::pair_plan::PlannedPair;
+use crate::plugin::state::handles::HandleMap;
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::registry::Registry;
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::Candidate;
+use crate::plugin::state::step::EndOfStep;
+use crate::plugin::state::step::StepData;
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
@@ -44,7 +49,11 @@ use nalgebra::Vector3;
 /// `s` moved out of the ground along `hit`'s normal and, if `stop`, without its speed into
 /// the ground: what a resting contact holds a ball at (for a ball, an `e = 0` frictionless
 /// normal impulse, through its centre).
-pub(crate) fn put_on_ground(s: &mut State, hit: &super::geometry::Hit, stop: bool) {
+pub(crate) fn put_on_ground(
+    s: &mut State,
+    hit: &crate::plugin::queries::geometry::Hit,
+    stop: bool,
+) {
     s.com -= hit.normal * hit.dist;
     let vn = hit.normal.dot(&s.v);
     if stop && vn < 0.0 {
@@ -117,7 +126,7 @@ impl Settle<'_> {
     }
 
     /// The one end-of-step check: the body's deepest point at `end` against `grounds`, the
-    /// decision table's action for `why` ([`super::policy::Policy::end_action`]), and that
+    /// decision table's action for `why` ([`crate::plugin::policy::Policy::end_action`]), and that
     /// action on `end`:
     /// - `PushOut`: moved out along the normal (`put_on_ground`), a `PushOut` event;
     /// - `Impact`: the model's impulse at the contact (`ImpactTiming::StepEnd`, `e = 0` if
@@ -350,7 +359,7 @@ impl Settle<'_> {
         step: &StepData,
         refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
     ) -> SmallList<GroundGeom<'a>> {
-        let half = super::convert::to_real(geom.radius + step.policy.resting_gap);
+        let half = crate::plugin::bridge::convert::to_real(geom.radius + step.policy.resting_gap);
         self.registry
             .index
             .near(&step.grounds, com, half)
@@ -506,15 +515,15 @@ impl Settle<'_> {
         pair: &PlannedPair,
         step: &EndOfStep,
     ) {
-        use super::body_contact::{body_contact, touch_point};
-        use super::resolve::{BodyContactAt, resolve_bodies};
+        use crate::plugin::bridge::resolve::{BodyContactAt, resolve_bodies};
+        use crate::plugin::queries::body_contact::{body_contact, touch_point};
         let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
             return;
         };
         let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
         let (la, lb) = (
-            super::convert::vec_to_na(ra.local_center_of_mass()),
-            super::convert::vec_to_na(rb.local_center_of_mass()),
+            crate::plugin::bridge::convert::vec_to_na(ra.local_center_of_mass()),
+            crate::plugin::bridge::convert::vec_to_na(rb.local_center_of_mass()),
         );
         let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
         let Some(touch) = body_contact(&ga, &sa, &gb, &sb, 0.0) else {
@@ -634,10 +643,10 @@ impl Settle<'_> {
     ) {
         for (body, state) in moved {
             let rb = &bodies[body];
-            let local_com = super::convert::vec_to_na(rb.local_center_of_mass());
+            let local_com = crate::plugin::bridge::convert::vec_to_na(rb.local_center_of_mass());
             let geom = body_geom(rb, colliders, &local_com);
             let inertia = Inertia::of(rb);
-            let com = super::convert::vec_from_na(&state.com);
+            let com = crate::plugin::bridge::convert::vec_from_na(&state.com);
             let grounds = self.woken_geoms(bodies, colliders, com, &geom, step, &|_, _, _| false);
             let checked = Checked {
                 body,
@@ -669,7 +678,7 @@ impl Settle<'_> {
         body: RigidBodyHandle,
         checked: &Checked,
         grounds: &[GroundGeom],
-        hit: &super::geometry::Hit,
+        hit: &crate::plugin::queries::geometry::Hit,
         before: &State,
         after: &State,
         step: &StepData,
@@ -695,7 +704,7 @@ impl Settle<'_> {
 fn pivot_pushed(
     cand: &Candidate,
     ground: &GroundGeom,
-    hit: &super::geometry::Hit,
+    hit: &crate::plugin::queries::geometry::Hit,
     s: &State,
     step: &EndOfStep,
 ) -> bool {
@@ -704,7 +713,8 @@ fn pivot_pushed(
             return false;
         }
         let p = s.com + s.rot * local;
-        let u = super::geometry::body_velocity_at(s, &p) - ground.velocity_at(&p, step.dt);
+        let u = crate::plugin::queries::geometry::body_velocity_at(s, &p)
+            - ground.velocity_at(&p, step.dt);
         hit.normal.dot(&u) < -step.policy.pressed_speed
     })
 }

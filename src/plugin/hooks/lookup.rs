@@ -1,14 +1,14 @@
 //! Install: the per-step tables rapier's hooks read during its step.
 //!
 //! Contract: built at the end of `before_step` from the plan's roles and the hook flags, read
-//! (never written) by the `PhysicsHooks` impl (`hooks.rs`) while rapier steps; a lookup is an
+//! (never written) by the `PhysicsHooks` impl (`hooks/mod.rs`) while rapier steps; a lookup is an
 //! index and a handle compare, not a hash. The hook flags themselves are put in place by
-//! `hook_flags.rs`.
+//! `hooks/flags.rs`.
 
-use super::handles::{HandleMap, slot_of};
-use super::hook_flags::HookedBody;
-use super::policy::Role;
-use super::resolve::PairKey;
+use crate::plugin::hooks::flags::HookedBody;
+use crate::plugin::policy::Role;
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::handles::{HandleMap, slot_of};
 use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
 
 /// What the hooks ask for every ground pair inside rapier's step, by collider index instead

@@ -3,15 +3,15 @@
 //!
 //! Contract: the only state here is what the user registered (grounds, the all-fixed mode,
 //! exclusions) and the ground index built from it; marking a ground changes nothing in the
-//! collider set (the plugin's hook flags are put on at each step, `hook_flags.rs`). Every
+//! collider set (the plugin's hook flags are put on at each step, `hooks/flags.rs`). Every
 //! registration is validated at the call that makes it ([`ConfigError`]).
 
-use super::config::{ConfigError, GroundMaterial};
-use super::convert::to_f64;
-use super::ground_index::{GroundEntry, GroundIndex};
-use super::handles::{HandleMap, HandleSet};
-use super::resolve::material;
 use crate::model::Material;
+use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::bridge::resolve::material;
+use crate::plugin::config::{ConfigError, GroundMaterial};
+use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
+use crate::plugin::state::handles::{HandleMap, HandleSet};
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
 };

@@ -7,15 +7,16 @@
 //! ([`surely_far`]), and what touches a body besides its grounds in rapier's contact graph
 //! ([`non_ground_contacts`], [`touches_other`]).
 
-use super::commit::Shadow;
-use super::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
-use super::geometry::{BodyGeom, BodyPart, GroundGeom, SmallList};
-use super::ground_index::{GroundEntry, GroundIndex, GroundMotion};
-use super::handles::HandleMap;
-use super::policy::LOADED_COS;
-use super::registry::Registry;
 use crate::motion::{Flight, Gyro, State};
 use crate::parry::query;
+use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
+use crate::plugin::policy::LOADED_COS;
+use crate::plugin::queries::geometry::{BodyGeom, BodyPart, GroundGeom};
+use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex, GroundMotion};
+use crate::plugin::state::handles::HandleMap;
+use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::registry::Registry;
+use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
     Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,

@@ -8,11 +8,13 @@
 //! at the origin and `b`'s placed relative to it, so that `f32` rounding applies to the small
 //! relative pose and not to world coordinates.
 
-use super::convert::{pose_from_na, to_f64, to_real, vec_to_na};
-use super::geometry::{BodyGeom, BodyPart, body_velocity_at, close_tolerance, part_pose};
 use crate::motion::{Moving, State};
 use crate::parry::query::{
     self, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
+use crate::plugin::bridge::convert::{pose_from_na, to_f64, to_real, vec_to_na};
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, body_velocity_at, close_tolerance, part_pose,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
 

@@ -15,7 +15,7 @@
 //! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately
 //! ([`user_refuses`]), where the colliders' hook flags ask for it, as rapier would.
 
-use super::resolve::PairKey;
+use crate::plugin::state::handles::PairKey;
 use crate::rapier::prelude::{
     ActiveHooks, Collider, ColliderSet, ImpulseJointSet, MultibodyJointSet, PairFilterContext,
     PhysicsHooks, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,

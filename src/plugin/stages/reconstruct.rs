@@ -11,15 +11,17 @@
 //! nothing into rapier: the caller has the settle stage check that state (`EndCheck::Flown`:
 //! a body never left inside a ground) and commits it.
 
-use super::convert::vec_to_na;
-use super::events::{EventKind, ImpactTiming};
-use super::geometry::{
+use crate::motion::{Flight, Rolling, State};
+use crate::plugin::bridge::convert::vec_to_na;
+use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, resolve};
+use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
 };
-use super::plan::{Candidate, EndOfStep, StepData};
-use super::resolve::{ImpactInput, Inertia, Site, correction, resolve};
-use super::settle::Settle;
-use crate::motion::{Flight, Rolling, State};
+use crate::plugin::stages::settle::Settle;
+use crate::plugin::state::step::Candidate;
+use crate::plugin::state::step::EndOfStep;
+use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ColliderSet, RigidBody};
 
 /// The body's state at the step's end after the impacts from `first` on (see the module's

@@ -3,10 +3,11 @@
 //!
 //! All arithmetic is `f64`; poses are rounded to rapier's precision only to call parry.
 
-use super::convert::{pose_from_na, to_f64, vec_to_na};
 use crate::motion::{Flight, State};
 use crate::parry::query;
 use crate::parry::shape::{PolygonalFeature, Shape, Triangle};
+use crate::plugin::bridge::convert::{pose_from_na, to_f64, vec_to_na};
+use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::ColliderHandle;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -20,71 +21,6 @@ pub(crate) struct BodyPart<'a> {
     pub local: Isometry3<f64>,
     /// rapier's contact skin of the collider (m).
     pub skin: f64,
-}
-
-/// A list that keeps one element inline and spills to a `Vec` beyond: most bodies have one
-/// collider and touch one ground, and the per-step lists of the adapter then allocate nothing.
-#[derive(Clone, Debug, Default)]
-pub(crate) enum SmallList<T> {
-    #[default]
-    Empty,
-    One(T),
-    Many(Vec<T>),
-}
-
-impl<T> SmallList<T> {
-    pub fn push(&mut self, x: T) {
-        match self {
-            Self::Empty => *self = Self::One(x),
-            Self::One(_) => {
-                if let Self::One(a) = std::mem::take(self) {
-                    *self = Self::Many(vec![a, x]);
-                }
-            }
-            Self::Many(v) => v.push(x),
-        }
-    }
-}
-
-impl<T> std::ops::Deref for SmallList<T> {
-    type Target = [T];
-
-    fn deref(&self) -> &[T] {
-        match self {
-            Self::Empty => &[],
-            Self::One(a) => std::slice::from_ref(a),
-            Self::Many(v) => v,
-        }
-    }
-}
-
-impl<T> std::ops::DerefMut for SmallList<T> {
-    fn deref_mut(&mut self) -> &mut [T] {
-        match self {
-            Self::Empty => &mut [],
-            Self::One(a) => std::slice::from_mut(a),
-            Self::Many(v) => v,
-        }
-    }
-}
-
-impl<'s, T> IntoIterator for &'s SmallList<T> {
-    type Item = &'s T;
-    type IntoIter = std::slice::Iter<'s, T>;
-
-    fn into_iter(self) -> Self::IntoIter {
-        self.iter()
-    }
-}
-
-impl<T> FromIterator<T> for SmallList<T> {
-    fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
-        let mut list = Self::Empty;
-        for x in iter {
-            list.push(x);
-        }
-        list
-    }
 }
 
 /// The colliders of a body and a bound on their distance from its centre of mass.
@@ -215,7 +151,7 @@ pub(crate) fn contact_checked(
         ground.shape,
         &pose_b,
         part.shape,
-        super::convert::to_real(prediction + skins),
+        crate::plugin::bridge::convert::to_real(prediction + skins),
     )?
     else {
         return Ok(None);
@@ -363,7 +299,7 @@ fn triangles_under(ground: &GroundGeom, t: f64, p: &Vector3<f64>) -> Vec<Triangl
     let local = pose_g
         .inverse_transform_point(&nalgebra::Point3::from(*p))
         .coords;
-    let local = super::convert::vec_from_na(&local);
+    let local = crate::plugin::bridge::convert::vec_from_na(&local);
     match ground.shape.as_typed_shape() {
         TypedShape::TriMesh(m) => {
             let id = m.project_local_point_and_get_location(local, false).1.0;
@@ -444,8 +380,9 @@ fn plane_contact_on(
         None => {
             let sm = part.shape.as_support_map().ok_or(None)?;
             let dir_local = pose_b.rotation.inverse() * (-n);
-            let support_local =
-                vec_to_na(sm.local_support_point(super::convert::vec_from_na(&dir_local)));
+            let support_local = vec_to_na(
+                sm.local_support_point(crate::plugin::bridge::convert::vec_from_na(&dir_local)),
+            );
             (pose_b * nalgebra::Point3::from(support_local)).coords
         }
     };
@@ -758,8 +695,8 @@ fn triangles_near(
         .coords;
     let r = Vector3::repeat(reach);
     let aabb = Aabb::new(
-        super::convert::vec_from_na(&(local - r)),
-        super::convert::vec_from_na(&(local + r)),
+        crate::plugin::bridge::convert::vec_from_na(&(local - r)),
+        crate::plugin::bridge::convert::vec_from_na(&(local + r)),
     );
     let mut world = |tri: &Triangle| {
         f([tri.a, tri.b, tri.c].map(|x| (pose * nalgebra::Point3::from(vec_to_na(x))).coords));
@@ -1186,7 +1123,10 @@ pub(crate) fn landing_point(
     let pose = part_pose(part, s);
     let dir_local = pose.rotation.inverse() * (-h.normal);
     let mut feature = PolygonalFeature::default();
-    pfm.local_support_feature(super::convert::vec_from_na(&dir_local), &mut feature);
+    pfm.local_support_feature(
+        crate::plugin::bridge::convert::vec_from_na(&dir_local),
+        &mut feature,
+    );
     let count = feature.num_vertices.min(4);
     if count < 2 {
         return (h.point, 1);

@@ -24,28 +24,30 @@
 //! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
 //! nothing into rapier.
 
-use super::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
-use super::commit::write_state;
-use super::config::TimingMode;
-use super::convert::to_f64;
-use super::events::{EventKind, ImpactTiming};
-use super::geometry::{
-    BodyGeom, GroundGeom, Search, SmallList, closest, first_impact, landing_point,
-};
-use super::handles::{HandleMap, HandleSet};
-use super::observe::{body_geom, centred_ball, touches_other};
-use super::plan::{Candidate, EndOfStep};
-use super::policy::{EndCheck, Role};
-use super::reconstruct::ccd_consistent;
-use super::reconstruct::rest_on_ground;
-use super::resolve::{
+use crate::motion::meeting::first_touch;
+use crate::motion::{Flight, Motion, Moving, State};
+use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::bridge::resolve::{
     BodyContactAt, ImpactInput, Inertia, PairSide, Site, correction, material, resolve,
     resolve_balls, resolve_bodies,
 };
-use super::settle::Checked;
-use super::settle::Settle;
-use crate::motion::meeting::first_touch;
-use crate::motion::{Flight, Motion, Moving, State};
+use crate::plugin::config::TimingMode;
+use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::policy::{EndCheck, Role};
+use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
+use crate::plugin::queries::geometry::{
+    BodyGeom, GroundGeom, Search, closest, first_impact, landing_point,
+};
+use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
+use crate::plugin::stages::commit::write_state;
+use crate::plugin::stages::reconstruct::ccd_consistent;
+use crate::plugin::stages::reconstruct::rest_on_ground;
+use crate::plugin::stages::settle::Checked;
+use crate::plugin::stages::settle::Settle;
+use crate::plugin::state::handles::{HandleMap, HandleSet};
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::Candidate;
+use crate::plugin::state::step::EndOfStep;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 use std::cmp::Reverse;
@@ -230,7 +232,7 @@ pub(crate) fn move_clusters(
 
 /// What happens next in the cluster.
 enum Next {
-    Ground(usize, State, super::geometry::Hit),
+    Ground(usize, State, crate::plugin::queries::geometry::Hit),
     /// The pair of this index in the cluster's pairs, with parry's contact for a pair not
     /// both centred balls.
     Touch(usize, Option<BodyTouch>),
@@ -588,8 +590,8 @@ fn reaches_other_grounds(
         + s.v.norm() * left
         + accel * left * left
         + step.policy.resting_gap.max(step.policy.prediction);
-    let half = super::convert::to_real(reach);
-    let centre = super::convert::vec_from_na(&s.com);
+    let half = crate::plugin::bridge::convert::to_real(reach);
+    let centre = crate::plugin::bridge::convert::vec_from_na(&s.com);
     view.registry
         .index
         .near(&step.grounds, centre, half)
@@ -617,7 +619,7 @@ fn ground_impact(
     flight: &mut Flight,
     s: &State,
     t: f64,
-    hit: &super::geometry::Hit,
+    hit: &crate::plugin::queries::geometry::Hit,
     step: &EndOfStep,
 ) -> Option<State> {
     let part = &ball.geom.parts[hit.part];

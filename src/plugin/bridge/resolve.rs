@@ -2,13 +2,13 @@
 //! `Body`, `BodyVelocity`, `Contact` and `Material`; the model's `Impact` becomes a new
 //! state and an [`ImpactEvent`]. No impulse algebra here: the model does it.
 
-use super::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
-use super::events::{EventKind, ImpactEvent, ImpactTiming};
-use super::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::model::{
     self, Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, ModelError,
 };
 use crate::motion::State;
+use crate::plugin::bridge::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
 };
@@ -129,7 +129,7 @@ impl ImpactInput<'_> {
 }
 
 /// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the
-/// contact `point` (a landing point, see [`super::geometry::landing_point`]) with the
+/// contact `point` (a landing point, see [`crate::plugin::queries::geometry::landing_point`]) with the
 /// hit's normal. Returns the state after and the event, or `None` when the point does not
 /// approach the ground or the model refuses the input.
 #[allow(clippy::too_many_arguments)]
@@ -415,8 +415,8 @@ impl Site {
             collider: e.collider,
             ground: e.ground,
             body2: e.body2,
-            normal: super::convert::vec_to_na(e.normal),
-            point: super::convert::vec_to_na(e.point),
+            normal: crate::plugin::bridge::convert::vec_to_na(e.normal),
+            point: crate::plugin::bridge::convert::vec_to_na(e.point),
         }
     }
 }
@@ -479,6 +479,3 @@ pub(crate) fn released(site: &Site, inertia: &Inertia, state: &State, time: f64)
     }
     event
 }
-
-/// The collider handle pair key of a body collider and a ground collider.
-pub(crate) type PairKey = (ColliderHandle, ColliderHandle);

@@ -2,7 +2,7 @@
 //!
 //! Called by rapier's narrow phase (every step, for every pair with a hook flag: the plugin sets
 //! `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on the grounds, or on the colliders of the
-//! managed bodies near a ground, see `hook_flags.rs`) and by its CCD. It reads the roles
+//! managed bodies near a ground, see `hooks/flags.rs`) and by its CCD. It reads the roles
 //! [`ImpactPlugin::before_step`] assigned:
 //! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
 //!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its
@@ -26,8 +26,11 @@
 //!   hook flags (those the user set, before the plugin added its own) ask for it; otherwise
 //!   rapier's default applies.
 
-use super::impact_plugin::ImpactPlugin;
-use super::policy::Role;
+pub(crate) mod flags;
+pub(crate) mod lookup;
+
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::policy::Role;
 use crate::rapier::prelude::{
     ActiveHooks, ContactModificationContext, PairFilterContext, PhysicsHooks, SolverFlags,
 };
@@ -84,7 +87,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {
-                        *rigid.friction = super::convert::to_real(m.friction);
+                        *rigid.friction = crate::plugin::bridge::convert::to_real(m.friction);
                     }
                     // A ball held at rest on a slope: the normal force acts `h tan(theta)`
                     // downhill of the contact point, as the rolling resistance's contact patch
@@ -100,8 +103,11 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                                     * ((contact.anchor2 - contact.anchor1).dot(normal)
                                         - contact.dist);
                             let point = (closed + contact.anchor2) * 0.5;
-                            let lever = super::convert::to_f64((centre - point).dot(normal).abs());
-                            let offset = super::convert::vec_from_na(&(tilt * lever));
+                            let lever = crate::plugin::bridge::convert::to_f64(
+                                (centre - point).dot(normal).abs(),
+                            );
+                            let offset =
+                                crate::plugin::bridge::convert::vec_from_na(&(tilt * lever));
                             contact.anchor1 += offset;
                             contact.anchor2 += offset;
                         }

@@ -15,9 +15,9 @@
 //! - the motions are in a deterministic order (by collider handle), and an index into
 //!   [`GroundIndex::motions`] names a ground for the whole step.
 
-use super::convert::{pose_from_na, pose_to_na, to_f64, to_real, vec_to_na};
-use super::geometry::SmallList;
 use crate::model::Material;
+use crate::plugin::bridge::convert::{pose_from_na, pose_to_na, to_f64, to_real, vec_to_na};
+use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
@@ -28,7 +28,7 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
-use super::handles::{HandleHasher, slot_of};
+use crate::plugin::state::handles::{HandleHasher, slot_of};
 
 /// A registered ground collider.
 #[derive(Clone, Copy, Debug)]

@@ -93,3 +93,6 @@ impl<V: Copy> SlotTable<V> {
         self.slots.iter().flatten().map(|(h, v)| (h, v))
     }
 }
+
+/// The collider handle pair key of a body collider and a ground collider.
+pub(crate) type PairKey = (ColliderHandle, ColliderHandle);

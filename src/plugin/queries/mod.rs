@@ -1,0 +1,10 @@
+//! Read-only questions the stages share: contact geometry along a flight and the time of
+//! impact (`geometry.rs`), between two moving bodies (`body_contact.rs`), which grounds a body
+//! may meet (`ground_index.rs`), rapier's own pair filtering (`filter.rs`), and what the step
+//! reads of rapier (`observe.rs`). Nothing here writes.
+
+pub(crate) mod body_contact;
+pub(crate) mod filter;
+pub(crate) mod geometry;
+pub(crate) mod ground_index;
+pub(crate) mod observe;

@@ -1,0 +1,66 @@
+//! A list that keeps one element inline: the adapter's per-body and per-step lists.
+
+/// A list that keeps one element inline and spills to a `Vec` beyond: most bodies have one
+/// collider and touch one ground, and the per-step lists of the adapter then allocate nothing.
+#[derive(Clone, Debug, Default)]
+pub(crate) enum SmallList<T> {
+    #[default]
+    Empty,
+    One(T),
+    Many(Vec<T>),
+}
+
+impl<T> SmallList<T> {
+    pub fn push(&mut self, x: T) {
+        match self {
+            Self::Empty => *self = Self::One(x),
+            Self::One(_) => {
+                if let Self::One(a) = std::mem::take(self) {
+                    *self = Self::Many(vec![a, x]);
+                }
+            }
+            Self::Many(v) => v.push(x),
+        }
+    }
+}
+
+impl<T> std::ops::Deref for SmallList<T> {
+    type Target = [T];
+
+    fn deref(&self) -> &[T] {
+        match self {
+            Self::Empty => &[],
+            Self::One(a) => std::slice::from_ref(a),
+            Self::Many(v) => v,
+        }
+    }
+}
+
+impl<T> std::ops::DerefMut for SmallList<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        match self {
+            Self::Empty => &mut [],
+            Self::One(a) => std::slice::from_mut(a),
+            Self::Many(v) => v,
+        }
+    }
+}
+
+impl<'s, T> IntoIterator for &'s SmallList<T> {
+    type Item = &'s T;
+    type IntoIter = std::slice::Iter<'s, T>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl<T> FromIterator<T> for SmallList<T> {
+    fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
+        let mut list = Self::Empty;
+        for x in iter {
+            list.push(x);
+        }
+        list
+    }
+}
