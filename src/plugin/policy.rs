@@ -38,6 +38,24 @@ pub(crate) const LOADED_COS: f64 = 0.5;
 /// pair stays rapier's resting contact.
 pub(crate) const CHAIN_MAX_TILT_SIN: f64 = 0.1;
 
+/// Relative tolerance of the plane test ([`on_plane`]): a ball that rolled in closed form is
+/// still on its plane when its closest ground contact is within this many metres per metre of
+/// radius (at least per metre) and the contact's normal is the plane's to this many parts of
+/// one (the rounding of the closed form's `f64` arithmetic, far below any real gap).
+pub(crate) const ON_PLANE_TOLERANCE: f64 = 1e-9;
+
+/// Is a ball of contact radius `radius` (m), whose closest ground contact is at gap `dist`
+/// (m) with unit normal `normal`, still on the plane of unit normal `plane`?
+pub(crate) fn on_plane(
+    dist: f64,
+    normal: &nalgebra::Vector3<f64>,
+    plane: &nalgebra::Vector3<f64>,
+    radius: f64,
+) -> bool {
+    dist.abs() <= ON_PLANE_TOLERANCE * radius.max(1.0)
+        && normal.dot(plane) >= 1.0 - ON_PLANE_TOLERANCE
+}
+
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Role {
@@ -148,6 +166,12 @@ impl Policy {
             held_speed: (4.0 * resting_speed).max(2.0 * g * dt),
             prediction,
         }
+    }
+
+    /// Is a ball of contact radius `radius` (m) at rest in `s`: its centre, and its surface
+    /// about the centre, no faster than the resting speed?
+    pub fn is_still(&self, s: &crate::motion::State, radius: f64) -> bool {
+        s.v.norm() <= self.resting_speed && s.w.norm() * radius <= self.resting_speed
     }
 
     /// Does a body-ground pair at gap `dist` (m, negative inside) rest this step, arriving at

@@ -31,9 +31,13 @@ pub(crate) mod lookup;
 
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Role;
+use crate::plugin::stages::pair_plan::pair_key;
+use crate::plugin::state::handles::{PairKey, slot_of};
 use crate::rapier::prelude::{
-    ActiveHooks, ContactModificationContext, PairFilterContext, PhysicsHooks, SolverFlags,
+    ActiveHooks, ColliderHandle, ColliderSet, ContactModificationContext, PairFilterContext,
+    PhysicsHooks, RigidBodySet, SolverFlags,
 };
+use lookup::Looked;
 
 impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
@@ -125,6 +129,127 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                     self.user_hooks.modify_solver_contacts(context);
                 }
             }
+        }
+    }
+}
+
+/// The step's answers to rapier's hook calls: which pairs are the plugin's, with what role.
+impl<H> ImpactPlugin<H> {
+    /// The role of a managed pair in the current step (`Resting` when unknown: a pair the
+    /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
+    /// solver without bounce).
+    pub(crate) fn role(&self, key: &PairKey) -> Role {
+        let lookup = &self.step.lookup;
+        if lookup.roles_built {
+            match lookup.roles.get(slot_of(key.0)) {
+                Some(Some(slot)) if slot.body == key.0 => {
+                    if slot.ground == key.1 {
+                        return slot.role;
+                    }
+                    if !slot.more {
+                        return Role::Resting;
+                    }
+                }
+                _ => return Role::Resting,
+            }
+        }
+        self.step.roles.get(key).copied().unwrap_or(Role::Resting)
+    }
+
+    /// The pair as the plugin sees it in rapier's step: `Some((key, role, user flags))` for a
+    /// managed body-ground pair, `None` for another pair. The step's table answers the pairs
+    /// `before_step` gave a role (most of them) without looking at the sets; the others are
+    /// checked (a pair the plugin did not see coming is `Resting`).
+    pub(crate) fn pair_in_step(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<(PairKey, Role, ActiveHooks)> {
+        // The table holds the registry as `before_step` saw it; a ground marked or unmarked
+        // since is checked against the sets.
+        // A pair of opted-in balls.
+        if !self.step.pairs.roles.is_empty() {
+            let key = pair_key(c1, c2);
+            if let Some(role) = self.step.pairs.roles.get(&key) {
+                let user = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                return Some((key, *role, user));
+            }
+        }
+        let current = self.registry.index.entry(c1).is_ok();
+        match current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
+            Some(Looked::Pair(key, slot)) => {
+                // A body collider that is itself marked as ground (its body turned dynamic
+                // after it was marked) makes the pair two grounds: not the plugin's, as
+                // `managed_pair` says.
+                if self.registry.entry(key.0).is_none() {
+                    return Some((key, slot.role, slot.user));
+                }
+                return None;
+            }
+            // A body with no ground in reach against a managed ground (not on a dynamic
+            // body, as `managed_pair` asks): `Resting`, as every pair the plugin gave no role.
+            Some(Looked::Far(key, user)) => {
+                let ground_managed = self.registry.entry(key.1).is_some()
+                    && self.registry.entry(key.0).is_none()
+                    && colliders.get(key.1).is_some_and(|co| {
+                        co.parent()
+                            .is_none_or(|p| bodies.get(p).is_some_and(|rb| !rb.is_dynamic()))
+                    });
+                return ground_managed
+                    .then(|| (key, Role::Resting, user | self.user_flags(colliders, key.1)));
+            }
+            None => {}
+        }
+        self.managed_pair(bodies, colliders, c1, c2).map(|key| {
+            (
+                key,
+                self.role(&key),
+                self.user_flags(colliders, c1) | self.user_flags(colliders, c2),
+            )
+        })
+    }
+
+    /// The hook flags the user asked for on a collider.
+    pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
+        self.step_user_flags(c)
+            .unwrap_or_else(|| self.flags.recorded_user_flags(colliders, c))
+    }
+
+    /// `Some((body collider, ground collider))` when the pair is a managed body against a
+    /// ground.
+    pub(crate) fn managed_pair(
+        &self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> Option<PairKey> {
+        let (body, ground) = match (
+            self.registry.entry(c1).is_some(),
+            self.registry.entry(c2).is_some(),
+        ) {
+            (true, false) => (c2, c1),
+            (false, true) => (c1, c2),
+            _ => return None,
+        };
+        if let Some(parent) = colliders.get(ground)?.parent() {
+            if bodies.get(parent).is_none_or(|rb| rb.is_dynamic()) {
+                return None;
+            }
+        }
+        let parent = colliders.get(body)?.parent()?;
+        let rb = bodies.get(parent)?;
+        self.registry.manages(parent, rb).then_some((body, ground))
+    }
+
+    /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
+    /// another collider (its flags are the user's) or outside the step's tables.
+    pub(crate) fn step_user_flags(&self, c: ColliderHandle) -> Option<ActiveHooks> {
+        match self.step.lookup.user_flags.get(slot_of(c)) {
+            Some(Some((h, user))) if *h == c => Some(*user),
+            _ => None,
         }
     }
 }

@@ -1,22 +1,127 @@
-//! Commit: the one place the step writes a body's state into rapier, and what the plugin
-//! remembers of what it wrote.
+//! Commit: the one writer. Every change the step makes to a rapier body, and every event that
+//! reports one, goes through [`Commit`].
 //!
-//! Contract: the only code that calls rapier's body setters. [`write_state`] sets a body's
-//! pose and velocities (woken up) from an `f64` state, [`write_flight`] what free flight
-//! changes, [`wake`] wakes a sleeping body a step must plan;
-//! [`Shadow`] keeps, for `Exact` mode, the `f64` state behind what was written, so that the
-//! next step continues from it rather than from its rounding to rapier's precision, as long
-//! as rapier still holds exactly what was written.
+//! Contract: the only code that calls rapier's body setters (pose, velocities, wake-up) and
+//! the only code that appends to the step's events. [`Commit::state`] sets a body's pose and
+//! velocities (woken up) from an `f64` state, [`Commit::flight`] what free flight changes,
+//! [`Commit::wake`] wakes a sleeping body a step must plan. In `Exact` mode a state the model
+//! reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], so that the next step
+//! continues from the `f64` state rather than from its rounding to rapier's precision, as long
+//! as rapier still holds exactly what was written; a correction of rapier's own end state
+//! ([`Origin::Correction`]) is not: rapier's precision is its truth.
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, vec_from_na};
+use crate::plugin::events::ImpactEvent;
+use crate::plugin::state::handles::HandleMap;
+use crate::plugin::state::memory::Shadow;
 use crate::rapier::math::Pose;
-use crate::rapier::prelude::RigidBody;
+use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 
-/// Writes a state into rapier (woken up): the full pose and velocities, or (`full = false`)
-/// the translation and linear velocity only, keeping rapier's rotation.
-pub(crate) fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
+/// Where a written state comes from, which decides whether `Exact` mode keeps it.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Origin {
+    /// The model's reconstruction (a flight, a rolling ball, the impacts of the step): its
+    /// `f64` state is the next step's start in `Exact` mode.
+    Model,
+    /// A correction of rapier's end state (a push-out, a step-end impact, a step-start
+    /// impulse): the next step starts from what rapier holds.
+    Correction,
+}
+
+/// The step's writer: the events of the step and `Exact` mode's shadows.
+pub(crate) struct Commit<'a> {
+    events: &'a mut Vec<ImpactEvent>,
+    shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
+    /// `Exact` mode: states of [`Origin::Model`] are remembered.
+    exact: bool,
+}
+
+impl<'a> Commit<'a> {
+    pub fn new(
+        events: &'a mut Vec<ImpactEvent>,
+        shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
+        exact: bool,
+    ) -> Self {
+        Self {
+            events,
+            shadows,
+            exact,
+        }
+    }
+
+    /// Reports one change made to a body.
+    pub fn event(&mut self, event: ImpactEvent) {
+        self.events.push(event);
+    }
+
+    /// Reports changes made to bodies, in order.
+    pub fn events(&mut self, events: impl IntoIterator<Item = ImpactEvent>) {
+        self.events.extend(events);
+    }
+
+    /// Withdraws the events reported from index `from` on: those of an attempt that was
+    /// abandoned before anything of it was written (a cluster the search gave up on).
+    pub fn withdraw(&mut self, from: usize) {
+        self.events.truncate(from);
+    }
+
+    /// The step's events so far (a body's events of this step start at an index taken
+    /// before its stage ran: `reported()`).
+    pub fn reported(&self) -> &[ImpactEvent] {
+        self.events
+    }
+
+    /// Writes `s` into `body` (woken up): its pose and velocities.
+    pub fn state(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        body: RigidBodyHandle,
+        s: &State,
+        local_com: &Vector3<f64>,
+        origin: Origin,
+    ) {
+        let rb = &mut bodies[body];
+        write_pose_and_velocities(rb, s, local_com, true);
+        self.remember(body, rb, s, origin);
+    }
+
+    /// Writes a free flight's end into `body` (woken up): the translation and linear
+    /// velocity, and the spin where `exact_spin` and rapier's differs (a write queues the body
+    /// for rapier's update, so an unchanged spin is not written); rapier's rotation is kept.
+    pub fn flight(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        body: RigidBodyHandle,
+        s: &State,
+        local_com: &Vector3<f64>,
+        exact_spin: bool,
+    ) {
+        let rb = &mut bodies[body];
+        write_pose_and_velocities(rb, s, local_com, false);
+        let w = vec_from_na(&s.w);
+        if exact_spin && rb.angvel() != w {
+            rb.set_angvel(w, true);
+        }
+        self.remember(body, rb, s, Origin::Model);
+    }
+
+    /// Wakes a sleeping body the step must plan.
+    pub fn wake(rb: &mut RigidBody) {
+        rb.wake_up(true);
+    }
+
+    fn remember(&mut self, body: RigidBodyHandle, rb: &RigidBody, s: &State, origin: Origin) {
+        if self.exact && origin == Origin::Model {
+            self.shadows.insert(body, Shadow::of(rb, s));
+        }
+    }
+}
+
+/// Sets a body's pose and velocities (woken up) from an `f64` state: the full pose, or
+/// (`full = false`) the translation only, keeping rapier's rotation, and the spin unchanged.
+fn write_pose_and_velocities(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
     if full {
         let translation = s.com - s.rot * local_com;
         rb.set_position(
@@ -30,25 +135,4 @@ pub(crate) fn write_state(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64
         rb.set_translation(vec_from_na(&translation), true);
     }
     rb.set_linvel(vec_from_na(&s.v), true);
-}
-
-/// Writes a free flight's end (woken up): the translation and linear velocity, and the spin
-/// where `exact_spin` and rapier's differs (a write queues the body for rapier's update, so
-/// an unchanged spin is not written); rapier's rotation is kept.
-pub(crate) fn write_flight(
-    rb: &mut RigidBody,
-    s: &State,
-    local_com: &Vector3<f64>,
-    exact_spin: bool,
-) {
-    write_state(rb, s, local_com, false);
-    let w = vec_from_na(&s.w);
-    if exact_spin && rb.angvel() != w {
-        rb.set_angvel(w, true);
-    }
-}
-
-/// Wakes a sleeping body up.
-pub(crate) fn wake(rb: &mut RigidBody) {
-    rb.wake_up(true);
 }

@@ -1,12 +1,288 @@
-//! The step's stages, in the order they run. Before rapier's step: the plan of the pairs
-//! between opted-in bodies (`pair_plan.rs`) and of each body near a ground (`plan.rs`). After
-//! it: the clusters of impacts between bodies (`pair_reconstruct.rs`), each body's motion
-//! through its ground impacts (`reconstruct.rs`), the one check of every end state
-//! (`settle.rs`), and the one writer (`commit.rs`).
+//! The step, as its stages in the order they run (see `docs/architecture.md`).
+//!
+//! Before rapier's step ([`ImpactPlugin::before_step`]):
+//! 1. `prepare.rs`: the step's thresholds and the grounds' poses over the step; last step's
+//!    memory handed over.
+//! 2. `pair_plan.rs`: the pairs of opted-in bodies that may meet, their roles (and in `Step`
+//!    mode their impulses at the step's start).
+//! 3. `prepare.rs` (survey): which managed bodies are asleep, far from every ground, or to be
+//!    planned.
+//! 4. `plan.rs`: each planned body's pairs with the grounds near it get a role, the body a
+//!    candidate (and in `Step` mode the impulses of the contacts that close in the step).
+//! 5. `install.rs`: the hook flags and the tables rapier's hook calls read.
+//!
+//! During rapier's step the plugin is its `PhysicsHooks` (`hooks/`).
+//!
+//! After rapier's step ([`ImpactPlugin::after_step`]):
+//! 1. `prepare.rs`: the grounds' actual motion over the step; this step's roles kept for the
+//!    next.
+//! 2. `woken.rs`: the bodies asleep at the start that rapier woke, checked at the step's end.
+//! 3. `pair_reconstruct.rs`: the clusters of impacts between bodies, moved together.
+//! 4. `bodies.rs`: every other candidate, routed to its reconstruction (`reconstruct.rs`: a
+//!    rolling ball's closed form, `Exact` mode's flight, the in-step impacts) and checked at
+//!    the step's end (`settle.rs`).
+//! 5. `settle.rs`: the pairs between bodies left to rapier's end state, checked.
+//! 6. `bodies.rs`: the balls held at rest on a slope for their first step, put back.
+//! 7. the colliders moved to the bodies' poses; the step's tables kept for the next.
+//!
+//! Every write into rapier and every event goes through the one writer (`commit.rs`).
 
+mod bodies;
 pub(crate) mod commit;
+mod install;
 pub(crate) mod pair_plan;
 pub(crate) mod pair_reconstruct;
 pub(crate) mod plan;
+mod prepare;
 pub(crate) mod reconstruct;
 pub(crate) mod settle;
+mod woken;
+
+use crate::plugin::config::TimingMode;
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::queries::observe::Sets;
+use crate::plugin::stages::commit::Commit;
+use crate::plugin::stages::plan::Planner;
+use crate::plugin::state::memory::LastStep;
+use crate::plugin::state::step::{AfterStep, EndOfStep, StepData};
+use crate::rapier::math::Vector;
+use crate::rapier::prelude::{
+    ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters, MultibodyJointSet,
+    NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodySet,
+};
+
+impl<H> ImpactPlugin<H> {
+    /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
+    /// plugin as hooks, [`Self::after_step`].
+    pub fn step(&mut self, world: &mut PhysicsWorld)
+    where
+        H: crate::rapier::pipeline::PhysicsHooks,
+    {
+        self.step_with_events(world, &());
+    }
+
+    /// [`Self::step`] with rapier's event handler `events`.
+    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler)
+    where
+        H: crate::rapier::pipeline::PhysicsHooks,
+    {
+        self.before_step(
+            world.gravity,
+            &world.integration_parameters,
+            &mut world.bodies,
+            &mut world.colliders,
+            &world.narrow_phase,
+            &world.impulse_joints,
+            &world.multibody_joints,
+        );
+        world.step_with_events(&*self, events);
+        self.after_step(
+            &mut world.bodies,
+            &mut world.colliders,
+            &world.narrow_phase,
+            &world.impulse_joints,
+            &world.multibody_joints,
+        );
+    }
+
+    /// Prepares a step: call it right before rapier's `PhysicsPipeline::step` with the same
+    /// gravity, parameters and sets. Clears the events, reads the managed bodies near a
+    /// ground, and in `Step` mode applies the impulses of the contacts that close in this
+    /// step. The joints are read for rapier's pair filtering (a joint can disable its bodies'
+    /// contacts).
+    // The sets rapier's own `PhysicsPipeline::step` takes, which has the same allowance.
+    #[allow(clippy::too_many_arguments)]
+    pub fn before_step(
+        &mut self,
+        gravity: Vector,
+        params: &IntegrationParameters,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        narrow_phase: &NarrowPhase,
+        impulse_joints: &ImpulseJointSet,
+        multibody_joints: &MultibodyJointSet,
+    ) where
+        H: PhysicsHooks,
+    {
+        let sets = Sets {
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        };
+        let mut step = self.prepare(gravity, params, bodies, colliders);
+        if !step.active {
+            self.step = step;
+            return;
+        }
+        let last = self.memory.begin_step(&mut step);
+        self.plan_pairs(&mut step, bodies, colliders, &sets, &last);
+        let rapier_gravity = (gravity, params.dt);
+        let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
+        let to_plan = std::mem::take(&mut survey.to_plan);
+        let near = self.plan_bodies(
+            &mut step,
+            to_plan,
+            &mut survey.far,
+            bodies,
+            colliders,
+            &sets,
+            &last,
+        );
+        let planned = (near.as_slice(), survey.far.as_slice());
+        self.install(&mut step, (bodies, colliders), planned, survey.unmanaged);
+        self.memory.end_planning(last);
+        self.step = step;
+    }
+
+    /// Finishes a step: call it right after rapier's `PhysicsPipeline::step`. Resolves the
+    /// managed impacts, writes poses and velocities back (bodies woken up), moves their
+    /// colliders, and records the [`crate::ImpactEvent`]s.
+    pub fn after_step(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &mut ColliderSet,
+        narrow_phase: &NarrowPhase,
+        impulse_joints: &ImpulseJointSet,
+        multibody_joints: &MultibodyJointSet,
+    ) where
+        H: PhysicsHooks,
+    {
+        let sets = Sets {
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        };
+        let mut step = EndOfStep {
+            data: std::mem::take(&mut self.step),
+            sets,
+        };
+        if !step.active {
+            return;
+        }
+        step.active = false;
+        self.memory.keep_roles(&mut step);
+        self.measure_ground_motion(&mut step, bodies);
+        self.check_woken(&step, bodies, colliders);
+        let moved_together =
+            pair_reconstruct::move_clusters(&mut self.after_view(), bodies, colliders, &step);
+        self.reconstruct_bodies(&step, &moved_together, bodies, colliders);
+        self.settle_pairs(&step, &moved_together, bodies, colliders);
+        self.put_back_held(&step, bodies);
+        bodies.propagate_modified_body_positions_to_colliders(colliders);
+        self.registry.index.motions = std::mem::take(&mut step.data.grounds);
+        self.memory.spare.candidates = std::mem::take(&mut step.data.candidates);
+    }
+}
+
+/// The stage calls that hand the plugin's state to the stages.
+impl<H> ImpactPlugin<H> {
+    /// The pairs of opted-in bodies first (`pair_plan.rs`): a sleeping ball a pair may reach
+    /// is woken, and the bodies of `Impact` pairs are planned whatever their distance to the
+    /// grounds. In `Step` mode, the impulses of the pairs that close in the step.
+    fn plan_pairs(
+        &mut self,
+        step: &mut StepData,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        sets: &Sets,
+        last: &LastStep,
+    ) where
+        H: PhysicsHooks,
+    {
+        step.pairs = pair_plan::plan_pairs(
+            &mut self.pair_index,
+            &self.registry,
+            &self.flags,
+            &self.user_hooks,
+            bodies,
+            colliders,
+            sets,
+            &last.pair_roles,
+            &step.grounds,
+            step.gravity,
+            step.dt,
+            &step.policy,
+        );
+        if self.config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
+            let config = self.config;
+            pair_plan::step_start_impulses(
+                &mut step.pairs,
+                bodies,
+                &mut self.commit(),
+                colliders,
+                config.law,
+                config.max_impacts_per_step,
+                config.flat_tolerance,
+                &step.policy,
+                step.dt,
+            );
+        }
+    }
+
+    /// Plans each body of `to_plan` (`plan.rs`); returns those with a ground near them and
+    /// adds the others to `far`.
+    #[allow(clippy::too_many_arguments)]
+    fn plan_bodies(
+        &mut self,
+        step: &mut StepData,
+        to_plan: Vec<RigidBodyHandle>,
+        far: &mut Vec<RigidBodyHandle>,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        sets: &Sets,
+        last: &LastStep,
+    ) -> Vec<RigidBodyHandle>
+    where
+        H: PhysicsHooks,
+    {
+        let mut near = Vec::with_capacity(self.flags.hooked().len());
+        let exact = self.config.timing == TimingMode::Exact;
+        let mut planner = Planner {
+            config: &self.config,
+            registry: &self.registry,
+            flags: &self.flags,
+            user_hooks: &self.user_hooks,
+            prev_holds: &self.memory.holds,
+            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
+        };
+        let (g, dt) = (step.gravity, step.dt);
+        for handle in to_plan {
+            let is_near = planner.plan_body(
+                handle,
+                bodies,
+                colliders,
+                sets,
+                &last.shadows,
+                &last.roles,
+                g,
+                dt,
+                step,
+            );
+            if is_near {
+                near.push(handle);
+            } else {
+                far.push(handle);
+            }
+        }
+        near
+    }
+
+    /// The writer of the step (`commit.rs`).
+    fn commit(&mut self) -> Commit<'_> {
+        let exact = self.config.timing == TimingMode::Exact;
+        Commit::new(&mut self.events, &mut self.memory.shadows, exact)
+    }
+
+    /// What the stages after rapier's step read of the plugin, and the writer.
+    fn after_view(&mut self) -> AfterStep<'_> {
+        let exact = self.config.timing == TimingMode::Exact;
+        AfterStep {
+            config: &self.config,
+            registry: &self.registry,
+            flags: &self.flags,
+            roles: &self.memory.roles,
+            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
+            released: Vec::new(),
+        }
+    }
+}

@@ -37,7 +37,7 @@ use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
     Sets, body_geom, centred, ground_geom, held_besides, neighbours, pressed_besides, rapier_state,
 };
-use crate::plugin::stages::commit::wake;
+use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::handles::{HandleMap, HandleSet, slot_of};
 use crate::plugin::state::registry::Registry;
@@ -720,7 +720,7 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     index.clear_list(&leaves);
     for handle in woken {
         if let Some(rb) = bodies.get_mut(handle) {
-            wake(rb);
+            Commit::wake(rb);
         }
     }
     plan
@@ -736,18 +736,20 @@ fn slot_of_body(handle: RigidBodyHandle) -> u32 {
 /// within the step and approaches faster than the resting speed gets the model's impulse,
 /// in the plan's order, and again in turn while one approaches (a chain along a row), at
 /// most `max_impacts` per ball. The pairs are then rapier's resting contacts for the step
-/// (`Resting`, e = 0), so it never bounces them a second time. Returns the events.
+/// (`Resting`, e = 0), so it never bounces them a second time. Writes and reports through
+/// `commit`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn step_start_impulses(
     plan: &mut PairPlan,
     bodies: &mut RigidBodySet,
+    commit: &mut Commit,
     colliders: &ColliderSet,
     law: crate::model::Law,
     max_impacts: usize,
     flat_tolerance: f64,
     policy: &Policy,
     dt: f64,
-) -> Vec<crate::plugin::events::ImpactEvent> {
+) {
     let mut events = Vec::new();
     let impacts: Vec<usize> = (0..plan.pairs.len())
         .filter(|k| plan.pairs[*k].role == Role::Impact)
@@ -777,7 +779,11 @@ pub(crate) fn step_start_impulses(
                 continue;
             };
             events.extend(pair_events);
-            write_velocities(bodies, [(pair.a, sa, after_a), (pair.b, sb, after_b)]);
+            write_velocities(
+                commit,
+                bodies,
+                [(pair.a, sa, after_a), (pair.b, sb, after_b)],
+            );
             any = true;
             if events.len() >= 2 * cap {
                 break 'passes;
@@ -791,28 +797,23 @@ pub(crate) fn step_start_impulses(
         plan.pairs[k].role = Role::Resting;
         plan.roles.insert(plan.pairs[k].key, Role::Resting);
     }
-    events
+    commit.events(events);
 }
 
 /// Writes each body's velocities after a step-start impulse; the pose stays rapier's.
 fn write_velocities<const N: usize>(
+    commit: &mut Commit,
     bodies: &mut RigidBodySet,
     written: [(RigidBodyHandle, State, State); N],
 ) {
-    use crate::plugin::stages::commit::write_state;
     for (h, s, after) in written {
-        let rb = &mut bodies[h];
-        let local_com = vec_to_na(rb.local_center_of_mass());
-        write_state(
-            rb,
-            &State {
-                v: after.v,
-                w: after.w,
-                ..s
-            },
-            &local_com,
-            true,
-        );
+        let local_com = vec_to_na(bodies[h].local_center_of_mass());
+        let s = State {
+            v: after.v,
+            w: after.w,
+            ..s
+        };
+        commit.state(bodies, h, &s, &local_com, Origin::Correction);
     }
 }
 

@@ -33,19 +33,20 @@ use crate::plugin::bridge::resolve::{
 };
 use crate::plugin::config::TimingMode;
 use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::policy::on_plane;
 use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, Search, closest, first_impact, landing_point,
 };
 use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
-use crate::plugin::stages::commit::write_state;
+use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::reconstruct::ccd_consistent;
 use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::settle::Checked;
-use crate::plugin::stages::settle::Settle;
 use crate::plugin::state::handles::{HandleMap, HandleSet};
 use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::AfterStep;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::EndOfStep;
 use crate::rapier::math::Vector;
@@ -76,7 +77,7 @@ pub(crate) struct ClusterBall<'a> {
 /// (`pair_reconstruct.rs`), checked against their grounds (`EndCheck::Flown`) and
 /// written. Returns the bodies written.
 pub(crate) fn move_clusters(
-    view: &mut Settle,
+    view: &mut AfterStep,
     bodies: &mut RigidBodySet,
     colliders: &ColliderSet,
     step: &EndOfStep,
@@ -195,7 +196,7 @@ pub(crate) fn move_clusters(
         let Some(balls) = balls else {
             continue;
         };
-        let from = view.events.len();
+        let from = view.commit.reported().len();
         let Some(ends) = through_pair_impacts(view, colliders, &balls, pairs, step) else {
             continue;
         };
@@ -219,11 +220,9 @@ pub(crate) fn move_clusters(
                 from,
             );
             let end = settled.unwrap_or(end);
-            let rb = &mut bodies[ball.cand.body];
-            write_state(rb, &end, &ball.cand.local_com, true);
-            if view.config.timing == TimingMode::Exact {
-                view.remember(ball.cand.body, rb, &end);
-            }
+            let (body, local_com) = (ball.cand.body, &ball.cand.local_com);
+            view.commit
+                .state(bodies, body, &end, local_com, Origin::Model);
             written.insert(ball.cand.body);
         }
     }
@@ -241,22 +240,22 @@ enum Next {
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
 /// cluster's `Impact` pairs as indices into `balls`.
 pub(crate) fn through_pair_impacts(
-    view: &mut Settle,
+    view: &mut AfterStep,
     colliders: &ColliderSet,
     balls: &[ClusterBall],
     pairs: &[(usize, usize)],
     step: &EndOfStep,
 ) -> Option<Vec<State>> {
-    let events_from = view.events.len();
+    let events_from = view.commit.reported().len();
     let moved = move_cluster(view, colliders, balls, pairs, step);
     if moved.is_none() {
-        view.events.truncate(events_from);
+        view.commit.withdraw(events_from);
     }
     moved
 }
 
 fn move_cluster(
-    view: &mut Settle,
+    view: &mut AfterStep,
     colliders: &ColliderSet,
     balls: &[ClusterBall],
     pairs: &[(usize, usize)],
@@ -371,7 +370,7 @@ fn move_cluster(
                     agenda.touch(p, search.touch(p, &moving, next_after(te)).ok()?);
                     continue;
                 };
-                view.events.extend(pair_events);
+                view.commit.events(pair_events);
                 for (k, after) in [(i, after_i), (j, after_j)] {
                     if reaches_other_grounds(view, &balls[k], &after, dt - te, step) {
                         return None;
@@ -417,8 +416,7 @@ fn move_cluster(
                 dt,
                 step.policy.resting_gap,
             )?;
-            let on_plane = hit.dist.abs() <= 1e-9 * rolling.radius.max(1.0)
-                && hit.normal.dot(&rolling.normal) >= 1.0 - 1e-9;
+            let on_plane = on_plane(hit.dist, &hit.normal, &rolling.normal, rolling.radius);
             if !on_plane {
                 return None;
             }
@@ -579,7 +577,7 @@ impl Agenda {
 /// from a heavier ball can send it much faster (a light ball struck down into the floor), and
 /// the cluster cannot be moved alone then.
 fn reaches_other_grounds(
-    view: &Settle,
+    view: &AfterStep,
     ball: &ClusterBall,
     s: &State,
     left: f64,
@@ -613,7 +611,7 @@ fn next_after(t: f64) -> f64 {
 /// resolves one; a settled impact holds gravity off the rest of the step (`flight`).
 #[allow(clippy::too_many_arguments)]
 fn ground_impact(
-    view: &mut Settle,
+    view: &mut AfterStep,
     colliders: &ColliderSet,
     ball: &ClusterBall,
     flight: &mut Flight,
@@ -636,7 +634,7 @@ fn ground_impact(
     };
     let (mut after, event) = resolve(&input, &ball.geom, gg, s, t, hit, point, points)?;
     let settled = event.settled;
-    view.events.push(event);
+    view.commit.event(event);
     if settled {
         let site = Site {
             body: ball.cand.body,
@@ -653,7 +651,7 @@ fn ground_impact(
 
 /// How ball `k` moves on after an impact with another ball left it at `after` (time `t`).
 fn on_after_touch(
-    view: &mut Settle,
+    view: &mut AfterStep,
     balls: &[ClusterBall],
     k: usize,
     before: &Moving,
@@ -699,7 +697,7 @@ fn on_after_touch(
             normal: n,
             point: after.com - n * rolling.radius,
         };
-        view.events.push(correction(
+        view.commit.event(correction(
             EventKind::Settle,
             &site,
             &ball.inertia,

@@ -12,14 +12,14 @@
 
 use crate::plugin::bridge::convert::{to_f64, vec_from_na};
 use crate::plugin::config::{ImpactConfig, TimingMode};
-use crate::plugin::events::{ImpactEvent, ImpactTiming};
+use crate::plugin::events::ImpactTiming;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
     BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, cannot_close,
     contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under, plane_piece_of,
 };
-use crate::plugin::stages::commit::write_state;
+use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::state::handles::{HandleMap, HandleSet};
 use crate::plugin::state::memory::Shadow;
 use crate::plugin::state::small_list::SmallList;
@@ -79,7 +79,7 @@ pub(crate) struct Planner<'a, H> {
     pub user_hooks: &'a H,
     /// The pairs held at rest last step (`StepData::holds`).
     pub prev_holds: &'a HandleSet<PairKey>,
-    pub events: &'a mut Vec<ImpactEvent>,
+    pub commit: Commit<'a>,
 }
 
 impl<H: PhysicsHooks> Planner<'_, H> {
@@ -316,7 +316,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                 Some((after, event)) => {
                                     state = after;
                                     touched = true;
-                                    self.events.push(event);
+                                    self.commit.event(event);
                                     // Out of rapier's solver unless the point leaves
                                     // slower than the resting speed. (Keeping a touching
                                     // pair in the solver after the impulse let a box
@@ -415,7 +415,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                     point,
                                 };
                                 let inertia = Inertia::of(&bodies[handle]);
-                                self.events.push(released(&site, &inertia, &state, 0.0));
+                                self.commit.event(released(&site, &inertia, &state, 0.0));
                             }
                             Some(OnPlane::Reached) | None => {}
                         }
@@ -455,7 +455,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
         }
         if touched {
-            write_state(&mut bodies[handle], &state, &local_com, true);
+            self.commit
+                .state(bodies, handle, &state, &local_com, Origin::Correction);
         }
         if !impact_grounds.is_empty()
             || !turning_resting.is_empty()

@@ -15,10 +15,11 @@ use crate::motion::{Flight, Rolling, State};
 use crate::plugin::bridge::convert::vec_to_na;
 use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, resolve};
 use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::policy::on_plane;
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
 };
-use crate::plugin::stages::settle::Settle;
+use crate::plugin::state::step::AfterStep;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::EndOfStep;
 use crate::plugin::state::step::StepData;
@@ -28,7 +29,7 @@ use crate::rapier::prelude::{ColliderSet, RigidBody};
 /// contract); `view` receives the events.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn through_impacts(
-    view: &mut Settle,
+    view: &mut AfterStep,
     colliders: &ColliderSet,
     cand: &Candidate,
     geom: &BodyGeom,
@@ -80,7 +81,7 @@ pub(crate) fn through_impacts(
         };
         seg = after;
         let settled = event.settled;
-        view.events.push(event);
+        view.commit.event(event);
         // A settled impact on a body whose centre of mass leaves the ground (a
         // spinning cube's corner swinging down while it rises) does not rest it:
         // holding gravity there lifted the cube for the rest of the step (dice seed
@@ -119,8 +120,7 @@ pub(crate) fn rolled(
 ) -> Option<State> {
     let end = motion.advance(&cand.start, step.dt);
     let hit = closest(geom, grounds, &end, step.dt, step.policy.resting_gap)?;
-    let on_plane = hit.dist.abs() <= 1e-9 * motion.radius.max(1.0)
-        && hit.normal.dot(&motion.normal) >= 1.0 - 1e-9;
+    let on_plane = on_plane(hit.dist, &hit.normal, &motion.normal, motion.radius);
 
     on_plane.then_some(end)
 }
@@ -152,7 +152,7 @@ pub(crate) fn rolling_touch(
 /// the ground for the rest of the step (`flight`), and the remaining speed into the ground is
 /// removed (a `Settle` event). Returns whether it rests.
 pub(crate) fn rest_on_ground(
-    view: &mut Settle,
+    view: &mut AfterStep,
     site: &Site,
     inertia: &Inertia,
     flight: &mut Flight,
@@ -172,8 +172,8 @@ pub(crate) fn rest_on_ground(
     if vn < 0.0 {
         let before = *s;
         s.v -= n * vn;
-        view.events
-            .push(correction(EventKind::Settle, site, inertia, &before, s, t));
+        view.commit
+            .event(correction(EventKind::Settle, site, inertia, &before, s, t));
     }
     true
 }

@@ -1,7 +1,7 @@
 //! Settle: after rapier's step, one end-of-step check of what a body's end state holds in a
 //! ground, and one decision table for what is done about it.
 //!
-//! Contract: [`Settle::check`] takes a body's end state (rapier's, or the in-step impacts'
+//! Contract: [`AfterStep::check`] takes a body's end state (rapier's, or the in-step impacts'
 //! from `reconstruct.rs`), the reason it is checked ([`EndCheck`], a row group of the table
 //! [`crate::plugin::policy::Policy::end_action`]) and the grounds to check it against; it finds the
 //! deepest point, asks the table, and returns the corrected state: a push-out
@@ -20,9 +20,7 @@ use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::{
     ImpactInput, Inertia, PairSide, Site, correction, material, resolve, resolve_balls,
 };
-use crate::plugin::config::ImpactConfig;
-use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
-use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, closest, landing_point};
@@ -30,13 +28,10 @@ use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
     NonGround, body_geom, ground_geom, neighbours, rapier_state, touched_besides_grounds,
 };
-use crate::plugin::stages::commit::write_state;
+use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::pair_plan::PlannedPair;
-use crate::plugin::state::handles::HandleMap;
-use crate::plugin::state::handles::PairKey;
-use crate::plugin::state::memory::Shadow;
-use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::AfterStep;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::EndOfStep;
 use crate::plugin::state::step::StepData;
@@ -108,23 +103,7 @@ pub(crate) struct Checked<'c> {
     pub cand: Option<&'c Candidate>,
 }
 
-/// The end-of-step stage's view of the plugin: what it reads (configuration, registry, hook
-/// flags, the step's roles) and what it writes (events, the Exact-mode shadows).
-pub(crate) struct Settle<'a> {
-    pub config: &'a ImpactConfig,
-    pub registry: &'a Registry,
-    pub flags: &'a HookFlags,
-    pub roles: &'a HandleMap<PairKey, Role>,
-    pub events: &'a mut Vec<ImpactEvent>,
-    pub shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
-}
-
-impl Settle<'_> {
-    /// Keeps the `f64` state of a body just written in `Exact` mode.
-    pub fn remember(&mut self, handle: RigidBodyHandle, rb: &RigidBody, s: &State) {
-        self.shadows.insert(handle, Shadow::of(rb, s));
-    }
-
+impl AfterStep<'_> {
     /// The one end-of-step check: the body's deepest point at `end` against `grounds`, the
     /// decision table's action for `why` ([`crate::plugin::policy::Policy::end_action`]), and that
     /// action on `end`:
@@ -218,7 +197,7 @@ impl Settle<'_> {
             };
             s = after;
             s.com -= hit.normal * hit.dist;
-            self.events.push(event);
+            self.commit.event(event);
             changed = true;
         }
         if !changed {
@@ -250,20 +229,21 @@ impl Settle<'_> {
         events_from: usize,
     ) -> Option<State> {
         let cand = checked.cand?;
-        let elastic = self.events[events_from..]
+        let elastic = self.commit.reported()[events_from..]
             .iter()
             .all(|e| e.body != checked.body || e.restitution <= 1.0);
         if !elastic || !self.may_cap_energy(rb, colliders, cand, step) {
             return None;
         }
         let site = self
-            .events
+            .commit
+            .reported()
             .iter()
             .rev()
             .find(|e| e.body == checked.body)
             .map(Site::of)?;
         let capped = capped_energy(&cand.start, end, &cand.flight, checked.inertia)?;
-        self.events.push(correction(
+        self.commit.event(correction(
             EventKind::EnergyCap,
             &site,
             checked.inertia,
@@ -407,7 +387,7 @@ impl Settle<'_> {
     /// along that line (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
     /// the pressed speed for a ball touching something else), and both balls moved apart
     /// along it to touching, on the sides they started on, each by its inverse-mass share,
-    /// with a `PushOut` event each. Other shapes: [`Settle::pair_end_bodies`].
+    /// with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
     pub fn pair_end(
         &mut self,
         bodies: &mut RigidBodySet,
@@ -477,7 +457,7 @@ impl Settle<'_> {
         let side_b = PairSide::new(pair.b, cb, &ib, touching_b, rad_b);
         let input = self.step_end_input(&side_a, (ra, rb), &side_b, colliders, step);
         if let Some((after_a, after_b, events)) = resolve_balls(&input, &side_a, &side_b, step.dt) {
-            self.events.extend(events);
+            self.commit.events(events);
             sa = after_a;
             sb = State {
                 com: sb.com,
@@ -500,7 +480,7 @@ impl Settle<'_> {
         self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
     }
 
-    /// [`Settle::pair_end`] for a pair not both centred balls: where parry finds the two
+    /// [`AfterStep::pair_end`] for a pair not both centred balls: where parry finds the two
     /// bodies touching or overlapping at rapier's end state, the model's impulse at their
     /// contact (the flat-landing points of `touch_point`; `ImpactTiming::StepEnd`, no bounce
     /// slower than the resting speed, or the pressed speed for a body touching something
@@ -546,7 +526,7 @@ impl Settle<'_> {
         if let Some((after_a, after_b, events)) =
             resolve_bodies(&input, &side_a, &side_b, &at, step.dt)
         {
-            self.events.extend(events);
+            self.commit.events(events);
             (sa, sb) = (after_a, after_b);
         }
         let overlap = (-touch.dist).max(0.0);
@@ -592,7 +572,7 @@ impl Settle<'_> {
                 normal,
                 point: point(&side, &before, normal),
             };
-            self.events.push(correction(
+            self.commit.event(correction(
                 EventKind::PushOut,
                 &site,
                 side.inertia,
@@ -654,7 +634,7 @@ impl Settle<'_> {
                 inertia: &inertia,
                 cand: None,
             };
-            let from = self.events.len();
+            let from = self.commit.reported().len();
             let (_, settled) = self.check(
                 bodies,
                 colliders,
@@ -666,7 +646,8 @@ impl Settle<'_> {
                 from,
             );
             let end = settled.unwrap_or(state);
-            write_state(&mut bodies[body], &end, &local_com, true);
+            self.commit
+                .state(bodies, body, &end, &local_com, Origin::Correction);
         }
     }
 
@@ -687,7 +668,7 @@ impl Settle<'_> {
             return;
         }
         let site = Site::of_hit(body, checked.geom, grounds, hit);
-        self.events.push(correction(
+        self.commit.event(correction(
             EventKind::PushOut,
             &site,
             checked.inertia,
@@ -719,7 +700,7 @@ fn pivot_pushed(
     })
 }
 
-/// A body of a pair moved apart at the step's end (`Settle::push_apart`).
+/// A body of a pair moved apart at the step's end (`AfterStep::push_apart`).
 struct Pushed<'s> {
     body: RigidBodyHandle,
     collider: ColliderHandle,

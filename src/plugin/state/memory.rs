@@ -1,8 +1,12 @@
 //! What the plugin remembers from one step to the next.
 
 use crate::motion::State;
+use crate::plugin::policy::Role;
+use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
+use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::RigidBody;
+use crate::rapier::prelude::RigidBodyHandle;
 use nalgebra::Vector3;
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -28,5 +32,71 @@ impl Shadow {
             written_linvel: rb.linvel(),
             written_angvel: rb.angvel(),
         }
+    }
+}
+
+/// What one step leaves for the next: `Exact` mode's shadows and the roles and holds of its
+/// pairs (the hysteresis of the resting and rolling decisions), and the step's tables kept for
+/// their allocations.
+#[derive(Default)]
+pub(crate) struct Memory {
+    /// The shadows of the states written in the step (read by the next step's plan).
+    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    /// The roles of the pairs with grounds.
+    pub roles: HandleMap<PairKey, Role>,
+    /// The roles of the pairs between opted-in bodies.
+    pub pair_roles: HandleMap<PairKey, Role>,
+    /// The pairs held at rest (`StepData::holds`).
+    pub holds: HandleSet<PairKey>,
+    /// Tables a step fills again, kept from the step before so that their allocations are.
+    pub spare: Spare,
+}
+
+/// Last step's memory, read by this step's plan while this step's is written.
+pub(crate) struct LastStep {
+    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    pub roles: HandleMap<PairKey, Role>,
+    pub pair_roles: HandleMap<PairKey, Role>,
+}
+
+/// Tables a step fills again, kept from the step before.
+#[derive(Default)]
+pub(crate) struct Spare {
+    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    pub roles: HandleMap<PairKey, Role>,
+    pub candidates: Vec<Candidate>,
+}
+
+impl Memory {
+    /// Opens a step's plan: hands over last step's shadows and roles to be read, and gives
+    /// `step` the cleared tables to fill (the roles, the candidates).
+    pub fn begin_step(&mut self, step: &mut StepData) -> LastStep {
+        let shadows = std::mem::replace(&mut self.shadows, std::mem::take(&mut self.spare.shadows));
+        self.shadows.clear();
+        let roles = std::mem::take(&mut self.roles);
+        step.roles = std::mem::take(&mut self.spare.roles);
+        step.roles.clear();
+        step.candidates = std::mem::take(&mut self.spare.candidates);
+        step.candidates.clear();
+        let pair_roles = std::mem::take(&mut self.pair_roles);
+        LastStep {
+            shadows,
+            roles,
+            pair_roles,
+        }
+    }
+
+    /// Closes a step's plan: last step's tables become spare.
+    pub fn end_planning(&mut self, last: LastStep) {
+        self.spare.shadows = last.shadows;
+        self.spare.roles = last.roles;
+    }
+
+    /// After rapier's step: this step's roles and holds become what the next step reads.
+    pub fn keep_roles(&mut self, step: &mut StepData) {
+        self.roles = std::mem::take(&mut step.roles);
+        self.pair_roles = std::mem::take(&mut step.pairs.roles);
+        self.holds.clear();
+        self.holds.extend(step.holds.keys().copied());
     }
 }

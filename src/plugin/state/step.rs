@@ -2,12 +2,16 @@
 //! step to the stages after it.
 
 use crate::motion::{Flight, Rolling, State};
+use crate::plugin::config::ImpactConfig;
+use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::Sets;
+use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::PairPlan;
 use crate::plugin::state::handles::{HandleMap, PairKey};
+use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
@@ -127,4 +131,19 @@ impl std::ops::DerefMut for EndOfStep<'_> {
     fn deref_mut(&mut self) -> &mut StepData {
         &mut self.data
     }
+}
+
+/// What the stages after rapier's step read of the plugin (the configuration, the registry,
+/// the hook flags, this step's roles of the pairs with grounds) and the one writer they
+/// write through.
+pub(crate) struct AfterStep<'a> {
+    pub config: &'a ImpactConfig,
+    pub registry: &'a Registry,
+    pub flags: &'a HookFlags,
+    pub roles: &'a HandleMap<PairKey, Role>,
+    pub commit: Commit<'a>,
+    /// The pairs of rolling balls released at the step's end (`EventKind::Released`): their
+    /// role becomes `Resting`, so that the next step's plan, finding them within reach, does
+    /// not release them again.
+    pub released: Vec<PairKey>,
 }

@@ -1,0 +1,590 @@
+//! Bodies: after rapier's step, every planned candidate not moved with a cluster of impacts
+//! between bodies is routed to its reconstruction and checked at the step's end.
+//!
+//! Contract: for each candidate, in the plan's order, one route, decided from the plan (its
+//! role: rolling, turning while resting, with `Impact` grounds or none) and from what rapier's
+//! step did to it (a contact, a joint, a torque, rapier's CCD stopping it short):
+//! - a rolling ball nothing else acted on: its closed form (`reconstruct::rolled`), or, if it
+//!   rolls into another ground, that impact and on (`rolled_into`); one something else acted
+//!   on: rapier's end state, checked (`EndCheck::DisturbedRolling`), with a `Released` event;
+//! - a body that flew alone with a closing ground: the in-step impacts from its start state
+//!   (`reconstruct::through_impacts`), the end state checked (`EndCheck::Flown`);
+//! - a body that flew alone with the step clear: `Exact` mode's exact flight
+//!   (`fly_exactly`), and a check of rapier's rotation for a body whose turning moves its
+//!   surface (`turned_end`);
+//! - any other: rapier's end state, checked (`EndCheck::RapierEnd`).
+//!
+//! The checks are the settle stage's (`settle.rs`); every write and event goes through the
+//! commit (`commit.rs`). Also here: the balls held at rest on a slope for their first step,
+//! put back (`put_back_held`), and the pairs between bodies left to rapier's end state.
+
+use crate::motion::{Rolling, State};
+use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_to_na};
+use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, released, resolve};
+use crate::plugin::config::TimingMode;
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Role, on_plane};
+use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, Search, closest, first_impact};
+use crate::plugin::queries::observe::{
+    body_geom, pushed_by_other, rapier_state, touched_besides_grounds, touches_other,
+};
+use crate::plugin::stages::commit::Origin;
+use crate::plugin::stages::reconstruct::{self, ccd_consistent};
+use crate::plugin::stages::settle::Checked;
+use crate::plugin::state::handles::{HandleSet, PairKey};
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::{AfterStep, Candidate, EndOfStep, FirstHold};
+use crate::rapier::math::Vector;
+use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet};
+use nalgebra::Vector3;
+
+/// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
+/// grounds it is checked against, and the step.
+struct Subject<'s> {
+    cand: &'s Candidate,
+    geom: &'s BodyGeom<'s>,
+    grounds: &'s [GroundGeom<'s>],
+    step: &'s EndOfStep<'s>,
+}
+
+impl<H> ImpactPlugin<H> {
+    /// Routes every candidate not in `moved_together` (see the module's contract). A body
+    /// rapier put to sleep in the step rests: rapier zeroed its velocities, and its contacts
+    /// have left the solver's graph, so that it would look free and fall for a step.
+    pub(super) fn reconstruct_bodies(
+        &mut self,
+        step: &EndOfStep,
+        moved_together: &HandleSet<RigidBodyHandle>,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let mut view = self.after_view();
+        for cand in &step.candidates {
+            let awake_managed = bodies
+                .get(cand.body)
+                .is_some_and(|rb| view.registry.manages(cand.body, rb) && !rb.is_sleeping());
+            if moved_together.contains(&cand.body) || !awake_managed {
+                continue;
+            }
+            if let Some((ground, motion)) = &cand.rolling {
+                view.roll(step, cand, *ground, motion, bodies, colliders);
+            } else {
+                view.fly(step, cand, bodies, colliders);
+            }
+        }
+        let released = std::mem::take(&mut view.released);
+        for key in released {
+            self.memory.roles.insert(key, Role::Resting);
+        }
+    }
+
+    /// The `Impact` pairs between bodies not moved together: rapier's end state (the pair
+    /// out of its solver), checked at the step's end (`AfterStep::pair_end`).
+    pub(super) fn settle_pairs(
+        &mut self,
+        step: &EndOfStep,
+        moved_together: &HandleSet<RigidBodyHandle>,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let mut view = self.after_view();
+        for pair in &step.pairs.pairs {
+            if pair.role == Role::Impact
+                && !(moved_together.contains(&pair.a) && moved_together.contains(&pair.b))
+            {
+                view.pair_end(bodies, colliders, pair, step);
+            }
+        }
+    }
+
+    /// The balls held at rest on a slope for their first step (`FirstHold`): each put back
+    /// where it stopped, at rest, with its `EventKind::Hold` event, unless something else
+    /// touched it in the step (or it leaves faster than the resting speed), or rapier put it
+    /// to sleep.
+    pub(super) fn put_back_held(&mut self, step: &EndOfStep, bodies: &mut RigidBodySet) {
+        let mut view = self.after_view();
+        for hold in &step.first_holds {
+            view.put_back(hold, step, bodies);
+        }
+    }
+}
+
+impl AfterStep<'_> {
+    /// A rolling candidate (see the module's contract).
+    fn roll(
+        &mut self,
+        step: &EndOfStep,
+        cand: &Candidate,
+        ground: usize,
+        motion: &Rolling,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let rb = &bodies[cand.body];
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let Some(gg) = self.pair_geom(&step.grounds[ground], &geom, colliders) else {
+            return;
+        };
+        // With the other grounds near it (the pieces of its plane, if it rolls across a seam),
+        // each without the pairs rapier's or the user's filter refused.
+        let grounds: SmallList<_> = std::iter::once(gg)
+            .chain(
+                cand.near
+                    .iter()
+                    .filter(|i| **i != ground)
+                    .filter_map(|i| self.pair_geom(&step.grounds[*i], &geom, colliders)),
+            )
+            .collect();
+        let subject = Subject {
+            cand,
+            geom: &geom,
+            grounds: &grounds,
+            step,
+        };
+        // Something else acted on it in the step: a contact, a joint, or rapier's CCD
+        // stopping it short (against a thin body).
+        let sets = &step.sets;
+        let disturbed = sets
+            .impulse_joints
+            .attached_joints(cand.body)
+            .next()
+            .is_some()
+            || sets.multibody_joints.rigid_body_link(cand.body).is_some()
+            || pushed_by_other(rb, sets.narrow_phase)
+            || !ccd_consistent(rb, cand, step.dt, step.dt, step);
+        if !disturbed && !cand.impact_grounds.is_empty() {
+            // A ground it may roll into: where it does, that impact, and on from there.
+            let obstacles = self.impact_ground_geoms(cand, &geom, colliders, step);
+            if let Some(touch) = reconstruct::rolling_touch(cand, motion, &geom, &obstacles, step) {
+                self.rolled_into(bodies, colliders, &subject, motion, &obstacles, touch);
+                return;
+            }
+        }
+        let rolled = (!disturbed)
+            .then(|| reconstruct::rolled(cand, motion, &geom, &grounds, step))
+            .flatten();
+        if let Some(end) = rolled {
+            self.commit
+                .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+            return;
+        }
+        // rapier's end state stands, in which the ball flew without its ground.
+        if let (true, Some(part)) = (disturbed, geom.parts.first()) {
+            let key = (part.handle, grounds[0].handle);
+            let event = released_at_end(cand, &bodies[cand.body], key, motion, step.dt);
+            self.commit.event(event);
+            self.released.push(key);
+        }
+        let fall = -motion.accel.dot(&motion.normal) * step.dt;
+        let why = EndCheck::DisturbedRolling { fall };
+        self.settle_rapier_end(bodies, colliders, &subject, why);
+    }
+
+    /// A candidate that is not rolling (see the module's contract).
+    fn fly(
+        &mut self,
+        step: &EndOfStep,
+        cand: &Candidate,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let mode = self.config.timing;
+        let has_grounds = cand
+            .impact_grounds
+            .iter()
+            .any(|i| colliders.get(step.grounds[*i].handle).is_some());
+        if !has_grounds
+            && !cand.turning_resting.is_empty()
+            && self.turning_resting_corrected(step, cand, bodies, colliders)
+        {
+            return;
+        }
+        let rb = &bodies[cand.body];
+        let free = flew_alone(rb, cand, has_grounds, step);
+        // Before any geometry: a body with no ground left to search, or whose search would
+        // find the step clear (`Candidate::closing`) and that rapier's CCD did not cut short,
+        // only flies (exactly, in `Exact` mode).
+        let clear = mode != TimingMode::Step
+            && free
+            && has_grounds
+            && !cand.closing
+            && ccd_consistent(rb, cand, step.dt, step.dt, step);
+        if !has_grounds || clear {
+            if mode == TimingMode::Exact
+                && free
+                && (clear || ccd_consistent(rb, cand, step.dt, step.dt, step))
+            {
+                self.fly_exactly(bodies, cand, step.dt);
+            }
+            if has_grounds {
+                self.turned_end(bodies, colliders, cand, step);
+            }
+            return;
+        }
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
+        let subject = Subject {
+            cand,
+            geom: &geom,
+            grounds: &grounds,
+            step,
+        };
+        let inertia = Inertia::of(rb);
+        match first_search(rb, &subject, mode != TimingMode::Step && free) {
+            None => {
+                self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
+            }
+            Some(Search::Clear) => {
+                if mode == TimingMode::Exact {
+                    self.fly_exactly(bodies, cand, step.dt);
+                }
+                self.turned_end(bodies, colliders, cand, step);
+            }
+            Some(first) => {
+                self.fly_through_impacts(bodies, colliders, &subject, &inertia, first);
+            }
+        }
+    }
+
+    /// A body with no `Impact` ground whose resting pairs turn fast: rapier's end state,
+    /// checked against those grounds (`EndCheck::TurningResting`); `true` when corrected
+    /// (rapier's end state then stands, and no flight is written over it).
+    fn turning_resting_corrected(
+        &mut self,
+        step: &EndOfStep,
+        cand: &Candidate,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) -> bool {
+        let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
+        let grounds = self.turning_resting_geoms(cand, &geom, colliders, step);
+        let subject = Subject {
+            cand,
+            geom: &geom,
+            grounds: &grounds,
+            step,
+        };
+        let why = EndCheck::TurningResting {
+            turns_surface: cand.turns_surface,
+        };
+        self.settle_rapier_end(bodies, colliders, &subject, why) != EndAction::Keep
+    }
+
+    /// `Exact` mode, a body that flew free all step: its translation and linear velocity
+    /// from the exact flight. Its rotation stays rapier's, and so does the spin of an
+    /// anisotropic body or of one with a locked rotation axis (rapier turns it its own way,
+    /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
+    /// rapier's gyroscopic forces off) gets the exact spin too.
+    fn fly_exactly(&mut self, bodies: &mut RigidBodySet, cand: &Candidate, dt: f64) {
+        let end = cand.flight.advance(&cand.start, dt);
+        let rb = &bodies[cand.body];
+        let exact_spin =
+            cand.flight.gyro.is_none() && !rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED);
+        let s = State {
+            rot: rot_to_na(*rb.rotation()),
+            w: if exact_spin {
+                end.w
+            } else {
+                vec_to_na(rb.angvel())
+            },
+            ..end
+        };
+        self.commit
+            .flight(bodies, cand.body, &s, &cand.local_com, exact_spin);
+    }
+
+    /// One ball held at rest for its first step (`ImpactPlugin::put_back_held`).
+    fn put_back(&mut self, hold: &FirstHold, step: &EndOfStep, bodies: &mut RigidBodySet) {
+        let Some(rb) = bodies.get(hold.body) else {
+            return;
+        };
+        let end = rapier_state(rb);
+        let still = step.policy.is_still(&end, hold.radius);
+        if rb.is_sleeping()
+            || !still
+            || (end.com == hold.start.com && end.rot == hold.start.rot)
+            || touched_besides_grounds(hold.body, rb, &step.sets, self.registry)
+        {
+            return;
+        }
+        let site = Site {
+            body: hold.body,
+            collider: hold.collider,
+            ground: hold.ground,
+            body2: None,
+            normal: hold.normal,
+            point: hold.start.com - hold.normal * hold.radius,
+        };
+        let inertia = Inertia::of(rb);
+        let event = correction(EventKind::Hold, &site, &inertia, &end, &hold.start, step.dt);
+        self.commit.state(
+            bodies,
+            hold.body,
+            &hold.start,
+            &hold.local_com,
+            Origin::Model,
+        );
+        self.commit.event(event);
+    }
+
+    /// A rolling ball that meets another ground in the step, at `touch`
+    /// (`reconstruct::rolling_touch`): the impact there, by the model. Left on that ground
+    /// (e = 0) and leaving its own plane (rolling off a slope onto the level ground at its
+    /// foot), it rolls on in closed form on the new ground to the step's end; otherwise it
+    /// goes on through the impacts the search finds, as any impact's body does, and the
+    /// settle stage checks where it ends. `subject.grounds`: every ground near it,
+    /// `obstacles` among them.
+    fn rolled_into(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        subject: &Subject,
+        motion: &Rolling,
+        obstacles: &[GroundGeom],
+        touch: (f64, State, Hit),
+    ) {
+        let (t, s, hit) = touch;
+        let cand = subject.cand;
+        let inertia = Inertia::of(&bodies[cand.body]);
+        let og = &obstacles[hit.ground];
+        let rolls_on = self.roll_on_new_ground(colliders, subject, &inertia, motion, og, touch);
+        if let Some((end, event)) = rolls_on {
+            self.commit.event(event);
+            self.commit
+                .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+            return;
+        }
+        let Some(index) = subject.grounds.iter().position(|g| g.handle == og.handle) else {
+            return;
+        };
+        let first = Search::Hit(
+            t,
+            s,
+            Hit {
+                ground: index,
+                ..hit
+            },
+        );
+        self.fly_through_impacts(bodies, colliders, subject, &inertia, first);
+    }
+
+    /// The impact of a rolling ball on the ground `og` it rolls into, and, if that impact
+    /// leaves it on `og` (`e = 0`, the materials' or a settled impact's), leaving its own
+    /// plane, and `og` neither turns nor moves off its plane, its closed-form rolling on `og`
+    /// to the step's end, if it ends there on `og`'s plane and in no other ground: that end
+    /// state and the impact's event.
+    fn roll_on_new_ground(
+        &self,
+        colliders: &ColliderSet,
+        subject: &Subject,
+        inertia: &Inertia,
+        motion: &Rolling,
+        og: &GroundGeom,
+        (t, s, hit): (f64, State, Hit),
+    ) -> Option<(State, ImpactEvent)> {
+        let (cand, geom, step) = (subject.cand, subject.geom, subject.step);
+        let part = &geom.parts[hit.part];
+        let material = self.registry.material_of(colliders, part.handle, og.handle);
+        let input = ImpactInput {
+            body: cand.body,
+            inertia,
+            law: self.config.law,
+            material,
+            resting_speed: step.policy.resting_speed,
+            force_settle: false,
+            timing: ImpactTiming::InStep,
+        };
+        let n = hit.normal;
+        let (after, event) = resolve(&input, geom, og, &s, t, &hit, hit.point, 1)?;
+        let onto = (event.settled || event.restitution == 0.0)
+            && after.v.dot(&motion.normal) > 0.0
+            && n.dot(&motion.accel) < 0.0;
+        let in_plane =
+            og.w == Vector3::zeros() && og.v.dot(&n).abs() <= IN_PLANE_TOLERANCE * og.v.norm();
+        let ball = part.shape.as_ball().filter(|_| onto && in_plane)?;
+        let radius = to_f64(ball.radius) + part.skin + og.skin;
+        let default = (
+            self.config.rolling_resistance,
+            self.config.spinning_friction,
+        );
+        let (rolling_resistance, spinning_friction) =
+            self.registry.rolling_of(cand.body, og.handle, default);
+        let on_new = Rolling {
+            normal: n,
+            radius,
+            inertia_ratio: inertia.ball_ratio(radius)?,
+            friction: material.friction,
+            rolling_resistance,
+            spinning_friction,
+            accel: motion.accel,
+            ground_velocity: og.v,
+        };
+        let end = on_new.advance_checked(&after, step.dt - t)?;
+        // Still on the new ground's plane at the end, and in no other ground.
+        let reach = step.policy.resting_gap.max(step.policy.prediction);
+        let last = closest(geom, subject.grounds, &end, step.dt, reach)?;
+        on_plane(last.dist, &last.normal, &n, radius).then_some((end, event))
+    }
+
+    /// A candidate moved through the impacts from `first` on to the step's end
+    /// (`reconstruct::through_impacts`), checked there by the settle stage (never left inside
+    /// a ground, nor lifted out with energy gained), and committed.
+    fn fly_through_impacts(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        subject: &Subject,
+        inertia: &Inertia,
+        first: Search,
+    ) {
+        let Subject {
+            cand,
+            geom,
+            grounds,
+            step,
+        } = *subject;
+        let from = self.commit.reported().len();
+        let flown = reconstruct::through_impacts(
+            self, colliders, cand, geom, grounds, inertia, first, step,
+        );
+        let checked = Checked {
+            body: cand.body,
+            geom,
+            inertia,
+            cand: Some(cand),
+        };
+        let why = EndCheck::Flown;
+        let (_, settled) = self.check(
+            bodies, colliders, &checked, &flown, why, grounds, step, from,
+        );
+        let end = settled.unwrap_or(flown);
+        self.commit
+            .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+    }
+
+    /// The settle stage's check of rapier's end state of a candidate against its grounds for
+    /// `why`, and the commit of what it corrected; returns the action it took.
+    fn settle_rapier_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        subject: &Subject,
+        why: EndCheck,
+    ) -> EndAction {
+        let Subject {
+            cand,
+            geom,
+            grounds,
+            step,
+        } = *subject;
+        let rb = &bodies[cand.body];
+        let inertia = Inertia::of(rb);
+        let checked = Checked {
+            body: cand.body,
+            geom,
+            inertia: &inertia,
+            cand: Some(cand),
+        };
+        let from = self.commit.reported().len();
+        let end = rapier_state(rb);
+        let (action, settled) =
+            self.check(bodies, colliders, &checked, &end, why, grounds, step, from);
+        if let Some(s) = settled {
+            self.commit
+                .state(bodies, cand.body, &s, &cand.local_com, Origin::Correction);
+        }
+        action
+    }
+
+    /// After a step the search found clear, for a body whose rotation moves its surface (not
+    /// a ball about its centre): the search flies it torque-free while rapier's integrator
+    /// turns it its own way (and `Exact` mode keeps rapier's rotation), so that for a fast
+    /// tumble the two part at the corners. What rapier's end pose holds in its `Impact`
+    /// grounds is checked (`RapierEnd`).
+    fn turned_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        cand: &Candidate,
+        step: &EndOfStep,
+    ) {
+        if !cand.turns_surface {
+            return;
+        }
+        let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
+        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
+        let subject = Subject {
+            cand,
+            geom: &geom,
+            grounds: &grounds,
+            step,
+        };
+        self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
+    }
+}
+
+/// Nothing but its flight moved the body in rapier's step: no contact in rapier's solver,
+/// joint, torque or `Step` impulse. A body whose linear velocity rapier changed otherwise than
+/// its flight does was pushed (a ball resting in a pile), and its contacts are not walked.
+fn flew_alone(rb: &RigidBody, cand: &Candidate, has_grounds: bool, step: &EndOfStep) -> bool {
+    let sets = &step.sets;
+    (has_grounds || reconstruct::moved_as_flown(rb, cand, step.dt))
+        && sets
+            .impulse_joints
+            .attached_joints(cand.body)
+            .next()
+            .is_none()
+        && sets.multibody_joints.rigid_body_link(cand.body).is_none()
+        && rb.user_torque() == Vector::ZERO
+        && !cand.touched
+        && !touches_other(rb, sets.narrow_phase)
+}
+
+/// The first event of an in-step resolution from the start-of-step state, or `None` when there
+/// is none: the body did not fly `free` (it touched something else, or the mode is `Step`),
+/// or rapier's CCD cut its motion short before that first event; rapier's end state is then
+/// checked instead.
+fn first_search(rb: &RigidBody, subject: &Subject, free: bool) -> Option<Search> {
+    let Subject {
+        cand,
+        geom,
+        grounds,
+        step,
+    } = *subject;
+    let first = free.then(|| {
+        if cand.closing {
+            first_impact(geom, grounds, &cand.flight, &cand.start, 0.0, 0.0, step.dt)
+        } else {
+            Search::Clear
+        }
+    });
+    first.filter(|f| {
+        let t_first = match f {
+            Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
+            Search::Clear => step.dt,
+        };
+        ccd_consistent(rb, cand, t_first, step.dt, step)
+    })
+}
+
+/// The [`EventKind::Released`] event of a rolling ball that something besides its ground
+/// touched in the step: rapier's end state, unchanged.
+fn released_at_end(
+    cand: &Candidate,
+    rb: &RigidBody,
+    (collider, ground): PairKey,
+    motion: &Rolling,
+    dt: f64,
+) -> ImpactEvent {
+    let end = rapier_state(rb);
+    let site = Site {
+        body: cand.body,
+        collider,
+        ground,
+        body2: None,
+        normal: motion.normal,
+        point: end.com - motion.normal * motion.radius,
+    };
+    released(&site, &Inertia::of(rb), &end, dt)
+}

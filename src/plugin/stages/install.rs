@@ -1,0 +1,63 @@
+//! Install: the last stage before rapier's step puts the plugin's hook flags where this step
+//! needs them and builds the tables rapier's hook calls read.
+//!
+//! Contract: reads the plan (the roles of the pairs with grounds and between opted-in
+//! bodies, which bodies are near a ground and which far); writes the hook flags on the
+//! colliders (`hooks/flags.rs`, the only change to rapier's sets before its step besides
+//! `Step` mode's impulses) and the step's [`Lookup`]. Decides nothing about any pair.
+
+use crate::plugin::hooks::lookup::Lookup;
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::state::handles::HandleSet;
+use crate::plugin::state::step::StepData;
+use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+
+impl<H> ImpactPlugin<H> {
+    /// Flags the colliders the step's hooks need and builds the hooks' tables. `near`: the
+    /// planned bodies with a ground near them; `far`: the awake managed bodies with none.
+    pub(super) fn install(
+        &mut self,
+        step: &mut StepData,
+        (bodies, colliders): (&RigidBodySet, &mut ColliderSet),
+        (near, far): (&[RigidBodyHandle], &[RigidBodyHandle]),
+        unmanaged: bool,
+    ) {
+        let members = self.hooked_pair_members(step);
+        self.flags
+            .update(&self.registry, near, &members, unmanaged, bodies, colliders);
+        self.registry.flags_stale = false;
+        let flags = &self.flags;
+        let far_colliders: Vec<ColliderHandle> = far
+            .iter()
+            .filter_map(|h| bodies.get(*h))
+            .flat_map(|rb| rb.colliders().iter().copied())
+            .collect();
+        step.lookup = Lookup::build(&step.roles, &far_colliders, flags.hooked(), |c| {
+            flags.recorded_user_flags(colliders, c)
+        });
+    }
+
+    /// The bodies whose colliders carry the hook flags of the planned pairs that need the
+    /// hooks (`PlannedPair::hooked`): `Impact` pairs leave rapier's solver, `Resting` ones
+    /// rapier would bounce get zero restitution. rapier hooks a pair when either collider is
+    /// flagged, and every pair of a flagged body loses its contact recycling: so one body of
+    /// each pair is flagged, one already flagged where there is one (a flag put on or taken
+    /// off is a change rapier's next step processes).
+    fn hooked_pair_members(&self, step: &StepData) -> Vec<RigidBodyHandle> {
+        let mut chosen: HandleSet<RigidBodyHandle> = HandleSet::default();
+        let mut members: Vec<RigidBodyHandle> = Vec::new();
+        for pair in step.pairs.pairs.iter().filter(|pair| pair.hooked) {
+            if chosen.contains(&pair.a) || chosen.contains(&pair.b) {
+                continue;
+            }
+            let body = if self.flags.hooked().contains_key(&pair.b) {
+                pair.b
+            } else {
+                pair.a
+            };
+            chosen.insert(body);
+            members.push(body);
+        }
+        members
+    }
+}

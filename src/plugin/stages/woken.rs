@@ -1,0 +1,95 @@
+//! Woken: the managed bodies asleep at the step's start that rapier woke during it. They had
+//! no plan and no roles, so rapier's solver had all their ground contacts, bounce included:
+//! their end state is checked as any other (`EndCheck::Woken`).
+//!
+//! Contract: reads rapier's end state of each such body and the grounds near it, without the
+//! pairs rapier would not solve, that a joint disables or that the user's filter refuses
+//! (asked here, as the body had no roles); commits what the settle stage corrected.
+
+use crate::plugin::bridge::convert::vec_to_na;
+use crate::plugin::bridge::resolve::Inertia;
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::policy::EndCheck;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::observe::{body_geom, rapier_state};
+use crate::plugin::stages::commit::{Commit, Origin};
+use crate::plugin::stages::settle::Checked;
+use crate::plugin::state::step::{AfterStep, EndOfStep};
+use crate::rapier::prelude::{ColliderHandle, ColliderSet, PhysicsHooks, RigidBodySet};
+
+impl<H: PhysicsHooks> ImpactPlugin<H> {
+    /// Checks every body asleep at the start and awake at the end (see the module's
+    /// contract).
+    pub(super) fn check_woken(
+        &mut self,
+        step: &EndOfStep,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let exact = self.config.timing == crate::plugin::config::TimingMode::Exact;
+        let (user_hooks, flags) = (&self.user_hooks, &self.flags);
+        let mut view = AfterStep {
+            config: &self.config,
+            registry: &self.registry,
+            flags: &self.flags,
+            roles: &self.memory.roles,
+            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
+            released: Vec::new(),
+        };
+        let (impulse_joints, multibody_joints) =
+            (step.sets.impulse_joints, step.sets.multibody_joints);
+        for handle in &step.asleep {
+            let Some(rb) = bodies.get(*handle) else {
+                continue;
+            };
+            if rb.is_sleeping() || !view.registry.manages(*handle, rb) {
+                continue;
+            }
+            let refused = |bodies: &RigidBodySet, part: ColliderHandle, ground: ColliderHandle| {
+                let user = flags.recorded_user_flags(colliders, part)
+                    | flags.recorded_user_flags(colliders, ground);
+                colliders[ground].parent().is_some_and(|ground_body| {
+                    filter::joint_disables_contacts(
+                        impulse_joints,
+                        multibody_joints,
+                        *handle,
+                        ground_body,
+                    )
+                }) || filter::user_refuses(user_hooks, user, bodies, colliders, (part, ground))
+            };
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            let geom = body_geom(rb, colliders, &local_com);
+            let grounds = view.woken_geoms(
+                bodies,
+                colliders,
+                rb.center_of_mass(),
+                &geom,
+                step,
+                &refused,
+            );
+            let inertia = Inertia::of(rb);
+            let checked = Checked {
+                body: *handle,
+                geom: &geom,
+                inertia: &inertia,
+                cand: None,
+            };
+            let from = view.commit.reported().len();
+            let end = rapier_state(rb);
+            let (_, settled) = view.check(
+                bodies,
+                colliders,
+                &checked,
+                &end,
+                EndCheck::Woken,
+                &grounds,
+                step,
+                from,
+            );
+            if let Some(s) = settled {
+                view.commit
+                    .state(bodies, *handle, &s, &local_com, Origin::Correction);
+            }
+        }
+    }
+}
