@@ -16,7 +16,7 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
 /// and the per-step driver.
 ///
-/// Mark colliders as ground, then either call [`ImpactPlugin::step`] on a [`PhysicsWorld`],
+/// Mark colliders as ground, then either call [`ImpactPlugin::step`] on a [`PhysicsWorld`](crate::rapier::prelude::PhysicsWorld),
 /// or call [`ImpactPlugin::before_step`], rapier's `PhysicsPipeline::step` with the plugin as
 /// its hooks argument, and [`ImpactPlugin::after_step`]. A hook you already use is given at
 /// construction ([`ImpactPlugin::with_hooks`]) and receives every pair that is not a managed
