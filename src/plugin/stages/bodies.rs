@@ -25,12 +25,12 @@ use crate::plugin::config::TimingMode;
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Role, on_plane};
-use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, Search, closest, first_impact};
+use crate::plugin::queries::geometry::{GroundGeom, Hit, Search, closest, first_impact};
 use crate::plugin::queries::observe::{
     body_geom, pushed_by_other, rapier_state, touched_besides_grounds, touches_other,
 };
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::reconstruct::{self, ccd_consistent};
+use crate::plugin::stages::reconstruct::{self, Subject, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::small_list::SmallList;
@@ -38,15 +38,6 @@ use crate::plugin::state::step::{AfterStep, Candidate, EndOfStep, FirstHold};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
-
-/// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
-/// grounds it is checked against, and the step.
-struct Subject<'s> {
-    cand: &'s Candidate,
-    geom: &'s BodyGeom<'s>,
-    grounds: &'s [GroundGeom<'s>],
-    step: &'s EndOfStep<'s>,
-}
 
 impl<H> ImpactPlugin<H> {
     /// Routes every candidate not in `moved_together` (see the module's contract). A body
@@ -444,20 +435,18 @@ impl AfterStep<'_> {
             grounds,
             step,
         } = *subject;
-        let from = self.commit.reported().len();
-        let flown = reconstruct::through_impacts(
-            self, colliders, cand, geom, grounds, inertia, first, step,
-        );
+        let events_from = self.commit.reported().len();
+        let flown = reconstruct::through_impacts(self, colliders, subject, inertia, first);
         let checked = Checked {
             body: cand.body,
             geom,
             inertia,
             cand: Some(cand),
+            grounds,
+            events_from,
         };
         let why = EndCheck::Flown;
-        let (_, settled) = self.check(
-            bodies, colliders, &checked, &flown, why, grounds, step, from,
-        );
+        let (_, settled) = self.check(bodies, colliders, &checked, &flown, why, step);
         let end = settled.unwrap_or(flown);
         self.commit
             .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
@@ -485,11 +474,11 @@ impl AfterStep<'_> {
             geom,
             inertia: &inertia,
             cand: Some(cand),
+            grounds,
+            events_from: self.commit.reported().len(),
         };
-        let from = self.commit.reported().len();
         let end = rapier_state(rb);
-        let (action, settled) =
-            self.check(bodies, colliders, &checked, &end, why, grounds, step, from);
+        let (action, settled) = self.check(bodies, colliders, &checked, &end, why, step);
         if let Some(s) = settled {
             self.commit
                 .state(bodies, cand.body, &s, &cand.local_com, Origin::Correction);

@@ -208,17 +208,11 @@ pub(crate) fn move_clusters(
                 geom: &ball.geom,
                 inertia: &ball.inertia,
                 cand: None,
+                grounds: &ball.grounds,
+                events_from: from,
             };
-            let (_, settled) = view.check(
-                bodies,
-                colliders,
-                &checked,
-                &end,
-                EndCheck::Flown,
-                &ball.grounds,
-                step,
-                from,
-            );
+            let why = EndCheck::Flown;
+            let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
             let end = settled.unwrap_or(end);
             let (body, local_com) = (ball.cand.body, &ball.cand.local_com);
             view.commit

@@ -25,19 +25,30 @@ use crate::plugin::state::step::EndOfStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ColliderSet, RigidBody};
 
+/// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
+/// grounds it is checked against, and the step.
+pub(crate) struct Subject<'s> {
+    pub cand: &'s Candidate,
+    pub geom: &'s BodyGeom<'s>,
+    pub grounds: &'s [GroundGeom<'s>],
+    pub step: &'s EndOfStep<'s>,
+}
+
 /// The body's state at the step's end after the impacts from `first` on (see the module's
 /// contract); `view` receives the events.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn through_impacts(
     view: &mut AfterStep,
     colliders: &ColliderSet,
-    cand: &Candidate,
-    geom: &BodyGeom,
-    grounds: &[GroundGeom],
+    subject: &Subject,
     inertia: &Inertia,
     first: Search,
-    step: &EndOfStep,
 ) -> State {
+    let Subject {
+        cand,
+        geom,
+        grounds,
+        step,
+    } = *subject;
     let mut next = first;
     let mut flight = cand.flight;
     let mut seg = cand.start;

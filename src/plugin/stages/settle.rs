@@ -101,6 +101,11 @@ pub(crate) struct Checked<'c> {
     /// The plan's candidate: the energy cap's start state and flight, the resting contacts.
     /// `None` for a body asleep at the start (no plan, no cap).
     pub cand: Option<&'c Candidate>,
+    /// The grounds it is checked against.
+    pub grounds: &'c [GroundGeom<'c>],
+    /// Where the body's events of the step start among the step's events (the energy cap is
+    /// for bodies with no restitution above 1 among them).
+    pub events_from: usize,
 }
 
 impl AfterStep<'_> {
@@ -117,7 +122,6 @@ impl AfterStep<'_> {
     /// stands). It writes nothing into rapier: the caller commits the state. `events_from` is
     /// where this body's events of the step start in `self.events` (the cap is for bodies
     /// with no restitution above 1 among them).
-    #[allow(clippy::too_many_arguments)]
     pub fn check(
         &mut self,
         bodies: &RigidBodySet,
@@ -125,11 +129,9 @@ impl AfterStep<'_> {
         checked: &Checked,
         end: &State,
         why: EndCheck,
-        grounds: &[GroundGeom],
         step: &EndOfStep,
-        events_from: usize,
     ) -> (EndAction, Option<State>) {
-        let body = checked.body;
+        let (body, grounds) = (checked.body, checked.grounds);
         let Some(rb) = bodies.get(body) else {
             return (EndAction::Keep, None);
         };
@@ -166,7 +168,7 @@ impl AfterStep<'_> {
                 EndAction::PushOut { stop } => {
                     let before = s;
                     put_on_ground(&mut s, &hit, stop);
-                    self.report_push_out(body, checked, grounds, &hit, &before, &s, step);
+                    self.report_push_out(checked, &hit, &before, &s, step);
                     changed |= s != before;
                     break;
                 }
@@ -203,7 +205,7 @@ impl AfterStep<'_> {
         if !changed {
             return (first, None);
         }
-        if let Some(capped) = self.cap_if_gained(rb, colliders, checked, &s, step, events_from) {
+        if let Some(capped) = self.cap_if_gained(rb, colliders, checked, &s, step) {
             s = capped;
         }
         (first, Some(s))
@@ -226,10 +228,9 @@ impl AfterStep<'_> {
         checked: &Checked,
         end: &State,
         step: &EndOfStep,
-        events_from: usize,
     ) -> Option<State> {
         let cand = checked.cand?;
-        let elastic = self.commit.reported()[events_from..]
+        let elastic = self.commit.reported()[checked.events_from..]
             .iter()
             .all(|e| e.body != checked.body || e.restitution <= 1.0);
         if !elastic || !self.may_cap_energy(rb, colliders, cand, step) {
@@ -633,18 +634,11 @@ impl AfterStep<'_> {
                 geom: &geom,
                 inertia: &inertia,
                 cand: None,
+                grounds: &grounds,
+                events_from: self.commit.reported().len(),
             };
-            let from = self.commit.reported().len();
-            let (_, settled) = self.check(
-                bodies,
-                colliders,
-                &checked,
-                &state,
-                EndCheck::RapierEnd,
-                &grounds,
-                step,
-                from,
-            );
+            let why = EndCheck::RapierEnd;
+            let (_, settled) = self.check(bodies, colliders, &checked, &state, why, step);
             let end = settled.unwrap_or(state);
             self.commit
                 .state(bodies, body, &end, &local_com, Origin::Correction);
@@ -653,12 +647,9 @@ impl AfterStep<'_> {
 
     /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it
     /// changed nothing.
-    #[allow(clippy::too_many_arguments)]
     fn report_push_out(
         &mut self,
-        body: RigidBodyHandle,
         checked: &Checked,
-        grounds: &[GroundGeom],
         hit: &crate::plugin::queries::geometry::Hit,
         before: &State,
         after: &State,
@@ -667,7 +658,7 @@ impl AfterStep<'_> {
         if before.com == after.com && before.v == after.v {
             return;
         }
-        let site = Site::of_hit(body, checked.geom, grounds, hit);
+        let site = Site::of_hit(checked.body, checked.geom, checked.grounds, hit);
         self.commit.event(correction(
             EventKind::PushOut,
             &site,

@@ -73,19 +73,12 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 geom: &geom,
                 inertia: &inertia,
                 cand: None,
+                grounds: &grounds,
+                events_from: view.commit.reported().len(),
             };
-            let from = view.commit.reported().len();
             let end = rapier_state(rb);
-            let (_, settled) = view.check(
-                bodies,
-                colliders,
-                &checked,
-                &end,
-                EndCheck::Woken,
-                &grounds,
-                step,
-                from,
-            );
+            let why = EndCheck::Woken;
+            let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
             if let Some(s) = settled {
                 view.commit
                     .state(bodies, *handle, &s, &local_com, Origin::Correction);
