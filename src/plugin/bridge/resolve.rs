@@ -176,30 +176,32 @@ pub(crate) fn resolve(
         w: impact.velocity.angular,
         ..*s
     };
-    let event = ImpactEvent {
-        kind: EventKind::Impact,
+    let site = Site {
         body: input.body,
         collider: geom.parts[hit.part].handle,
         ground: ground.handle,
         body2: None,
+        normal: n,
+        point,
+    };
+    let resolution = Resolution {
         time: t,
         timing: input.timing,
-        point: vec_from_na(&point),
-        normal: vec_from_na(&n),
         contact_points: points,
         approach_speed: -un,
-        impulse: vec_from_na(&impact.impulse),
+        settled,
+        material,
+    };
+    let exchange = Exchange {
+        impulse: impact.impulse,
         normal_impulse: impact.normal_impulse,
-        tangent_impulse: vec_from_na(&impact.tangent_impulse),
+        tangent_impulse: impact.tangent_impulse,
         regime: impact.regime,
         law: impact.law,
         fallback: impact.fallback,
-        settled,
-        restitution: material.restitution,
-        friction: material.friction,
-        ke_before: impact.ke_before,
-        ke_after: impact.ke_after,
     };
+    let energies = (impact.ke_before, impact.ke_after);
+    let event = event(EventKind::Impact, &site, &resolution, &exchange, energies);
     Some((after, event))
 }
 
@@ -342,31 +344,33 @@ pub(crate) fn resolve_bodies(
     let event = |side: &PairSide, other: &PairSide, before: &State, after: &State, sign: f64| {
         let energy = |s: &State| side.inertia.body_at(&s.rot).kinetic_energy(&velocity(s));
         let impulse = impact.impulse * sign;
-        ImpactEvent {
-            kind: EventKind::Impact,
+        // The normal from the other body into this one.
+        let site = Site {
             body: side.body,
             collider: side.collider,
             ground: other.collider,
             body2: Some(other.body),
+            normal: n * sign,
+            point,
+        };
+        let resolution = Resolution {
             time: t,
             timing: input.timing,
-            point: vec_from_na(&point),
-            // From the other ball into this one.
-            normal: vec_from_na(&(n * sign)),
             contact_points: at.points,
             approach_speed: closing,
-            impulse: vec_from_na(&impulse),
+            settled,
+            material,
+        };
+        let exchange = Exchange {
+            impulse,
             normal_impulse: impact.normal_impulse,
-            tangent_impulse: vec_from_na(&(impact.tangent_impulse * sign)),
+            tangent_impulse: impact.tangent_impulse * sign,
             regime: impact.regime,
             law: impact.law,
             fallback: impact.fallback,
-            settled,
-            restitution: material.restitution,
-            friction: material.friction,
-            ke_before: energy(before),
-            ke_after: energy(after),
-        }
+        };
+        let energies = (energy(before), energy(after));
+        event(EventKind::Impact, &site, &resolution, &exchange, energies)
     };
     let events = [
         event(a, b, &a.state, &after_a, -1.0),
@@ -440,34 +444,33 @@ pub(crate) fn correction(
     let impulse = (after.v - before.v) * inertia.mass;
     let normal_impulse = impulse.dot(&site.normal);
     let approach = -site.normal.dot(&body_velocity_at(before, &site.point));
-    ImpactEvent {
-        kind,
-        body: site.body,
-        collider: site.collider,
-        ground: site.ground,
-        body2: site.body2,
+    let resolution = Resolution {
         time,
         timing: if kind == EventKind::Settle {
             ImpactTiming::InStep
         } else {
             ImpactTiming::StepEnd
         },
-        point: vec_from_na(&site.point),
-        normal: vec_from_na(&site.normal),
         contact_points: 0,
         approach_speed: approach.max(0.0),
-        impulse: vec_from_na(&impulse),
+        settled: true,
+        material: Material::new(0.0, 0.0),
+    };
+    let exchange = Exchange {
+        impulse,
         normal_impulse,
-        tangent_impulse: vec_from_na(&(impulse - site.normal * normal_impulse)),
+        tangent_impulse: impulse - site.normal * normal_impulse,
         regime: model::Regime::Separating,
         law: Law::Consistent,
         fallback: None,
-        settled: true,
-        restitution: 0.0,
-        friction: 0.0,
-        ke_before: energy(before),
-        ke_after: energy(after),
-    }
+    };
+    event(
+        kind,
+        site,
+        &resolution,
+        &exchange,
+        (energy(before), energy(after)),
+    )
 }
 
 /// The [`EventKind::Released`] event of a rolling ball handed to rapier's contact at `time`
@@ -478,4 +481,60 @@ pub(crate) fn released(site: &Site, inertia: &Inertia, state: &State, time: f64)
         event.timing = ImpactTiming::StepStart;
     }
     event
+}
+
+/// How an impact was resolved: when, at how many contact points, how fast it approached,
+/// whether it settled, and the material it was resolved with (`e = 0` if it settled).
+struct Resolution {
+    time: f64,
+    timing: ImpactTiming,
+    contact_points: usize,
+    approach_speed: f64,
+    settled: bool,
+    material: Material,
+}
+
+/// The impulse an event reports, and what produced it.
+struct Exchange {
+    impulse: Vector3<f64>,
+    normal_impulse: f64,
+    tangent_impulse: Vector3<f64>,
+    regime: model::Regime,
+    law: Law,
+    fallback: Option<Fallback>,
+}
+
+/// The one place an [`ImpactEvent`] is made: what changed a body at `site`, resolved as
+/// `resolution` says, with the impulse `exchange` and the kinetic energies before and after.
+fn event(
+    kind: EventKind,
+    site: &Site,
+    resolution: &Resolution,
+    exchange: &Exchange,
+    (ke_before, ke_after): (f64, f64),
+) -> ImpactEvent {
+    ImpactEvent {
+        kind,
+        body: site.body,
+        collider: site.collider,
+        ground: site.ground,
+        body2: site.body2,
+        time: resolution.time,
+        timing: resolution.timing,
+        point: vec_from_na(&site.point),
+        normal: vec_from_na(&site.normal),
+        contact_points: resolution.contact_points,
+        approach_speed: resolution.approach_speed,
+        impulse: vec_from_na(&exchange.impulse),
+        normal_impulse: exchange.normal_impulse,
+        tangent_impulse: vec_from_na(&exchange.tangent_impulse),
+        regime: exchange.regime,
+        law: exchange.law,
+        fallback: exchange.fallback,
+        settled: resolution.settled,
+        restitution: resolution.material.restitution,
+        friction: resolution.material.friction,
+        ke_before,
+        ke_after,
+    }
 }
