@@ -94,10 +94,9 @@ pub(crate) fn through_impacts(
         let settled = event.settled;
         view.commit.event(event);
         // A settled impact on a body whose centre of mass leaves the ground (a
-        // spinning cube's corner swinging down while it rises) does not rest it:
-        // holding gravity there lifted the cube for the rest of the step (dice seed
-        // 4, f64 Exact 60 Hz: +3.0e-3 of the throw's energy). It flies on, with
-        // gravity, to its next impact.
+        // spinning cube's corner swinging down while it rises) does not rest it: holding
+        // gravity off would lift it, with energy gained, for the rest of the step. It flies
+        // on, with gravity, to its next impact.
         let site = Site {
             body: cand.body,
             collider: part.handle,

@@ -214,13 +214,12 @@ impl AfterStep<'_> {
     /// A state moved out of the ground by position at the step's end gains the potential
     /// energy of the lift: its end state is deeper than any state of a true flight (a corner
     /// swung or a ball rode into the ground), and moving it out keeps the speed it gathered
-    /// getting there. Repeated every step, that lift fed a box rocking on its corners at
-    /// the step rate for ever (`Step` mode, 60 Hz: 60 bounces a second), and it is the
-    /// energy a tumbling cube gained over its throw. So, for a body whose energy can only
-    /// have been lost (`may_cap_energy`, and no restitution above 1 among its events of the
-    /// step from `events_from`), the end state's mechanical energy in its constant force field
-    /// (`Flight::accel`) is held to the start's (`capped_energy`), reported as an `EnergyCap`
-    /// event at the site of the body's last event.
+    /// getting there. Repeated every step, that lift would feed a body rocking on its corners
+    /// at the step rate. Invariant: a body whose energy can only have been lost
+    /// (`may_cap_energy`, and no restitution above 1 among its events of the step from
+    /// `Checked::events_from`) ends no higher in mechanical energy, in its constant force
+    /// field (`Flight::accel`), than it started (`capped_energy`); the cap is reported as an
+    /// `EnergyCap` event at the site of the body's last event.
     fn cap_if_gained(
         &mut self,
         rb: &RigidBody,
