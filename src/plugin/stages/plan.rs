@@ -16,8 +16,9 @@ use crate::plugin::events::{ImpactEvent, ImpactTiming};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, cannot_close,
-    contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under, plane_piece_of,
+    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, Sweep,
+    cannot_close, contact_checked, earliest_touch, flat_relative, landing_point, one_plane_under,
+    plane_piece_of,
 };
 use crate::plugin::stages::commit::write_state;
 use crate::plugin::state::handles::{HandleMap, HandleSet};
@@ -437,12 +438,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                 && cannot_close(
                                     part,
                                     gg,
-                                    &flight,
-                                    &state,
-                                    dt,
+                                    &Sweep {
+                                        flight: &flight,
+                                        s: &state,
+                                        dt,
+                                        radius: geom.radius,
+                                        speed,
+                                    },
                                     (dist, n),
-                                    geom.radius,
-                                    speed,
                                 )
                         }
                         None => false,
