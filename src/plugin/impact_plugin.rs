@@ -975,10 +975,10 @@ impl<H> ImpactPlugin<H> {
                 bodies,
                 colliders,
                 &sets,
-                &shadows,
-                &prev_roles,
-                g,
-                dt,
+                &crate::plugin::stages::plan::LastStep {
+                    shadows: &shadows,
+                    roles: &prev_roles,
+                },
                 &mut step,
             );
             if near {
