@@ -30,6 +30,8 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 /// [`ImpactPlugin::before_step`] tests (speed bounds over the step, a relative `1e-4` for
 /// rounding and the `f64` shadow), misses every ground's AABB, so that test would find no
 /// ground near either; `None` when the body has no collider to query (as [`body_geom`]).
+///
+/// [`ImpactPlugin::before_step`]: crate::plugin::impact_plugin::ImpactPlugin::before_step
 pub(crate) fn surely_far(
     rb: &RigidBody,
     colliders: &ColliderSet,

@@ -4,7 +4,7 @@
 //! Contract: [`Planner::plan_body`] takes one awake managed body that may reach a ground and
 //! gives each of its pairs with the grounds near it a role (`Role`, decided by
 //! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
-//! the body a [`Candidate`] (its start state, flight, and which grounds may reach it) for the
+//! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and which grounds may reach it) for the
 //! stages after rapier's step. In `Step` mode it also applies the impulses of the contacts
 //! that close in the step, the only write of this stage, each with its event. It reads rapier
 //! and the registry and calls the user's filter where the colliders ask for it; [`StepData`]

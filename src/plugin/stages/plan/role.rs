@@ -37,7 +37,8 @@ struct GroundVerdict {
 impl<H: PhysicsHooks> Planner<'_, H> {
     /// The roles of the body's pairs with its `k`-th ground near it (in `step.roles`, in the
     /// order of the body's parts), and whether the search after the step runs against it
-    /// (`plan.impact_grounds`, `plan.closing`).
+    /// (`plan.impact_grounds`, `plan.closing`). Writes only `plan`, `step` and, in `Step`
+    /// mode or on a release, the events; rapier is not written here.
     pub(super) fn plan_ground(
         &mut self,
         reads: BodyReads,
@@ -90,7 +91,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// The role of a pair rapier's filtering keeps, by its contact at the body's current
     /// state: out of reach, rapier's (parry cannot query it), resting, `Step` mode's impulse
     /// or impact, a resting ball's rolling, held or reached (`rest_on_ground`); records the
-    /// resting contacts turning slides and what the pair tells the search (`verdict`).
+    /// resting contacts turning slides (`plan.turning_resting`) and what the pair tells the
+    /// search (`verdict`). Does not insert the role: the caller does.
     fn contact_role(
         &mut self,
         reads: BodyReads,
@@ -117,8 +119,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             Ok(None) => Role::Impact,
             Ok(Some(contact)) => self.touching_role(reads, plan, pair, contact, step),
         };
-        // A ball resting on a ground, alone on it: the closed form instead of rapier's
-        // resting contact where it applies (`rolling_of`).
+        // A ball sliding or rolling on a ground, alone on it: the closed form instead of
+        // rapier's resting contact where it applies (`rolling_of`). rapier's contact turns
+        // its point with the ball, which then hops and keeps slipping.
         if role == Role::Resting && !body.turns_surface && plan.rolling.is_none() && !plan.held {
             // Within the resting gap of it (a `Step` impulse can leave a ball resting on its
             // way down, up to a step's travel above the ground).
