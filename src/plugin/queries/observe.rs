@@ -30,6 +30,8 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 /// [`ImpactPlugin::before_step`] tests (speed bounds over the step, a relative `1e-4` for
 /// rounding and the `f64` shadow), misses every ground's AABB, so that test would find no
 /// ground near either; `None` when the body has no collider to query (as [`body_geom`]).
+///
+/// [`ImpactPlugin::before_step`]: crate::plugin::impact_plugin::ImpactPlugin::before_step
 pub(crate) fn surely_far(
     rb: &RigidBody,
     colliders: &ColliderSet,
@@ -408,7 +410,7 @@ pub(crate) fn neighbours(
     )
 }
 
-/// A centred ball's motion over the step as [`within_reach_of_other`] bounds it: its
+/// A centred ball's motion over the step `dt` as [`within_reach_of_other`] bounds it: its
 /// velocity (m/s), its acceleration in flight (`accel`: gravity and the user's force over its
 /// mass), and what its ground adds to that: a push along the ground's `normal` of `pressed`
 /// (m/s^2), and a drag of at most `dragged` (m/s^2) against one of the unit directions
@@ -425,6 +427,19 @@ pub(crate) struct OwnMotion {
     pub drag_along: Option<[Vector3<f64>; 2]>,
     /// The world's gravity (m/s^2), which the other body feels times its gravity scale.
     pub gravity: Vector3<f64>,
+    /// The step (s).
+    pub dt: f64,
+}
+
+/// What a decision before rapier's step reads of the world: rapier's bodies, colliders,
+/// contact graph and joints, and the plugin's registry (which colliders are grounds). Read
+/// only.
+#[derive(Clone, Copy)]
+pub(crate) struct Scene<'s> {
+    pub bodies: &'s RigidBodySet,
+    pub colliders: &'s ColliderSet,
+    pub sets: &'s Sets<'s>,
+    pub registry: &'s Registry,
 }
 
 /// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
@@ -440,17 +455,18 @@ pub(crate) struct OwnMotion {
 /// reads rapier's contact impulses after the step ([`pushed_by_other`]). For a centred ball
 /// (`body` must be one: its own spin is not counted); a pair parry cannot measure, and any
 /// joint, is within reach.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn within_reach_of_other(
     body: RigidBodyHandle,
     rb: &RigidBody,
     own: &OwnMotion,
-    bodies: &RigidBodySet,
-    colliders: &ColliderSet,
-    sets: &Sets,
-    registry: &Registry,
-    dt: f64,
+    scene: &Scene,
 ) -> bool {
+    let Scene {
+        bodies,
+        colliders,
+        sets,
+        registry,
+    } = *scene;
     if sets.impulse_joints.attached_joints(body).next().is_some()
         || sets.multibody_joints.rigid_body_link(body).is_some()
     {
@@ -490,7 +506,7 @@ pub(crate) fn within_reach_of_other(
                     // Two centres close no faster than along their line now:
                     // |d + x| >= |d| + x.d/|d| for any relative displacement x.
                     let line = (len > 0.0).then(|| d / len);
-                    if gap > closing_bound(own, oc, true, line, bodies, dt) || is_ground(&other) {
+                    if gap > closing_bound(own, oc, true, line, bodies) || is_ground(&other) {
                         continue;
                     }
                     return true;
@@ -503,7 +519,7 @@ pub(crate) fn within_reach_of_other(
                 },
             };
             let other_ball = oc.shape().as_ball().is_some();
-            if gap <= closing_bound(own, oc, other_ball, None, bodies, dt) {
+            if gap <= closing_bound(own, oc, other_ball, None, bodies) {
                 return true;
             }
         }
@@ -512,7 +528,7 @@ pub(crate) fn within_reach_of_other(
 }
 
 /// How much a body of motion `own` (a centred ball) and the collider `other` can close in
-/// `dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
+/// the step `own.dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
 /// or in any direction; infinite when the other's motion cannot be read. The relative speed
 /// of the centres of mass, the other's spin times how far its surface lies from its centre
 /// of mass, and the step squared times the accelerations' difference and what `own`'s ground
@@ -523,8 +539,8 @@ fn closing_bound(
     other_ball: bool,
     line: Option<Vector3<f64>>,
     bodies: &RigidBodySet,
-    dt: f64,
 ) -> f64 {
+    let dt = own.dt;
     // Along the line, the part of a vector that closes the gap; else its length.
     let closing = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).max(0.0));
     let across = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).abs());

@@ -245,19 +245,8 @@ impl<H> ImpactPlugin<H> {
             prev_holds: &self.memory.holds,
             commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
         };
-        let (g, dt) = (step.gravity, step.dt);
         for handle in to_plan {
-            let is_near = planner.plan_body(
-                handle,
-                bodies,
-                colliders,
-                sets,
-                &last.shadows,
-                &last.roles,
-                g,
-                dt,
-                step,
-            );
+            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
             if is_near {
                 near.push(handle);
             } else {

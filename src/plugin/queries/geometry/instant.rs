@@ -1,0 +1,344 @@
+//! The contact of a body part with a ground at one instant: the signed distance, normal and
+//! point, in `f64` against flat faces (a half-space, a cuboid's face, a mesh's or
+//! heightfield's triangle) and from parry otherwise, and the closest contact over a body's
+//! parts and the grounds.
+
+use super::{BodyGeom, BodyPart, GroundGeom, Hit, PairContact, body_velocity_at, part_pose};
+use crate::motion::State;
+use crate::parry::query;
+use crate::parry::shape::Triangle;
+use crate::plugin::bridge::convert::{pose_from_na, to_f64, vec_to_na};
+use nalgebra::Vector3;
+
+/// Contact of one body part and one ground at time `t`, if within `prediction` (m):
+/// signed distance (skins deducted), normal from the ground into the body, point on the body.
+pub(crate) fn contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    prediction: f64,
+) -> Option<PairContact> {
+    contact_checked(part, ground, s, t, prediction)
+        .ok()
+        .flatten()
+}
+
+/// [`contact`], telling apart a pair parry cannot query (`Err`).
+pub(crate) fn contact_checked(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    prediction: f64,
+) -> Result<Option<PairContact>, query::Unsupported> {
+    // Flat grounds first, without parry: a flat face's contact is exact in `f64`, where
+    // parry's GJK in `f32` can report a thin, wide ground's penetrating contact as a gap.
+    if let Some(found) = direct_plane_contact(part, ground, s, t) {
+        return Ok((found.0 <= prediction).then_some(found));
+    }
+    let skins = part.skin + ground.skin;
+    let pose_g = pose_from_na(&ground.pose_at(t));
+    let pose_b = pose_from_na(&part_pose(part, s));
+    let Some(c) = query::contact(
+        &pose_g,
+        ground.shape,
+        &pose_b,
+        part.shape,
+        crate::plugin::bridge::convert::to_real(prediction + skins),
+    )?
+    else {
+        return Ok(None);
+    };
+    if let Some(plane) = plane_contact(part, ground, s, t, &c) {
+        return Ok((plane.0 <= prediction).then_some(plane));
+    }
+    let n = vec_to_na(c.normal1);
+    let norm = n.norm();
+    if norm.is_nan() || norm <= 0.5 {
+        return Ok(None);
+    }
+    let n = n / norm;
+    let point = vec_to_na(c.point2) - n * part.skin;
+    Ok(Some((to_f64(c.dist) - skins, n, point)))
+}
+
+/// The contact of a convex body with a flat piece of ground, in `f64`: a half-space, the
+/// face of a ground cuboid, or the triangle of a mesh or heightfield that parry's contact
+/// `c` found. parry's own normal, from GJK/EPA in rapier's precision, is unreliable for
+/// touching shapes against large flat grounds (in `f32` it can tilt far from the face's
+/// normal); the plane's normal is exact. The body's support point
+/// towards the plane must lie over the face, else `None` (parry's answer stands).
+fn plane_contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    c: &query::Contact,
+) -> Option<PairContact> {
+    use crate::parry::shape::TypedShape;
+    let first = match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) if (c.subshape1 as usize) < m.indices().len() => {
+            Some(m.triangle(c.subshape1))
+        }
+        TypedShape::HeightField(hf) => Some(hf.triangle_at_id(c.subshape1)?),
+        TypedShape::TriMesh(_) => return None,
+        _ => None,
+    };
+    match plane_contact_on(part, ground, s, t, vec_to_na(c.point2), first) {
+        Ok(found) => Some(found),
+        // Over another triangle of the mesh (a body across a diagonal): that one's plane.
+        Err(Some(over)) => triangles_under(ground, t, &over)
+            .into_iter()
+            .find_map(|tri| {
+                plane_contact_on(part, ground, s, t, vec_to_na(c.point2), Some(tri)).ok()
+            }),
+        Err(None) => None,
+    }
+}
+
+/// [`plane_contact`] located by the body collider's origin instead of parry's contact: the
+/// half-space, the ground cuboid's face towards the body, or the mesh or heightfield
+/// triangles under it. `None` when the body is not over a face (parry decides then).
+fn direct_plane_contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+) -> Option<PairContact> {
+    use crate::parry::shape::TypedShape;
+    if let Some(ball) = part.shape.as_ball() {
+        if let Some(found) = ball_plane_contact(part, to_f64(ball.radius), ground, s, t) {
+            return found;
+        }
+    }
+    let center = part_pose(part, s).translation.vector;
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
+            plane_contact_on(part, ground, s, t, center, None).ok()
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => triangles_under(ground, t, &center)
+            .into_iter()
+            .find_map(|tri| plane_contact_on(part, ground, s, t, center, Some(tri)).ok()),
+        _ => None,
+    }
+}
+
+/// [`plane_contact_on`] for a ball on a half-space or a cuboid, with the ball's support
+/// point written out (`centre - r n`): the same contact, without the general path's pose
+/// compositions and support-map call (most bodies in a ball scene take this path every step
+/// they are near the ground). `None`: not such a pair, take the general path; `Some(None)`:
+/// the ball is beside the cuboid's nearest face.
+fn ball_plane_contact(
+    part: &BodyPart,
+    radius: f64,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+) -> Option<Option<PairContact>> {
+    use crate::parry::shape::TypedShape;
+    let offset = part.local.translation.vector;
+    let centre = if offset == Vector3::zeros() {
+        s.com
+    } else {
+        s.com + s.rot * offset
+    };
+    let skins = part.skin + ground.skin;
+    let pose_g = ground.pose_at(t);
+    let (n, height) = match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => {
+            let n = pose_g.rotation * vec_to_na(hs.normal);
+            let len = n.norm();
+            if len.is_nan() || len <= 0.0 {
+                return Some(None);
+            }
+            let n = n / len;
+            (n, n.dot(&(centre - pose_g.translation.vector)) - radius)
+        }
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(centre))
+                .coords;
+            let (axis, nl) = cuboid_face(&p, &half);
+            let tol = 1e-6 * (1.0 + centre.norm());
+            if !(0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol) {
+                return Some(None);
+            }
+            (pose_g.rotation * nl, p[axis].abs() - half[axis] - radius)
+        }
+        _ => return None,
+    };
+    let support = centre - n * radius;
+    Some(Some((height - skins, n, support - n * part.skin)))
+}
+
+/// The face of a cuboid of half extents `half` that a point `p` (in the cuboid's frame) is
+/// furthest out of, relative to the half extents: its axis and outward unit normal.
+pub(super) fn cuboid_face(p: &Vector3<f64>, half: &Vector3<f64>) -> (usize, Vector3<f64>) {
+    let axis = (0..3)
+        .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
+        .unwrap_or(1);
+    let mut n = Vector3::zeros();
+    n[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
+    (axis, n)
+}
+
+/// The mesh or heightfield triangles under the world point `p` at time `t`: the closest
+/// triangle of a mesh, the two of a heightfield cell.
+fn triangles_under(ground: &GroundGeom, t: f64, p: &Vector3<f64>) -> Vec<Triangle> {
+    use crate::parry::query::PointQueryWithLocation;
+    use crate::parry::shape::TypedShape;
+    let pose_g = ground.pose_at(t);
+    let local = pose_g
+        .inverse_transform_point(&nalgebra::Point3::from(*p))
+        .coords;
+    let local = crate::plugin::bridge::convert::vec_from_na(&local);
+    match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) => {
+            let id = m.project_local_point_and_get_location(local, false).1.0;
+            vec![m.triangle(id)]
+        }
+        TypedShape::HeightField(hf) => match hf.cell_at_point(local) {
+            Some((i, j)) => {
+                let (a, b) = hf.triangles_at(i, j);
+                a.into_iter().chain(b).collect()
+            }
+            None => Vec::new(),
+        },
+        _ => Vec::new(),
+    }
+}
+
+/// [`plane_contact`] on one face (`triangle` for meshes and heightfields). `Err(Some(p))`:
+/// the body's support point projects to `p`, outside that face; `Err(None)`: no flat face.
+pub(super) fn plane_contact_on(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    locator: Vector3<f64>,
+    triangle: Option<Triangle>,
+) -> Result<PairContact, Option<Vector3<f64>>> {
+    use crate::parry::shape::TypedShape;
+    let pose_g = ground.pose_at(t);
+    let local = |v: Vector3<f64>| pose_g.rotation * v;
+    let at = |v: Vector3<f64>| (pose_g * nalgebra::Point3::from(v)).coords;
+    let body_point = locator;
+    // The plane (world normal, world point) and the face's bounds.
+    enum Face {
+        Unbounded,
+        Rect { axis: usize, half: Vector3<f64> },
+        Tri([Vector3<f64>; 3]),
+    }
+    let (n, q, face) = match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => (
+            local(vec_to_na(hs.normal)),
+            at(Vector3::zeros()),
+            Face::Unbounded,
+        ),
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(body_point))
+                .coords;
+            let (axis, nl) = cuboid_face(&p, &half);
+            (local(nl), at(nl * half[axis]), Face::Rect { axis, half })
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            let tri = triangle.ok_or(None)?;
+            let v = [
+                at(vec_to_na(tri.a)),
+                at(vec_to_na(tri.b)),
+                at(vec_to_na(tri.c)),
+            ];
+            ((v[1] - v[0]).cross(&(v[2] - v[0])), v[0], Face::Tri(v))
+        }
+        _ => return Err(None),
+    };
+    let len = n.norm();
+    if len.is_nan() || len <= 0.0 {
+        return Err(None);
+    }
+    let mut n = n / len;
+    let pose_b = part_pose(part, s);
+    if matches!(face, Face::Tri(_)) && n.dot(&(pose_b.translation.vector - q)) < 0.0 {
+        // A mesh triangle has no outside: the body's side is.
+        n = -n;
+    }
+    let support = match part.shape.as_ball() {
+        // Written out in `f64`, as `ball_plane_contact` does: parry's support map takes the
+        // direction in rapier's precision, which moves a ball on a mesh by nanometres from
+        // one triangle to the next.
+        Some(ball) => pose_b.translation.vector - n * to_f64(ball.radius),
+        None => {
+            let sm = part.shape.as_support_map().ok_or(None)?;
+            let dir_local = pose_b.rotation.inverse() * (-n);
+            let support_local = vec_to_na(
+                sm.local_support_point(crate::plugin::bridge::convert::vec_from_na(&dir_local)),
+            );
+            (pose_b * nalgebra::Point3::from(support_local)).coords
+        }
+    };
+    let height = n.dot(&(support - q));
+    let over = support - n * height;
+    let tol = 1e-6 * (1.0 + body_point.norm());
+    let inside = match face {
+        Face::Unbounded => true,
+        Face::Rect { axis, half } => {
+            let p = pose_g
+                .inverse_transform_point(&nalgebra::Point3::from(over))
+                .coords;
+            (0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol)
+        }
+        Face::Tri(v) => {
+            let inside_edge = |a: &Vector3<f64>, b: &Vector3<f64>| {
+                n.dot(&(b - a).cross(&(over - a))) >= -tol * (b - a).norm()
+            };
+            let ccw = n.dot(&(v[1] - v[0]).cross(&(v[2] - v[0]))) > 0.0;
+            let (a, b, c3) = if ccw {
+                (v[0], v[1], v[2])
+            } else {
+                (v[0], v[2], v[1])
+            };
+            inside_edge(&a, &b) && inside_edge(&b, &c3) && inside_edge(&c3, &a)
+        }
+    };
+    if !inside {
+        return Err(Some(over).filter(|_| matches!(face, Face::Tri(_))));
+    }
+    let skins = part.skin + ground.skin;
+    Ok((height - skins, n, support - n * part.skin))
+}
+
+/// The closest contact over every body part and ground (indices in `grounds`), at `t`.
+pub(crate) fn closest(
+    body: &BodyGeom,
+    grounds: &[GroundGeom],
+    s: &State,
+    t: f64,
+    prediction: f64,
+) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    for (i, part) in body.parts.iter().enumerate() {
+        for (j, ground) in grounds.iter().enumerate() {
+            if ground.skip.contains(&part.handle) {
+                continue;
+            }
+            if let Some((dist, normal, point)) = contact(part, ground, s, t, prediction) {
+                if best.is_none_or(|b| dist < b.dist) {
+                    let u = body_velocity_at(s, &point) - ground.velocity_at(&point, t);
+                    best = Some(Hit {
+                        part: i,
+                        ground: j,
+                        dist,
+                        normal,
+                        point,
+                        un: normal.dot(&u),
+                    });
+                }
+            }
+        }
+    }
+    best
+}

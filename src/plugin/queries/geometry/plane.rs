@@ -1,0 +1,406 @@
+//! Flat faces: whether a flight stays over one flat face of a ground ([`flat_throughout`],
+//! [`flat_relative`]), whether the grounds near a rolling ball are pieces of one plane that
+//! cover its path ([`plane_piece_of`], [`one_plane_under`]), and the landing points of a flat
+//! face of the body ([`landing_point`]).
+
+use super::instant::cuboid_face;
+use super::{BodyPart, GroundGeom, Hit, body_velocity_at, part_pose};
+use crate::motion::State;
+use crate::parry::shape::{PolygonalFeature, Triangle};
+use crate::plugin::bridge::convert::{to_f64, vec_to_na};
+use nalgebra::{Isometry3, Vector3};
+
+/// Is every query of `part` against `ground` over a flight from `s` in which every point of
+/// the body moves at most `travel` the direct plane query of one face, with the body's support
+/// point over it? For a ground that does not move (no velocity): a half-space, or a cuboid
+/// whose face the direct query picks stays picked and under the body wherever it goes (the
+/// part's origin within `travel` plus its offset turning, the support point within `radius`
+/// of the centre of mass). The part must have a support map.
+pub(crate) fn flat_throughout(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    travel: f64,
+    radius: f64,
+) -> bool {
+    ground.v == Vector3::zeros() && flat_relative(part, ground, s, travel, radius)
+}
+
+/// [`flat_throughout`] for a ground that may translate (without turning), with `travel`
+/// measured relative to it: in the ground's frame the ground is still and the body moves by
+/// its velocity relative to it.
+pub(crate) fn flat_relative(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    travel: f64,
+    radius: f64,
+) -> bool {
+    use crate::parry::shape::TypedShape;
+    if ground.w != Vector3::zeros()
+        || part.shape.as_support_map().is_none()
+        || !(travel.is_finite() && radius.is_finite())
+    {
+        return false;
+    }
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(_) => true,
+        TypedShape::Cuboid(cb) => {
+            let pose_g = ground.pose_at(0.0);
+            let to_local = |p: Vector3<f64>| {
+                pose_g
+                    .inverse_transform_point(&nalgebra::Point3::from(p))
+                    .coords
+            };
+            let origin_w = part_pose(part, s).translation.vector;
+            let origin = to_local(origin_w);
+            let com = to_local(s.com);
+            let r_o = travel + 2.0 * (origin_w - s.com).norm();
+            let half = vec_to_na(cb.half_extents);
+            // The face plane_contact_on picks.
+            let (axis, _) = cuboid_face(&origin, &half);
+            let lead = (origin[axis].abs() - r_o) / half[axis];
+            lead > 0.0
+                && (0..3).filter(|i| *i != axis).all(|i| {
+                    (origin[i].abs() + r_o) / half[i] < lead
+                        && com[i].abs() + travel + radius < half[i]
+                })
+        }
+        _ => false,
+    }
+}
+
+/// Largest height difference (m) between two grounds' faces for a ball to roll from one to the
+/// other as on one plane: below rapier's contact tolerances, and above the rounding of `f32`
+/// poses of flush cuboids a few metres from the origin (about 5e-7 m).
+pub(crate) const COPLANAR_TOLERANCE: f64 = 1e-6;
+
+/// Cosine of the largest angle between two faces' normals for them to count as one plane:
+/// the rounding of one rotation stored twice in `f32`.
+const COPLANAR_COS: f64 = 1.0 - 1e-12;
+
+/// The plane under a rolling ball, and the part of space the ball can reach in the step: what
+/// decides whether a ground is a piece of that plane ([`plane_piece_of`], [`one_plane_under`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlaneNear {
+    /// Unit normal, out of the grounds.
+    pub n: Vector3<f64>,
+    /// `n . x` of the plane's points: the grounds' faces plus their contact skins.
+    pub height: f64,
+    /// The ball's centre at the step's start.
+    pub centre: Vector3<f64>,
+    /// How far from `centre` a point of the ball can get in the step (m): its radius, its
+    /// travel and its path's bow.
+    pub reach: f64,
+}
+
+/// Does the plane `plane` carry a ball rolling from `p` straight to `q` (contact points, both
+/// on it) across the still grounds `grounds`, as one flat face would? Each ground must be a
+/// piece of the plane ([`plane_piece_of`]: a ball resting on the plane then touches it only at
+/// its contact point, whatever edges lie under it), and their faces must cover the path `p..q`
+/// and `margin` around it (the path bows from its chord by less: the caller's bound). A flush
+/// seam between two floor tiles passes, and so does a flat stretch of a mesh across its
+/// triangles' edges; a gap, a step, a bump, or a tile's outer edge within the path does not.
+pub(crate) fn one_plane_under(
+    grounds: &[&GroundGeom],
+    plane: &PlaneNear,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+    margin: f64,
+) -> bool {
+    let Some(pieces) = grounds
+        .iter()
+        .map(|g| plane_piece(g, plane))
+        .collect::<Option<Vec<_>>>()
+    else {
+        return false;
+    };
+    let n = &plane.n;
+    // The path lies within `margin` of its chord: the chord and its two parallels at
+    // `margin` either side in the plane, each lengthened by `margin` at both ends, must be
+    // covered (for faces tiling the plane, that covers the band between them).
+    let chord = q - p;
+    let length = chord.norm();
+    let ahead = if length > 0.0 {
+        chord / length
+    } else {
+        n.cross(&Vector3::x())
+            .try_normalize(0.0)
+            .unwrap_or_else(|| n.cross(&Vector3::y()).normalize())
+    };
+    let side = n.cross(&ahead) * margin;
+    let (from, to) = (p - ahead * margin, q + ahead * margin);
+    [Vector3::zeros(), side, -side]
+        .iter()
+        .all(|offset| pieces_cover(&pieces, n, &(from + offset), &(to + offset)))
+}
+
+/// A ground as a piece of a plane (see [`one_plane_under`]).
+enum PlanePiece {
+    /// A half-space: all of the plane.
+    Everywhere,
+    /// A cuboid's face in the plane: the cuboid's pose, half extents, and the axis normal
+    /// to the face.
+    Face {
+        pose: Isometry3<f64>,
+        half: Vector3<f64>,
+        axis: usize,
+    },
+    /// A mesh's or heightfield's triangles in the plane within the ball's reach (world
+    /// vertices); every other triangle within it lies below the plane.
+    Triangles(Vec<[Vector3<f64>; 3]>),
+}
+
+/// `ground` as a piece of `plane`: a still ground lying wholly below the plane with a face in
+/// it (a half-space, a cuboid), or a still mesh or heightfield whose triangles within the
+/// ball's reach all lie below the plane; `None` for any other ground.
+fn plane_piece(ground: &GroundGeom, plane: &PlaneNear) -> Option<PlanePiece> {
+    use crate::parry::shape::TypedShape;
+    if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
+        return None;
+    }
+    let (n, height) = (&plane.n, plane.height);
+    let pose = ground.pose0;
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(hs) => {
+            let normal = pose.rotation * vec_to_na(hs.normal);
+            let top = pose.translation.vector.dot(n) + ground.skin;
+            (normal.dot(n) >= COPLANAR_COS && (top - height).abs() <= COPLANAR_TOLERANCE)
+                .then_some(PlanePiece::Everywhere)
+        }
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let n_local = pose.rotation.inverse() * n;
+            let axis = (0..3)
+                .max_by(|i, j| n_local[*i].abs().total_cmp(&n_local[*j].abs()))
+                .unwrap_or(1);
+            let top = pose.translation.vector.dot(n)
+                + (0..3).map(|i| half[i] * n_local[i].abs()).sum::<f64>()
+                + ground.skin;
+            (n_local[axis].abs() >= COPLANAR_COS && (top - height).abs() <= COPLANAR_TOLERANCE)
+                .then_some(PlanePiece::Face { pose, half, axis })
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            let mut flat = Vec::new();
+            let mut below = true;
+            triangles_near(ground, &plane.centre, plane.reach, &mut |v| {
+                let above = v.map(|x| x.dot(n) + ground.skin - height);
+                if above.iter().any(|h| *h > COPLANAR_TOLERANCE) {
+                    below = false;
+                } else if above.iter().all(|h| h.abs() <= COPLANAR_TOLERANCE) {
+                    let normal = (v[1] - v[0]).cross(&(v[2] - v[0]));
+                    if normal.norm() > 0.0 && normal.normalize().dot(n).abs() >= COPLANAR_COS {
+                        flat.push(v);
+                    }
+                }
+            });
+            below.then_some(PlanePiece::Triangles(flat))
+        }
+        _ => None,
+    }
+}
+
+/// Calls `f` with the world vertices of every triangle of the still mesh or heightfield
+/// `ground` whose bounding box meets the cube of half side `reach` around `centre`.
+fn triangles_near(
+    ground: &GroundGeom,
+    centre: &Vector3<f64>,
+    reach: f64,
+    f: &mut impl FnMut([Vector3<f64>; 3]),
+) {
+    use crate::parry::bounding_volume::Aabb;
+    use crate::parry::shape::TypedShape;
+    let pose = ground.pose0;
+    // A ball's reach is a sphere: its box in the ground's frame is the same cube.
+    let local = pose
+        .inverse_transform_point(&nalgebra::Point3::from(*centre))
+        .coords;
+    let r = Vector3::repeat(reach);
+    let aabb = Aabb::new(
+        crate::plugin::bridge::convert::vec_from_na(&(local - r)),
+        crate::plugin::bridge::convert::vec_from_na(&(local + r)),
+    );
+    let mut world = |tri: &Triangle| {
+        f([tri.a, tri.b, tri.c].map(|x| (pose * nalgebra::Point3::from(vec_to_na(x))).coords));
+    };
+    match ground.shape.as_typed_shape() {
+        TypedShape::TriMesh(m) => {
+            for id in m.bvh().intersect_aabb(&aabb) {
+                world(&m.triangle(id));
+            }
+        }
+        TypedShape::HeightField(hf) => {
+            hf.map_elements_in_local_aabb(&aabb, &mut |_, tri| world(tri))
+        }
+        _ => {}
+    }
+}
+
+/// Is `ground` a piece of `plane` (a still half-space or cuboid wholly below it with a face in
+/// it, or a still mesh or heightfield with every triangle within the ball's reach below it)?
+/// A ball on the plane touches such a ground only at its contact point.
+pub(crate) fn plane_piece_of(ground: &GroundGeom, plane: &PlaneNear) -> bool {
+    plane_piece(ground, plane).is_some()
+}
+
+/// [`one_plane_under`] for one straight path `p..q` over the pieces of one plane.
+fn pieces_cover(
+    pieces: &[PlanePiece],
+    n: &Vector3<f64>,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+) -> bool {
+    let mut covered: Vec<(f64, f64)> = Vec::with_capacity(pieces.len());
+    for piece in pieces {
+        match piece {
+            PlanePiece::Everywhere => covered.push((0.0, 1.0)),
+            PlanePiece::Face { pose, half, axis } => {
+                // The path's stretch over the face, by its two in-plane axes.
+                let (a, b) = (
+                    pose.inverse_transform_point(&nalgebra::Point3::from(*p))
+                        .coords,
+                    pose.inverse_transform_point(&nalgebra::Point3::from(*q))
+                        .coords,
+                );
+                let (mut lo, mut hi) = (0.0f64, 1.0f64);
+                for i in (0..3).filter(|i| i != axis) {
+                    let d = b[i] - a[i];
+                    if d == 0.0 {
+                        if a[i].abs() > half[i] {
+                            hi = -1.0;
+                        }
+                        continue;
+                    }
+                    let (t1, t2) = ((-half[i] - a[i]) / d, (half[i] - a[i]) / d);
+                    lo = lo.max(t1.min(t2));
+                    hi = hi.min(t1.max(t2));
+                }
+                if lo <= hi {
+                    covered.push((lo, hi));
+                }
+            }
+            PlanePiece::Triangles(triangles) => {
+                for v in triangles {
+                    if let Some(stretch) = stretch_over_triangle(v, n, p, q) {
+                        covered.push(stretch);
+                    }
+                }
+            }
+        }
+    }
+    // The stretches must join up from 0 to 1; faces apart by less than `COPLANAR_TOLERANCE`
+    // (the rounding of a shared edge computed from two faces) join.
+    let slack = COPLANAR_TOLERANCE / (q - p).norm().max(COPLANAR_TOLERANCE);
+    covered.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut reached = 0.0;
+    for (lo, hi) in covered {
+        if lo > reached + slack {
+            return false;
+        }
+        reached = f64::max(reached, hi);
+    }
+    reached >= 1.0
+}
+
+/// The stretch `(lo, hi)` of the path `p + s (q - p)`, `s` in 0..1, over the triangle `v`
+/// (in the plane of normal `n`, as the path), by its three edges; `None` if it misses it or
+/// the triangle has no area.
+fn stretch_over_triangle(
+    v: &[Vector3<f64>; 3],
+    n: &Vector3<f64>,
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for i in 0..3 {
+        let (a, b, c) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
+        // The edge's normal in the plane, towards the third vertex.
+        let mut inward = n.cross(&(b - a));
+        let to_c = inward.dot(&(c - a));
+        if to_c == 0.0 {
+            return None;
+        }
+        if to_c < 0.0 {
+            inward = -inward;
+        }
+        // inward . (p - a) + s inward . (q - p) >= 0
+        let (at0, rate) = (inward.dot(&(p - a)), inward.dot(&(q - p)));
+        if rate == 0.0 {
+            if at0 < 0.0 {
+                return None;
+            }
+            continue;
+        }
+        let s = -at0 / rate;
+        if rate > 0.0 {
+            lo = lo.max(s);
+        } else {
+            hi = hi.min(s);
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// The contact points of a landing, resolved as one impact (see the integration guide):
+/// the vertices of the body's support face towards the ground (parry's polygonal feature)
+/// that lie within `flat_tolerance x face size` of the contact plane and approach the
+/// ground. Two or more give one impact at their centroid, projected on the contact plane;
+/// otherwise the impact is at the deepest point. Returns the point and the count.
+pub(crate) fn landing_point(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    h: &Hit,
+    flat_tolerance: f64,
+) -> (Vector3<f64>, usize) {
+    let Some((pfm, border)) = part.shape.as_polygonal_feature_map() else {
+        return (h.point, 1);
+    };
+    let pose = part_pose(part, s);
+    let dir_local = pose.rotation.inverse() * (-h.normal);
+    let mut feature = PolygonalFeature::default();
+    pfm.local_support_feature(
+        crate::plugin::bridge::convert::vec_from_na(&dir_local),
+        &mut feature,
+    );
+    let count = feature.num_vertices.min(4);
+    if count < 2 {
+        return (h.point, 1);
+    }
+    let verts: Vec<Vector3<f64>> = feature.vertices[..count]
+        .iter()
+        .map(|v| pose * nalgebra::Point3::from(vec_to_na(*v)))
+        .map(|p| p.coords)
+        .collect();
+    let heights: Vec<f64> = verts.iter().map(|x| h.normal.dot(&(x - h.point))).collect();
+    let h_min = heights.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut size: f64 = 0.0;
+    for a in &verts {
+        for b in &verts {
+            size = size.max((a - b).norm());
+        }
+    }
+    let tol = flat_tolerance * size + 1e-6 * (size + 1e-3);
+    // The face must be the one touching: its lowest vertex at the contact point (a rounded
+    // shape's core vertices sit `border` above its surface).
+    if (h_min - to_f64(border)).abs() > tol + 1e-6 * (1.0 + size) {
+        return (h.point, 1);
+    }
+    let mut sum = Vector3::zeros();
+    let mut n = 0usize;
+    for (x, hx) in verts.iter().zip(&heights) {
+        if hx - h_min <= tol {
+            let u = body_velocity_at(s, x) - ground.velocity_at(x, t);
+            if h.normal.dot(&u) < 0.0 {
+                sum += x;
+                n += 1;
+            }
+        }
+    }
+    if n < 2 {
+        return (h.point, 1);
+    }
+    let c = sum / n as f64;
+    (c - h.normal * h.normal.dot(&(c - h.point)), n)
+}

@@ -1,0 +1,235 @@
+//! One body's start: its snapshot and geometry, the grounds near it (nearest first for a ball
+//! at a seam), the plan that the pairs' roles fill in, and the candidate it ends as.
+
+use super::Planner;
+use crate::motion::{Flight, Rolling, State};
+use crate::parry::query::Unsupported;
+use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::config::TimingMode;
+use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, PairContact, contact_checked};
+use crate::plugin::queries::observe::{Scene, body_geom, centred_ball, ground_geom, snapshot};
+use crate::plugin::state::memory::LastStep;
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::{Candidate, StepData};
+use crate::rapier::math::Vector;
+use crate::rapier::parry::bounding_volume::Aabb;
+use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBodyHandle};
+use nalgebra::Vector3;
+
+/// A ground's contact with a body part at the step's start, as `contact_checked` answers.
+pub(super) type StartContact = Result<Option<PairContact>, Unsupported>;
+
+/// What is known of a body near a ground before any of its pairs is decided: read-only for
+/// the stages of its plan.
+pub(super) struct BodyNear<'c> {
+    pub handle: RigidBodyHandle,
+    /// Its state at the step's start (before any `Step` impulse).
+    pub start: State,
+    pub flight: Flight,
+    pub local_com: Vector3<f64>,
+    pub geom: BodyGeom<'c>,
+    /// A bound on the speed of any point of the body over the step (m/s).
+    pub speed: f64,
+    /// How far beyond its bounding sphere the body can reach a ground in the step (m).
+    pub reach: f64,
+    /// The grounds near it (indices in `StepData::grounds`).
+    pub near: SmallList<usize>,
+    /// A ball of an impact between bodies: it needs its candidate in every mode.
+    pub member: bool,
+    /// Not one centred ball: turning moves its contact point over its surface.
+    pub turns_surface: bool,
+    /// It has a joint (which may disable its contacts with a ground's body).
+    pub jointed: bool,
+    /// The grounds near it with their geometry, the one a ball rests on first.
+    pub grounds: SmallList<(usize, GroundGeom<'c>)>,
+    /// For a ball near several grounds: its contact with each of `grounds` at the start,
+    /// in the same order (empty otherwise).
+    pub start_contacts: SmallList<StartContact>,
+}
+
+/// What one body's plan reads and never writes: the body near its grounds, rapier's world,
+/// and what the plugin kept of the last step.
+#[derive(Clone, Copy)]
+pub(super) struct BodyReads<'q, 'c> {
+    pub body: &'q BodyNear<'c>,
+    pub scene: &'q Scene<'c>,
+    pub last: &'q LastStep,
+}
+
+/// The body's plan in progress, filled in by its pairs' roles in the grounds' order.
+pub(super) struct BodyPlan {
+    /// Its state: the start, after any `Step` impulse, or put on the plane it rolls on.
+    pub state: State,
+    /// A `Step` impulse changed its state (to be written).
+    pub touched: bool,
+    /// The grounds the search after the step runs against.
+    pub impact_grounds: SmallList<usize>,
+    /// One of those grounds may close in the step (`geometry::cannot_close` does not rule it
+    /// out).
+    pub closing: bool,
+    /// Its resting contacts whose point turning can slide beyond the resting gap: the ground
+    /// and the point in the body frame.
+    pub turning_resting: SmallList<(usize, Vector3<f64>)>,
+    /// The closed-form rolling on the ground of this index.
+    pub rolling: Option<(usize, Rolling)>,
+    /// Held at rest on a slope (`OnPlane::Held`): its pairs are rapier's.
+    pub held: bool,
+    /// The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
+    pub rolling_pieces: Option<SmallList<ColliderHandle>>,
+}
+
+impl BodyNear<'_> {
+    /// The plan before any pair is decided: the start state, nothing found.
+    pub fn plan(&self) -> BodyPlan {
+        BodyPlan {
+            state: self.start,
+            touched: false,
+            impact_grounds: SmallList::Empty,
+            closing: false,
+            turning_resting: SmallList::Empty,
+            rolling: None,
+            held: false,
+            rolling_pieces: None,
+        }
+    }
+
+    /// How far a point of the body can move relative to a resting contact point in the step
+    /// by turning, from the state `s` (for a ball about its centre: how fast rapier's contact
+    /// point slides off its bottom). Pure.
+    pub fn turning_reach(&self, s: &State, dt: f64) -> f64 {
+        self.flight.max_angular_speed(s) * 2.0 * self.geom.radius * dt
+    }
+}
+
+impl<H: PhysicsHooks> Planner<'_, H> {
+    /// The body's snapshot and the grounds near it (the cheap test: its bounding sphere
+    /// swept over the step against the grounds' boxes). `None` when it has no collider to
+    /// query or no ground is near it; then, in `Exact` mode or for a ball of an impact
+    /// between bodies, its flying candidate is pushed. Reads rapier; writes only
+    /// `step.candidates`.
+    pub(super) fn start_body<'c>(
+        &self,
+        handle: RigidBodyHandle,
+        scene: &Scene<'c>,
+        last: &LastStep,
+        step: &mut StepData,
+    ) -> Option<BodyNear<'c>> {
+        let rb = &scene.bodies[handle];
+        let (start, flight, local_com) =
+            snapshot(rb, step.gravity, step.dt, last.shadows.get(&handle));
+        let geom = body_geom(rb, scene.colliders, &local_com);
+        if geom.parts.is_empty() {
+            return None;
+        }
+        let dt = step.dt;
+        let speed = flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
+        let reach = speed * dt + step.policy.resting_gap.max(step.policy.prediction);
+        let sphere = Aabb::from_half_extents(
+            vec_from_na(&start.com),
+            Vector::splat(to_real(geom.radius + reach)),
+        );
+        let near =
+            self.registry
+                .index
+                .near(&step.grounds, sphere.center(), sphere.half_extents().x);
+        let member = step.pairs.members.contains(&handle);
+        if near.is_empty() {
+            if self.config.timing == TimingMode::Exact || member {
+                step.candidates
+                    .push(Candidate::flying(handle, start, flight, local_com));
+            }
+            return None;
+        }
+        let mut grounds: SmallList<(usize, GroundGeom)> = near
+            .iter()
+            .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], scene.colliders)?)))
+            .collect();
+        let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
+        let start_contacts = if !turns_surface && grounds.len() > 1 {
+            nearest_first(&geom, &mut grounds, &start, reach)
+        } else {
+            SmallList::Empty
+        };
+        let jointed = scene
+            .sets
+            .impulse_joints
+            .attached_joints(handle)
+            .next()
+            .is_some()
+            || scene
+                .sets
+                .multibody_joints
+                .rigid_body_link(handle)
+                .is_some();
+        Some(BodyNear {
+            handle,
+            start,
+            flight,
+            local_com,
+            geom,
+            speed,
+            reach,
+            near,
+            member,
+            turns_surface,
+            jointed,
+            grounds,
+            start_contacts,
+        })
+    }
+
+    /// The body's candidate for the stages after rapier's step, if they have anything to do
+    /// with it: grounds to search, resting contacts that turn, a rolling, `Exact` mode, or a
+    /// ball of an impact between bodies. Pure.
+    pub(super) fn candidate(&self, body: BodyNear, plan: BodyPlan) -> Option<Candidate> {
+        let wanted = !plan.impact_grounds.is_empty()
+            || !plan.turning_resting.is_empty()
+            || plan.rolling.is_some()
+            || self.config.timing == TimingMode::Exact
+            || body.member;
+        wanted.then_some(Candidate {
+            body: body.handle,
+            start: plan.state,
+            flight: body.flight,
+            local_com: body.local_com,
+            near: body.near,
+            impact_grounds: plan.impact_grounds,
+            touched: plan.touched,
+            closing: plan.closing,
+            turning_resting: plan.turning_resting,
+            turns_surface: body.turns_surface,
+            rolling: plan.rolling,
+        })
+    }
+}
+
+/// A ball (`geom`, one centred ball) near several grounds (a seam between floor tiles): the
+/// ground it rests on (least `|gap|` at `start`) moved first in `grounds`, so that if it rolls
+/// there on one plane with the others, the rest are only that plane's pieces. Returns its
+/// contact with each ground at `start`, in the new order: the pairs' roles reuse them while
+/// the ball has not moved (a `Step` impulse changes only its velocity). One query per ground,
+/// no sort (which would query each pair again).
+fn nearest_first(
+    geom: &BodyGeom,
+    grounds: &mut SmallList<(usize, GroundGeom)>,
+    start: &State,
+    reach: f64,
+) -> SmallList<StartContact> {
+    let mut start_contacts: SmallList<_> = grounds
+        .iter()
+        .map(|(_, gg)| contact_checked(&geom.parts[0], gg, start, 0.0, reach))
+        .collect();
+    let gap = |found: &StartContact| match found {
+        Ok(Some((dist, ..))) => f64::abs(*dist),
+        _ => f64::INFINITY,
+    };
+    let nearest = start_contacts
+        .iter()
+        .map(gap)
+        .enumerate()
+        .min_by(|(_, a), (_, b)| a.total_cmp(b))
+        .map_or(0, |(k, _)| k);
+    grounds.swap(0, nearest);
+    start_contacts.swap(0, nearest);
+    start_contacts
+}

@@ -1,0 +1,71 @@
+//! `Step` mode's start-of-step impulse: a contact that closes within the step is resolved at
+//! the step's start, its event pushed, and the pair's role follows from how the contact point
+//! leaves.
+
+use super::Planner;
+use super::body::{BodyPlan, BodyReads};
+use super::role::Pair;
+use crate::plugin::bridge::resolve::{ImpactInput, Inertia, resolve};
+use crate::plugin::events::ImpactTiming;
+use crate::plugin::policy::Role;
+use crate::plugin::queries::geometry::{BodyGeom, Hit, body_velocity_at, landing_point};
+use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::step::StepData;
+use crate::rapier::prelude::PhysicsHooks;
+
+impl<H: PhysicsHooks> Planner<'_, H> {
+    /// Resolves the pair's contact `hit` (closing within the step, at the step's start) as
+    /// one impact of the body's part alone at its landing point (`landing_point`), with the
+    /// body's state `plan.state`. On an impulse: the new state in `plan.state`
+    /// (`plan.touched`), its event pushed, and the pair `Resting` if the point now leaves
+    /// slower than the resting speed, else `Impact` (out of rapier's solver: a touching pair
+    /// kept in the solver after the impulse would let a heavy body landing on this one in
+    /// the same step press it into the ground; a box rocking on two edges, bounced in turn at
+    /// the step's start and end, comes to rest by the energy cap). No impulse: `Resting`. Writes nothing to
+    /// rapier (the state is written once the body's plan is done).
+    pub(super) fn step_start_impulse(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        hit: &Hit,
+        step: &StepData,
+    ) -> Role {
+        let BodyReads { body, scene, .. } = reads;
+        let Pair { part, gg, .. } = pair;
+        let n = hit.normal;
+        let (point, count) =
+            landing_point(part, gg, &plan.state, 0.0, hit, self.config.flat_tolerance);
+        let inertia = Inertia::of(&scene.bodies[body.handle]);
+        let single = BodyGeom {
+            parts: SmallList::One(*part),
+            radius: body.geom.radius,
+        };
+        let input = ImpactInput {
+            body: body.handle,
+            inertia: &inertia,
+            law: self.config.law,
+            material: self
+                .registry
+                .material_of(scene.colliders, part.handle, gg.handle),
+            resting_speed: step.policy.resting_speed,
+            force_settle: false,
+            timing: ImpactTiming::StepStart,
+        };
+        match resolve(&input, &single, gg, &plan.state, 0.0, hit, point, count) {
+            Some((after, event)) => {
+                plan.state = after;
+                plan.touched = true;
+                self.commit.event(event);
+                let un2 =
+                    n.dot(&(body_velocity_at(&plan.state, &point) - gg.velocity_at(&point, 0.0)));
+                if un2 <= step.policy.resting_speed {
+                    Role::Resting
+                } else {
+                    Role::Impact
+                }
+            }
+            None => Role::Resting,
+        }
+    }
+}

@@ -1,0 +1,268 @@
+//! One pair's role: rapier's filtering first, then a piece of the plane the ball rolls on or
+//! a ground it may roll into, then by its contact at the step's start: resting, `Step` mode's
+//! start impulse, or impact; and what a ground's pairs tell the search after the step.
+
+use super::body::{BodyNear, BodyPlan, BodyReads, StartContact};
+use super::{Planner, closes_within};
+use crate::plugin::config::TimingMode;
+use crate::plugin::policy::Role;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{
+    BodyPart, COPLANAR_TOLERANCE, GroundGeom, Hit, PairContact, Sweep, body_velocity_at,
+    cannot_close, contact_checked,
+};
+use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
+use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::step::StepData;
+use crate::rapier::prelude::PhysicsHooks;
+
+/// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
+/// part, and the pair's key.
+#[derive(Clone, Copy)]
+pub(super) struct Pair<'q, 'c> {
+    pub k: usize,
+    pub part: &'q BodyPart<'c>,
+    pub gg: &'q GroundGeom<'c>,
+    pub key: PairKey,
+}
+
+/// What a ground's pairs with the body tell the search after the step.
+struct GroundVerdict {
+    /// A pair is `Impact` and within reach: the search runs against the ground.
+    any_impact: bool,
+    /// No pair of the body with the ground can meet in the step.
+    clear: bool,
+}
+
+impl<H: PhysicsHooks> Planner<'_, H> {
+    /// The roles of the body's pairs with its `k`-th ground near it (in `step.roles`, in the
+    /// order of the body's parts), and whether the search after the step runs against it
+    /// (`plan.impact_grounds`, `plan.closing`). Writes only `plan`, `step` and, in `Step`
+    /// mode or on a release, the events; rapier is not written here.
+    pub(super) fn plan_ground(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        k: usize,
+        step: &mut StepData,
+    ) {
+        let BodyReads { body, scene, .. } = reads;
+        let (gi, gg) = &body.grounds[k];
+        let mut verdict = GroundVerdict {
+            any_impact: false,
+            clear: true,
+        };
+        for part in &body.geom.parts {
+            let key = (part.handle, gg.handle);
+            let pair = Pair { k, part, gg, key };
+            let role = if self.filtered(body, scene, key) {
+                Role::Filtered
+            } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
+                role
+            } else {
+                self.contact_role(reads, plan, pair, &mut verdict, step)
+            };
+            step.roles.insert(key, role);
+        }
+        if verdict.any_impact {
+            plan.impact_grounds.push(*gi);
+            plan.closing |= !verdict.clear;
+        }
+    }
+
+    /// Does rapier have no contact for the pair: a joint of the body with the ground's body
+    /// that disables contacts, rapier's own filtering, or the user's filter? Reads only.
+    fn filtered(&self, body: &BodyNear, scene: &Scene, key: PairKey) -> bool {
+        let (bodies, colliders, sets) = (scene.bodies, scene.colliders, scene.sets);
+        let joint_filtered = body.jointed
+            && colliders[key.1].parent().is_some_and(|ground_body| {
+                filter::joint_disables_contacts(
+                    sets.impulse_joints,
+                    sets.multibody_joints,
+                    body.handle,
+                    ground_body,
+                )
+            });
+        joint_filtered
+            || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+            || self.user_refuses(bodies, colliders, key)
+    }
+
+    /// The role of a pair rapier's filtering keeps, by its contact at the body's current
+    /// state: out of reach, rapier's (parry cannot query it), resting, `Step` mode's impulse
+    /// or impact, a resting ball's rolling, held or reached (`rest_on_ground`); records the
+    /// resting contacts turning slides (`plan.turning_resting`) and what the pair tells the
+    /// search (`verdict`). Does not insert the role: the caller does.
+    fn contact_role(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        verdict: &mut GroundVerdict,
+        step: &mut StepData,
+    ) -> Role {
+        let body = reads.body;
+        let Pair { k, part, gg, .. } = pair;
+        let found = match body.start_contacts.get(k) {
+            Some(found) if plan.state.com == body.start.com && plan.state.rot == body.start.rot => {
+                *found
+            }
+            _ => contact_checked(part, gg, &plan.state, 0.0, body.reach),
+        };
+        let contact0 = found.as_ref().ok().copied().flatten();
+        // A pair beyond reach cannot touch in this step: out of the solver, and no search
+        // after the step.
+        let reachable = matches!(found, Ok(Some(_)));
+        let mut role = match found {
+            // parry cannot query this pair: rapier keeps it, restitution included.
+            Err(_) => Role::Rapier,
+            Ok(None) => Role::Impact,
+            Ok(Some(contact)) => self.touching_role(reads, plan, pair, contact, step),
+        };
+        // A ball sliding or rolling on a ground, alone on it: the closed form instead of
+        // rapier's resting contact where it applies (`rolling_of`). rapier's contact turns
+        // its point with the ball, which then hops and keeps slipping.
+        if role == Role::Resting && !body.turns_surface && plan.rolling.is_none() && !plan.held {
+            // Within the resting gap of it (a `Step` impulse can leave a ball resting on its
+            // way down, up to a step's travel above the ground).
+            if let Some(contact) =
+                contact0.filter(|(dist, ..)| dist.abs() <= step.policy.resting_gap)
+            {
+                role = self.rest_on_ground(reads, plan, pair, contact, step);
+            }
+        }
+        if role == Role::Resting
+            && body.turning_reach(&plan.state, step.dt) > step.policy.resting_gap
+        {
+            if let Some((_, _, p)) = contact0 {
+                let (gi, _) = &body.grounds[k];
+                plan.turning_resting
+                    .push((*gi, plan.state.rot.inverse() * (p - plan.state.com)));
+            }
+        }
+        verdict.any_impact |= role == Role::Impact && reachable;
+        // Only asked of a ground the search may run against (a single part's pair that is
+        // not `Impact` does not make one).
+        verdict.clear = verdict.clear
+            && match contact0 {
+                Some(_) if role != Role::Impact && body.geom.parts.len() == 1 => true,
+                Some((dist, n, _)) => {
+                    self.config.timing != TimingMode::Step
+                        && cannot_close(
+                            part,
+                            gg,
+                            &Sweep {
+                                flight: &body.flight,
+                                s: &plan.state,
+                                dt: step.dt,
+                                radius: body.geom.radius,
+                                speed: body.speed,
+                            },
+                            (dist, n),
+                        )
+                }
+                None => false,
+            };
+        role
+    }
+
+    /// The role of a pair touching or within reach at `contact` (gap, normal, point): resting
+    /// (`Policy::rests`, with hysteresis for a pair rapier held at rest last step), in `Step`
+    /// mode the start impulse of a contact that closes in the step (`step_start_impulse`),
+    /// else impact. May apply that impulse to `plan.state`; reads rapier's contact graph only
+    /// where the policy asks whether the body is pressed.
+    fn touching_role(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        (dist, n, p): PairContact,
+        step: &StepData,
+    ) -> Role {
+        let BodyReads { body, scene, last } = reads;
+        let Pair { gg, key, .. } = pair;
+        let flight = &body.flight;
+        let u = body_velocity_at(&plan.state, &p) - gg.velocity_at(&p, 0.0);
+        let un = n.dot(&u);
+        // The normal speed the contact will have on reaching the ground (gravity, or any
+        // acceleration towards it, included): `sqrt(un^2 + 2 |an| dist)`.
+        let an = n.dot(&flight.accel);
+        let arrival = (un * un + 2.0 * (-an).max(0.0) * dist.max(0.0)).sqrt();
+        // Hysteresis: a pair rapier held at rest last step shows the normal speed rapier's
+        // solver leaves at rest (up to g dt and more for a fast-rolling ball): it stays
+        // resting unless clearly hit.
+        let prev_role = last.roles.get(&key);
+        // A ball the closed form rolled ends on its plane: one above it has left it since
+        // (an impact lifted it, and it flies), and is not held (the hysteresis would put it
+        // back on the ground, within the resting gap, with no event).
+        let was_resting = match prev_role {
+            Some(Role::Resting) => true,
+            Some(Role::Rolling) => dist <= COPLANAR_TOLERANCE,
+            _ => false,
+        };
+        // The plugin had the pair last step: what touched the body then is known (a body new
+        // near the ground has nothing to go on).
+        let measured = matches!(
+            prev_role,
+            Some(&Role::Resting | &Role::Impact | &Role::Rolling)
+        );
+        // A pressed contact: a resting pair of a body that also touched another body (or a
+        // wall, or had a joint) last step approaches only because something pushes it (a
+        // box dropped on it, the pile above it). The push must stay inside rapier's solver,
+        // which holds the body out of the ground, so rapier keeps the pair, with e = 0
+        // (`Policy::rests`): out of the solver the push would sink the body for a step and
+        // the end of step would bounce it back out. What touched the body is asked only
+        // where it decides (rarely: most resting pairs are slow), and only of a body
+        // measured after the last step.
+        let rb = &scene.bodies[body.handle];
+        let pressed =
+            || measured && touched_besides_grounds(body.handle, rb, scene.sets, self.registry);
+        if step.policy.rests(dist, arrival, was_resting, pressed) {
+            Role::Resting
+        } else if self.config.timing == TimingMode::Step
+            && closes_within(dist, un, n.dot(&(flight.accel)), step.dt)
+            && un < 0.0
+        {
+            let hit = Hit {
+                part: 0,
+                ground: 0,
+                dist,
+                normal: n,
+                point: p,
+                un,
+            };
+            self.step_start_impulse(reads, plan, pair, &hit, step)
+        } else {
+            Role::Impact
+        }
+    }
+}
+
+/// The role of a pair of a ball already rolling in closed form on the plane of an earlier
+/// (nearer) ground, `None` when it does not roll yet. A piece of that plane: the pair is the
+/// rolling's too, out of rapier's solver (rapier's contact with a tile's edge at a flush
+/// seam would throw the ball up, and `Step` mode would bounce it). Another ground it may
+/// roll into (a slope's foot, a wall): out of rapier's solver too, and the search along the
+/// rolling finds the impact, run only if the ground is within reach (`verdict`). Reads only.
+fn rolling_piece_role(
+    body: &BodyNear,
+    plan: &BodyPlan,
+    pair: Pair,
+    verdict: &mut GroundVerdict,
+) -> Option<Role> {
+    let pieces = plan.rolling_pieces.as_ref()?;
+    let Pair { k, part, gg, .. } = pair;
+    if pieces.contains(&gg.handle) {
+        return Some(Role::Rolling);
+    }
+    verdict.any_impact |= match body.start_contacts.get(k) {
+        Some(found) => within_reach(found),
+        None => within_reach(&contact_checked(part, gg, &plan.state, 0.0, body.reach)),
+    };
+    Some(Role::Impact)
+}
+
+/// Is the contact within reach (found, and parry could query it)?
+fn within_reach(found: &StartContact) -> bool {
+    matches!(found, Ok(Some(_)))
+}
