@@ -21,7 +21,7 @@
 //! 4. `bodies.rs`: every other candidate, routed to its reconstruction (`reconstruct.rs`: a
 //!    rolling ball's closed form, `Exact` mode's flight, the in-step impacts) and checked at
 //!    the step's end (`settle.rs`).
-//! 5. `settle.rs`: the pairs between bodies left to rapier's end state, checked.
+//! 5. `pair_settle.rs`: the pairs between bodies left to rapier's end state, checked.
 //! 6. `bodies.rs`: the balls held at rest on a slope for their first step, put back.
 //! 7. the colliders moved to the bodies' poses; the step's tables kept for the next.
 //!
@@ -32,6 +32,7 @@ pub(crate) mod commit;
 mod install;
 pub(crate) mod pair_plan;
 pub(crate) mod pair_reconstruct;
+mod pair_settle;
 pub(crate) mod plan;
 mod prepare;
 pub(crate) mod reconstruct;

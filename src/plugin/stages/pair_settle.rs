@@ -1,0 +1,321 @@
+//! Settle, for the pairs between bodies: the `Impact` pairs not moved together by
+//! `pair_reconstruct.rs` (something else touched a body, or a search gave up) are checked at
+//! rapier's end state, in which the pair was out of rapier's solver.
+//!
+//! Contract: [`AfterStep::pair_end`] reads rapier's end states of the pair's two bodies; where
+//! they met in the step, it resolves their impact with the model at the step's end
+//! (`ImpactTiming::StepEnd`), moves them apart along the contact normal to touching, each by
+//! its inverse-mass share (a `PushOut` event each), checks each against the grounds near it
+//! (the settle stage's check, `settle.rs`), and commits both.
+
+use crate::motion::State;
+use crate::plugin::bridge::convert::{to_f64, vec_from_na, vec_to_na};
+use crate::plugin::bridge::resolve::{
+    BodyContactAt, ImpactInput, Inertia, PairSide, Site, correction, material, resolve_balls,
+    resolve_bodies,
+};
+use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::policy::EndCheck;
+use crate::plugin::queries::body_contact::{body_contact, touch_point};
+use crate::plugin::queries::observe::{body_geom, rapier_state, touched_besides_grounds};
+use crate::plugin::stages::commit::Origin;
+use crate::plugin::stages::pair_plan::PlannedPair;
+use crate::plugin::stages::settle::Checked;
+use crate::plugin::state::step::{AfterStep, EndOfStep};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+};
+use nalgebra::Vector3;
+
+impl AfterStep<'_> {
+    /// After the step, for an `Impact` pair of balls not moved together (something else
+    /// touched one, or a search gave up): rapier's end state, in which the pair was out of
+    /// its solver, so that the balls may have passed into, or right through, each other. If
+    /// they met in the step (they overlap, their centres crossed the line of centres they
+    /// started on, or their straight relative motion came within reach), the model's impulse
+    /// along that line (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
+    /// the pressed speed for a ball touching something else), and both balls moved apart
+    /// along it to touching, on the sides they started on, each by its inverse-mass share,
+    /// with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
+    pub fn pair_end(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        pair: &PlannedPair,
+        step: &EndOfStep,
+    ) {
+        if !pair.balls {
+            return self.pair_end_bodies(bodies, colliders, pair, step);
+        }
+        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+            return;
+        };
+        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let d = sb.com - sa.com;
+        let len = d.norm();
+        // Out of rapier's solver, the balls may have passed into or through each other in the
+        // step: they met if they overlap now, if their centres crossed the line of centres
+        // they started on, or if their relative motion over the step (straight, as out of the
+        // solver) came within reach.
+        let crossed = d.dot(&pair.normal) < 0.0;
+        let dv = sb.v - sa.v;
+        let back = dv.norm_squared();
+        let nearest = if back > 0.0 {
+            // The closest approach of d - dv s for s in [0, dt] before the step's end.
+            let s_min = (d.dot(&dv) / back).clamp(0.0, step.dt);
+            (d - dv * s_min).norm()
+        } else {
+            len
+        };
+        let met = len < pair.reach || crossed || nearest < pair.reach;
+        if !met || pair.normal == Vector3::zeros() && len == 0.0 {
+            return;
+        }
+        // The contact normal: the line of centres now, or the one they started on if they
+        // have crossed (or passed by).
+        let n = if !crossed && len > 0.0 && len < pair.reach {
+            d / len
+        } else {
+            pair.normal
+        };
+        // How far apart to move them along n: to touching, on the sides they started on.
+        let along = d.dot(&n);
+        let overlap = (pair.reach - along).max(0.0);
+        // The model's impulse is taken with the balls touching along n.
+        let touching_b = State {
+            com: sa.com + n * pair.reach,
+            ..sb
+        };
+        let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+        let (ca, cb) = (pair.key.0, pair.key.1);
+        // The key orders the colliders by slot: match them to the bodies.
+        let (ca, cb) = if colliders.get(ca).and_then(|c| c.parent()) == Some(pair.a) {
+            (ca, cb)
+        } else {
+            (cb, ca)
+        };
+        let radius = |c: ColliderHandle| {
+            colliders.get(c).and_then(|co| {
+                Some(to_f64(co.shape().as_ball()?.radius) + to_f64(co.contact_skin()))
+            })
+        };
+        let (Some(rad_a), Some(rad_b)) = (radius(ca), radius(cb)) else {
+            return;
+        };
+        let side_a = PairSide::new(pair.a, ca, &ia, sa, rad_a);
+        let side_b = PairSide::new(pair.b, cb, &ib, touching_b, rad_b);
+        let input = self.step_end_input(&side_a, (ra, rb), &side_b, colliders, step);
+        if let Some((after_a, after_b, events)) = resolve_balls(&input, &side_a, &side_b, step.dt) {
+            self.commit.events(events);
+            sa = after_a;
+            sb = State {
+                com: sb.com,
+                ..after_b
+            };
+        }
+        // Each ball's push-out at its surface point facing the other ball.
+        let facing =
+            |side: &Pushed, before: &State, normal: Vector3<f64>| before.com - normal * side.radius;
+        self.push_apart(
+            [
+                Pushed::new(pair.a, ca, &ia, &mut sa, rad_a),
+                Pushed::new(pair.b, cb, &ib, &mut sb, rad_b),
+            ],
+            n,
+            overlap,
+            facing,
+            step.dt,
+        );
+        self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
+    }
+
+    /// [`AfterStep::pair_end`] for a pair not both centred balls: where parry finds the two
+    /// bodies touching or overlapping at rapier's end state, the model's impulse at their
+    /// contact (the flat-landing points of `touch_point`; `ImpactTiming::StepEnd`, no bounce
+    /// slower than the resting speed, or the pressed speed for a body touching something
+    /// else) if they approach there, and both moved apart along the contact normal to
+    /// touching, each by its inverse-mass share, with a `PushOut` event each. (A pair that
+    /// passed through each other inside the step is not found: the step's end is all that is
+    /// checked, as rapier's solver would see it.)
+    fn pair_end_bodies(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        pair: &PlannedPair,
+        step: &EndOfStep,
+    ) {
+        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+            return;
+        };
+        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let (la, lb) = (
+            vec_to_na(ra.local_center_of_mass()),
+            vec_to_na(rb.local_center_of_mass()),
+        );
+        let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
+        let Some(touch) = body_contact(&ga, &sa, &gb, &sb, 0.0) else {
+            return;
+        };
+        let (ca, cb) = (
+            ga.parts[touch.parts.0].handle,
+            gb.parts[touch.parts.1].handle,
+        );
+        let (ia, ib) = (Inertia::of(ra), Inertia::of(rb));
+        let (point, points) = touch_point(&ga, &sa, &gb, &sb, &touch, self.config.flat_tolerance);
+        let side_a = PairSide::new(pair.a, ca, &ia, sa, 0.0);
+        let side_b = PairSide::new(pair.b, cb, &ib, sb, 0.0);
+        let input = self.step_end_input(&side_a, (ra, rb), &side_b, colliders, step);
+        let at = BodyContactAt {
+            normal: touch.normal,
+            point,
+            points,
+        };
+        if let Some((after_a, after_b, events)) =
+            resolve_bodies(&input, &side_a, &side_b, &at, step.dt)
+        {
+            self.commit.events(events);
+            (sa, sb) = (after_a, after_b);
+        }
+        let overlap = (-touch.dist).max(0.0);
+        self.push_apart(
+            [
+                Pushed::new(pair.a, ca, &ia, &mut sa, 0.0),
+                Pushed::new(pair.b, cb, &ib, &mut sb, 0.0),
+            ],
+            touch.normal,
+            overlap,
+            |_: &Pushed, _: &State, _| touch.point,
+            step.dt,
+        );
+        self.check_moved_apart(bodies, colliders, [(pair.a, sa), (pair.b, sb)], step);
+    }
+
+    /// Moves the two bodies of a pair apart along `n` (from the first towards the second) by
+    /// `overlap` (m), each by its inverse-mass share, with a `PushOut` event each at the point
+    /// `point` gives (from the body, its state before and the normal into it).
+    fn push_apart(
+        &mut self,
+        pair: [Pushed; 2],
+        n: Vector3<f64>,
+        overlap: f64,
+        point: impl Fn(&Pushed, &State, Vector3<f64>) -> Vector3<f64>,
+        dt: f64,
+    ) {
+        if overlap <= 0.0 {
+            return;
+        }
+        let [a, b] = pair;
+        let (wa, wb) = (1.0 / a.inertia.mass, 1.0 / b.inertia.mass);
+        let (ha, ca, hb, cb) = (a.body, a.collider, b.body, b.collider);
+        let moves = [(a, -n, wa, hb, cb), (b, n, wb, ha, ca)];
+        for (side, normal, w, body2, other) in moves {
+            let before = *side.state;
+            side.state.com += normal * (overlap * w / (wa + wb));
+            let site = Site {
+                body: side.body,
+                collider: side.collider,
+                ground: other,
+                body2: Some(body2),
+                normal,
+                point: point(&side, &before, normal),
+            };
+            self.commit.event(correction(
+                EventKind::PushOut,
+                &site,
+                side.inertia,
+                &before,
+                side.state,
+                dt,
+            ));
+        }
+    }
+
+    /// The model's input for a pair resolved at the step's end (`ImpactTiming::StepEnd`): no
+    /// bounce slower than the resting speed, or the pressed speed if either body touched
+    /// something else in the step.
+    fn step_end_input<'a>(
+        &self,
+        a: &PairSide<'a>,
+        (ra, rb): (&RigidBody, &RigidBody),
+        b: &PairSide,
+        colliders: &ColliderSet,
+        step: &EndOfStep,
+    ) -> ImpactInput<'a> {
+        let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
+            touched_besides_grounds(h, rb, &step.sets, self.registry)
+        };
+        let touching = pressed(a.body, ra) || pressed(b.body, rb);
+        ImpactInput::between(
+            a,
+            self.config.law,
+            material(&colliders[a.collider], &colliders[b.collider], None),
+            if touching {
+                step.policy.pressed_speed
+            } else {
+                step.policy.resting_speed
+            },
+            ImpactTiming::StepEnd,
+        )
+    }
+
+    /// Writes the two bodies of a pair resolved at the step's end: moved apart, a body may be
+    /// moved into a ground (a light ball pushed down by a heavy one), so each is checked
+    /// against the grounds near it, as rapier's end state is.
+    fn check_moved_apart(
+        &mut self,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+        moved: [(RigidBodyHandle, State); 2],
+        step: &EndOfStep,
+    ) {
+        for (body, state) in moved {
+            let rb = &bodies[body];
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            let geom = body_geom(rb, colliders, &local_com);
+            let inertia = Inertia::of(rb);
+            let com = vec_from_na(&state.com);
+            let grounds = self.woken_geoms(bodies, colliders, com, &geom, step, &|_, _, _| false);
+            let checked = Checked {
+                body,
+                geom: &geom,
+                inertia: &inertia,
+                cand: None,
+                grounds: &grounds,
+                events_from: self.commit.reported().len(),
+            };
+            let why = EndCheck::RapierEnd;
+            let (_, settled) = self.check(bodies, colliders, &checked, &state, why, step);
+            let end = settled.unwrap_or(state);
+            self.commit
+                .state(bodies, body, &end, &local_com, Origin::Correction);
+        }
+    }
+}
+
+/// A body of a pair moved apart at the step's end (`AfterStep::push_apart`).
+struct Pushed<'s> {
+    body: RigidBodyHandle,
+    collider: ColliderHandle,
+    inertia: &'s Inertia,
+    state: &'s mut State,
+    /// A ball's radius to its contact point (m; 0 for other shapes).
+    radius: f64,
+}
+
+impl<'s> Pushed<'s> {
+    fn new(
+        body: RigidBodyHandle,
+        collider: ColliderHandle,
+        inertia: &'s Inertia,
+        state: &'s mut State,
+        radius: f64,
+    ) -> Self {
+        Self {
+            body,
+            collider,
+            inertia,
+            state,
+            radius,
+        }
+    }
+}
