@@ -896,28 +896,32 @@ impl<H> ImpactPlugin<H> {
         let prev_pairs = std::mem::take(&mut self.prev_pair_roles);
         step.pairs = pair_plan::plan_pairs(
             &mut self.pair_index,
-            &self.registry,
-            &self.flags,
-            &self.user_hooks,
             bodies,
-            colliders,
-            &sets,
-            &prev_pairs,
-            &step.grounds,
-            g,
-            dt,
-            &step.policy,
+            &pair_plan::PairInputs {
+                registry: &self.registry,
+                flags: &self.flags,
+                user_hooks: &self.user_hooks,
+                colliders,
+                sets: &sets,
+                prev: &prev_pairs,
+                grounds: &step.grounds,
+                gravity: g,
+                dt,
+                policy: &step.policy,
+            },
         );
         if self.config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
             let events = pair_plan::step_start_impulses(
                 &mut step.pairs,
                 bodies,
-                colliders,
-                self.config.law,
-                self.config.max_impacts_per_step,
-                self.config.flat_tolerance,
-                &step.policy,
-                dt,
+                &pair_plan::StepStart {
+                    colliders,
+                    law: self.config.law,
+                    max_impacts: self.config.max_impacts_per_step,
+                    flat_tolerance: self.config.flat_tolerance,
+                    policy: &step.policy,
+                    dt,
+                },
             );
             self.events.extend(events);
         }
