@@ -43,6 +43,7 @@ use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
+use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
 use crate::plugin::stages::plan::Planner;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{AfterStep, EndOfStep, StepData};
@@ -190,33 +191,29 @@ impl<H> ImpactPlugin<H> {
     ) where
         H: PhysicsHooks,
     {
-        step.pairs = pair_plan::plan_pairs(
-            &mut self.pair_index,
-            &self.registry,
-            &self.flags,
-            &self.user_hooks,
-            bodies,
+        let inputs = PairInputs {
+            registry: &self.registry,
+            flags: &self.flags,
+            user_hooks: &self.user_hooks,
             colliders,
             sets,
-            &last.pair_roles,
-            &step.grounds,
-            step.gravity,
-            step.dt,
-            &step.policy,
-        );
+            prev: &last.pair_roles,
+            grounds: &step.grounds,
+            gravity: step.gravity,
+            dt: step.dt,
+            policy: &step.policy,
+        };
+        step.pairs = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
         if self.config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
-            let config = self.config;
-            pair_plan::step_start_impulses(
-                &mut step.pairs,
-                bodies,
-                &mut self.commit(),
+            let inputs = StepStart {
                 colliders,
-                config.law,
-                config.max_impacts_per_step,
-                config.flat_tolerance,
-                &step.policy,
-                step.dt,
-            );
+                law: self.config.law,
+                max_impacts: self.config.max_impacts_per_step,
+                flat_tolerance: self.config.flat_tolerance,
+                policy: &step.policy,
+                dt: step.dt,
+            };
+            pair_plan::step_start_impulses(&mut step.pairs, bodies, &mut self.commit(), &inputs);
         }
     }
 

@@ -1,0 +1,335 @@
+//! Each pair's role: whether a pair of members may meet in the step, and if so whether it is
+//! an `Impact` (out of rapier's solver, resolved by the reconstruct stage) or `Resting`
+//! (rapier's solver keeps it, with zero restitution where rapier would bounce it above the
+//! resting gap).
+
+use super::gather::{Ball, Members, geom_state};
+use super::index::PairIndex;
+use super::{PairInputs, PairPlan, PlannedPair, pair_key};
+use crate::motion::State;
+use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::bridge::resolve::material;
+use crate::plugin::policy::Role;
+use crate::plugin::queries::body_contact::body_contact;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::contact;
+use crate::plugin::queries::observe::{ground_geom, held_besides, pressed_besides};
+use crate::plugin::state::handles::PairKey;
+use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle, RigidBodySet};
+use nalgebra::Vector3;
+use std::cell::OnceCell;
+
+/// What deciding a pair reads: the stage's inputs, the bodies, the members and the pair
+/// index (its list the members'). Read-only but for its caches (`lying`), which hold answers
+/// that do not change within the step.
+pub(super) struct Judge<'p, 'a, H> {
+    pub inputs: &'p PairInputs<'a, H>,
+    pub bodies: &'p RigidBodySet,
+    pub members: &'p Members<'a>,
+    pub index: &'p PairIndex,
+    /// `resting_gap.max(prediction)` (m): the slack of every reach and closing test.
+    pub margin: f64,
+    /// The unit direction of gravity, zero without gravity.
+    pub down: Vector3<f64>,
+    /// Whether member `k`, not a centred ball, lies within the resting gap of a ground:
+    /// computed once a step, for the bodies of a pair looked at.
+    lying: Vec<OnceCell<bool>>,
+}
+
+/// How two members approach at the step's start.
+struct Approach {
+    /// Their surfaces' distance (m): the centres' less `reach` for two balls, parry's
+    /// otherwise.
+    gap: f64,
+    /// The closing speed along `normal` (m/s), what turning can add included.
+    closing: f64,
+    /// The unit contact normal from the first to the second.
+    normal: Vector3<f64>,
+    /// Their radii summed (m).
+    reach: f64,
+    /// Two centred balls.
+    balls_only: bool,
+}
+
+impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
+    pub(super) fn new(
+        inputs: &'p PairInputs<'a, H>,
+        bodies: &'p RigidBodySet,
+        members: &'p Members<'a>,
+        index: &'p PairIndex,
+    ) -> Self {
+        let policy = inputs.policy;
+        Judge {
+            inputs,
+            bodies,
+            members,
+            index,
+            margin: policy.resting_gap.max(policy.prediction),
+            down: inputs
+                .gravity
+                .try_normalize(0.0)
+                .unwrap_or_else(Vector3::zeros),
+            lying: members.balls.iter().map(|_| OnceCell::new()).collect(),
+        }
+    }
+
+    /// Member `k`, a body that is not a centred ball, lies within the resting gap of a ground
+    /// (parry's distance to the grounds near it): its pairs are rapier's. `false` for a
+    /// centred ball.
+    fn on_ground(&self, k: usize) -> bool {
+        *self.lying[k].get_or_init(|| {
+            let (inputs, policy) = (self.inputs, self.inputs.policy);
+            let m = &self.members.balls[k];
+            let Some(shape) = &m.shape else {
+                return false;
+            };
+            let (geom, state) = (&shape.0, &shape.1);
+            let half = to_real(m.radius + policy.resting_gap);
+            inputs
+                .registry
+                .index
+                .near(inputs.grounds, vec_from_na(&m.com), half)
+                .iter()
+                .any(|g| {
+                    ground_geom(&inputs.grounds[*g], inputs.colliders).is_some_and(|gg| {
+                        geom.parts.iter().any(|part| {
+                            contact(part, &gg, state, 0.0, policy.resting_gap).is_some()
+                        })
+                    })
+                })
+        })
+    }
+
+    /// Has rapier's solver held the pair in contact (an impulse last step)?
+    fn held(&self, a: &Ball, b: &Ball) -> bool {
+        self.inputs
+            .sets
+            .narrow_phase
+            .contact_pair(a.collider, b.collider)
+            .is_some_and(|pair| {
+                pair.manifolds()
+                    .iter()
+                    .any(|m| m.points.iter().any(|p| p.data.impulse > 0.0))
+            })
+    }
+
+    /// Would rapier not solve the pair `key` of the bodies' colliders, or the user's filter
+    /// refuse it? (`filter.rs`; every test there is symmetric in the two.)
+    pub(super) fn refused(&self, key: PairKey, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
+        let inputs = self.inputs;
+        let (bodies, colliders) = (self.bodies, inputs.colliders);
+        let user = inputs.flags.recorded_user_flags(colliders, key.0)
+            | inputs.flags.recorded_user_flags(colliders, key.1);
+        !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+            || filter::joint_disables_contacts(
+                inputs.sets.impulse_joints,
+                inputs.sets.multibody_joints,
+                a,
+                b,
+            )
+            || filter::user_refuses(inputs.user_hooks, user, bodies, colliders, key)
+    }
+
+    /// The closing speed of two members along their line of centres, and their centres'
+    /// distance less their radii (the gap of two balls).
+    pub(super) fn closing_gap(&self, a: RigidBodyHandle, b: RigidBodyHandle) -> (f64, f64) {
+        let balls = &self.members.balls;
+        let (ba, bb) = (
+            &balls[self.index.ball_of_body(a)],
+            &balls[self.index.ball_of_body(b)],
+        );
+        let d = bb.com - ba.com;
+        let len = d.norm();
+        let closing = if len > 0.0 {
+            (ba.v - bb.v).dot(&(d / len))
+        } else {
+            0.0
+        };
+        (closing, len - (ba.radius + bb.radius))
+    }
+
+    /// How members `i` and `j` approach, or `None` when their swept spheres are apart (their
+    /// travel cannot close the gap in the step) or, for shapes other than two centred
+    /// balls, when the pair is rapier's as it is or parry finds no contact within reach.
+    fn approach(&self, i: usize, j: usize) -> Option<Approach> {
+        let (balls, swept) = (&self.members.balls, &self.members.swept);
+        let (a, b) = (&balls[i], &balls[j]);
+        let d = b.com - a.com;
+        let (reach, reach_swept) = (a.radius + b.radius, swept[i] + swept[j]);
+        if d.norm_squared() > reach_swept * reach_swept {
+            return None;
+        }
+        let len = d.norm();
+        let travel = reach_swept - reach;
+        let balls_only = a.shape.is_none() && b.shape.is_none();
+        let (gap, closing, normal) = if balls_only {
+            // Along the line of centres: a ball's spin does not move its surface along the
+            // normal.
+            let closing = if len > 0.0 {
+                (a.v - b.v).dot(&(d / len))
+            } else {
+                0.0
+            };
+            let normal = if len > 0.0 { d / len } else { Vector3::zeros() };
+            (len - reach, closing, normal)
+        } else {
+            self.shapes_approach(i, j, travel)?
+        };
+        Some(Approach {
+            gap,
+            closing,
+            normal,
+            reach,
+            balls_only,
+        })
+    }
+
+    /// The gap, closing speed and normal of members `i` and `j`, not both centred balls, at
+    /// parry's contact within `travel` (plus what turning adds, and the margin); `None` when
+    /// the pair is rapier's as it is or parry finds no contact within reach.
+    ///
+    /// A body rapier's solver holds against something else, or one within the resting gap
+    /// of a ground at the step's start (where rapier's narrow phase may not hold the contact
+    /// yet), cannot be moved alone through an impact, and out of rapier's solver the pair
+    /// would be checked only at the step's end, where a fast body may have passed through:
+    /// such a pair is rapier's.
+    fn shapes_approach(&self, i: usize, j: usize, travel: f64) -> Option<(f64, f64, Vector3<f64>)> {
+        let (bodies, sets) = (self.bodies, self.inputs.sets);
+        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
+        if self.on_ground(i)
+            || self.on_ground(j)
+            || held_besides(a.body, &bodies[a.body], b.collider, sets)
+            || held_besides(b.body, &bodies[b.body], a.collider, sets)
+        {
+            return None;
+        }
+        let dt = self.inputs.dt;
+        let colliders = self.inputs.colliders;
+        let ((ga, sa), (gb, sb)) = (
+            geom_state(a, bodies, colliders),
+            geom_state(b, bodies, colliders),
+        );
+        // A turning body can bring a point closer by its angular speed times its radius.
+        let turn = |m: &Ball, s: &State| match m.shape {
+            Some(_) => s.w.norm() * m.radius * dt,
+            None => 0.0,
+        };
+        let turn = turn(a, &sa) + turn(b, &sb);
+        let touch = body_contact(ga.get(), &sa, gb.get(), &sb, travel + turn + self.margin)?;
+        // The closest points' closing speed, plus what a turn can add along the normal (the
+        // spin about the normal adds nothing): a turning body's other corner may swing in
+        // first. Without turning it is the closest points' speed.
+        let n = touch.normal;
+        let tilt = |m: &Ball, s: &State| match m.shape {
+            Some(_) => (s.w - n * n.dot(&s.w)).norm() * m.radius,
+            None => 0.0,
+        };
+        let closing = -touch.rate + tilt(a, &sa) + tilt(b, &sb);
+        Some((touch.dist, closing, n))
+    }
+
+    /// The pair of members `i < j` with its role, or `None` when it cannot meet in the step,
+    /// it is slow and rapier's resting contact as it is (unless `chain`: side by side with a
+    /// body of an impact, it may pass the impact on), or it is hooked and rapier would not
+    /// solve it or the user's filter refuses it. Reads only; the caller adds the pair.
+    pub(super) fn evaluate(&self, i: usize, j: usize, chain: bool) -> Option<PlannedPair> {
+        let Approach {
+            gap,
+            closing,
+            normal,
+            reach,
+            balls_only,
+        } = self.approach(i, j)?;
+        let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
+        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
+        let forces = a.force_accel + b.force_accel;
+        let slow = closing <= policy.resting_speed;
+        // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
+        // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
+        // pair is not planned; it leaves before its colliders and contacts are read.
+        if slow && !chain && !self.members.any_elastic {
+            return None;
+        }
+        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + self.margin;
+        let (ca, cb) = (&inputs.colliders[a.collider], &inputs.colliders[b.collider]);
+        // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
+        let held_last_step = OnceCell::new();
+        let held_pair = || *held_last_step.get_or_init(|| self.held(a, b));
+        // rapier's own bounce of a pair it solves: `e` times the approach, the step the
+        // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
+        // cannot rise above the resting gap (below the pressed speed) it is rapier's resting
+        // noise, and the pair keeps rapier's restitution.
+        let rapier_bounces = closing > 0.0 && closes && {
+            let e = material(ca, cb, None).restitution;
+            e >= 1.0 || e * closing > policy.pressed_speed && !held_pair()
+        };
+        // Slower than the resting speed it is no impact: rapier's resting contact, left as it
+        // is where rapier's bounce of it is noise, and not planned.
+        if slow && !chain && !rapier_bounces {
+            return None;
+        }
+        let key = pair_key(a.collider, b.collider);
+        // Held at rest last step: planned `Resting`, or (slow pairs are not planned) touching
+        // in rapier's solver.
+        let was_resting = || inputs.prev.get(&key) == Some(&Role::Resting) || held_pair();
+        // Pressed, as a ground pair is: a body that touched something else after the last
+        // step is pushed by it, and rapier's solver holds the pile. (Not by each other: their
+        // own contact does not press them together.)
+        let pressed = || {
+            let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
+            pressed_besides(a.body, &bodies[a.body], b.collider, sets, registry)
+                || pressed_besides(b.body, &bodies[b.body], a.collider, sets, registry)
+        };
+        // An impact: approaching faster than the resting speed, closing the gap within the
+        // step (both fall alike; a user force adds its acceleration), and not resting or
+        // pressed. Anything else is rapier's (`Resting`), with e = 0 where rapier would
+        // bounce it.
+        let impact = !slow && closes && !policy.rests(gap, closing, was_resting(), pressed);
+        let hooked = impact || rapier_bounces;
+        // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
+        // solver or changes: an impact, a pair it zeroes (one a chain takes is asked there).
+        // A resting pair it leaves as it is stays rapier's whatever they say (the hooks ask
+        // the user's filter of it, `hooks/mod.rs`).
+        if hooked && self.refused(key, a.body, b.body) {
+            return None;
+        }
+        Some(PlannedPair {
+            a: a.body,
+            b: b.body,
+            key,
+            balls: balls_only,
+            reach,
+            normal,
+            role: if impact { Role::Impact } else { Role::Resting },
+            hooked,
+        })
+    }
+}
+
+/// The plan as it grows, and the sleeping bodies it reaches (to wake once planning is done).
+#[derive(Default)]
+pub(super) struct Planned {
+    pub plan: PairPlan,
+    pub woken: Vec<RigidBodyHandle>,
+}
+
+impl Planned {
+    /// Makes `body` a member of the plan's `Impact` pairs; the first time, a sleeping body
+    /// is listed to be woken. Reads the bodies only.
+    pub(super) fn join(&mut self, bodies: &RigidBodySet, body: RigidBodyHandle) {
+        if self.plan.members.insert(body) && bodies[body].is_sleeping() {
+            self.woken.push(body);
+        }
+    }
+
+    /// Adds a pair, with its role, after every pair added before (the plan's order is the
+    /// order pairs are decided); an `Impact` pair's bodies join.
+    pub(super) fn add(&mut self, bodies: &RigidBodySet, pair: PlannedPair) {
+        if pair.role == Role::Impact {
+            self.join(bodies, pair.a);
+            self.join(bodies, pair.b);
+        }
+        self.plan.roles.insert(pair.key, pair.role);
+        self.plan.pairs.push(pair);
+    }
+}

@@ -1,0 +1,203 @@
+//! The plan's members: the opted-in bodies with one enabled, solid, convex collider, as the
+//! plan sees them at the step's start, and what is computed once for each (whether it moves,
+//! its sphere swept over the step, its leaf in the pair index).
+
+use super::PairInputs;
+use super::index::slot_of_body;
+use crate::motion::State;
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use crate::plugin::queries::geometry::BodyGeom;
+use crate::plugin::queries::observe::{body_geom, centred, rapier_state};
+use crate::rapier::math::Vector;
+use crate::rapier::parry::bounding_volume::Aabb;
+use crate::rapier::prelude::{
+    CoefficientCombineRule, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+};
+use nalgebra::Vector3;
+
+/// A body that takes part in impacts between bodies, as the plan sees it at the step start
+/// (named for the common case).
+pub(super) struct Ball<'a> {
+    pub body: RigidBodyHandle,
+    pub collider: ColliderHandle,
+    pub com: Vector3<f64>,
+    pub v: Vector3<f64>,
+    /// Radius, skin included (m): a centred ball's, or for any other shape the radius of a
+    /// sphere about the centre of mass that holds it (its rotation stays inside).
+    pub radius: f64,
+    pub asleep: bool,
+    /// The acceleration of its user force (m/s^2).
+    pub force_accel: f64,
+    /// How fast its turning can move a surface point: the angular speed times the radius for
+    /// a shape that is not a ball, 0 for a ball (m/s).
+    pub turn_speed: f64,
+    /// Not a centred ball: its collider and state, for the contact queries (boxed so that
+    /// the list, rebuilt every step, stays small for the common centred balls).
+    pub shape: Option<Box<(BodyGeom<'a>, State)>>,
+}
+
+/// The step's members and what every later part of the plan reads of them. Built once by
+/// [`Members::gather`], read-only afterwards; every table is indexed like `balls`.
+pub(super) struct Members<'a> {
+    pub balls: Vec<Ball<'a>>,
+    /// Faster than half the resting speed (its centre's speed plus its turn's reach): a pair
+    /// approaching faster than the resting speed has at least one mover.
+    pub is_mover: Vec<bool>,
+    /// How many of the balls are movers.
+    pub movers: usize,
+    /// Some ball's restitution can make a pair's combined restitution reach 1 (its own of 1,
+    /// or a summing combine rule): rapier then bounces any approach, so every overlapping
+    /// pair is looked at.
+    pub any_elastic: bool,
+    /// Each ball's sphere swept over the step (m): `radius + |v| dt + (|g| + |a_force|) dt^2
+    /// + margin`, a bound on its travel under gravity and its user force.
+    pub swept: Vec<f64>,
+    /// Each ball's leaf in the pair index: its body's slot and its swept sphere's box.
+    pub leaves: Vec<(u32, Aabb)>,
+}
+
+impl<'a> Members<'a> {
+    /// The members of the step, or `None` when no pair can be planned (no body takes pairs,
+    /// fewer than two members, or none of them awake: two sleeping bodies cannot meet).
+    /// Reads the bodies, their colliders and the registry; writes nothing.
+    pub(super) fn gather<H>(bodies: &RigidBodySet, inputs: &PairInputs<'a, H>) -> Option<Self> {
+        let registry = inputs.registry;
+        if !registry.any_pairs()
+            || !bodies
+                .iter()
+                .any(|(handle, rb)| !rb.is_sleeping() && registry.takes_pairs(handle, rb))
+        {
+            return None;
+        }
+        let balls: Vec<Ball> = bodies
+            .iter()
+            .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
+            .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders))
+            .collect();
+        if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
+            return None;
+        }
+        let policy = inputs.policy;
+        let is_mover: Vec<bool> = balls
+            .iter()
+            .map(|b| 2.0 * (b.v.norm() + b.turn_speed) > policy.resting_speed)
+            .collect();
+        let any_elastic = balls.iter().any(|b| {
+            let co = &inputs.colliders[b.collider];
+            co.restitution() >= 1.0
+                || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
+        });
+        let movers = is_mover.iter().filter(|m| **m).count();
+        let (margin, dt) = (policy.resting_gap.max(policy.prediction), inputs.dt);
+        let g_len = inputs.gravity.norm();
+        let swept: Vec<f64> = balls
+            .iter()
+            .map(|b| b.radius + b.v.norm() * dt + (g_len + b.force_accel) * dt * dt + margin)
+            .collect();
+        let leaves: Vec<(u32, Aabb)> = balls
+            .iter()
+            .zip(&swept)
+            .map(|(b, swept)| {
+                let half = to_real(*swept);
+                (
+                    slot_of_body(b.body),
+                    Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
+                )
+            })
+            .collect();
+        Some(Members {
+            balls,
+            is_mover,
+            movers,
+            any_elastic,
+            swept,
+            leaves,
+        })
+    }
+}
+
+/// The member of one opted-in body, or `None` when its pairs stay rapier's: not exactly one
+/// collider, a disabled or sensor collider, or a shape that is neither a centred ball (met in
+/// closed form) nor convex (parry's contact manifolds of a compound or a mesh are in their
+/// pieces' frames). Reads the body and its collider only.
+fn member<'a>(
+    handle: RigidBodyHandle,
+    rb: &RigidBody,
+    colliders: &'a ColliderSet,
+) -> Option<Ball<'a>> {
+    let [collider] = rb.colliders() else {
+        return None;
+    };
+    let co = colliders.get(*collider)?;
+    if !co.is_enabled() || co.is_sensor() {
+        return None;
+    }
+    // Centred on the centre of mass in the body's frame, where both are exact.
+    let centre = co
+        .position_wrt_parent()
+        .map_or(Vector3::zeros(), |pose| vec_to_na(pose.translation));
+    let local_com = vec_to_na(rb.local_center_of_mass());
+    let ball = co
+        .shape()
+        .as_ball()
+        .map(|b| to_f64(b.radius))
+        .filter(|r| centred(&(centre - local_com), *r));
+    let (radius, shape) = match ball {
+        Some(r) => (r + to_f64(co.contact_skin()), None),
+        None if !co.shape().is_convex() => return None,
+        None => {
+            let geom = body_geom(rb, colliders, &local_com);
+            (geom.radius, Some(Box::new((geom, rapier_state(rb)))))
+        }
+    };
+    let com = vec_to_na(rb.center_of_mass());
+    Some(Ball {
+        body: handle,
+        collider: *collider,
+        com,
+        v: vec_to_na(rb.linvel()),
+        radius,
+        asleep: rb.is_sleeping(),
+        force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
+        turn_speed: match shape {
+            Some(_) => to_f64(rb.angvel().length()) * radius,
+            None => 0.0,
+        },
+        shape,
+    })
+}
+
+/// A member's colliders and state for a contact query: kept in the member for a shape that
+/// is not a centred ball, made from the body otherwise.
+pub(super) fn geom_state<'g, 'a>(
+    m: &'g Ball<'a>,
+    bodies: &RigidBodySet,
+    colliders: &'a ColliderSet,
+) -> (GeomRef<'g, 'a>, State) {
+    match &m.shape {
+        Some(shape) => (GeomRef::Borrowed(&shape.0), shape.1),
+        None => {
+            let rb = &bodies[m.body];
+            let local_com = vec_to_na(rb.local_center_of_mass());
+            (
+                GeomRef::Owned(body_geom(rb, colliders, &local_com)),
+                rapier_state(rb),
+            )
+        }
+    }
+}
+
+/// A body's colliders for a contact query: kept in the plan's list, or made for the query.
+pub(super) enum GeomRef<'g, 'a> {
+    Borrowed(&'g BodyGeom<'a>),
+    Owned(BodyGeom<'a>),
+}
+
+impl<'a> GeomRef<'_, 'a> {
+    pub(super) fn get(&self) -> &BodyGeom<'a> {
+        match self {
+            GeomRef::Borrowed(g) => g,
+            GeomRef::Owned(g) => g,
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! A cluster's agenda: the next event of each body's ground and of each pair, searched once
+//! and again only when one of its bodies changed, taken earliest first.
+//!
+//! Invariant: ties go to a ground impact before a touch, then to the lowest index, so the
+//! order of events is the same every run.
+
+use crate::motion::State;
+use crate::plugin::queries::body_contact::BodyTouch;
+use crate::plugin::queries::geometry::Hit;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// What happens next in the cluster.
+pub(super) enum Next {
+    /// Body `k`'s ground impact: its state there, and the hit.
+    Ground(usize, State, Hit),
+    /// The pair of this index in the cluster's pairs, with parry's contact for a pair not
+    /// both centred balls.
+    Touch(usize, Option<BodyTouch>),
+}
+
+/// A cluster's next events, each found once and searched again only when one of its bodies
+/// changed: an event costs the searches of its bodies' ground and pairs, not of every pair of
+/// the cluster. The earliest comes first; ties go to a ground impact before a touch, then to
+/// the lowest index, the same every run.
+pub(super) struct Agenda {
+    queue: BinaryHeap<Reverse<Due>>,
+    /// The event found for each body's ground, then for each pair (by `Due::slot`), and the
+    /// number of its search: an entry in the queue from an earlier search is stale.
+    found: Vec<(u32, Option<Next>)>,
+    bodies: usize,
+}
+
+/// An entry of the [`Agenda`]'s queue.
+#[derive(Clone, Copy, Debug)]
+struct Due {
+    t: f64,
+    /// A body's ground impact (its index) before a pair's touch (the body count plus its index).
+    slot: usize,
+    search: u32,
+}
+
+impl PartialEq for Due {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for Due {}
+
+impl PartialOrd for Due {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Due {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.t
+            .total_cmp(&other.t)
+            .then(self.slot.cmp(&other.slot))
+            .then(self.search.cmp(&other.search))
+    }
+}
+
+impl Agenda {
+    /// An empty agenda for `bodies` bodies and `pairs` pairs.
+    pub(super) fn new(bodies: usize, pairs: usize) -> Self {
+        Self {
+            queue: BinaryHeap::with_capacity(bodies + pairs),
+            found: (0..bodies + pairs).map(|_| (0, None)).collect(),
+            bodies,
+        }
+    }
+
+    /// Body `k`'s ground impact, as last searched.
+    pub(super) fn ground(&mut self, k: usize, next: Option<(f64, Next)>) {
+        self.set(k, next);
+    }
+
+    /// Pair `p`'s touch, as last searched (`None` also for a pair resting from here).
+    pub(super) fn touch(&mut self, p: usize, next: Option<(f64, Next)>) {
+        self.set(self.bodies + p, next);
+    }
+
+    /// Replaces the event of `slot` (a body's ground, or the body count plus a pair's
+    /// index): its earlier entry in the queue becomes stale.
+    fn set(&mut self, slot: usize, next: Option<(f64, Next)>) {
+        let entry = &mut self.found[slot];
+        entry.0 += 1;
+        entry.1 = None;
+        if let Some((t, event)) = next {
+            entry.1 = Some(event);
+            self.queue.push(Reverse(Due {
+                t,
+                slot,
+                search: entry.0,
+            }));
+        }
+    }
+
+    /// The earliest event still current, taken off the agenda.
+    pub(super) fn pop(&mut self) -> Option<(f64, Next)> {
+        while let Some(Reverse(due)) = self.queue.pop() {
+            let entry = &mut self.found[due.slot];
+            if entry.0 == due.search {
+                if let Some(event) = entry.1.take() {
+                    return Some((due.t, event));
+                }
+            }
+        }
+        None
+    }
+}

@@ -1,0 +1,493 @@
+//! A cluster moved over the step, event by event: each body by its own motion to the
+//! cluster's earliest event (a ground impact or two bodies touching), resolved by the model,
+//! then on to the next (see the parent module's contract).
+
+use super::ClusterBall;
+use super::agenda::{Agenda, Next};
+use crate::motion::meeting::first_touch;
+use crate::motion::{Flight, Motion, Moving, State};
+use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::bridge::resolve::{
+    BodyContactAt, ImpactInput, PairSide, Site, correction, material, resolve, resolve_balls,
+    resolve_bodies,
+};
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::policy::on_plane;
+use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
+use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landing_point};
+use crate::plugin::stages::reconstruct::rest_on_ground;
+use crate::plugin::state::step::AfterStep;
+use crate::plugin::state::step::EndOfStep;
+use crate::rapier::prelude::ColliderSet;
+
+/// The cluster's states at the step's end (see the module's contract). `pairs` are the
+/// cluster's `Impact` pairs as indices into `balls`. Pushes the cluster's events into
+/// the step's events (`view.commit`), and withdraws them all when it returns `None`; writes nothing into rapier.
+pub(crate) fn through_pair_impacts(
+    view: &mut AfterStep,
+    colliders: &ColliderSet,
+    balls: &[ClusterBall],
+    pairs: &[(usize, usize)],
+    step: &EndOfStep,
+) -> Option<Vec<State>> {
+    let events_from = view.commit.reported().len();
+    let cluster = Cluster {
+        colliders,
+        balls,
+        pairs,
+        step,
+    };
+    let moved = move_cluster(view, cluster);
+    if moved.is_none() {
+        view.commit.withdraw(events_from);
+    }
+    moved
+}
+
+/// The cluster's events in time order, until the step's end or the cluster cannot be moved
+/// alone (`None`: more than `max_impacts_per_step` events per body, a search that stalls, a
+/// body reaching a ground it was not planned against, a rolling ball off its plane). Pushes
+/// events into the step's events (`view.commit`) without withdrawing them (the caller does).
+fn move_cluster(view: &mut AfterStep, cluster: Cluster) -> Option<Vec<State>> {
+    let max_events = view.config.max_impacts_per_step * cluster.balls.len();
+    let mut events = 0usize;
+    let mut run = Run::start(cluster)?;
+    while let Some((te, event)) = run.agenda.pop() {
+        events += 1;
+        if events > max_events {
+            return None;
+        }
+        // The bodies whose motion changed: their ground and pairs are searched again.
+        let (changed, count) = match event {
+            Next::Ground(k, s, hit) => {
+                run.ground_event(view, k, &s, te, &hit)?;
+                ([k, k], 1)
+            }
+            Next::Touch(p, touch) => run.touch_event(view, p, touch, te)?,
+        };
+        run.search_again(&changed[..count], te)?;
+    }
+    run.ends()
+}
+
+/// What a cluster's motion reads and never changes: the colliders, its bodies, its `Impact`
+/// pairs (indices into `balls`) and the step.
+#[derive(Clone, Copy)]
+struct Cluster<'c, 'a> {
+    colliders: &'c ColliderSet,
+    balls: &'c [ClusterBall<'a>],
+    pairs: &'c [(usize, usize)],
+    step: &'c EndOfStep<'c>,
+}
+
+/// A touch slower than the resting speed: a resting contact from there on.
+struct SlowTouch;
+
+/// A pair's impulse: both states after, and the two events; `None` where the model finds the
+/// bodies not approaching (a graze at rounding level).
+type Resolved = Option<(State, State, [ImpactEvent; 2])>;
+
+/// A cluster in motion: each body's motion from its last event, and the agenda of what
+/// happens next.
+struct Run<'c, 'a> {
+    cluster: Cluster<'c, 'a>,
+    moving: Vec<Moving>,
+    /// Each body's flight (gravity, and its user force), held off by a settled ground impact.
+    flights: Vec<Flight>,
+    /// Pairs left touching slowly: resting for the rest of the step.
+    resting: Vec<bool>,
+    /// Each body's pairs, by index in the cluster's pairs.
+    pairs_of: Vec<Vec<usize>>,
+    agenda: Agenda,
+}
+
+impl<'c, 'a> Run<'c, 'a> {
+    /// Every body at its start state, rolling or flying, and the first event of each body's
+    /// ground and of each pair; `None` where a search gave up.
+    fn start(cluster: Cluster<'c, 'a>) -> Option<Self> {
+        let (balls, pairs) = (cluster.balls, cluster.pairs);
+        let moving: Vec<Moving> = balls
+            .iter()
+            .map(|b| Moving {
+                state: b.cand.start,
+                t0: 0.0,
+                motion: match &b.cand.rolling {
+                    Some((_, rolling)) => Motion::Rolling(*rolling),
+                    None => Motion::Flight(b.cand.flight),
+                },
+            })
+            .collect();
+        let flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
+        let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); balls.len()];
+        for (p, (i, j)) in pairs.iter().enumerate() {
+            pairs_of[*i].push(p);
+            pairs_of[*j].push(p);
+        }
+        let mut agenda = Agenda::new(balls.len(), pairs.len());
+        for (k, m) in moving.iter().enumerate() {
+            agenda.ground(k, cluster.ground(k, m, 0.0).ok()?);
+        }
+        for p in 0..pairs.len() {
+            agenda.touch(p, cluster.touch(p, &moving, 0.0).ok()?);
+        }
+        Some(Run {
+            cluster,
+            moving,
+            flights,
+            resting: vec![false; pairs.len()],
+            pairs_of,
+            agenda,
+        })
+    }
+
+    /// Body `k`'s ground impact at `t` (state `s`, `hit`), as `reconstruct::through_impacts`
+    /// resolves one: it flies on from there; a settled impact holds gravity off the rest of
+    /// the step. Pushes the events; `None` where the model gives none.
+    fn ground_event(
+        &mut self,
+        view: &mut AfterStep,
+        k: usize,
+        s: &State,
+        t: f64,
+        hit: &Hit,
+    ) -> Option<()> {
+        let (ball, step) = (&self.cluster.balls[k], self.cluster.step);
+        let flight = &mut self.flights[k];
+        let part = &ball.geom.parts[hit.part];
+        let gg = &ball.grounds[hit.ground];
+        let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
+        let input = ImpactInput {
+            body: ball.cand.body,
+            inertia: &ball.inertia,
+            law: view.config.law,
+            material: view
+                .registry
+                .material_of(self.cluster.colliders, part.handle, gg.handle),
+            resting_speed: step.policy.resting_speed,
+            force_settle: false,
+            timing: ImpactTiming::InStep,
+        };
+        let (mut after, event) = resolve(&input, &ball.geom, gg, s, t, hit, point, points)?;
+        let settled = event.settled;
+        view.commit.event(event);
+        if settled {
+            let site = Site {
+                body: ball.cand.body,
+                collider: part.handle,
+                ground: gg.handle,
+                body2: None,
+                normal: hit.normal,
+                point,
+            };
+            rest_on_ground(view, &site, &ball.inertia, flight, &mut after, t, step);
+        }
+        self.moving[k] = Moving {
+            state: after,
+            t0: t,
+            motion: Motion::Flight(self.flights[k]),
+        };
+        Some(())
+    }
+
+    /// Pair `p` touching at `te` (`touch`: parry's contact, for a pair not both centred
+    /// balls). Returns the bodies whose motion changed (the first `count` of the array: none
+    /// for a resting touch or a graze, both bodies after an impact), or `None` where the
+    /// cluster cannot be moved alone. Pushes the impact's events.
+    fn touch_event(
+        &mut self,
+        view: &mut AfterStep,
+        p: usize,
+        touch: Option<BodyTouch>,
+        te: f64,
+    ) -> Option<([usize; 2], usize)> {
+        let cluster = self.cluster;
+        let (i, j) = cluster.pairs[p];
+        let resolved = cluster.pair_impact(view, p, &touch, &self.moving, te);
+        let Ok(resolved) = resolved else {
+            self.resting[p] = true;
+            return Some(([i, j], 0));
+        };
+        let Some((after_i, after_j, pair_events)) = resolved else {
+            // A graze is stepped over: the pair's next search starts after it.
+            let found = cluster.touch(p, &self.moving, next_after(te)).ok()?;
+            self.agenda.touch(p, found);
+            return Some(([i, j], 0));
+        };
+        view.commit.events(pair_events);
+        for (k, after) in [(i, after_i), (j, after_j)] {
+            if cluster.reaches_other_grounds(view, k, &after, cluster.step.dt - te) {
+                return None;
+            }
+            self.moving[k] = cluster.on_after_touch(view, k, &self.moving[k], after, te)?;
+        }
+        // A ball that moved on may drive into a pair it rested in.
+        for q in self.pairs_of[i].iter().chain(&self.pairs_of[j]) {
+            self.resting[*q] = false;
+        }
+        Some(([i, j], 2))
+    }
+
+    /// Searches again, from `te`, the ground of each body in `changed` and each of its pairs
+    /// (the pair of two changed bodies once; a resting pair has no touch). `None` where a
+    /// search gave up.
+    fn search_again(&mut self, changed: &[usize], te: f64) -> Option<()> {
+        let cluster = self.cluster;
+        for &k in changed {
+            self.agenda
+                .ground(k, cluster.ground(k, &self.moving[k], te).ok()?);
+        }
+        for (n, &k) in changed.iter().enumerate() {
+            for &q in &self.pairs_of[k] {
+                let (a, b) = cluster.pairs[q];
+                if n == 1 && (a == changed[0] || b == changed[0]) {
+                    continue;
+                }
+                let found = if self.resting[q] {
+                    None
+                } else {
+                    cluster.touch(q, &self.moving, te).ok()?
+                };
+                self.agenda.touch(q, found);
+            }
+        }
+        Some(())
+    }
+
+    /// Every body's state at the step's end, or `None` when a rolling ball is no longer on
+    /// its plane there (a cuboid's face it left, or a mesh, would need the ground's other
+    /// faces).
+    fn ends(&self) -> Option<Vec<State>> {
+        let step = self.cluster.step;
+        let dt = step.dt;
+        let ends: Vec<State> = self.moving.iter().map(|m| m.at(dt)).collect();
+        for (k, ball) in self.cluster.balls.iter().enumerate() {
+            if let (Motion::Rolling(rolling), Some(g)) = (self.moving[k].motion, ball.rolling_on) {
+                let hit = closest(
+                    &ball.geom,
+                    &ball.grounds[g..=g],
+                    &ends[k],
+                    dt,
+                    step.policy.resting_gap,
+                )?;
+                if !on_plane(hit.dist, &hit.normal, &rolling.normal, rolling.radius) {
+                    return None;
+                }
+            }
+        }
+        Some(ends)
+    }
+}
+
+impl Cluster<'_, '_> {
+    /// Body `k`'s first ground impact after `t` (none while it rolls: its one plane is all it
+    /// meets), `Err` where the search gave up (the cluster is not moved alone).
+    fn ground(&self, k: usize, m: &Moving, t: f64) -> Result<Option<(f64, Next)>, ()> {
+        let ball = &self.balls[k];
+        let Motion::Flight(flight) = m.motion else {
+            return Ok(None);
+        };
+        if ball.grounds.is_empty() {
+            return Ok(None);
+        }
+        match first_impact(
+            &ball.geom,
+            &ball.grounds,
+            &flight,
+            &m.state,
+            m.t0,
+            t,
+            self.step.dt,
+        ) {
+            Search::Hit(th, s, hit) => Ok(Some((th, Next::Ground(k, s, hit)))),
+            Search::Stalled(..) => Err(()),
+            Search::Clear => Ok(None),
+        }
+    }
+
+    /// Pair `p`'s first touch after `t` while approaching, `Err` where the search gave up.
+    fn touch(&self, p: usize, moving: &[Moving], t: f64) -> Result<Option<(f64, Next)>, ()> {
+        let (i, j) = self.pairs[p];
+        let (bi, bj) = (&self.balls[i], &self.balls[j]);
+        let dt = self.step.dt;
+        let found = match (bi.radius, bj.radius) {
+            (Some(ri), Some(rj)) => first_touch(&moving[i], &moving[j], ri + rj, t, dt)
+                .map_err(|_| ())?
+                .map(|tc| (tc, None)),
+            _ => {
+                let mover = |k: usize| Mover {
+                    geom: &self.balls[k].geom,
+                    moving: &moving[k],
+                    turns: self.balls[k].radius.is_none(),
+                };
+                first_body_touch(&mover(i), &mover(j), t, dt)
+                    .map_err(|_| ())?
+                    .map(|(tc, touch)| (tc, Some(touch)))
+            }
+        };
+        Ok(found.map(|(tc, touch)| (tc, Next::Touch(p, touch))))
+    }
+
+    /// The model's impulse for pair `p` touching at `te`, the bodies where `moving` has them
+    /// then: along the line of centres for two centred balls, at parry's contact `touch`
+    /// (with the flat-landing points of `touch_point`) otherwise; `Err` for a touch slower
+    /// than the resting speed. Reads only.
+    ///
+    /// A touch slower than the resting speed is a resting contact from here: the next step
+    /// hands it to rapier's solver (`Resting`). Resolving it with e = 0 would not end:
+    /// bodies left touching at nearly the same speed behind a chain would meet again and
+    /// again, in ever smaller impacts.
+    fn pair_impact(
+        &self,
+        view: &AfterStep,
+        p: usize,
+        touch: &Option<BodyTouch>,
+        moving: &[Moving],
+        te: f64,
+    ) -> Result<Resolved, SlowTouch> {
+        let (i, j) = self.pairs[p];
+        let balls = self.balls;
+        let side = |k: usize| {
+            let ball = &balls[k];
+            let radius = ball.radius.unwrap_or(0.0);
+            let state = moving[k].at(te);
+            PairSide::new(ball.cand.body, ball.collider, &ball.inertia, state, radius)
+        };
+        let (si, sj) = (side(i), side(j));
+        let input = ImpactInput::between(
+            &si,
+            view.config.law,
+            material(
+                &self.colliders[balls[i].collider],
+                &self.colliders[balls[j].collider],
+                None,
+            ),
+            self.step.policy.resting_speed,
+            ImpactTiming::InStep,
+        );
+        let closing = match touch {
+            None => {
+                let line = (sj.state.com - si.state.com).normalize();
+                (si.state.v - sj.state.v).dot(&line)
+            }
+            Some(touch) => -touch.rate,
+        };
+        if closing < self.step.policy.resting_speed {
+            return Err(SlowTouch);
+        }
+        Ok(match touch {
+            None => resolve_balls(&input, &si, &sj, te),
+            Some(touch) => {
+                let (point, points) = touch_point(
+                    &balls[i].geom,
+                    &si.state,
+                    &balls[j].geom,
+                    &sj.state,
+                    touch,
+                    view.config.flat_tolerance,
+                );
+                let at = BodyContactAt {
+                    normal: touch.normal,
+                    point,
+                    points,
+                };
+                resolve_bodies(&input, &si, &sj, &at, te)
+            }
+        })
+    }
+
+    /// Can body `k`, leaving an impact at `s` with `left` seconds of the step to go, reach a
+    /// ground it was not planned against? Its grounds came from its start-of-step speed, and
+    /// a hit from a heavier body can send it much faster; the cluster cannot be moved alone
+    /// then. Reads only.
+    fn reaches_other_grounds(&self, view: &AfterStep, k: usize, s: &State, left: f64) -> bool {
+        let (ball, step) = (&self.balls[k], self.step);
+        let accel = ball.cand.flight.accel.norm();
+        let reach = ball.geom.radius
+            + s.v.norm() * left
+            + accel * left * left
+            + step.policy.resting_gap.max(step.policy.prediction);
+        let half = to_real(reach);
+        let centre = vec_from_na(&s.com);
+        view.registry
+            .index
+            .near(&step.grounds, centre, half)
+            .iter()
+            .any(|i| {
+                !ball
+                    .grounds
+                    .iter()
+                    .any(|g| g.handle == step.grounds[*i].handle)
+            })
+    }
+
+    /// How body `k` moves on after an impact with another body left it at `after` (time
+    /// `t`): as before, but a ball rolling on its ground flies when lifted off it, and rolls
+    /// on when pressed into it (the ground takes the normal speed: a `Settle` event, pushed).
+    /// `None` where the closed form of its rolling does not reach the step's end.
+    fn on_after_touch(
+        &self,
+        view: &mut AfterStep,
+        k: usize,
+        before: &Moving,
+        mut after: State,
+        t: f64,
+    ) -> Option<Moving> {
+        let ball = &self.balls[k];
+        let (Motion::Rolling(rolling), Some(g)) = (before.motion, ball.rolling_on) else {
+            return Some(Moving {
+                state: after,
+                t0: t,
+                motion: before.motion,
+            });
+        };
+        let n = rolling.normal;
+        let vn = n.dot(&after.v);
+        if vn > 0.0 {
+            // Lifted off its ground, however little (the ground cannot pull): it flies, and may
+            // land on it again.
+            return Some(Moving {
+                state: after,
+                t0: t,
+                motion: Motion::Flight(ball.cand.flight),
+            });
+        }
+        // Rolling on, where the closed form reaches (on a slope: along the fall line).
+        let on_ground = State {
+            v: after.v - n * vn,
+            ..after
+        };
+        rolling.advance_checked(&on_ground, self.step.dt - t)?;
+        if vn < 0.0 {
+            // Pressed into the ground: the ground takes the normal speed (an impulse through
+            // the centre, e = 0).
+            let prior = after;
+            after.v -= n * vn;
+            let site = Site {
+                body: ball.cand.body,
+                collider: ball.collider,
+                ground: ball.grounds[g].handle,
+                body2: None,
+                normal: n,
+                point: after.com - n * rolling.radius,
+            };
+            view.commit.event(correction(
+                EventKind::Settle,
+                &site,
+                &ball.inertia,
+                &prior,
+                &after,
+                t,
+            ));
+        }
+        Some(Moving {
+            state: after,
+            t0: t,
+            motion: Motion::Rolling(rolling),
+        })
+    }
+}
+
+/// The smallest time after `t` that differs from it.
+fn next_after(t: f64) -> f64 {
+    t + f64::EPSILON * t.abs().max(1e-3)
+}
