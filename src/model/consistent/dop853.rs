@@ -20,13 +20,26 @@ fn stage<const N: usize, const M: usize>(z: &Z, h: f64, c: &[(usize, f64); N], k
     out
 }
 
+/// One step of DOP853 from `z`: the 8th-order solution, its two error estimates, the
+/// rate at its end and its stages.
+pub(super) struct Step {
+    /// The 8th-order solution at the step's end.
+    pub(super) z: Z,
+    /// The 5th-order error vector, without the factor `h` (as in Hairer's estimate).
+    pub(super) err5: Z,
+    /// The 3rd-order error vector, without the factor `h`.
+    pub(super) err3: Z,
+    /// The rate at the step's end (the next step's first stage, the dense output's 13th).
+    pub(super) rate: Z,
+    /// The twelve stages, for the dense output.
+    pub(super) stages: [Z; 12],
+}
+
 /// One step of Dormand and Prince's 8th-order method with 5th- and 3rd-order error
 /// estimates (DOP853: Hairer, Norsett & Wanner, "Solving ODEs I", 2nd ed., II.10;
-/// coefficients of Hairer's `dop853`). Returns the 8th-order solution, the 5th- and
-/// 3rd-order error vectors (without the factor `h`, as in Hairer's estimate), and the
-/// rate at the new point, and the twelve stages (for the dense output).
+/// coefficients of Hairer's `dop853`) from `z`, whose rate is `k1`, over `h`.
 #[inline(always)]
-pub(super) fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> (Z, Z, Z, Z, [Z; 12]) {
+pub(super) fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> Step {
     let mut k = [[0.0; 4]; 12];
     k[0] = *k1;
     k[1] = flow.rate(&stage(z, h, &A2, &k));
@@ -44,7 +57,13 @@ pub(super) fn dop853_step(flow: &Flow, z: &Z, k1: &Z, h: f64) -> (Z, Z, Z, Z, [Z
     let err5 = stage(&[0.0; 4], 1.0, &E5, &k);
     let err3 = stage(&[0.0; 4], 1.0, &E3, &k);
     let k_new = flow.rate(&z_new);
-    (z_new, err5, err3, k_new, k)
+    Step {
+        z: z_new,
+        err5,
+        err3,
+        rate: k_new,
+        stages: k,
+    }
 }
 
 /// DOP853's dense output over one accepted step from `z` (Hairer's contd8): with

@@ -48,6 +48,16 @@ enum Phase {
     },
 }
 
+impl Phase {
+    /// The event that ends this phase.
+    fn end_event(self) -> Event {
+        match self {
+            Phase::Compression => Event::CompressionEnded,
+            Phase::Restitution { .. } => Event::Finished,
+        }
+    }
+}
+
 /// Integration state, in the contact basis `(t1, t2, n)`.
 #[derive(Clone, Copy, Debug)]
 struct State {

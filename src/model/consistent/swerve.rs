@@ -1,10 +1,11 @@
 //! The swerving slip: the one segment of the consistent law that is not linear in the
 //! impulse, integrated numerically in the slip's own time `tau` (`dp = |u_t| dtau`).
 
-use super::dop853::{Dense, dense_root, dop853_step};
+use super::dop853::{Dense, Step, dense_root, dop853_step};
 use super::{Event, Phase, SWERVE_TOLERANCE, State, keeps_direction};
 use crate::model::collision_matrix::ContactK;
 use nalgebra::Vector2;
+use std::ops::ControlFlow;
 
 /// Integrates a swerving slip numerically to its first event. `None` on a jam that
 /// does not end (the normal impulse grows without bound).
@@ -41,219 +42,313 @@ pub(super) fn swerve_segment(
     speed: f64,
     step_hint: &mut Option<f64>,
 ) -> Option<Event> {
-    let scale = speed.max(f64::MIN_POSITIVE);
-    let flow = Flow {
-        ut0: state.ut,
-        un0: state.un,
-        k11: ck.ktt.m11,
-        k12: ck.ktt.m12,
-        k22: ck.ktt.m22,
-        ktn: ck.ktn,
-        knn: ck.knn,
-        mu,
-    };
-    let p_cap = 1e8 * scale / ck.knn;
-    let stop_speed = 1e-3 * SWERVE_TOLERANCE * scale;
+    let swerve = Swerve::new(ck, mu, state, phase, speed);
     let mut z: Z = [0.0; 4];
-    let mut k1 = flow.rate(&z);
-    // A first step of a fraction of the flow's fastest time scale (the direction turns
-    // and the slip decays at rates of order |K_tn| + mu |K_tt|). Half of it: with a
-    // quarter the first step's error was ~1e-15..1e-14, far under the tolerance, and
-    // the controller spent a step catching up; with three quarters the swerve test's
-    // end error doubled (the first step then uses the whole tolerance).
-    let turn = flow.ktn.norm() + mu * (flow.k11.abs() + flow.k22.abs() + 2.0 * flow.k12.abs());
-    let mut h = step_hint.take().unwrap_or(0.5 / turn.max(1e-300));
-    // Bounds the rate of u_n per unit slip: |du_n/dtau| <= |u_t| (K_nn + mu |K_tn|).
-    let normal_rates = flow.knn + mu * flow.ktn.norm();
-    let store = |z: &Z, state: &mut State| {
-        let (ut, un) = flow.velocity(z);
+    let mut k1 = swerve.flow.rate(&z);
+    let mut h = step_hint.take().unwrap_or(swerve.first_step());
+    for _iter in 0..10_000 {
+        let rho = match swerve.end_before_step(&z, state) {
+            ControlFlow::Break(end) => return end,
+            ControlFlow::Continue(rho) => rho,
+        };
+        let h_planned = h;
+        let landing = swerve.landing_step(state, &z, &k1, rho, h);
+        if let Some(short) = landing {
+            h = short;
+        }
+        let step = dop853_step(&swerve.flow, &z, &k1, h);
+        let err_norm = swerve.error_norm(&step, h);
+        if err_norm > SWERVE_TOLERANCE || err_norm.is_nan() {
+            h *= shrink_factor(err_norm);
+            continue;
+        }
+        // The point the segment ends at, and the step restitution starts with if it goes
+        // on along the same flow.
+        let end = if swerve.crossed_event(state, &step.z) {
+            Some((swerve.locate_crossed_event(state, &z, &k1, &step, h), h))
+        } else if landing.is_some() {
+            swerve
+                .closing_step(state, &step.z, &step.rate)
+                .map(|z_event| (z_event, h_planned))
+        } else {
+            None
+        };
+        if let Some((z_event, hint)) = end {
+            swerve.store(&z_event, state);
+            let event = phase.end_event();
+            if event == Event::CompressionEnded {
+                *step_hint = Some(hint);
+            }
+            return Some(event);
+        }
+        z = step.z;
+        k1 = step.rate;
+        h = if landing.is_some() {
+            h_planned
+        } else {
+            h * grow_factor(err_norm)
+        };
+    }
+    None
+}
+
+/// What stays fixed over one swerving segment: its flow, the event that ends it, and the
+/// scales its tests and steps are measured against.
+struct Swerve {
+    flow: Flow,
+    phase: Phase,
+    /// The initial contact speed (positive): every tolerance is relative to it.
+    scale: f64,
+    /// The normal impulse past which the segment is a jam that does not end.
+    p_cap: f64,
+    /// The slip speed at and below which the slip has stopped.
+    stop_speed: f64,
+    /// The flow's fastest rate, `|K_tn| + mu |K_tt|`: the direction turns and the slip
+    /// decays at rates of this order.
+    turn: f64,
+    /// Bounds the rate of `u_n` per unit slip: `|du_n/dtau| <= |u_t| (K_nn + mu |K_tn|)`.
+    normal_rates: f64,
+}
+
+impl Swerve {
+    /// The swerve from `state` under `phase`, `speed` the impact's initial contact speed.
+    fn new(ck: &ContactK, mu: f64, state: &State, phase: Phase, speed: f64) -> Self {
+        let scale = speed.max(f64::MIN_POSITIVE);
+        let flow = Flow {
+            ut0: state.ut,
+            un0: state.un,
+            k11: ck.ktt.m11,
+            k12: ck.ktt.m12,
+            k22: ck.ktt.m22,
+            ktn: ck.ktn,
+            knn: ck.knn,
+            mu,
+        };
+        let turn = flow.ktn.norm() + mu * (flow.k11.abs() + flow.k22.abs() + 2.0 * flow.k12.abs());
+        Self {
+            p_cap: 1e8 * scale / ck.knn,
+            stop_speed: 1e-3 * SWERVE_TOLERANCE * scale,
+            turn,
+            normal_rates: flow.knn + mu * flow.ktn.norm(),
+            flow,
+            phase,
+            scale,
+        }
+    }
+
+    /// The first step when none is carried over: half the flow's fastest time scale
+    /// `1 / turn`. Its error is then a fair share of the tolerance: a shorter one leaves
+    /// the controller steps to catch up, a longer one spends the whole tolerance on it.
+    fn first_step(&self) -> f64 {
+        0.5 / self.turn.max(1e-300)
+    }
+
+    /// Stores the impulse increment `z` into `state`: the contact velocity after it, and
+    /// the work, friction and normal impulse added.
+    fn store(&self, z: &Z, state: &mut State) {
+        let (ut, un) = self.flow.velocity(z);
         state.ut = ut;
         state.un = un;
         state.work += z[DW];
         state.ft += Vector2::new(z[DF1], z[DF2]);
         state.p += z[DP];
-    };
-    for _iter in 0..10_000 {
-        let (ut, _) = flow.velocity(&z);
+    }
+
+    /// The tests before a step from `z`: `Break` with the event the segment ends at here,
+    /// `state` stored (`Break(None)`: a jam, the normal impulse past its cap), else
+    /// `Continue` with the slip speed `|u_t|` at `z`.
+    fn end_before_step(&self, z: &Z, state: &mut State) -> ControlFlow<Option<Event>, f64> {
+        let (ut, _) = self.flow.velocity(z);
         // Once the slip has turned onto a direction it keeps (the invariant direction
         // of K), the rest of the segment is linear: hand it back to the closed form.
-        if let Some(turn) = flow.settled(&ut, scale) {
+        if let Some(turn) = self.flow.settled(&ut, self.scale) {
             // Onto the invariant direction itself, so that the closed form's constant
             // rate is parallel to the slip (the rotation moves u_t by less than the
             // tolerance).
-            store(&z, state);
+            self.store(z, state);
             let (sin, cos) = crate::math::sin_cos(turn);
             state.ut = Vector2::new(cos * ut.x - sin * ut.y, sin * ut.x + cos * ut.y);
-            return Some(Event::DirectionSettled);
+            return ControlFlow::Break(Some(Event::DirectionSettled));
         }
-        if keeps_direction(&flow.slip_rate(&ut), &ut, scale) {
-            store(&z, state);
-            return Some(Event::DirectionSettled);
+        if keeps_direction(&self.flow.slip_rate(&ut), &ut, self.scale) {
+            self.store(z, state);
+            return ControlFlow::Break(Some(Event::DirectionSettled));
         }
         let rho = ut.norm();
-        if rho <= stop_speed {
-            store(&z, state);
-            return Some(Event::SlipStopped);
+        if rho <= self.stop_speed {
+            self.store(z, state);
+            return ControlFlow::Break(Some(Event::SlipStopped));
         }
-        if state.p + z[DP] > p_cap {
-            return None;
+        if state.p + z[DP] > self.p_cap {
+            return ControlFlow::Break(None);
         }
-        // An event within reach of this step: predict where, and shorten the step to
-        // end just before it, so that a short closing step can reach it (below)
-        // instead of a step past it being thrown away.
-        let mut landing = false;
-        let h_planned = h;
-        let (g, g_rate) = event_value(&flow, phase, state, &z, &k1);
+        ControlFlow::Continue(rho)
+    }
+
+    /// The step from `z` (rate `k1`, slip speed `rho`) shortened to end just before an
+    /// event within reach of the planned step `h`, so that a short closing step
+    /// ([`Self::closing_step`]) can reach it instead of a step past it being thrown away;
+    /// `None` when no event is predicted within `h`. The prediction: the first zero of
+    /// the event's quadratic Taylor polynomial, one classic RK4 step to it, and a Newton
+    /// step from there; the step ends at [`LANDING`] of that.
+    fn landing_step(&self, state: &State, z: &Z, k1: &Z, rho: f64, h: f64) -> Option<f64> {
+        let (g, g_rate) = event_value(&self.flow, self.phase, state, z, k1);
         // |d^2 g/dtau^2| is at most |u_t| times the rates' scale squared: when even that
         // bound cannot bring the event within the step (a distant event, a dying slip),
         // the second derivative is not computed.
         let curve_bound = rho
-            * match phase {
-                Phase::Compression => turn * normal_rates,
-                Phase::Restitution { .. } => rho * normal_rates + flow.velocity(&z).1.abs() * turn,
+            * match self.phase {
+                Phase::Compression => self.turn * self.normal_rates,
+                Phase::Restitution { .. } => {
+                    rho * self.normal_rates + self.flow.velocity(z).1.abs() * self.turn
+                }
             };
         let quadratic = if -g <= h * g_rate.max(0.0) + 0.5 * h * h * curve_bound {
-            // The first zero of the event's quadratic Taylor polynomial.
-            let g_curve = event_curve(&flow, phase, &z, &k1);
-            let disc = g_rate * g_rate - 2.0 * g_curve * g;
-            if disc >= 0.0 && g_rate + disc.sqrt() > 0.0 {
-                -2.0 * g / (g_rate + disc.sqrt())
-            } else {
-                f64::INFINITY
-            }
+            let g_curve = event_curve(&self.flow, self.phase, z, k1);
+            quadratic_root(g, g_rate, g_curve)
         } else {
             f64::INFINITY
         };
         if quadratic <= h {
-            // One classic RK4 step to that guess, then a Newton step from there.
             let guess = quadratic;
-            let z_guess = rk4_step(&flow, &z, &k1, guess);
-            let k_guess = flow.rate(&z_guess);
-            let (g1, g1_rate) = event_value(&flow, phase, state, &z_guess, &k_guess);
+            let z_guess = rk4_step(&self.flow, z, k1, guess);
+            let k_guess = self.flow.rate(&z_guess);
+            let (g1, g1_rate) = event_value(&self.flow, self.phase, state, &z_guess, &k_guess);
             let predicted = guess - g1 / g1_rate;
             if g1_rate > 0.0 && predicted > 0.0 && LANDING * predicted <= h {
-                h = LANDING * predicted;
-                landing = true;
+                return Some(LANDING * predicted);
             }
         }
-        let (z_new, err5, err3, k_new, k) = dop853_step(&flow, &z, &k1, h);
-        // Hairer's DOP853 error estimate from the 5th- and 3rd-order embedded pairs.
-        let e5 = flow.error_size(&err5) / scale;
-        let e3 = flow.error_size(&err3) / scale;
+        None
+    }
+
+    /// Hairer's DOP853 error estimate of `step` (over `h`) from its 5th- and 3rd-order
+    /// embedded pairs, measured on the contact velocity relative to the initial speed:
+    /// the step is accepted when it is at most [`SWERVE_TOLERANCE`].
+    fn error_norm(&self, step: &Step, h: f64) -> f64 {
+        let e5 = self.flow.error_size(&step.err5) / self.scale;
+        let e3 = self.flow.error_size(&step.err3) / self.scale;
         let denominator = (e5 * e5 + 0.01 * e3 * e3).sqrt();
-        let err_norm = if denominator > 0.0 {
+        if denominator > 0.0 {
             h * e5 * e5 / denominator
         } else {
             0.0
-        };
-        if err_norm > SWERVE_TOLERANCE || err_norm.is_nan() {
-            let factor = if err_norm.is_finite() {
-                (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.1, 0.9)
-            } else {
-                0.1
-            };
-            h *= factor;
-            continue;
         }
-        let grow = if err_norm > 0.0 {
-            (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.333, 6.0)
-        } else {
-            6.0
-        };
-        // Events inside the accepted step (not anticipated above), located on DOP853's
-        // 7th-order dense output (Hairer's contd8: three more stages), by Newton's
-        // method on its polynomial.
-        let un_new = flow.velocity(&z_new).1;
-        let event = match phase {
-            Phase::Compression if un_new >= 0.0 => Some(Event::CompressionEnded),
-            Phase::Restitution { target_work } if state.work + z_new[DW] >= target_work => {
-                Some(Event::Finished)
-            }
-            _ => None,
-        };
-        if let Some(event) = event {
-            let dense = Dense::new(&flow, &z, &z_new, &k, &k_new, h);
-            // The event's value as a polynomial in the step fraction x, zero at the event:
-            // u_n (linear in z) or the work given back so far minus its target.
-            let (base, coefficients) = match phase {
-                Phase::Compression => {
-                    let un = |c: &Z| flow.knn * c[DP] + flow.ktn.x * c[DF1] + flow.ktn.y * c[DF2];
-                    (flow.velocity(&z).1, dense.f.map(|c| un(&c)))
-                }
-                Phase::Restitution { target_work } => {
-                    (z[DW] - (target_work - state.work), dense.f.map(|c| c[DW]))
-                }
-            };
-            let dh = h * dense_root(base, &coefficients);
-            // The dense output is an order less accurate than a step: take one step to
-            // the located point, then one Newton correction on the integrated value
-            // itself, along the rate there (its shift is of the dense output's error,
-            // ~1e-10 of the step, so the neglected curvature is ~1e-20 of it).
-            let mut z_event = dop853_step(&flow, &z, &k1, dh).0;
-            let (v, slope) = match phase {
-                Phase::Compression => (flow.velocity(&z_event).1, flow.normal_rate(&z_event)),
-                Phase::Restitution { target_work } => (
-                    z_event[DW] - (target_work - state.work),
-                    flow.rate(&z_event)[DW],
-                ),
-            };
-            if slope > 0.0 && slope.is_finite() {
-                let shift = (-v / slope).clamp(-dh, h - dh);
-                let rate = flow.rate(&z_event);
-                for (zi, ri) in z_event.iter_mut().zip(rate) {
-                    *zi += ri * shift;
-                }
-            }
-            store(&z_event, state);
-            if event == Event::CompressionEnded {
-                // Restitution goes on along the same flow: start it with this step.
-                *step_hint = Some(h);
-            }
-            return Some(event);
-        }
-        if landing {
-            let (g, g_rate) = event_value(&flow, phase, state, &z_new, &k_new);
-            // The distance to the event from its quadratic Taylor polynomial: what is
-            // left after the closing step (the cubic term, ~1e-4 of the distance) is
-            // then small enough for a first-order Newton correction.
-            let g_curve = event_curve(&flow, phase, &z_new, &k_new);
-            let disc = g_rate * g_rate - 2.0 * g_curve * g;
-            let rest = if disc >= 0.0 && g_rate + disc.sqrt() > 0.0 {
-                -2.0 * g / (g_rate + disc.sqrt())
-            } else {
-                f64::INFINITY
-            };
-            if g_rate > 0.0 && rest >= 0.0 && rest * turn <= CLOSING_REACH {
-                // The closing step: classic RK4 over `rest` (its local error is of order
-                // (rest L)^5 / 120 ~ 3e-11 for rates of the flow's scale L; on the swerve
-                // tests it agrees with a DOP853 step over `rest` to ~1e-15 of the speed),
-                // then one Newton correction on the event's value along the rate there
-                // (of ~1e-4 of `rest`, so its neglected curvature is ~1e-8 of that).
-                let mut z_event = rk4_step(&flow, &z_new, &k_new, rest);
-                let k_event = flow.rate(&z_event);
-                let (g, g_rate) = event_value(&flow, phase, state, &z_event, &k_event);
-                if g_rate > 0.0 && g_rate.is_finite() {
-                    let shift = -g / g_rate;
-                    for (zi, ri) in z_event.iter_mut().zip(k_event) {
-                        *zi += ri * shift;
-                    }
-                }
-                store(&z_event, state);
-                let event = match phase {
-                    Phase::Compression => Event::CompressionEnded,
-                    Phase::Restitution { .. } => Event::Finished,
-                };
-                if event == Event::CompressionEnded {
-                    *step_hint = Some(h_planned);
-                }
-                return Some(event);
-            }
-        }
-        z = z_new;
-        k1 = k_new;
-        h = if landing { h_planned } else { h * grow };
     }
-    None
+
+    /// True when the accepted step that ends at `z_new` has crossed the phase's event:
+    /// `u_n >= 0` in compression, the work given back reached in restitution.
+    fn crossed_event(&self, state: &State, z_new: &Z) -> bool {
+        let un_new = self.flow.velocity(z_new).1;
+        match self.phase {
+            Phase::Compression => un_new >= 0.0,
+            Phase::Restitution { target_work } => state.work + z_new[DW] >= target_work,
+        }
+    }
+
+    /// The point of an event inside the accepted `step` from `z` (rate `k1`) over `h`,
+    /// not anticipated by [`Self::landing_step`]: located on DOP853's 7th-order dense
+    /// output (Hairer's contd8: three more stages) by Newton's method on its polynomial,
+    /// then reached by a step and one Newton correction.
+    fn locate_crossed_event(&self, state: &State, z: &Z, k1: &Z, step: &Step, h: f64) -> Z {
+        let flow = &self.flow;
+        let dense = Dense::new(flow, z, &step.z, &step.stages, &step.rate, h);
+        // The event's value as a polynomial in the step fraction x, zero at the event:
+        // u_n (linear in z) or the work given back so far minus its target.
+        let (base, coefficients) = match self.phase {
+            Phase::Compression => {
+                let un = |c: &Z| flow.knn * c[DP] + flow.ktn.x * c[DF1] + flow.ktn.y * c[DF2];
+                (flow.velocity(z).1, dense.f.map(|c| un(&c)))
+            }
+            Phase::Restitution { target_work } => {
+                (z[DW] - (target_work - state.work), dense.f.map(|c| c[DW]))
+            }
+        };
+        let dh = h * dense_root(base, &coefficients);
+        // The dense output is an order less accurate than a step: take one step to
+        // the located point, then one Newton correction on the integrated value
+        // itself, along the rate there (its shift is of the dense output's error,
+        // ~1e-10 of the step, so the neglected curvature is ~1e-20 of it).
+        let mut z_event = dop853_step(flow, z, k1, dh).z;
+        let (v, slope) = match self.phase {
+            Phase::Compression => (flow.velocity(&z_event).1, flow.normal_rate(&z_event)),
+            Phase::Restitution { target_work } => (
+                z_event[DW] - (target_work - state.work),
+                flow.rate(&z_event)[DW],
+            ),
+        };
+        if slope > 0.0 && slope.is_finite() {
+            let shift = (-v / slope).clamp(-dh, h - dh);
+            let rate = flow.rate(&z_event);
+            for (zi, ri) in z_event.iter_mut().zip(rate) {
+                *zi += ri * shift;
+            }
+        }
+        z_event
+    }
+
+    /// The event's point after a landing step that ended at `z_new` (rate `k_new`), or
+    /// `None` when it is not within [`CLOSING_REACH`] ahead. The distance comes from the
+    /// event's quadratic Taylor polynomial, so that what is left after the closing step
+    /// (the cubic term, ~1e-4 of the distance) is small enough for a first-order Newton
+    /// correction.
+    fn closing_step(&self, state: &State, z_new: &Z, k_new: &Z) -> Option<Z> {
+        let (g, g_rate) = event_value(&self.flow, self.phase, state, z_new, k_new);
+        let g_curve = event_curve(&self.flow, self.phase, z_new, k_new);
+        let rest = quadratic_root(g, g_rate, g_curve);
+        if !(g_rate > 0.0 && rest >= 0.0 && rest * self.turn <= CLOSING_REACH) {
+            return None;
+        }
+        // The closing step: classic RK4 over `rest` (its local error is of order
+        // (rest L)^5 / 120 ~ 3e-11 for rates of the flow's scale L), then one Newton
+        // correction on the event's value along the rate there (of ~1e-4 of `rest`, so
+        // its neglected curvature is ~1e-8 of that).
+        let mut z_event = rk4_step(&self.flow, z_new, k_new, rest);
+        let k_event = self.flow.rate(&z_event);
+        let (g, g_rate) = event_value(&self.flow, self.phase, state, &z_event, &k_event);
+        if g_rate > 0.0 && g_rate.is_finite() {
+            let shift = -g / g_rate;
+            for (zi, ri) in z_event.iter_mut().zip(k_event) {
+                *zi += ri * shift;
+            }
+        }
+        Some(z_event)
+    }
+}
+
+/// The first zero `x >= 0` of the event's quadratic Taylor polynomial
+/// `g + g_rate x + g_curve x^2 / 2` (`g < 0` before the event), in the form that does not
+/// cancel; infinite when it has none ahead.
+#[inline(always)]
+fn quadratic_root(g: f64, g_rate: f64, g_curve: f64) -> f64 {
+    let disc = g_rate * g_rate - 2.0 * g_curve * g;
+    if disc >= 0.0 && g_rate + disc.sqrt() > 0.0 {
+        -2.0 * g / (g_rate + disc.sqrt())
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The step-size factor after a rejected step of error `err_norm` (above the
+/// tolerance, or NaN): the controller's `0.9 (tol / err)^(1/8)`, within `[0.1, 0.9]`.
+#[inline(always)]
+fn shrink_factor(err_norm: f64) -> f64 {
+    if err_norm.is_finite() {
+        (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.1, 0.9)
+    } else {
+        0.1
+    }
+}
+
+/// The step-size factor after an accepted step of error `err_norm`: the controller's
+/// `0.9 (tol / err)^(1/8)`, within `[0.333, 6]`.
+#[inline(always)]
+fn grow_factor(err_norm: f64) -> f64 {
+    if err_norm > 0.0 {
+        (0.9 * eighth_root(SWERVE_TOLERANCE / err_norm)).clamp(0.333, 6.0)
+    } else {
+        6.0
+    }
 }
 
 /// How far (in `tau` times the flow's rate scale) the closing step of an event may
