@@ -25,7 +25,7 @@ mod dop853;
 mod jam;
 mod swerve;
 
-use super::collision_matrix::Compliance;
+use super::collision_matrix::{Compliance, ContactK};
 use super::types::{Material, Regime};
 use jam::jam_resolution;
 use nalgebra::{Vector2, Vector3};
@@ -92,37 +92,96 @@ pub(crate) fn consistent_impulse<K: Compliance>(
 ) -> (Vector3<f64>, Regime) {
     let n = *n;
     let ck = k.contact_k(&n);
-    let (e, mu) = (material.restitution, material.friction);
-    let mut state = State {
-        ut: ck.tangential(u1),
-        un: n.dot(u1),
-        work: 0.0,
-        p: 0.0,
-        ft: Vector2::zeros(),
-    };
     let speed = u1.norm();
-    // A slip below the swerve's own stop speed has stopped. This is the rounding that
-    // u1 - n (n.u1) leaves for an exactly normal approach when n is not a coordinate
-    // axis (~1e-16 |u1|); kept, keeps_direction (absolute in |u_t|) would accept its
-    // random direction and friction would act along it for the whole impact.
-    if state.ut.norm() <= 1e-3 * SWERVE_TOLERANCE * speed {
-        state.ut = Vector2::zeros();
-    }
-    let mut phase = Phase::Compression;
-    let started_slipping = state.ut.norm_squared() > 0.0;
+    let mut run = Integration::start(&ck, material.friction, &n, u1, speed);
+    let started_slipping = run.state.ut.norm_squared() > 0.0;
     let mut stuck = false;
     let mut stuck_after_slip = false;
-    // Set once a swerve has settled onto a stable invariant direction (by its own,
-    // sharper test); the slip then keeps that direction until it stops.
-    let mut settled = false;
-    // The last accepted swerve step, when the swerve goes on from compression into
-    // restitution: the flow is the same, only the event changes.
-    let mut step_hint = None;
-
     // Every iteration ends one segment at an event; a body goes through at most
     // stop -> (re-slip) -> compression end -> finish, so the cap is generous.
     for _ in 0..16 {
-        let mode = if state.ut.norm_squared() == 0.0 {
+        let mode = run.mode();
+        if let Mode::Stick(_) = mode {
+            if !stuck && started_slipping {
+                stuck_after_slip = true;
+            }
+            stuck = true;
+        }
+        let Some(event) = run.segment(mode) else {
+            return jam_resolution(k, &n, material, u1);
+        };
+        if run.ends_at(event, material.restitution) {
+            break;
+        }
+    }
+
+    let state = run.state;
+    let impulse = n * state.p + ck.world(&state.ft);
+    let regime = if stuck_after_slip {
+        Regime::SlipThenStick
+    } else if stuck {
+        Regime::Stick
+    } else {
+        Regime::Slip
+    };
+    (impulse, regime)
+}
+
+/// One impact's integration, segment by segment: the state, the phase, and what a
+/// segment hands on to the next.
+struct Integration<'a> {
+    /// The collision matrix in the contact basis.
+    ck: &'a ContactK,
+    /// Coulomb friction coefficient.
+    mu: f64,
+    /// The initial contact speed `|u1|`: every tolerance is relative to it.
+    speed: f64,
+    state: State,
+    phase: Phase,
+    /// Set once a swerve has settled onto a stable invariant direction (by its own,
+    /// sharper test); the slip then keeps that direction until it stops.
+    settled: bool,
+    /// The last accepted swerve step, when the swerve goes on from compression into
+    /// restitution: the flow is the same, only the event changes.
+    step_hint: Option<f64>,
+}
+
+impl<'a> Integration<'a> {
+    /// The integration's start, in compression, for the approach velocity `u1` (of norm
+    /// `speed`) along the normal `n`.
+    fn start(ck: &'a ContactK, mu: f64, n: &Vector3<f64>, u1: &Vector3<f64>, speed: f64) -> Self {
+        let mut state = State {
+            ut: ck.tangential(u1),
+            un: n.dot(u1),
+            work: 0.0,
+            p: 0.0,
+            ft: Vector2::zeros(),
+        };
+        // A slip below the swerve's own stop speed has stopped. This is the rounding that
+        // u1 - n (n.u1) leaves for an exactly normal approach when n is not a coordinate
+        // axis (~1e-16 |u1|); kept, keeps_direction (absolute in |u_t|) would accept its
+        // random direction and friction would act along it for the whole impact.
+        if state.ut.norm() <= 1e-3 * SWERVE_TOLERANCE * speed {
+            state.ut = Vector2::zeros();
+        }
+        Self {
+            ck,
+            mu,
+            speed,
+            state,
+            phase: Phase::Compression,
+            settled: false,
+            step_hint: None,
+        }
+    }
+
+    /// The stick/slip decision at a segment's start. A slipping contact slips on along
+    /// its slip. A contact at rest sticks when the friction per unit normal impulse that
+    /// holds it, `f = -K_tt^-1 K_tn`, is inside the cone (`|f| <= mu`), else slips along
+    /// the invariant direction; frictionless, it slips with no friction at all.
+    fn mode(&self) -> Mode {
+        let (ck, mu, ut) = (self.ck, self.mu, self.state.ut);
+        if ut.norm_squared() == 0.0 {
             let f = ck.sticking_friction_ratio();
             if f.norm() <= mu {
                 Mode::Stick(f)
@@ -134,65 +193,60 @@ pub(crate) fn consistent_impulse<K: Compliance>(
         } else if mu == 0.0 {
             Mode::Slip(Vector2::zeros())
         } else {
-            Mode::Slip(state.ut / state.ut.norm())
-        };
-        if let Mode::Stick(_) = mode {
-            if !stuck && started_slipping {
-                stuck_after_slip = true;
-            }
-            stuck = true;
-        }
-        let friction = match mode {
-            Mode::Stick(f) => f,
-            Mode::Slip(s) => -s * mu,
-        };
-        let (gt, gn) = ck.rate(&friction);
-        let direction_kept = match mode {
-            Mode::Stick(_) => true,
-            Mode::Slip(s) => {
-                s == Vector2::zeros() || settled || keeps_direction(&gt, &state.ut, speed)
-            }
-        };
-        let event = if direction_kept {
-            step_hint = None;
-            match linear_segment(&mut state, phase, gt, gn, friction, mode) {
-                Some(ev) => ev,
-                None => return jam_resolution(k, &n, material, u1),
-            }
-        } else {
-            match swerve_segment(&ck, mu, &mut state, phase, speed, &mut step_hint) {
-                Some(ev) => ev,
-                None => return jam_resolution(k, &n, material, u1),
-            }
-        };
-        match event {
-            Event::SlipStopped => {
-                state.ut = Vector2::zeros();
-                settled = false;
-            }
-            Event::DirectionSettled => settled = true,
-            Event::CompressionEnded => {
-                state.un = 0.0;
-                if e == 0.0 {
-                    break;
-                }
-                phase = Phase::Restitution {
-                    target_work: (1.0 - e * e) * state.work,
-                };
-            }
-            Event::Finished => break,
+            Mode::Slip(ut / ut.norm())
         }
     }
 
-    let impulse = n * state.p + ck.world(&state.ft);
-    let regime = if stuck_after_slip {
-        Regime::SlipThenStick
-    } else if stuck {
-        Regime::Stick
-    } else {
-        Regime::Slip
-    };
-    (impulse, regime)
+    /// Advances one segment in `mode` to its first event: in closed form while the rate
+    /// `du/dp` keeps the slip direction (stick, no friction, a settled swerve, or a rate
+    /// parallel to the slip), else by the swerve integrator. `None` on a jam that does not
+    /// end.
+    fn segment(&mut self, mode: Mode) -> Option<Event> {
+        let friction = match mode {
+            Mode::Stick(f) => f,
+            Mode::Slip(s) => -s * self.mu,
+        };
+        let (gt, gn) = self.ck.rate(&friction);
+        let direction_kept = match mode {
+            Mode::Stick(_) => true,
+            Mode::Slip(s) => {
+                s == Vector2::zeros()
+                    || self.settled
+                    || keeps_direction(&gt, &self.state.ut, self.speed)
+            }
+        };
+        if direction_kept {
+            self.step_hint = None;
+            linear_segment(&mut self.state, self.phase, gt, gn, friction, mode)
+        } else {
+            let (ck, mu, phase, speed) = (self.ck, self.mu, self.phase, self.speed);
+            swerve_segment(ck, mu, &mut self.state, phase, speed, &mut self.step_hint)
+        }
+    }
+
+    /// Carries the integration past `event`; true when it ends the impact. A stopped
+    /// slip is zero from there on; compression's end (`u_n = 0`, `W = W_c`) sets
+    /// restitution's target `W = (1 - e^2) W_c`, or ends a plastic impact (`e = 0`).
+    fn ends_at(&mut self, event: Event, e: f64) -> bool {
+        match event {
+            Event::SlipStopped => {
+                self.state.ut = Vector2::zeros();
+                self.settled = false;
+            }
+            Event::DirectionSettled => self.settled = true,
+            Event::CompressionEnded => {
+                self.state.un = 0.0;
+                if e == 0.0 {
+                    return true;
+                }
+                self.phase = Phase::Restitution {
+                    target_work: (1.0 - e * e) * self.state.work,
+                };
+            }
+            Event::Finished => return true,
+        }
+        false
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
