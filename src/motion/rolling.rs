@@ -1,5 +1,5 @@
 //! A ball sliding and rolling on a plane ground in closed form, in `f64`: the motion between
-//! a landing and rest that rapier's resting contact gets wrong at 60 Hz (its contact point
+//! a landing and rest, which a stepped resting contact does not follow (its contact point
 //! turns with the ball, which then hops and slips on). No rapier types.
 
 use super::flight::State;
@@ -7,8 +7,8 @@ use super::pursuit::Pursuit;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A ball sliding or rolling on a fixed flat ground, the ground pressing it with the force
-/// that cancels the normal acceleration: what rapier's resting contact should give a ball and
-/// does not at 60 Hz (its contact point turns with the ball, which then hops and slips on).
+/// that cancels the normal acceleration, so the ball neither hops nor sinks: it keeps touching
+/// the ground (`v . n = 0`) while it slides, rolls or rests.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Rolling {
     /// Unit ground normal, out of the ground.
