@@ -229,6 +229,13 @@ fn resolve_approaching(
     u1: &Vector3<f64>,
 ) -> Result<Impact, ModelError> {
     let u1 = *u1;
+    let approach = Approach {
+        body,
+        iso,
+        velocity,
+        contact,
+        u1,
+    };
     let k = OneBody {
         body,
         r: &contact.offset,
@@ -238,86 +245,118 @@ fn resolve_approaching(
     match law {
         Law::Document => {
             let (impulse, regime, _) = document::document_impulse(&k, n, material, &u1)?;
-            let (impact, _, _) = finish(
-                body,
-                iso,
-                velocity,
-                &u1,
-                contact,
-                impulse,
-                regime,
-                Law::Document,
-                None,
-            );
+            let (impact, _, _) = approach.finish(impulse, regime, Law::Document, None);
             Ok(impact)
         }
-        Law::Consistent => Ok(consistent_impact(
-            body, iso, velocity, contact, material, &u1, None,
-        )),
+        Law::Consistent => Ok(approach.consistent_impact(material, None)),
         Law::Guarded => {
             let reason = match document::document_impulse(&k, n, material, &u1) {
                 Err(_) => Fallback::Jam,
                 Ok((impulse, regime, s)) => {
-                    let (impact, u2, work) = finish(
-                        body,
-                        iso,
-                        velocity,
-                        &u1,
-                        contact,
-                        impulse,
-                        regime,
-                        Law::Document,
-                        None,
-                    );
-                    let (p, pn) = (&impact.impulse, impact.normal_impulse);
-                    match unphysical(n, material, p, pn, impact.regime, &u1, &u2, work, &s) {
+                    let (impact, u2, work) = approach.finish(impulse, regime, Law::Document, None);
+                    let outcome = DocumentOutcome {
+                        impulse: &impact.impulse,
+                        normal_impulse: impact.normal_impulse,
+                        regime: impact.regime,
+                        slip: &s,
+                        u1: &u1,
+                        u2: &u2,
+                        work,
+                    };
+                    match unphysical(n, material, &outcome) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }
                 }
             };
-            Ok(consistent_impact(
-                body,
-                iso,
-                velocity,
-                contact,
-                material,
-                &u1,
-                Some(reason),
-            ))
+            Ok(approach.consistent_impact(material, Some(reason)))
         }
     }
 }
 
-/// The consistent law's impact (`fallback` set when `Guarded` fell back to it).
-#[inline(never)]
-fn consistent_impact(
-    body: &Body,
+/// One body's approach to the ground, all that applying an impulse to it needs: the
+/// body, its isotropic inverse inertia `a` if it has one, its velocity, the contact, and
+/// the relative contact velocity there, `u1 = v + w × r - u_ground` (`n.u1 < 0`).
+struct Approach<'a> {
+    body: &'a Body,
     iso: Option<f64>,
-    velocity: &BodyVelocity,
-    contact: &Contact,
-    material: &Material,
-    u1: &Vector3<f64>,
-    fallback: Option<Fallback>,
-) -> Impact {
-    let k = OneBody {
-        body,
-        r: &contact.offset,
-        iso: None,
-    };
-    let (impulse, regime) = consistent::consistent_impulse(&k, &contact.normal, material, u1);
-    finish(
-        body,
-        iso,
-        velocity,
-        u1,
-        contact,
-        impulse,
-        regime,
-        Law::Consistent,
-        fallback,
-    )
-    .0
+    velocity: &'a BodyVelocity,
+    contact: &'a Contact,
+    u1: Vector3<f64>,
+}
+
+impl Approach<'_> {
+    /// The consistent law's impact (`fallback` set when `Guarded` fell back to it).
+    #[inline(never)]
+    fn consistent_impact(&self, material: &Material, fallback: Option<Fallback>) -> Impact {
+        let k = OneBody {
+            body: self.body,
+            r: &self.contact.offset,
+            iso: None,
+        };
+        let (impulse, regime) =
+            consistent::consistent_impulse(&k, &self.contact.normal, material, &self.u1);
+        self.finish(impulse, regime, Law::Consistent, fallback).0
+    }
+
+    /// Applies the impulse: `v2 = v1 + P/m`, `w2 = w1 + I_w^-1 (r × P)` (eqs. 4-9).
+    /// Returns the impact (under `law`, its `regime` and `fallback` as given), the
+    /// relative contact velocity after it, and the impulse's work `P . (u1 + u2) / 2`.
+    #[inline(always)]
+    fn finish(
+        &self,
+        impulse: Vector3<f64>,
+        regime: Regime,
+        law: Law,
+        fallback: Option<Fallback>,
+    ) -> (Impact, Vector3<f64>, f64) {
+        let (body, iso, velocity, contact, u1) =
+            (self.body, self.iso, self.velocity, self.contact, &self.u1);
+        let r = &contact.offset;
+        let inv_m = 1.0 / body.mass;
+        let r_p = r.cross(&impulse);
+        let (dw, ke_before) = match iso {
+            Some(a) => (
+                r_p * a,
+                // With a = 0 (a body that does not rotate) the angular velocity carries no
+                // energy, as in `Body::kinetic_energy`.
+                0.5 * (body.mass * velocity.linear.norm_squared()
+                    + if a > 0.0 {
+                        velocity.angular.norm_squared() / a
+                    } else {
+                        0.0
+                    }),
+            ),
+            None => (body.inv_inertia * r_p, body.kinetic_energy(velocity)),
+        };
+        let dv = impulse * inv_m;
+        let after = BodyVelocity {
+            linear: velocity.linear + dv,
+            angular: velocity.angular + dw,
+        };
+        let normal_impulse = impulse.dot(&contact.normal);
+        // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
+        // one impulse at r, and free of the cancellation of subtracting two energies. With
+        // u_B2 = u_B1 + K P it is P . u_B1 + P . K P / 2, and P . K P = |P|^2/m + (r × P) . dw,
+        // a sum of non-negative terms.
+        let point_before = u1 + contact.ground_velocity;
+        let pkp = impulse.dot(&dv) + r_p.dot(&dw);
+        let u2 = u1 + dv + dw.cross(r);
+        let impact = Impact {
+            impulse,
+            normal_impulse,
+            tangent_impulse: impulse - contact.normal * normal_impulse,
+            velocity: after,
+            regime,
+            law,
+            fallback,
+            ke_before,
+            ke_after: ke_before + (impulse.dot(&point_before) + 0.5 * pkp),
+        };
+        // The impulse's work in the frame of the ground's contact point: P . (u1 + u2) / 2.
+        let work = impulse.dot(u1) + 0.5 * pkp;
+        (impact, u2, work)
+    }
 }
 
 /// The law a separating contact reports under `law`: `Guarded` never names itself.
@@ -351,22 +390,40 @@ fn off_diagonal_is_zero(a: &Matrix3<f64>) -> bool {
     bits << 1 == 0
 }
 
-/// Why the document's result (impulse `impulse`, its normal part `normal_impulse`, its
-/// `regime`) is unphysical, if it is (the `Guarded` law's test). `u1`, `u2` are the
-/// relative contact velocities before and after, `work` the impulse's work
-/// `P . (u1 + u2) / 2`, `slip` the unit slip direction it used.
-#[allow(clippy::too_many_arguments)]
+/// The document's result as the `Guarded` law judges it.
+pub(crate) struct DocumentOutcome<'a> {
+    /// The impulse (N s).
+    pub(crate) impulse: &'a Vector3<f64>,
+    /// Its normal part.
+    pub(crate) normal_impulse: f64,
+    pub(crate) regime: Regime,
+    /// The unit slip direction the document used.
+    pub(crate) slip: &'a Vector3<f64>,
+    /// The relative contact velocity before the impact.
+    pub(crate) u1: &'a Vector3<f64>,
+    /// The relative contact velocity after it.
+    pub(crate) u2: &'a Vector3<f64>,
+    /// The impulse's work `P . (u1 + u2) / 2`.
+    pub(crate) work: f64,
+}
+
+/// Why the document's result `outcome` at the contact of normal `n` is unphysical, if it
+/// is (the `Guarded` law's test): a normal impulse that pulls, a slip the friction
+/// reverses, or (for `e <= 1`) an energy gain beyond rounding.
 pub(crate) fn unphysical(
     n: &Vector3<f64>,
     material: &Material,
-    impulse: &Vector3<f64>,
-    normal_impulse: f64,
-    regime: Regime,
-    u1: &Vector3<f64>,
-    u2: &Vector3<f64>,
-    work: f64,
-    slip: &Vector3<f64>,
+    outcome: &DocumentOutcome,
 ) -> Option<Fallback> {
+    let DocumentOutcome {
+        impulse,
+        normal_impulse,
+        regime,
+        slip,
+        u1,
+        u2,
+        work,
+    } = *outcome;
     if normal_impulse < 0.0 {
         return Some(Fallback::PullingNormalImpulse);
     }
@@ -385,67 +442,4 @@ pub(crate) fn unphysical(
         }
     }
     None
-}
-
-/// Applies the impulse: `v2 = v1 + P/m`, `w2 = w1 + I_w^-1 (r × P)` (eqs. 4-9).
-/// `u1` is the relative contact velocity before the impact, `iso` the isotropic
-/// inverse inertia if the body has one. Returns the impact and the relative contact
-/// velocity after it.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn finish(
-    body: &Body,
-    iso: Option<f64>,
-    velocity: &BodyVelocity,
-    u1: &Vector3<f64>,
-    contact: &Contact,
-    impulse: Vector3<f64>,
-    regime: Regime,
-    law: Law,
-    fallback: Option<Fallback>,
-) -> (Impact, Vector3<f64>, f64) {
-    let r = &contact.offset;
-    let inv_m = 1.0 / body.mass;
-    let r_p = r.cross(&impulse);
-    let (dw, ke_before) = match iso {
-        Some(a) => (
-            r_p * a,
-            // With a = 0 (a body that does not rotate) the angular velocity carries no
-            // energy, as in `Body::kinetic_energy`.
-            0.5 * (body.mass * velocity.linear.norm_squared()
-                + if a > 0.0 {
-                    velocity.angular.norm_squared() / a
-                } else {
-                    0.0
-                }),
-        ),
-        None => (body.inv_inertia * r_p, body.kinetic_energy(velocity)),
-    };
-    let dv = impulse * inv_m;
-    let after = BodyVelocity {
-        linear: velocity.linear + dv,
-        angular: velocity.angular + dw,
-    };
-    let normal_impulse = impulse.dot(&contact.normal);
-    // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
-    // one impulse at r, and free of the cancellation of subtracting two energies. With
-    // u_B2 = u_B1 + K P it is P . u_B1 + P . K P / 2, and P . K P = |P|^2/m + (r × P) . dw,
-    // a sum of non-negative terms.
-    let point_before = u1 + contact.ground_velocity;
-    let pkp = impulse.dot(&dv) + r_p.dot(&dw);
-    let u2 = u1 + dv + dw.cross(r);
-    let impact = Impact {
-        impulse,
-        normal_impulse,
-        tangent_impulse: impulse - contact.normal * normal_impulse,
-        velocity: after,
-        regime,
-        law,
-        fallback,
-        ke_before,
-        ke_after: ke_before + (impulse.dot(&point_before) + 0.5 * pkp),
-    };
-    // The impulse's work in the frame of the ground's contact point: P . (u1 + u2) / 2.
-    let work = impulse.dot(u1) + 0.5 * pkp;
-    (impact, u2, work)
 }

@@ -12,7 +12,9 @@
 use super::collision_matrix::{Compliance, OneBody, TwoBodies};
 use super::error::{ModelError, check_coefficients, finite3};
 use super::types::{Body, BodyVelocity, Fallback, Law, Material, Regime};
-use super::{consistent, document, isotropic_inverse_inertia, separating_law, unphysical};
+use super::{
+    DocumentOutcome, consistent, document, isotropic_inverse_inertia, separating_law, unphysical,
+};
 use nalgebra::Vector3;
 
 /// The contact between two bodies `a` and `b`, world frame.
@@ -185,7 +187,16 @@ pub fn resolve_pair(
                 Ok((p, regime, s)) => {
                     let (impact, u2, work) = side.finish(&n, &u1, p, regime, Law::Document, None);
                     let pn = p.dot(&n);
-                    match unphysical(&n, material, &p, pn, regime, &u1, &u2, work, &s) {
+                    let outcome = DocumentOutcome {
+                        impulse: &p,
+                        normal_impulse: pn,
+                        regime,
+                        slip: &s,
+                        u1: &u1,
+                        u2: &u2,
+                        work,
+                    };
+                    match unphysical(&n, material, &outcome) {
                         None => return Ok(impact),
                         Some(reason) => reason,
                     }

@@ -1,5 +1,5 @@
 //! A ball sliding and rolling on a plane ground in closed form, in `f64`: the motion between
-//! a landing and rest that rapier's resting contact gets wrong at 60 Hz (its contact point
+//! a landing and rest, which a stepped resting contact does not follow (its contact point
 //! turns with the ball, which then hops and slips on). No rapier types.
 
 use super::flight::State;
@@ -7,8 +7,8 @@ use super::pursuit::Pursuit;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A ball sliding or rolling on a fixed flat ground, the ground pressing it with the force
-/// that cancels the normal acceleration: what rapier's resting contact should give a ball and
-/// does not at 60 Hz (its contact point turns with the ball, which then hops and slips on).
+/// that cancels the normal acceleration, so the ball neither hops nor sinks: it keeps touching
+/// the ground (`v . n = 0`) while it slides, rolls or rests.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Rolling {
     /// Unit ground normal, out of the ground.
@@ -39,6 +39,12 @@ pub(crate) struct Rolling {
 /// terms in `tan(psi/2)^4` stay far from overflow.
 const FALL_LINE_TOLERANCE: f64 = 1e-12;
 
+/// True when the unit direction `u` is along the fall line of a ground of acceleration
+/// `at` along it (or the ground is level): within [`FALL_LINE_TOLERANCE`].
+fn along_fall_line(at: &Vector3<f64>, u: &Vector3<f64>) -> bool {
+    at.cross(u).norm() <= FALL_LINE_TOLERANCE * at.norm()
+}
+
 /// One phase of the motion along the ground and how long it lasts.
 struct Phase {
     kind: PhaseKind,
@@ -59,6 +65,18 @@ enum PhaseKind {
     /// Rolling across a slope's fall line against rolling resistance: the velocity's
     /// pursuit, the spin `n x v / r`.
     RollAcross(Pursuit),
+}
+
+impl Phase {
+    /// A phase of constant accelerations, `linear` and `angular` (of the spin along the
+    /// ground), lasting `until`, the ball doing `then` at its end.
+    fn constant(linear: Vector3<f64>, angular: Vector3<f64>, until: f64, then: PhaseEnd) -> Self {
+        Phase {
+            kind: PhaseKind::Constant { linear, angular },
+            until,
+            then,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -239,55 +257,72 @@ impl Rolling {
     /// acceleration `at` along it and `gn` into it; `slides`: the last phase ended where
     /// rolling needs more friction than `mu N`.
     fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64, slides: bool) -> Option<Phase> {
-        let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
+        let (n, r) = (self.normal, self.radius);
         let scale = 1e-12 * (1e-3 + st.v.norm() + r * st.w.norm() + at.norm());
         let slip = st.v - r * st.w.cross(&n);
-        let along = |u: &Vector3<f64>| at.cross(u).norm() <= FALL_LINE_TOLERANCE * at.norm();
-        let constant = |linear: Vector3<f64>, angular: Vector3<f64>, until: f64, then| Phase {
-            kind: PhaseKind::Constant { linear, angular },
-            until,
-            then,
-        };
-        let slide = |u: Vector3<f64>, slip_speed: f64| {
-            // Friction's accelerations: linear along -u, angular about n x u.
-            let linear = at - u * (self.friction * gn);
-            let angular = n.cross(&u) * (self.friction * gn / (r * k));
-            let rate = at.dot(&u) - self.friction * gn * (1.0 + 1.0 / k);
-            let until = if rate < 0.0 {
-                slip_speed / -rate
-            } else {
-                f64::INFINITY
-            };
-            constant(linear, angular, until, PhaseEnd::Continue)
-        };
-        // A ball that cannot roll slides, its slip growing down the fall line, if it can keep
-        // growing there (otherwise the narrow band out of reach).
-        let slide_down = || {
-            let phase = slide(at.try_normalize(0.0)?, 0.0);
-            (phase.until == f64::INFINITY).then_some(phase)
-        };
         if slides {
-            return slide_down();
+            return self.slide_down(at, gn);
         }
         let slip_speed = slip.norm();
         if slip_speed > scale {
-            let u = slip / slip_speed;
-            if along(&u) || self.friction == 0.0 {
-                return Some(slide(u, slip_speed));
-            }
-            let brake = self.friction * gn * (1.0 + 1.0 / k);
-            let Some(pursuit) = Pursuit::new(&slip, at, brake) else {
-                // Braking so much harder than gravity drifts it that the slip keeps its
-                // direction to rounding.
-                return Some(slide(u, slip_speed));
-            };
-            return Some(Phase {
-                kind: PhaseKind::SlideAcross(pursuit),
-                until: pursuit.stop_time().unwrap_or(f64::INFINITY),
-                then: PhaseEnd::Rolls,
-            });
+            return Some(self.sliding(&slip, slip_speed, at, gn));
         }
-        // Rolling, or at rest: the direction it rolls (or would start to).
+        self.rolling(st, at, gn, scale)
+    }
+
+    /// Sliding along the unit direction `u` with a slip of speed `slip_speed`, under
+    /// constant accelerations: friction `mu g_n` along `-u` (and its torque about `n x u`)
+    /// and `a_t`. It lasts until the slip, changing at `a_t.u - mu g_n (1 + 1/k)`, stops,
+    /// if it slows.
+    fn slide(&self, u: Vector3<f64>, slip_speed: f64, at: &Vector3<f64>, gn: f64) -> Phase {
+        let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
+        // Friction's accelerations: linear along -u, angular about n x u.
+        let linear = at - u * (self.friction * gn);
+        let angular = n.cross(&u) * (self.friction * gn / (r * k));
+        let rate = at.dot(&u) - self.friction * gn * (1.0 + 1.0 / k);
+        let until = if rate < 0.0 {
+            slip_speed / -rate
+        } else {
+            f64::INFINITY
+        };
+        Phase::constant(linear, angular, until, PhaseEnd::Continue)
+    }
+
+    /// A ball that cannot roll slides, its slip growing down the fall line, if it can keep
+    /// growing there; `None` otherwise (the narrow band out of reach).
+    fn slide_down(&self, at: &Vector3<f64>, gn: f64) -> Option<Phase> {
+        let phase = self.slide(at.try_normalize(0.0)?, 0.0, at, gn);
+        (phase.until == f64::INFINITY).then_some(phase)
+    }
+
+    /// The phase of a ball that slips at `slip` (`slip_speed` its norm): a straight slide
+    /// along the fall line, on level ground or without friction; across a slope's fall line
+    /// the slip's pursuit, braked at `mu g_n (1 + 1/k)`, until it stops and the ball rolls.
+    fn sliding(&self, slip: &Vector3<f64>, slip_speed: f64, at: &Vector3<f64>, gn: f64) -> Phase {
+        let u = slip / slip_speed;
+        if along_fall_line(at, &u) || self.friction == 0.0 {
+            return self.slide(u, slip_speed, at, gn);
+        }
+        let brake = self.friction * gn * (1.0 + 1.0 / self.inertia_ratio);
+        let Some(pursuit) = Pursuit::new(slip, at, brake) else {
+            // Braking so much harder than gravity drifts it that the slip keeps its
+            // direction to rounding.
+            return self.slide(u, slip_speed, at, gn);
+        };
+        Phase {
+            kind: PhaseKind::SlideAcross(pursuit),
+            until: pursuit.stop_time().unwrap_or(f64::INFINITY),
+            then: PhaseEnd::Rolls,
+        }
+    }
+
+    /// The phase of a ball without slip (speeds at or below `scale`): rolling at
+    /// `dv/dt = (a_t - mu_r g_n v/|v|) / (1 + k)` as long as the friction this needs stays
+    /// within `mu N` (else it slides down the fall line), or at rest where the rolling
+    /// resistance and the friction hold it; `None` where only the friction falls short.
+    fn rolling(&self, st: &State, at: &Vector3<f64>, gn: f64, scale: f64) -> Option<Phase> {
+        let (n, r, k) = (self.normal, self.radius, self.inertia_ratio);
+        // The direction it rolls (or would start to).
         let speed = st.v.norm();
         let u = if speed > scale {
             st.v / speed
@@ -301,43 +336,30 @@ impl Rolling {
         } else {
             // Held at rest by the rolling resistance and the friction (or on level ground).
             let zero = Vector3::zeros();
-            return Some(constant(zero, zero, f64::INFINITY, PhaseEnd::Continue));
+            return Some(Phase::constant(
+                zero,
+                zero,
+                f64::INFINITY,
+                PhaseEnd::Continue,
+            ));
         };
         let linear = (at - u * (self.rolling_resistance * gn)) / (1.0 + k);
         // Rolling needs the friction m (dv/dt - a_t); beyond mu N the ball slides.
         let limit = self.friction * gn * (1.0 + 1e-12);
         if (linear - at).norm() > limit {
-            return slide_down();
+            return self.slide_down(at, gn);
         }
-        if self.rolling_resistance > 0.0 && !along(&u) {
+        if self.rolling_resistance > 0.0 && !along_fall_line(at, &u) {
             let brake = self.rolling_resistance * gn / (1.0 + k);
             if let Some(pursuit) = Pursuit::new(&st.v, &(at / (1.0 + k)), brake) {
-                // The friction rolling needs, |k a_t + mu_r g_n v/|v|| / (1 + k), grows as
-                // the velocity turns down the fall line: it reaches mu N where
-                // cos(psi) = ((mu g_n (1 + k))^2 - (k |a_t|)^2 - (mu_r g_n)^2)
-                //   / (2 k |a_t| mu_r g_n).
-                let (ka, rg) = (k * at.norm(), self.rolling_resistance * gn);
-                let mu = self.friction * gn * (1.0 + k);
-                let cos_limit = (mu * mu - ka * ka - rg * rg) / (2.0 * ka * rg);
-                let stop = pursuit.stop_time();
-                let slides_at = (cos_limit < 1.0).then(|| pursuit.time_at_angle(cos_limit));
-                let (until, then) = match (slides_at, stop) {
-                    (Some(t), _) => (t, PhaseEnd::Slides),
-                    (None, Some(t)) => (t, PhaseEnd::Rest),
-                    (None, None) => (f64::INFINITY, PhaseEnd::Continue),
-                };
-                return Some(Phase {
-                    kind: PhaseKind::RollAcross(pursuit),
-                    until,
-                    then,
-                });
+                return Some(self.roll_across(pursuit, at, gn));
             }
         }
         // Only the rolling resistance stops a ball: without it the acceleration is constant
         // (a_t / (1 + k)) and the velocity passes through zero, or turns, unbroken.
         let slowing = linear.dot(&u);
         let stops = self.rolling_resistance > 0.0 && slowing < 0.0 && speed > scale;
-        Some(constant(
+        Some(Phase::constant(
             linear,
             n.cross(&linear) / r,
             if stops {
@@ -351,6 +373,32 @@ impl Rolling {
                 PhaseEnd::Continue
             },
         ))
+    }
+
+    /// Rolling across a slope's fall line against the rolling resistance: the velocity's
+    /// `pursuit`, until the ball slides (the friction rolling needs reaches `mu N`) or,
+    /// before that, stops.
+    fn roll_across(&self, pursuit: Pursuit, at: &Vector3<f64>, gn: f64) -> Phase {
+        let k = self.inertia_ratio;
+        // The friction rolling needs, |k a_t + mu_r g_n v/|v|| / (1 + k), grows as
+        // the velocity turns down the fall line: it reaches mu N where
+        // cos(psi) = ((mu g_n (1 + k))^2 - (k |a_t|)^2 - (mu_r g_n)^2)
+        //   / (2 k |a_t| mu_r g_n).
+        let (ka, rg) = (k * at.norm(), self.rolling_resistance * gn);
+        let mu = self.friction * gn * (1.0 + k);
+        let cos_limit = (mu * mu - ka * ka - rg * rg) / (2.0 * ka * rg);
+        let stop = pursuit.stop_time();
+        let slides_at = (cos_limit < 1.0).then(|| pursuit.time_at_angle(cos_limit));
+        let (until, then) = match (slides_at, stop) {
+            (Some(t), _) => (t, PhaseEnd::Slides),
+            (None, Some(t)) => (t, PhaseEnd::Rest),
+            (None, None) => (f64::INFINITY, PhaseEnd::Continue),
+        };
+        Phase {
+            kind: PhaseKind::RollAcross(pursuit),
+            until,
+            then,
+        }
     }
 
     /// For the states [`Self::advance_checked`] does not reach (the band where the ball can
