@@ -111,7 +111,38 @@ pub(crate) struct ImpactInput<'a> {
     pub timing: ImpactTiming,
 }
 
-impl ImpactInput<'_> {
+impl<'a> ImpactInput<'a> {
+    /// The input of an impact of `body` (of inertia `inertia`) resolved by `law` with
+    /// `material`, at `timing`, with no bounce slower than `resting_speed` (m/s). The one
+    /// construction of the model's input, for impacts with grounds and between bodies.
+    pub fn new(
+        body: RigidBodyHandle,
+        inertia: &'a Inertia,
+        law: Law,
+        material: Material,
+        resting_speed: f64,
+        timing: ImpactTiming,
+    ) -> Self {
+        Self {
+            body,
+            inertia,
+            law,
+            material,
+            resting_speed,
+            force_settle: false,
+            timing,
+        }
+    }
+
+    /// The same input, resolved with `e = 0` whatever the speed if `force` (the last impact
+    /// a body is allowed in a step, or an impact the settle stage's table settles).
+    pub fn forced_to_settle(self, force: bool) -> Self {
+        Self {
+            force_settle: force,
+            ..self
+        }
+    }
+
     /// Whether an impact approaching at `approach` (m/s) settles (slower than the resting
     /// speed, or forced), and the material it is resolved with (`e = 0` if it settles).
     fn material_at(&self, approach: f64) -> (bool, Material) {
@@ -128,21 +159,35 @@ impl ImpactInput<'_> {
     }
 }
 
+/// Where a body touches a ground at an impact: the contact the search found, and the point
+/// the impulse acts at (a landing point, or the deepest point) with how many contact points
+/// it stands for.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GroundContactAt<'h> {
+    pub hit: &'h Hit,
+    pub point: Vector3<f64>,
+    pub points: usize,
+}
+
+impl<'h> GroundContactAt<'h> {
+    pub fn new(hit: &'h Hit, point: Vector3<f64>, points: usize) -> Self {
+        Self { hit, point, points }
+    }
+}
+
 /// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the
-/// contact `point` (a landing point, see [`crate::plugin::queries::geometry::landing_point`]) with the
+/// contact `at.point` (a landing point, see [`crate::plugin::queries::geometry::landing_point`]) with the
 /// hit's normal. Returns the state after and the event, or `None` when the point does not
 /// approach the ground or the model refuses the input.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn resolve(
     input: &ImpactInput,
     geom: &BodyGeom,
     ground: &GroundGeom,
     s: &State,
     t: f64,
-    hit: &Hit,
-    point: Vector3<f64>,
-    points: usize,
+    at: &GroundContactAt,
 ) -> Option<(State, ImpactEvent)> {
+    let (hit, point, points) = (at.hit, at.point, at.points);
     let n = hit.normal;
     let ground_velocity = ground.velocity_at(&point, t);
     let un = n.dot(&(body_velocity_at(s, &point) - ground_velocity));
@@ -246,15 +291,7 @@ impl<'a> ImpactInput<'a> {
         resting_speed: f64,
         timing: ImpactTiming,
     ) -> Self {
-        Self {
-            body: a.body,
-            inertia: a.inertia,
-            law,
-            material,
-            resting_speed,
-            force_settle: false,
-            timing,
-        }
+        Self::new(a.body, a.inertia, law, material, resting_speed, timing)
     }
 }
 

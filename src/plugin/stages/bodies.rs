@@ -20,7 +20,9 @@
 
 use crate::motion::{Rolling, State};
 use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_to_na};
-use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, released, resolve};
+use crate::plugin::bridge::resolve::{
+    GroundContactAt, ImpactInput, Inertia, Site, correction, released, resolve,
+};
 use crate::plugin::config::TimingMode;
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
@@ -377,17 +379,23 @@ impl AfterStep<'_> {
         let (cand, geom, step) = (subject.cand, subject.geom, subject.step);
         let part = &geom.parts[hit.part];
         let material = self.registry.material_of(colliders, part.handle, og.handle);
-        let input = ImpactInput {
-            body: cand.body,
+        let input = ImpactInput::new(
+            cand.body,
             inertia,
-            law: self.config.law,
+            self.config.law,
             material,
-            resting_speed: step.policy.resting_speed,
-            force_settle: false,
-            timing: ImpactTiming::InStep,
-        };
+            step.policy.resting_speed,
+            ImpactTiming::InStep,
+        );
         let n = hit.normal;
-        let (after, event) = resolve(&input, geom, og, &s, t, &hit, hit.point, 1)?;
+        let (after, event) = resolve(
+            &input,
+            geom,
+            og,
+            &s,
+            t,
+            &GroundContactAt::new(&hit, hit.point, 1),
+        )?;
         let onto = (event.settled || event.restitution == 0.0)
             && after.v.dot(&motion.normal) > 0.0
             && n.dot(&motion.accel) < 0.0;

@@ -121,15 +121,9 @@ impl<H> ImpactPlugin<H> {
         let rapier_gravity = (gravity, params.dt);
         let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
         let to_plan = std::mem::take(&mut survey.to_plan);
-        let near = self.plan_bodies(
-            &mut step,
-            to_plan,
-            &mut survey.far,
-            bodies,
-            colliders,
-            &sets,
-            &last,
-        );
+        let (near, not_near) =
+            self.plan_bodies(&mut step, to_plan, bodies, colliders, &sets, &last);
+        survey.far.extend(not_near);
         let planned = (near.as_slice(), survey.far.as_slice());
         self.install(&mut step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
@@ -218,22 +212,21 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Plans each body of `to_plan` (`plan.rs`); returns those with a ground near them and
-    /// adds the others to `far`.
-    #[allow(clippy::too_many_arguments)]
+    /// the others, each in the order planned.
     fn plan_bodies(
         &mut self,
         step: &mut StepData,
         to_plan: Vec<RigidBodyHandle>,
-        far: &mut Vec<RigidBodyHandle>,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
-    ) -> Vec<RigidBodyHandle>
+    ) -> (Vec<RigidBodyHandle>, Vec<RigidBodyHandle>)
     where
         H: PhysicsHooks,
     {
         let mut near = Vec::with_capacity(self.flags.hooked().len());
+        let mut not_near = Vec::new();
         let exact = self.config.timing == TimingMode::Exact;
         let mut planner = Planner {
             config: &self.config,
@@ -248,10 +241,10 @@ impl<H> ImpactPlugin<H> {
             if is_near {
                 near.push(handle);
             } else {
-                far.push(handle);
+                not_near.push(handle);
             }
         }
-        near
+        (near, not_near)
     }
 
     /// The writer of the step (`commit.rs`).

@@ -13,7 +13,9 @@
 
 use crate::motion::{Flight, Rolling, State};
 use crate::plugin::bridge::convert::vec_to_na;
-use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, resolve};
+use crate::plugin::bridge::resolve::{
+    GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
+};
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::on_plane;
 use crate::plugin::queries::geometry::{
@@ -70,22 +72,41 @@ pub(crate) fn through_impacts(
         let part = &geom.parts[hit.part];
         let gg = &grounds[hit.ground];
         let (point, points) = landing_point(part, gg, &s, t, &hit, view.config.flat_tolerance);
-        let input = ImpactInput {
-            body: cand.body,
+        let material = view.registry.material_of(colliders, part.handle, gg.handle);
+        let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
+        let last_allowed = count + 1 >= view.config.max_impacts_per_step;
+        let input = ImpactInput::new(
+            cand.body,
             inertia,
-            law: view.config.law,
-            material: view.registry.material_of(colliders, part.handle, gg.handle),
-            resting_speed: step.policy.resting_speed,
-            force_settle: count + 1 >= view.config.max_impacts_per_step,
-            timing: ImpactTiming::InStep,
-        };
+            law,
+            material,
+            resting_speed,
+            ImpactTiming::InStep,
+        )
+        .forced_to_settle(last_allowed);
         count += 1;
         seg = s;
         seg_t0 = t;
         // A landing point (centroid) that does not approach falls back to the deepest
         // point; if that does not approach either, the flight stops here.
-        let resolved = resolve(&input, geom, gg, &s, t, &hit, point, points)
-            .or_else(|| resolve(&input, geom, gg, &s, t, &hit, hit.point, 1));
+        let resolved = resolve(
+            &input,
+            geom,
+            gg,
+            &s,
+            t,
+            &GroundContactAt::new(&hit, point, points),
+        )
+        .or_else(|| {
+            resolve(
+                &input,
+                geom,
+                gg,
+                &s,
+                t,
+                &GroundContactAt::new(&hit, hit.point, 1),
+            )
+        });
         let Some((after, event)) = resolved else {
             stop = Some(s);
             break;

@@ -17,7 +17,9 @@
 
 use crate::motion::{Flight, State};
 use crate::plugin::bridge::convert::to_f64;
-use crate::plugin::bridge::resolve::{ImpactInput, Inertia, Site, correction, resolve};
+use crate::plugin::bridge::resolve::{
+    GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
+};
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::filter;
@@ -173,24 +175,26 @@ impl AfterStep<'_> {
             let part = &checked.geom.parts[hit.part];
             let gg = &grounds[hit.ground];
             let (point, points) = landing_point(part, gg, &s, dt, &hit, self.config.flat_tolerance);
-            let input = ImpactInput {
-                body,
-                inertia: checked.inertia,
-                law: self.config.law,
-                material: self.registry.material_of(colliders, part.handle, gg.handle),
-                // A body that touched another body or a wall in the step: no bounce slower
-                // than a fall through the resting gap (see the pressed roles).
-                resting_speed: if neighbours_of().touching {
-                    step.policy.pressed_speed
-                } else {
-                    step.policy.resting_speed
-                },
-                force_settle: settle || k + 1 >= self.config.max_impacts_per_step,
-                timing: ImpactTiming::StepEnd,
+            let material = self.registry.material_of(colliders, part.handle, gg.handle);
+            // A body that touched another body or a wall in the step: no bounce slower than a
+            // fall through the resting gap (see the pressed roles).
+            let resting_speed = if neighbours_of().touching {
+                step.policy.pressed_speed
+            } else {
+                step.policy.resting_speed
             };
-            let Some((after, event)) =
-                resolve(&input, checked.geom, gg, &s, dt, &hit, point, points)
-            else {
+            let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
+            let input =
+                ImpactInput::new(body, checked.inertia, law, material, resting_speed, timing)
+                    .forced_to_settle(settle || k + 1 >= self.config.max_impacts_per_step);
+            let Some((after, event)) = resolve(
+                &input,
+                checked.geom,
+                gg,
+                &s,
+                dt,
+                &GroundContactAt::new(&hit, point, points),
+            ) else {
                 break;
             };
             s = after;

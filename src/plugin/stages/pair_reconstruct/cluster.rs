@@ -8,8 +8,8 @@ use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::{
-    BodyContactAt, ImpactInput, PairSide, Site, correction, material, resolve, resolve_balls,
-    resolve_bodies,
+    BodyContactAt, GroundContactAt, ImpactInput, PairSide, Site, correction, material, resolve,
+    resolve_balls, resolve_bodies,
 };
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::on_plane;
@@ -156,18 +156,20 @@ impl<'c, 'a> Run<'c, 'a> {
         let part = &ball.geom.parts[hit.part];
         let gg = &ball.grounds[hit.ground];
         let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
-        let input = ImpactInput {
-            body: ball.cand.body,
-            inertia: &ball.inertia,
-            law: view.config.law,
-            material: view
-                .registry
-                .material_of(self.cluster.colliders, part.handle, gg.handle),
-            resting_speed: step.policy.resting_speed,
-            force_settle: false,
-            timing: ImpactTiming::InStep,
-        };
-        let (mut after, event) = resolve(&input, &ball.geom, gg, s, t, hit, point, points)?;
+        let material = view
+            .registry
+            .material_of(self.cluster.colliders, part.handle, gg.handle);
+        let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
+        let (body, timing) = (ball.cand.body, ImpactTiming::InStep);
+        let input = ImpactInput::new(body, &ball.inertia, law, material, resting_speed, timing);
+        let (mut after, event) = resolve(
+            &input,
+            &ball.geom,
+            gg,
+            s,
+            t,
+            &GroundContactAt::new(hit, point, points),
+        )?;
         let settled = event.settled;
         view.commit.event(event);
         if settled {

@@ -5,7 +5,7 @@
 use super::Planner;
 use super::body::{BodyPlan, BodyReads};
 use super::role::Pair;
-use crate::plugin::bridge::resolve::{ImpactInput, Inertia, resolve};
+use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, resolve};
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
 use crate::plugin::queries::geometry::{BodyGeom, Hit, body_velocity_at, landing_point};
@@ -41,18 +41,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             parts: SmallList::One(*part),
             radius: body.geom.radius,
         };
-        let input = ImpactInput {
-            body: body.handle,
-            inertia: &inertia,
-            law: self.config.law,
-            material: self
-                .registry
-                .material_of(scene.colliders, part.handle, gg.handle),
-            resting_speed: step.policy.resting_speed,
-            force_settle: false,
-            timing: ImpactTiming::StepStart,
-        };
-        match resolve(&input, &single, gg, &plan.state, 0.0, hit, point, count) {
+        let material = self
+            .registry
+            .material_of(scene.colliders, part.handle, gg.handle);
+        let (law, resting_speed) = (self.config.law, step.policy.resting_speed);
+        let timing = ImpactTiming::StepStart;
+        let input = ImpactInput::new(body.handle, &inertia, law, material, resting_speed, timing);
+        match resolve(
+            &input,
+            &single,
+            gg,
+            &plan.state,
+            0.0,
+            &GroundContactAt::new(hit, point, count),
+        ) {
             Some((after, event)) => {
                 plan.state = after;
                 plan.touched = true;
