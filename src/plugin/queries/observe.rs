@@ -386,6 +386,20 @@ pub(crate) struct Sets<'a> {
     pub multibody_joints: &'a MultibodyJointSet,
 }
 
+impl<'a> Sets<'a> {
+    pub fn new(
+        narrow_phase: &'a NarrowPhase,
+        impulse_joints: &'a ImpulseJointSet,
+        multibody_joints: &'a MultibodyJointSet,
+    ) -> Self {
+        Self {
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        }
+    }
+}
+
 /// What touches the body besides its grounds in rapier's contact graph as the last
 /// step left it (the same graph between `after_step` and the next `before_step`): asked
 /// only where a decision needs it, so a step costs nothing for the bodies that need none.

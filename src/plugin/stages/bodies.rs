@@ -437,12 +437,8 @@ impl AfterStep<'_> {
         inertia: &Inertia,
         first: Search,
     ) {
-        let Subject {
-            cand,
-            geom,
-            grounds,
-            step,
-        } = *subject;
+        let (cand, geom, grounds, step) =
+            (subject.cand, subject.geom, subject.grounds, subject.step);
         let events_from = self.commit.reported().len();
         let flown = reconstruct::through_impacts(self, colliders, subject, inertia, first);
         let checked = Checked {
@@ -469,12 +465,8 @@ impl AfterStep<'_> {
         subject: &Subject,
         why: EndCheck,
     ) -> EndAction {
-        let Subject {
-            cand,
-            geom,
-            grounds,
-            step,
-        } = *subject;
+        let (cand, geom, grounds, step) =
+            (subject.cand, subject.geom, subject.grounds, subject.step);
         let rb = &bodies[cand.body];
         let inertia = Inertia::of(rb);
         let checked = Checked {
@@ -543,12 +535,7 @@ fn flew_alone(rb: &RigidBody, cand: &Candidate, has_grounds: bool, step: &EndOfS
 /// or rapier's CCD cut its motion short before that first event; rapier's end state is then
 /// checked instead.
 fn first_search(rb: &RigidBody, subject: &Subject, free: bool) -> Option<Search> {
-    let Subject {
-        cand,
-        geom,
-        grounds,
-        step,
-    } = *subject;
+    let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
     let first = free.then(|| {
         if cand.closing {
             first_impact(geom, grounds, &cand.flight, &cand.start, 0.0, 0.0, step.dt)

@@ -53,21 +53,16 @@ use crate::rapier::prelude::{
     NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodySet,
 };
 
-impl<H> ImpactPlugin<H> {
+/// The step: its entry points, each a list of stage calls.
+impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// Steps `world` once with the plugin: [`Self::before_step`], rapier's step with the
     /// plugin as hooks, [`Self::after_step`].
-    pub fn step(&mut self, world: &mut PhysicsWorld)
-    where
-        H: crate::rapier::pipeline::PhysicsHooks,
-    {
+    pub fn step(&mut self, world: &mut PhysicsWorld) {
         self.step_with_events(world, &());
     }
 
     /// [`Self::step`] with rapier's event handler `events`.
-    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler)
-    where
-        H: crate::rapier::pipeline::PhysicsHooks,
-    {
+    pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler) {
         self.before_step(
             world.gravity,
             &world.integration_parameters,
@@ -103,14 +98,8 @@ impl<H> ImpactPlugin<H> {
         narrow_phase: &NarrowPhase,
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
-    ) where
-        H: PhysicsHooks,
-    {
-        let sets = Sets {
-            narrow_phase,
-            impulse_joints,
-            multibody_joints,
-        };
+    ) {
+        let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
         let mut step = self.prepare(gravity, params, bodies, colliders);
         if !step.active {
             self.step = step;
@@ -140,14 +129,8 @@ impl<H> ImpactPlugin<H> {
         narrow_phase: &NarrowPhase,
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
-    ) where
-        H: PhysicsHooks,
-    {
-        let sets = Sets {
-            narrow_phase,
-            impulse_joints,
-            multibody_joints,
-        };
+    ) {
+        let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
         let mut step = EndOfStep {
             data: std::mem::take(&mut self.step),
             sets,
@@ -255,14 +238,7 @@ impl<H> ImpactPlugin<H> {
 
     /// What the stages after rapier's step read of the plugin, and the writer.
     fn after_view(&mut self) -> AfterStep<'_> {
-        let exact = self.config.timing == TimingMode::Exact;
-        AfterStep {
-            config: &self.config,
-            registry: &self.registry,
-            flags: &self.flags,
-            roles: &self.memory.roles,
-            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
-            released: Vec::new(),
-        }
+        let reads = (&self.config, &self.registry, &self.flags);
+        AfterStep::new(reads, &mut self.memory, &mut self.events)
     }
 }

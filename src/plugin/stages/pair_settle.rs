@@ -117,10 +117,7 @@ impl AfterStep<'_> {
         let facing =
             |side: &Pushed, before: &State, normal: Vector3<f64>| before.com - normal * side.radius;
         self.push_apart(
-            [
-                Pushed::new(pair.a, ca, &ia, &mut sa, rad_a),
-                Pushed::new(pair.b, cb, &ib, &mut sb, rad_b),
-            ],
+            [Pushed::of(&side_a, &mut sa), Pushed::of(&side_b, &mut sb)],
             n,
             overlap,
             facing,
@@ -178,10 +175,7 @@ impl AfterStep<'_> {
         }
         let overlap = (-touch.dist).max(0.0);
         self.push_apart(
-            [
-                Pushed::new(pair.a, ca, &ia, &mut sa, 0.0),
-                Pushed::new(pair.b, cb, &ib, &mut sb, 0.0),
-            ],
+            [Pushed::of(&side_a, &mut sa), Pushed::of(&side_b, &mut sb)],
             touch.normal,
             overlap,
             |_: &Pushed, _: &State, _| touch.point,
@@ -303,19 +297,14 @@ struct Pushed<'s> {
 }
 
 impl<'s> Pushed<'s> {
-    fn new(
-        body: RigidBodyHandle,
-        collider: ColliderHandle,
-        inertia: &'s Inertia,
-        state: &'s mut State,
-        radius: f64,
-    ) -> Self {
+    /// The body of `side`, its state `state` to be moved.
+    fn of(side: &PairSide<'s>, state: &'s mut State) -> Self {
         Self {
-            body,
-            collider,
-            inertia,
+            body: side.body,
+            collider: side.collider,
+            inertia: side.inertia,
             state,
-            radius,
+            radius: side.radius,
         }
     }
 }

@@ -45,12 +45,7 @@ pub(crate) fn through_impacts(
     inertia: &Inertia,
     first: Search,
 ) -> State {
-    let Subject {
-        cand,
-        geom,
-        grounds,
-        step,
-    } = *subject;
+    let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
     let mut next = first;
     let mut flight = cand.flight;
     let mut seg = cand.start;

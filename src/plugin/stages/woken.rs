@@ -12,7 +12,7 @@ use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::EndCheck;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::observe::{body_geom, rapier_state};
-use crate::plugin::stages::commit::{Commit, Origin};
+use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::state::step::{AfterStep, EndOfStep};
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, PhysicsHooks, RigidBodySet};
@@ -26,16 +26,9 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let exact = self.config.timing == crate::plugin::config::TimingMode::Exact;
         let (user_hooks, flags) = (&self.user_hooks, &self.flags);
-        let mut view = AfterStep {
-            config: &self.config,
-            registry: &self.registry,
-            flags: &self.flags,
-            roles: &self.memory.roles,
-            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
-            released: Vec::new(),
-        };
+        let reads = (&self.config, &self.registry, &self.flags);
+        let mut view = AfterStep::new(reads, &mut self.memory, &mut self.events);
         let (impulse_joints, multibody_joints) =
             (step.sets.impulse_joints, step.sets.multibody_joints);
         for handle in &step.asleep {

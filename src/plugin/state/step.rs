@@ -2,7 +2,8 @@
 //! step to the stages after it.
 
 use crate::motion::{Flight, Rolling, State};
-use crate::plugin::config::ImpactConfig;
+use crate::plugin::config::{ImpactConfig, TimingMode};
+use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::policy::{Policy, Role};
@@ -11,6 +12,7 @@ use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::PairPlan;
 use crate::plugin::state::handles::{HandleMap, PairKey};
+use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
@@ -146,4 +148,23 @@ pub(crate) struct AfterStep<'a> {
     /// role becomes `Resting`, so that the next step's plan, finding them within reach, does
     /// not release them again.
     pub released: Vec<PairKey>,
+}
+
+impl<'a> AfterStep<'a> {
+    /// The view of a plugin's parts; `exact`: `TimingMode::Exact` (see `Commit`).
+    pub fn new(
+        (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
+        memory: &'a mut Memory,
+        events: &'a mut Vec<ImpactEvent>,
+    ) -> Self {
+        let exact = config.timing == TimingMode::Exact;
+        Self {
+            config,
+            registry,
+            flags,
+            roles: &memory.roles,
+            commit: Commit::new(events, &mut memory.shadows, exact),
+            released: Vec::new(),
+        }
+    }
 }

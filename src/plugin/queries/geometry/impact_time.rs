@@ -209,19 +209,14 @@ struct Flying<'q, 'a> {
 /// A bound on the speed at which any point of the body can approach any ground during
 /// `[t0, t0 + span]` of the flight `fly`.
 fn approach_bound(fly: &Flying, span: f64) -> f64 {
-    let Flying {
-        body,
-        grounds,
-        flight,
-        s0,
-        t0,
-    } = *fly;
+    let (body, flight, s0) = (fly.body, fly.flight, fly.s0);
     let lin = flight.max_speed(s0, span);
     let body_bound = lin + flight.max_angular_speed(s0) * body.radius;
     let travel = lin * span + body.radius;
-    let ground_bound = grounds
+    let ground_bound = fly
+        .grounds
         .iter()
-        .map(|g| g.max_speed((s0.com - g.com_at(t0)).norm() + travel))
+        .map(|g| g.max_speed((s0.com - g.com_at(fly.t0)).norm() + travel))
         .fold(0.0, f64::max);
     (body_bound + ground_bound).max(1e-9)
 }
@@ -301,13 +296,7 @@ pub(crate) fn first_impact(
 /// defined even against a single triangle of a mesh, where a penetration normal may point
 /// sideways through the triangle's edge.
 fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64, State, Hit) {
-    let Flying {
-        body,
-        grounds,
-        flight,
-        s0,
-        t0,
-    } = *fly;
+    let (body, grounds, flight, s0, t0) = (fly.body, fly.grounds, fly.flight, fly.s0, fly.t0);
     if h.dist < 0.0 {
         // Already inside at the start of the search: the impact is now.
         return (t, s, h);

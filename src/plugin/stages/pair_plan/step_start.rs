@@ -14,7 +14,9 @@ use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state};
 use crate::plugin::stages::commit::{Commit, Origin};
-use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+};
 use nalgebra::Vector3;
 
 /// What `Step` mode's impulses between bodies read besides the plan and the bodies: the
@@ -58,9 +60,9 @@ pub(crate) fn step_start_impulses(
             let (sa, sb) = (rapier_state(&bodies[pair.a]), rapier_state(&bodies[pair.b]));
             let states = (sa, sb);
             let resolved = if pair.balls {
-                step_start_balls(&pair, states, bodies, inputs)
+                step_start_balls(&pair, states, (&bodies[pair.a], &bodies[pair.b]), inputs)
             } else {
-                step_start_bodies(&pair, states, bodies, inputs)
+                step_start_bodies(&pair, states, (&bodies[pair.a], &bodies[pair.b]), inputs)
             };
             let Some((after_a, after_b, pair_events)) = resolved else {
                 continue;
@@ -110,11 +112,10 @@ fn write_velocities<const N: usize>(
 fn step_start_balls(
     pair: &PlannedPair,
     (sa, sb): (State, State),
-    bodies: &RigidBodySet,
+    (ra, rb): (&RigidBody, &RigidBody),
     inputs: &StepStart,
 ) -> Resolved {
     let (colliders, policy, dt) = (inputs.colliders, inputs.policy, inputs.dt);
-    let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
     let margin = policy.resting_gap.max(policy.prediction);
     let d = sb.com - sa.com;
     let len = d.norm();
@@ -165,11 +166,10 @@ fn step_start_balls(
 fn step_start_bodies(
     pair: &PlannedPair,
     (sa, sb): (State, State),
-    bodies: &RigidBodySet,
+    (ra, rb): (&RigidBody, &RigidBody),
     inputs: &StepStart,
 ) -> Resolved {
     let (colliders, policy, dt) = (inputs.colliders, inputs.policy, inputs.dt);
-    let (ra, rb) = (bodies.get(pair.a)?, bodies.get(pair.b)?);
     let (la, lb) = (
         vec_to_na(ra.local_center_of_mass()),
         vec_to_na(rb.local_center_of_mass()),

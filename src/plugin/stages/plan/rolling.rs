@@ -399,14 +399,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         plane: &PlaneNear,
         step: &StepData,
     ) -> Option<SmallList<ColliderHandle>> {
-        let BallOnGround {
-            handle,
-            part,
-            gg,
-            others,
-            ref on_ground,
-            ..
-        } = *slide.ball;
+        let ball = slide.ball;
+        let (handle, part, gg, others, on_ground) = (
+            ball.handle,
+            ball.part,
+            ball.gg,
+            ball.others,
+            &ball.on_ground,
+        );
         let (colliders, friction) = (scene.colliders, slide.friction);
         let mut pieces = SmallList::One(gg.handle);
         let default = (
@@ -454,14 +454,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         end: &State,
         dt: f64,
     ) -> Option<SmallList<ColliderHandle>> {
-        let BallOnGround {
-            handle,
-            part,
-            gg,
-            others,
-            ref on_ground,
-            ..
-        } = *slide.ball;
+        let ball = slide.ball;
+        let (handle, part, gg, others, on_ground) = (
+            ball.handle,
+            ball.part,
+            ball.gg,
+            ball.others,
+            &ball.on_ground,
+        );
         let colliders = scene.colliders;
         let (to_plane, friction, default) = (slide.to_plane, slide.friction, slide.default);
         // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8.
