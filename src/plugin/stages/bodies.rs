@@ -129,12 +129,7 @@ impl AfterStep<'_> {
                     .filter_map(|i| self.pair_geom(&step.grounds[*i], &geom, colliders)),
             )
             .collect();
-        let subject = Subject {
-            cand,
-            geom: &geom,
-            grounds: &grounds,
-            step,
-        };
+        let subject = Subject::new(cand, &geom, &grounds, step);
         // Something else acted on it in the step: a contact, a joint, or rapier's CCD
         // stopping it short (against a thin body).
         let sets = &step.sets;
@@ -217,12 +212,7 @@ impl AfterStep<'_> {
         }
         let geom = body_geom(rb, colliders, &cand.local_com);
         let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
-        let subject = Subject {
-            cand,
-            geom: &geom,
-            grounds: &grounds,
-            step,
-        };
+        let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(rb);
         match first_search(rb, &subject, mode != TimingMode::Step && free) {
             None => {
@@ -252,12 +242,7 @@ impl AfterStep<'_> {
     ) -> bool {
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
         let grounds = self.turning_resting_geoms(cand, &geom, colliders, step);
-        let subject = Subject {
-            cand,
-            geom: &geom,
-            grounds: &grounds,
-            step,
-        };
+        let subject = Subject::new(cand, &geom, &grounds, step);
         let why = EndCheck::TurningResting {
             turns_surface: cand.turns_surface,
         };
@@ -503,12 +488,7 @@ impl AfterStep<'_> {
         }
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
         let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
-        let subject = Subject {
-            cand,
-            geom: &geom,
-            grounds: &grounds,
-            step,
-        };
+        let subject = Subject::new(cand, &geom, &grounds, step);
         self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
     }
 }

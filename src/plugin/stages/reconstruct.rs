@@ -36,6 +36,22 @@ pub(crate) struct Subject<'s> {
     pub step: &'s EndOfStep<'s>,
 }
 
+impl<'s> Subject<'s> {
+    pub fn new(
+        cand: &'s Candidate,
+        geom: &'s BodyGeom<'s>,
+        grounds: &'s [GroundGeom<'s>],
+        step: &'s EndOfStep<'s>,
+    ) -> Self {
+        Self {
+            cand,
+            geom,
+            grounds,
+            step,
+        }
+    }
+}
+
 /// The body's state at the step's end after the impacts from `first` on (see the module's
 /// contract); `view` receives the events.
 pub(crate) fn through_impacts(
