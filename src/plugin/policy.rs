@@ -56,6 +56,93 @@ pub(crate) fn on_plane(
         && normal.dot(plane) >= 1.0 - ON_PLANE_TOLERANCE
 }
 
+// Numerical tolerances of the geometry and of the searches: each the rounding of the
+// arithmetic it guards (rapier's `f32` poses, the model's `f64` products), far below any
+// physical gap, so that no decision turns on a rounding.
+
+/// Part of an acceleration along a plane, relative to the acceleration, below which the
+/// acceleration counts as normal to the plane (a level ground): the rounding of `f64` products
+/// of unit vectors.
+pub(crate) const LEVEL_TOLERANCE: f64 = 1e-9;
+
+/// Spread of a body's principal inverse inertias, relative to the largest, within which its
+/// inertia counts as isotropic (a ball about its centre): rapier computes a ball's three
+/// principal inertias alike, so only the rounding of a body built otherwise is allowed.
+pub(crate) const ISOTROPIC_TOLERANCE: f64 = 1e-12;
+
+/// Distance (m per m of radius) of a ball's centre from its body's centre of mass within which
+/// the ball counts as centred on it: the rounding of the body frame's coordinates.
+pub(crate) const CENTRED_TOLERANCE: f64 = 1e-9;
+
+/// How close to a ground counts as touching for the searches, per metre of the body's size,
+/// and its bounds (m): small beside rapier's contact skin and prediction distance, large beside
+/// the rounding of a contact query in `f32`.
+pub(crate) const TOUCH_TOLERANCE: f64 = 1e-3;
+/// See [`TOUCH_TOLERANCE`] (m).
+pub(crate) const TOUCH_TOLERANCE_MIN: f64 = 1e-7;
+/// See [`TOUCH_TOLERANCE`] (m).
+pub(crate) const TOUCH_TOLERANCE_MAX: f64 = 1e-3;
+
+/// How close to a ground counts as touching (m) for a body of bounding radius `radius` (m).
+pub(crate) fn touch_tolerance(radius: f64) -> f64 {
+    (TOUCH_TOLERANCE * radius).clamp(TOUCH_TOLERANCE_MIN, TOUCH_TOLERANCE_MAX)
+}
+
+/// Smallest time step (relative to the time, plus 1 s) a root search of a contact time takes
+/// before it stops: a few ulps of an `f64` time, where the iterates stop moving.
+pub(crate) const ROOT_STEP: f64 = 1e-15;
+
+/// Floor (m/s) of the approach-speed bound of a flight's conservative advancement, so that a
+/// body at rest still advances: a thousandth of a micrometre per millisecond.
+pub(crate) const FLIGHT_SPEED_FLOOR: f64 = 1e-9;
+
+/// Floor (m/s) of the closing-speed bound of two bodies' conservative advancement, so that two
+/// bodies at rest relative to each other still advance.
+pub(crate) const BODIES_SPEED_FLOOR: f64 = 1e-12;
+
+/// Rounding (m per m of distance from the origin, and per m of gap) of a flight's positions
+/// and of a contact query's distance, allowed for when a search decides a step is clear.
+pub(crate) const POSITION_ROUNDING: f64 = 1e-9;
+
+/// Most conservative-advancement steps a search may need across a step for it to be worth
+/// deciding the step clear without searching: the travel of the body's fastest point over its
+/// lowest gap.
+pub(crate) const CLEAR_SEARCH_STEPS: f64 = 256.0;
+
+/// Rounding (m per m of distance from the origin) of `f32` poses in a face test of parry's
+/// shapes (a point on a cuboid face, a support point over a face).
+pub(crate) const FACE_ROUNDING: f64 = 1e-6;
+
+/// The face size (m) below which a flat face's rounding allowance stops shrinking.
+pub(crate) const FACE_SIZE_FLOOR: f64 = 1e-3;
+
+/// The bounding-sphere test's margin for rapier's `f32` arithmetic: the sphere grown by the
+/// factor [`FAR_TEST_GROWTH`], and by this many metres per metre of distance from the origin.
+pub(crate) const FAR_TEST_MARGIN: f64 = 1e-4;
+/// See [`FAR_TEST_MARGIN`].
+pub(crate) const FAR_TEST_GROWTH: f64 = 1.0001;
+
+/// Allowance on a torque-free spin's growth bound `I_max / I_min` for the rounding of rapier's
+/// `f32` inertias (2 per cent).
+pub(crate) const SPIN_UP_ALLOWANCE: f64 = 1.02;
+
+/// How far (relative to the speeds) rapier's linear velocity may differ from a free flight's
+/// for the body to count as having flown freely: twenty times rapier's `f32` rounding over
+/// its substeps (a few ulps), far below a contact's impulse (all of `|g| dt` at rest).
+pub(crate) const MOVED_AS_FLOWN_ROUNDING: f64 = 1e-5;
+
+/// The smallest time (s) whose `f64` spacing the search steps past a time by: below it, the
+/// spacing at 1 ms, so that a time near zero still moves.
+pub(crate) const TIME_ULP_FLOOR: f64 = 1e-3;
+
+/// A translation below which (m^2, squared) a flight counts as not moving, for comparing it
+/// with rapier's CCD-clamped motion.
+pub(crate) const STILL_TRAVEL_SQUARED: f64 = 1e-24;
+
+/// Fraction of a step's travel rapier's CCD may stop short of the exact flight besides its
+/// integration difference and prediction distance: its own time-of-impact rounding.
+pub(crate) const CCD_SLACK: f64 = 1e-3;
+
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Role {

@@ -8,6 +8,7 @@ use crate::model::{
 use crate::motion::State;
 use crate::plugin::bridge::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::policy::ISOTROPIC_TOLERANCE;
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
@@ -42,12 +43,12 @@ impl Inertia {
         }
     }
 
-    /// `I / (m r^2)` for a body of isotropic inertia (to 1e-12) with no locked rotation axis
+    /// `I / (m r^2)` for a body of isotropic inertia (to `ISOTROPIC_TOLERANCE`) with no locked rotation axis
     /// (a ball about its centre) and contact radius `radius`, else `None`.
     pub fn ball_ratio(&self, radius: f64) -> Option<f64> {
         let inv = self.inv_principal.diagonal();
         let (lo, hi) = (inv.min(), inv.max());
-        let isotropic = lo > 0.0 && hi.is_finite() && hi - lo <= 1e-12 * hi;
+        let isotropic = lo > 0.0 && hi.is_finite() && hi - lo <= ISOTROPIC_TOLERANCE * hi;
         let ratio = 1.0 / (hi * self.mass * radius * radius);
         (isotropic && !self.locked.contains(&true) && ratio.is_finite() && ratio > 0.0)
             .then_some(ratio)

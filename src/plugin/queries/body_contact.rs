@@ -13,9 +13,8 @@ use crate::parry::query::{
     self, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use crate::plugin::bridge::convert::{pose_from_na, to_f64, to_real, vec_to_na};
-use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, body_velocity_at, close_tolerance, part_pose,
-};
+use crate::plugin::policy::{BODIES_SPEED_FLOOR, POSITION_ROUNDING, ROOT_STEP, touch_tolerance};
+use crate::plugin::queries::geometry::{BodyGeom, BodyPart, body_velocity_at, part_pose};
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// The closest (or deepest) contact of two bodies at one instant.
@@ -197,7 +196,7 @@ pub(crate) fn first_body_touch(
     // Touching, for the search, as for a ground (`geometry::first_impact`): within this of
     // each other a touch that separates is stepped over by it, and one that closes is
     // polished to rounding.
-    let close = close_tolerance(a.geom.radius.min(b.geom.radius));
+    let close = touch_tolerance(a.geom.radius.min(b.geom.radius));
     let bound = |t: f64, sa: &State, sb: &State| {
         let left = (t_end - t).max(0.0);
         let accel = a.moving.motion.accel_bound(sa) + b.moving.motion.accel_bound(sb);
@@ -238,9 +237,9 @@ pub(crate) fn first_body_touch(
                 // iterate may lie past a dip of a turning corner).
             }
             // Touching and separating (a graze, or a pair just resolved): step past it.
-            t += close.max(touch.dist) / speed.max(1e-12);
+            t += close.max(touch.dist) / speed.max(BODIES_SPEED_FLOOR);
         } else {
-            t += touch.dist / speed.max(1e-12);
+            t += touch.dist / speed.max(BODIES_SPEED_FLOOR);
         }
         if t > t_end {
             // The last step may have passed a touch at the interval's end by a rounding:
@@ -281,7 +280,7 @@ fn polish(
             None => break,
             Some(tb) => 0.5 * (ta + tb),
         };
-        if t_new.is_nan() || t_new <= ta || t_new - ta <= 1e-15 * (1.0 + ta.abs()) {
+        if t_new.is_nan() || t_new <= ta || t_new - ta <= ROOT_STEP * (1.0 + ta.abs()) {
             break;
         }
         match at(t_new, reach) {
@@ -315,7 +314,7 @@ pub(crate) fn touch_point(
     let (pose_a, pose_b) = (part_pose(pa, sa), part_pose(pb, sb));
     let rel = pose_a.inverse() * pose_b;
     let size = a.radius.min(b.radius);
-    let tol = flat_tolerance * size + 1e-9 * (1.0 + size);
+    let tol = flat_tolerance * size + POSITION_ROUNDING * (1.0 + size);
     let skins = pa.skin + pb.skin;
     let prediction = touch.dist.max(0.0) + skins + tol;
     let Some(found) = manifold_points(pa, pb, &pose_a, &rel, prediction) else {

@@ -11,6 +11,9 @@ use crate::motion::{Flight, Gyro, State};
 use crate::parry::query;
 use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
 use crate::plugin::policy::LOADED_COS;
+use crate::plugin::policy::{
+    CENTRED_TOLERANCE, FAR_TEST_GROWTH, FAR_TEST_MARGIN, SPIN_UP_ALLOWANCE,
+};
 use crate::plugin::queries::geometry::{BodyGeom, BodyPart, GroundGeom};
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex, GroundMotion};
 use crate::plugin::state::handles::HandleMap;
@@ -71,14 +74,14 @@ pub(crate) fn surely_far(
         // Torque-free motion speeds an anisotropic body's spin up by at most I_max / I_min.
         let inv = rb.mass_properties().local_mprops.inv_principal_inertia;
         let spin_up = if inv.is_finite() && inv.min_element() > 0.0 {
-            1.02 * inv.max_element() / inv.min_element()
+            SPIN_UP_ALLOWANCE as Real * inv.max_element() / inv.min_element()
         } else {
             1.0
         };
         speed += spin_up * w.length() * radius;
     }
-    let half = (radius + speed * dt + margin) * 1.0001
-        + 1e-4 * (1.0 + com.abs().max_element() + local_com.length());
+    let half = (radius + speed * dt + margin) * FAR_TEST_GROWTH as Real
+        + FAR_TEST_MARGIN as Real * (1.0 + com.abs().max_element() + local_com.length());
     if !half.is_finite() || !com.is_finite() {
         return Some(false);
     }
@@ -193,7 +196,7 @@ pub(crate) fn centred_ball(part: &BodyPart) -> bool {
 /// Is a ball of `radius` whose centre lies `offset` from the body's centre of mass centred
 /// on it (to rounding of the body frame's coordinates)?
 pub(crate) fn centred(offset: &Vector3<f64>, radius: f64) -> bool {
-    offset.norm() <= 1e-9 * radius
+    offset.norm() <= CENTRED_TOLERANCE * radius
 }
 
 /// A ground's geometry for the queries, if its collider still exists.
@@ -593,7 +596,7 @@ fn closing_bound(
         if !other_ball && inv.min_element() > 0.0 {
             let spin_up = inv.max_element() / inv.min_element();
             let torque = to_f64(ob.user_torque().length() * inv.max_element());
-            turn = (turn * to_f64(spin_up) + torque * dt * arm) * 1.02;
+            turn = (turn * to_f64(spin_up) + torque * dt * arm) * SPIN_UP_ALLOWANCE;
         }
     } else if ob.is_kinematic() {
         // A position-based kinematic body is moved to its next pose whatever its velocity:

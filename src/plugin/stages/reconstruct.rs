@@ -18,6 +18,7 @@ use crate::plugin::bridge::resolve::{
 };
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::on_plane;
+use crate::plugin::policy::{CCD_SLACK, MOVED_AS_FLOWN_ROUNDING, STILL_TRAVEL_SQUARED};
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
 };
@@ -235,11 +236,6 @@ pub(crate) fn moved_as_flown(rb: &RigidBody, cand: &Candidate, dt: f64) -> bool 
     (actual - flown).norm() <= MOVED_AS_FLOWN_ROUNDING * scale + damping
 }
 
-/// How far (relative to the speeds) rapier's linear velocity may differ from a free flight's
-/// for the body to count as having flown freely: twenty times rapier's `f32` rounding over
-/// its substeps (a few ulps), far below a contact's impulse (all of `|g| dt` at rest).
-const MOVED_AS_FLOWN_ROUNDING: f64 = 1e-5;
-
 /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its first
 /// ground impact at `t_first`? If rapier clamped it earlier, something other than a ground
 /// stopped it, and re-integrating its flight would undo that.
@@ -256,13 +252,14 @@ pub(crate) fn ccd_consistent(
     let free_end = cand.flight.advance(&cand.start, dt).com;
     let exact = free_end - cand.start.com;
     let len2 = exact.norm_squared();
-    if len2 < 1e-24 {
+    if len2 < STILL_TRAVEL_SQUARED {
         return true;
     }
     let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
     let fraction = actual.dot(&exact) / len2;
     // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
     // body up to about a prediction distance before the contact.
-    let slack = (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + 1e-3;
+    let slack =
+        (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + CCD_SLACK;
     fraction >= t_first / dt - slack
 }

@@ -8,6 +8,9 @@ use super::instant::{closest, plane_contact_on};
 use super::plane::flat_throughout;
 use super::{BodyGeom, BodyPart, GroundGeom, Hit};
 use crate::motion::{Flight, State};
+use crate::plugin::policy::{
+    CLEAR_SEARCH_STEPS, FLIGHT_SPEED_FLOOR, POSITION_ROUNDING, ROOT_STEP, touch_tolerance,
+};
 use nalgebra::Vector3;
 
 /// The first time in `(0, dt]` at which `touches` holds, for a body moving smoothly along
@@ -44,11 +47,6 @@ pub(crate) fn earliest_touch(dt: f64, touches: impl Fn(f64) -> bool) -> Option<f
 /// face once, and a sample every 16th of a step finds it.
 const TOUCH_SAMPLES: usize = 16;
 
-/// How close to a ground [`first_impact`] counts as touching (m), for a body of `radius`.
-pub(crate) fn close_tolerance(radius: f64) -> f64 {
-    (1e-3 * radius).clamp(1e-7, 1e-3)
-}
-
 /// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of
 /// mass, so its rotation does not move it) without linear damping against grounds whose
 /// every query over the flight is one face's plane ([`flat_throughout`]) and towards which
@@ -79,7 +77,7 @@ fn ball_on_flat(fly: &Flying, t_from: f64, t_to: f64) -> Option<Search> {
     }
     let span = t_to - t0;
     let travel = flight.max_speed(s0, span) * span;
-    let close = close_tolerance(body.radius);
+    let close = touch_tolerance(body.radius);
     let center = s0.com;
     let mut first: Option<f64> = None;
     for ground in grounds {
@@ -171,7 +169,7 @@ pub(crate) fn cannot_close(
         return false;
     }
     // Any point of the body moves at most this far in the step.
-    let travel = speed.max(1e-9) * dt;
+    let travel = speed.max(FLIGHT_SPEED_FLOOR) * dt;
     if !flat_throughout(part, ground, s, travel, radius) {
         return false;
     }
@@ -190,9 +188,9 @@ pub(crate) fn cannot_close(
         vn.min(0.0) * dt + 0.5 * an.min(0.0) * dt * dt
     };
     let turn = flight.max_angular_speed(s) * dt * radius;
-    let rounding = 1e-9 * (1.0 + s.com.norm() + dist.abs());
+    let rounding = POSITION_ROUNDING * (1.0 + s.com.norm() + dist.abs());
     let low = dist + sink - turn - rounding;
-    low > close_tolerance(radius) && travel <= 256.0 * low
+    low > touch_tolerance(radius) && travel <= CLEAR_SEARCH_STEPS * low
 }
 
 /// A body's flight against the grounds, as the search asks it: the body's parts, the grounds
@@ -218,7 +216,7 @@ fn approach_bound(fly: &Flying, span: f64) -> f64 {
         .iter()
         .map(|g| g.max_speed((s0.com - g.com_at(fly.t0)).norm() + travel))
         .fold(0.0, f64::max);
-    (body_bound + ground_bound).max(1e-9)
+    (body_bound + ground_bound).max(FLIGHT_SPEED_FLOOR)
 }
 
 /// What the search for the next impact found.
@@ -260,7 +258,7 @@ pub(crate) fn first_impact(
         return found;
     }
     let bound = approach_bound(&fly, t_to - t0);
-    let close = close_tolerance(body.radius);
+    let close = touch_tolerance(body.radius);
     let mut t = t_from;
     let mut last = (t, flight.advance(s0, t - t0));
     for _ in 0..MAX_ADVANCE {
@@ -318,7 +316,7 @@ fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64
             None => break,
             Some((t_b, d_b)) => t_a + d_a * (t_b - t_a) / (d_a - d_b),
         };
-        if t_new.is_nan() || t_new <= t_a || (t_new - t_a) <= 1e-15 * (1.0 + t_a.abs()) {
+        if t_new.is_nan() || t_new <= t_a || (t_new - t_a) <= ROOT_STEP * (1.0 + t_a.abs()) {
             break;
         }
         let s_new = flight.advance(s0, t_new - t0);
@@ -340,7 +338,7 @@ fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64
             last_side = -1;
         }
         if let Some((t_b, _)) = inside {
-            if t_b - out.0 <= 1e-15 * (1.0 + t_b.abs()) {
+            if t_b - out.0 <= ROOT_STEP * (1.0 + t_b.abs()) {
                 break;
             }
         }

@@ -8,6 +8,7 @@ use crate::motion::State;
 use crate::parry::query;
 use crate::parry::shape::Triangle;
 use crate::plugin::bridge::convert::{pose_from_na, to_f64, vec_to_na};
+use crate::plugin::policy::FACE_ROUNDING;
 use nalgebra::Vector3;
 
 /// Contact of one body part and one ground at time `t`, if within `prediction` (m):
@@ -161,7 +162,7 @@ fn ball_plane_contact(
                 .inverse_transform_point(&nalgebra::Point3::from(centre))
                 .coords;
             let (axis, nl) = cuboid_face(&p, &half);
-            let tol = 1e-6 * (1.0 + centre.norm());
+            let tol = FACE_ROUNDING * (1.0 + centre.norm());
             if !(0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol) {
                 return Some(None);
             }
@@ -282,7 +283,7 @@ pub(super) fn plane_contact_on(
     };
     let height = n.dot(&(support - q));
     let over = support - n * height;
-    let tol = 1e-6 * (1.0 + body_point.norm());
+    let tol = FACE_ROUNDING * (1.0 + body_point.norm());
     let inside = match face {
         Face::Unbounded => true,
         Face::Rect { axis, half } => {

@@ -8,6 +8,7 @@ use super::{BodyPart, GroundGeom, Hit, body_velocity_at, part_pose};
 use crate::motion::State;
 use crate::parry::shape::{PolygonalFeature, Triangle};
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
+use crate::plugin::policy::{FACE_ROUNDING, FACE_SIZE_FLOOR};
 use nalgebra::{Isometry3, Vector3};
 
 /// Is every query of `part` against `ground` over a flight from `s` in which every point of
@@ -381,10 +382,10 @@ pub(crate) fn landing_point(
             size = size.max((a - b).norm());
         }
     }
-    let tol = flat_tolerance * size + 1e-6 * (size + 1e-3);
+    let tol = flat_tolerance * size + FACE_ROUNDING * (size + FACE_SIZE_FLOOR);
     // The face must be the one touching: its lowest vertex at the contact point (a rounded
     // shape's core vertices sit `border` above its surface).
-    if (h_min - to_f64(border)).abs() > tol + 1e-6 * (1.0 + size) {
+    if (h_min - to_f64(border)).abs() > tol + FACE_ROUNDING * (1.0 + size) {
         return (h.point, 1);
     }
     let mut sum = Vector3::zeros();

@@ -12,6 +12,7 @@ use crate::plugin::bridge::resolve::{
     resolve_balls, resolve_bodies,
 };
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
+use crate::plugin::policy::TIME_ULP_FLOOR;
 use crate::plugin::policy::on_plane;
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landing_point};
@@ -491,5 +492,5 @@ impl Cluster<'_, '_> {
 
 /// The smallest time after `t` that differs from it.
 fn next_after(t: f64) -> f64 {
-    t + f64::EPSILON * t.abs().max(1e-3)
+    t + f64::EPSILON * t.abs().max(TIME_ULP_FLOOR)
 }

@@ -7,6 +7,7 @@ use super::body::{BodyPlan, BodyReads};
 use super::role::Pair;
 use crate::motion::{Flight, Rolling, State};
 use crate::plugin::bridge::resolve::{Inertia, Site, released};
+use crate::plugin::policy::LEVEL_TOLERANCE;
 use crate::plugin::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, ROLLING_MIN_SLIP, Role};
 use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, contact_checked,
@@ -265,7 +266,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let b = part.shape.as_ball()?;
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
-        let level = (flight.accel - n * an).norm() <= 1e-9 * flight.accel.norm();
+        let level = (flight.accel - n * an).norm() <= LEVEL_TOLERANCE * flight.accel.norm();
         let user_modifies = (self.flags.recorded_user_flags(colliders, part.handle)
             | self.flags.recorded_user_flags(colliders, gg.handle))
         .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
