@@ -93,7 +93,7 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) flags: HookFlags,
     /// What the last step left for the next (`state/memory.rs`).
     pub(crate) memory: Memory,
-    /// The opted-in balls' swept spheres, refitted each step (`pair_plan.rs`).
+    /// The opted-in balls' swept spheres, refitted each step (`stages/pair_plan/index.rs`).
     pub(crate) pair_index: PairIndex,
     pub(crate) events: Vec<ImpactEvent>,
 }

@@ -5,8 +5,8 @@
 //!
 //! - [`ImpactPlugin`] (`impact_plugin.rs`), its configuration (`config.rs`) and its events
 //!   (`events.rs`): the public face.
-//! - `stages/`: the step, as its stages in order (plan before rapier's step; reconstruct,
-//!   settle and commit after it).
+//! - `stages/`: the step, as its stages in order (plan before rapier's step; reconstruct and
+//!   settle after it), and the one writer every stage writes through (`stages/commit.rs`).
 //! - `hooks/`: what runs inside rapier's step (the `PhysicsHooks` impl, its flags and tables).
 //! - `queries/`: read-only questions the stages share (contact geometry and time of impact,
 //!   the ground index, rapier's filtering, what the step observes of rapier).

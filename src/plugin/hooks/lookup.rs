@@ -1,4 +1,4 @@
-//! Install: the per-step tables rapier's hooks read during its step.
+//! Lookup: the per-step tables rapier's hooks read during its step.
 //!
 //! Contract: built at the end of `before_step` from the plan's roles and the hook flags, read
 //! (never written) by the `PhysicsHooks` impl (`hooks/mod.rs`) while rapier steps; a lookup is an

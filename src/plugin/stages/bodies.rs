@@ -67,9 +67,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         let released = std::mem::take(&mut view.released);
-        for key in released {
-            self.memory.roles.insert(key, Role::Resting);
-        }
+        self.memory.release(released);
     }
 
     /// The `Impact` pairs between bodies not moved together: rapier's end state (the pair

@@ -22,8 +22,9 @@ use nalgebra::Vector3;
 /// Where a written state comes from, which decides whether `Exact` mode keeps it.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) enum Origin {
-    /// The model's reconstruction (a flight, a rolling ball, the impacts of the step): its
-    /// `f64` state is the next step's start in `Exact` mode.
+    /// A state the plugin computed in `f64` (the model's reconstruction: a flight, a rolling
+    /// ball, the impacts of the step; or a start state put back, `EventKind::Hold`): it is the
+    /// next step's start in `Exact` mode.
     Model,
     /// A correction of rapier's end state (a push-out, a step-end impact, a step-start
     /// impulse): the next step starts from what rapier holds.
@@ -108,8 +109,10 @@ impl<'a> Commit<'a> {
     }
 
     /// Wakes a sleeping body the step must plan.
-    pub fn wake(rb: &mut RigidBody) {
-        rb.wake_up(true);
+    pub fn wake(&mut self, bodies: &mut RigidBodySet, body: RigidBodyHandle) {
+        if let Some(rb) = bodies.get_mut(body) {
+            rb.wake_up(true);
+        }
     }
 
     fn remember(&mut self, body: RigidBodyHandle, rb: &RigidBody, s: &State, origin: Origin) {

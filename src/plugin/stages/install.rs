@@ -3,8 +3,9 @@
 //!
 //! Contract: reads the plan (the roles of the pairs with grounds and between opted-in
 //! bodies, which bodies are near a ground and which far); writes the hook flags on the
-//! colliders (`hooks/flags.rs`, the only change to rapier's sets before its step besides
-//! `Step` mode's impulses) and the step's [`Lookup`]. Decides nothing about any pair.
+//! colliders (`hooks/flags.rs`; the other changes to rapier before its step are the commit's:
+//! the sleeping bodies the pair plan wakes, and `Step` mode's impulses) and the step's
+//! [`Lookup`]. Decides nothing about any pair.
 
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;

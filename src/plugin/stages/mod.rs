@@ -1,28 +1,31 @@
 //! The step, as its stages in the order they run (see `docs/architecture.md`).
 //!
 //! Before rapier's step ([`ImpactPlugin::before_step`]):
-//! 1. `prepare.rs`: the step's thresholds and the grounds' poses over the step; last step's
-//!    memory handed over.
-//! 2. `pair_plan.rs`: the pairs of opted-in bodies that may meet, their roles (and in `Step`
-//!    mode their impulses at the step's start).
-//! 3. `prepare.rs` (survey): which managed bodies are asleep, far from every ground, or to be
-//!    planned.
-//! 4. `plan.rs`: each planned body's pairs with the grounds near it get a role, the body a
-//!    candidate (and in `Step` mode the impulses of the contacts that close in the step).
-//! 5. `install.rs`: the hook flags and the tables rapier's hook calls read.
+//! 1. prepare (`prepare.rs`): the step's thresholds and the grounds' poses over the step;
+//!    last step's memory handed to the plan (`state/memory.rs`, `Memory::begin_step`).
+//! 2. pair plan (`pair_plan/`): the pairs of opted-in bodies that may meet and their roles;
+//!    their sleeping bodies woken, and in `Step` mode their impulses at the step's start.
+//! 3. survey (`prepare.rs`): which managed bodies are asleep, far from every ground (in
+//!    `Exact` mode a flying candidate each), or to be planned.
+//! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
+//!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
+//! 5. install (`install.rs`): the hook flags and the tables rapier's hook calls read.
 //!
 //! During rapier's step the plugin is its `PhysicsHooks` (`hooks/`).
 //!
 //! After rapier's step ([`ImpactPlugin::after_step`]):
-//! 1. `prepare.rs`: the grounds' actual motion over the step; this step's roles kept for the
-//!    next.
-//! 2. `woken.rs`: the bodies asleep at the start that rapier woke, checked at the step's end.
-//! 3. `pair_reconstruct.rs`: the clusters of impacts between bodies, moved together.
-//! 4. `bodies.rs`: every other candidate, routed to its reconstruction (`reconstruct.rs`: a
-//!    rolling ball's closed form, `Exact` mode's flight, the in-step impacts) and checked at
-//!    the step's end (`settle.rs`).
-//! 5. `pair_settle.rs`: the pairs between bodies left to rapier's end state, checked.
-//! 6. `bodies.rs`: the balls held at rest on a slope for their first step, put back.
+//! 1. this step's roles kept for the next (`Memory::keep_roles`; from here the stages read
+//!    them as `AfterStep::roles`), and the grounds' actual motion over the step (`prepare.rs`).
+//! 2. woken (`woken.rs`): the bodies asleep at the start that rapier woke, checked at the
+//!    step's end.
+//! 3. pair clusters (`pair_reconstruct/`): the clusters of impacts between bodies, moved
+//!    together.
+//! 4. bodies (`bodies.rs`): every other candidate, routed to its reconstruction
+//!    (`reconstruct.rs`: a rolling ball's closed form, `Exact` mode's flight, the in-step
+//!    impacts) and checked at the step's end (`settle.rs`).
+//! 5. pair ends (`pair_settle.rs`): the pairs between bodies not moved together, checked at
+//!    the step's end, after their bodies' own checks.
+//! 6. holds (`bodies.rs`): the balls held at rest on a slope for their first step, put back.
 //! 7. the colliders moved to the bodies' poses; the step's tables kept for the next.
 //!
 //! Every write into rapier and every event goes through the one writer (`commit.rs`).
@@ -180,21 +183,27 @@ impl<H> ImpactPlugin<H> {
             dt: step.dt,
             policy: &step.policy,
         };
-        step.pairs = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
-        if self.config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
+        let (pairs, woken) = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
+        step.pairs = pairs;
+        let config = self.config;
+        let mut commit = self.commit();
+        for body in woken {
+            commit.wake(bodies, body);
+        }
+        if config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
             let inputs = StepStart {
                 colliders,
-                law: self.config.law,
-                max_impacts: self.config.max_impacts_per_step,
-                flat_tolerance: self.config.flat_tolerance,
+                law: config.law,
+                max_impacts: config.max_impacts_per_step,
+                flat_tolerance: config.flat_tolerance,
                 policy: &step.policy,
                 dt: step.dt,
             };
-            pair_plan::step_start_impulses(&mut step.pairs, bodies, &mut self.commit(), &inputs);
+            pair_plan::step_start_impulses(&mut step.pairs, bodies, &mut commit, &inputs);
         }
     }
 
-    /// Plans each body of `to_plan` (`plan.rs`); returns those with a ground near them and
+    /// Plans each body of `to_plan` (`plan/`); returns those with a ground near them and
     /// the others, each in the order planned.
     fn plan_bodies(
         &mut self,

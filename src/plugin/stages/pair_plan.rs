@@ -43,7 +43,6 @@ use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::Sets;
-use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::handles::{HandleMap, HandleSet, slot_of};
 use crate::plugin::state::registry::Registry;
@@ -118,26 +117,22 @@ pub(crate) struct PairInputs<'a, H> {
     pub policy: &'a Policy,
 }
 
-/// The step's pairs (see the module's contract). Updates the pair index's leaves (kept for
-/// the next step) and wakes the sleeping members of `Impact` pairs; writes nothing else.
+/// The step's pairs (see the module's contract), and the sleeping members of their `Impact`
+/// pairs, which the step must wake to plan them as awake bodies. Updates the pair index's
+/// leaves (kept for the next step); writes nothing into rapier.
 pub(crate) fn plan_pairs<H: PhysicsHooks>(
     index: &mut PairIndex,
-    bodies: &mut RigidBodySet,
+    bodies: &RigidBodySet,
     inputs: &PairInputs<H>,
-) -> PairPlan {
+) -> (PairPlan, Vec<RigidBodyHandle>) {
     let Some(members) = Members::gather(bodies, inputs) else {
-        return PairPlan::default();
+        return (PairPlan::default(), Vec::new());
     };
     index.update(&members.leaves);
     let found = candidates(index, &members);
     let Planned { plan, woken } = plan_members(index, bodies, inputs, &members, found);
     index.clear_list(&members.leaves);
-    for handle in woken {
-        if let Some(rb) = bodies.get_mut(handle) {
-            Commit::wake(rb);
-        }
-    }
-    plan
+    (plan, woken)
 }
 
 /// The plan of the candidate pairs and of the chains they start, with the sleeping bodies

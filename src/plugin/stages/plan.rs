@@ -5,10 +5,12 @@
 //! gives each of its pairs with the grounds near it a role (`Role`, decided by
 //! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
 //! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and which grounds may reach it) for the
-//! stages after rapier's step. In `Step` mode it also applies the impulses of the contacts
-//! that close in the step, the only write of this stage, each with its event. It reads rapier
-//! and the registry and calls the user's filter where the colliders ask for it; [`StepData`]
-//! carries the step's thresholds, roles and candidates.
+//! stages after rapier's step, and the balls held at rest on a slope their first step
+//! (`StepData::first_holds`). It writes into rapier only through the commit: in `Step` mode
+//! the impulses of the contacts that close in the step, each with its event; and it reports a
+//! rolling ball that something can now reach (`EventKind::Released`, nothing written). It
+//! reads rapier and the registry and calls the user's filter where the colliders ask for it;
+//! [`StepData`] carries the step's thresholds, roles and candidates.
 //!
 //! The parts, by what each decides: the body's start, the grounds near it and its candidate
 //! (`plan/body.rs`); one pair's role (`plan/role.rs`); `Step` mode's start-of-step impulse

@@ -92,6 +92,14 @@ impl Memory {
         self.spare.roles = last.roles;
     }
 
+    /// The pairs of rolling balls released at the step's end (`EventKind::Released`) become
+    /// `Resting`: the next step's plan, finding them within reach, does not release them again.
+    pub fn release(&mut self, pairs: Vec<PairKey>) {
+        for key in pairs {
+            self.roles.insert(key, Role::Resting);
+        }
+    }
+
     /// After rapier's step: this step's roles and holds become what the next step reads.
     pub fn keep_roles(&mut self, step: &mut StepData) {
         self.roles = std::mem::take(&mut step.roles);

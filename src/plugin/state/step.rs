@@ -59,7 +59,7 @@ pub(crate) struct Candidate {
     /// (`EndCheck::TurningResting`).
     pub turning_resting: SmallList<(usize, Vector3<f64>)>,
     /// Its rotation moves its surface (it is not a single ball about its centre): see
-    /// `EndCheck::TurningResting` and `ImpactPlugin::turned_end`.
+    /// `EndCheck::TurningResting` and `AfterStep::turned_end` (`stages/bodies.rs`).
     pub turns_surface: bool,
     /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
     /// `StepData::grounds`) and the motion. `start` then touches the ground.

@@ -39,7 +39,7 @@ type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 /// velocities there: every pair that closes within the step and approaches faster than the
 /// resting speed gets the model's impulse, in the plan's order, and again in turn while one
 /// approaches (a chain along a row), at most `max_impacts` passes per member and twice that
-/// many events. Writes the bodies' velocities (poses stay rapier's); the pairs are then
+/// many events. Writes the bodies' velocities (their poses written back as read); the pairs are then
 /// rapier's resting contacts for the step (`Resting`, e = 0), so it never bounces them a
 /// second time. Writes and reports through `commit`.
 pub(crate) fn step_start_impulses(
@@ -89,7 +89,8 @@ pub(crate) fn step_start_impulses(
     commit.events(events);
 }
 
-/// Writes each body's velocities after a step-start impulse; the pose stays rapier's.
+/// Writes each body's velocities after a step-start impulse, with its pose as read (its
+/// `f64` round trip, `Commit::state`).
 fn write_velocities<const N: usize>(
     commit: &mut Commit,
     bodies: &mut RigidBodySet,
