@@ -92,6 +92,16 @@ pub(crate) fn touch_tolerance(radius: f64) -> f64 {
 /// before it stops: a few ulps of an `f64` time, where the iterates stop moving.
 pub(crate) const ROOT_STEP: f64 = 1e-15;
 
+/// Most conservative-advancement steps a search of the first contact in a step takes, with a
+/// ground (`first_impact`) or between two bodies (`first_body_touch`), before it gives up
+/// (`Search::Stalled`, `BodyStalled`): a body spinning fast against a ground can need
+/// thousands, and the step's end check then keeps it out of the ground.
+pub(crate) const ADVANCE_STEPS: usize = 1024;
+
+/// Most iterates of the root search of a contact time (`touch_time`): regula falsi with the
+/// Illinois step converges superlinearly, so it reaches `ROOT_STEP` long before.
+pub(crate) const ROOT_ITERATIONS: usize = 48;
+
 /// Floor (m/s) of the approach-speed bound of a flight's conservative advancement, so that a
 /// body at rest still advances: a thousandth of a micrometre per millisecond.
 pub(crate) const FLIGHT_SPEED_FLOOR: f64 = 1e-9;

@@ -13,8 +13,12 @@ use crate::parry::query::{
     self, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use crate::plugin::bridge::convert::{pose_from_na, to_f64, to_real, vec_to_na};
-use crate::plugin::policy::{BODIES_SPEED_FLOOR, POSITION_ROUNDING, ROOT_STEP, touch_tolerance};
-use crate::plugin::queries::geometry::{BodyGeom, BodyPart, body_velocity_at, part_pose};
+use crate::plugin::policy::{
+    ADVANCE_STEPS, BODIES_SPEED_FLOOR, POSITION_ROUNDING, touch_tolerance,
+};
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, Gap, body_velocity_at, part_pose, touch_time,
+};
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// The closest (or deepest) contact of two bodies at one instant.
@@ -175,9 +179,6 @@ pub(crate) struct Mover<'a> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct BodyStalled;
 
-/// The most conservative-advancement steps of [`first_body_touch`].
-const MAX_ADVANCE: usize = 1024;
-
 /// The first time in `[t, t_end]` at which `a` and `b` touch while approaching, with the
 /// contact there, `Ok(None)` if they do not, or [`BodyStalled`].
 ///
@@ -215,7 +216,7 @@ pub(crate) fn first_body_touch(
         body_contact(a.geom, &sa, b.geom, &sb, reach)
     };
     let mut t = t;
-    for _ in 0..MAX_ADVANCE {
+    for _ in 0..ADVANCE_STEPS {
         let prev = t;
         let (sa, sb) = states(t);
         let speed = bound(t, &sa, &sb);
@@ -254,42 +255,25 @@ pub(crate) fn first_body_touch(
     Err(BodyStalled)
 }
 
-/// The touch time to rounding from `(t, touch)`, near touching and approaching:
-/// Newton's method on the distance (its rate is `touch.rate`) while the iterates stay outside,
-/// then bisection between the last outside and the first inside iterate. Returns the last
-/// iterate outside (or touching), where the normal is the closest-point direction.
+impl Gap for BodyTouch {
+    fn gap(&self) -> f64 {
+        self.dist
+    }
+    fn rate(&self) -> f64 {
+        self.rate
+    }
+}
+
+/// [`touch_time`] of two bodies' contact, from `(t, touch)` near touching and approaching:
+/// the last iterate outside (or touching), where the normal is the closest-point direction.
 fn polish(
     at: &impl Fn(f64, f64) -> Option<BodyTouch>,
     t: f64,
     touch: BodyTouch,
     t_end: f64,
 ) -> (f64, BodyTouch) {
-    if touch.dist < 0.0 {
-        return (t, touch);
-    }
-    let mut out = (t, touch);
-    let mut inside: Option<f64> = None;
     let reach = 4.0 * touch.dist.abs() + 1e-6;
-    for _ in 0..64 {
-        let (ta, ha) = out;
-        if ha.dist <= 0.0 {
-            break;
-        }
-        let t_new = match inside {
-            None if ha.rate < 0.0 => (ta - ha.dist / ha.rate).min(t_end),
-            None => break,
-            Some(tb) => 0.5 * (ta + tb),
-        };
-        if t_new.is_nan() || t_new <= ta || t_new - ta <= ROOT_STEP * (1.0 + ta.abs()) {
-            break;
-        }
-        match at(t_new, reach) {
-            Some(h) if h.dist >= 0.0 => out = (t_new, h),
-            Some(_) => inside = Some(t_new),
-            None => break,
-        }
-    }
-    out
+    touch_time((t, touch), t_end, |t_new| at(t_new, reach))
 }
 
 /// The contact point of an impact between two bodies at a touch, resolved as one impact (as a

@@ -9,7 +9,9 @@ mod impact_time;
 mod instant;
 mod plane;
 
-pub(crate) use impact_time::{Search, Sweep, cannot_close, earliest_touch, first_impact};
+pub(crate) use impact_time::{
+    Gap, Search, Sweep, cannot_close, earliest_touch, first_impact, touch_time,
+};
 pub(crate) use instant::{closest, contact, contact_checked};
 pub(crate) use plane::{
     COPLANAR_TOLERANCE, PlaneNear, flat_relative, landing_point, one_plane_under, plane_piece_of,

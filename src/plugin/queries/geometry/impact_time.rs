@@ -9,7 +9,8 @@ use super::plane::flat_throughout;
 use super::{BodyGeom, BodyPart, GroundGeom, Hit};
 use crate::motion::{Flight, State};
 use crate::plugin::policy::{
-    CLEAR_SEARCH_STEPS, FLIGHT_SPEED_FLOOR, POSITION_ROUNDING, ROOT_STEP, touch_tolerance,
+    ADVANCE_STEPS, CLEAR_SEARCH_STEPS, FLIGHT_SPEED_FLOOR, POSITION_ROUNDING, ROOT_ITERATIONS,
+    ROOT_STEP, touch_tolerance,
 };
 use nalgebra::Vector3;
 
@@ -246,7 +247,6 @@ pub(crate) fn first_impact(
     t_from: f64,
     t_to: f64,
 ) -> Search {
-    const MAX_ADVANCE: usize = 512;
     let fly = Flying {
         body,
         grounds,
@@ -261,7 +261,7 @@ pub(crate) fn first_impact(
     let close = touch_tolerance(body.radius);
     let mut t = t_from;
     let mut last = (t, flight.advance(s0, t - t0));
-    for _ in 0..MAX_ADVANCE {
+    for _ in 0..ADVANCE_STEPS {
         let s = flight.advance(s0, t - t0);
         let reach = bound * (t_to - t) + close;
         let Some(h) = closest(body, grounds, &s, t, reach) else {
@@ -287,45 +287,66 @@ pub(crate) fn first_impact(
     Search::Stalled(last.0, last.1)
 }
 
-/// The contact time to rounding, from `(t, h)` at most `close` from the ground, within
-/// `range`: Newton's method on the signed distance (its time derivative is `un`) until an
-/// iterate penetrates, then regula falsi (Illinois) on the bracket. Returns the last iterate
-/// on the outside (`dist >= 0`): there the normal is the closest-point direction, well
-/// defined even against a single triangle of a mesh, where a penetration normal may point
-/// sideways through the triangle's edge.
-fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64, State, Hit) {
-    let (body, grounds, flight, s0, t0) = (fly.body, fly.grounds, fly.flight, fly.s0, fly.t0);
-    if h.dist < 0.0 {
-        // Already inside at the start of the search: the impact is now.
-        return (t, s, h);
+/// A contact as the search for its time sees it.
+pub(crate) trait Gap: Copy {
+    /// Signed distance (m): negative when penetrating.
+    fn gap(&self) -> f64;
+    /// The distance's time derivative (m/s): negative when approaching.
+    fn rate(&self) -> f64;
+}
+
+impl Gap for (State, Hit) {
+    fn gap(&self) -> f64 {
+        self.1.dist
     }
-    let mut out = (t, s, h);
+    fn rate(&self) -> f64 {
+        self.1.un
+    }
+}
+
+/// The contact time to rounding, from `start = (t, c)` at most the touching tolerance from
+/// contact: Newton's method on the gap (its time derivative is the rate) until an iterate
+/// penetrates, then regula falsi (Illinois) on the bracket, never past `t_end`, at most
+/// `ROOT_ITERATIONS` iterates, and none closer than `ROOT_STEP` to the last. `at(t)` is the
+/// contact at time `t` (`None`: out of the search's reach, and the search stops). Returns the
+/// last iterate outside (`gap >= 0`): there the normal is the closest-point direction, well
+/// defined even against a single triangle of a mesh, where a penetration normal may point
+/// sideways through the triangle's edge. A start already inside is returned as it is: the
+/// contact is now. The one root search of a contact time: with a ground (`first_impact`) and
+/// between two bodies (`body_contact::first_body_touch`).
+pub(crate) fn touch_time<C: Gap>(
+    start: (f64, C),
+    t_end: f64,
+    mut at: impl FnMut(f64) -> Option<C>,
+) -> (f64, C) {
+    if start.1.gap() < 0.0 {
+        return start;
+    }
+    let mut out = start;
     // Bracket ends for regula falsi: distances as used (Illinois halves a stale one), and the
     // penetrating end once found.
-    let mut d_a = h.dist;
+    let mut d_a = start.1.gap();
     let mut inside: Option<(f64, f64)> = None;
     let mut last_side = 0i8; // +1: the last iterate was outside, -1: inside
-    let reach = 4.0 * h.dist + 1e-3 * body.radius + 1e-9;
-    for _ in 0..48 {
+    for _ in 0..ROOT_ITERATIONS {
         let t_a = out.0;
-        if out.2.dist == 0.0 {
+        if out.1.gap() == 0.0 {
             break;
         }
         let t_new = match inside {
-            None if out.2.un < 0.0 => (t_a + out.2.dist / -out.2.un).min(range.1),
+            None if out.1.rate() < 0.0 => (t_a + out.1.gap() / -out.1.rate()).min(t_end),
             None => break,
             Some((t_b, d_b)) => t_a + d_a * (t_b - t_a) / (d_a - d_b),
         };
         if t_new.is_nan() || t_new <= t_a || (t_new - t_a) <= ROOT_STEP * (1.0 + t_a.abs()) {
             break;
         }
-        let s_new = flight.advance(s0, t_new - t0);
-        let Some(h_new) = closest(body, grounds, &s_new, t_new, reach) else {
+        let Some(c_new) = at(t_new) else {
             break;
         };
-        if h_new.dist >= 0.0 {
-            out = (t_new, s_new, h_new);
-            d_a = h_new.dist;
+        if c_new.gap() >= 0.0 {
+            out = (t_new, c_new);
+            d_a = c_new.gap();
             if let (Some((_, d_b)), 1) = (inside.as_mut(), last_side) {
                 *d_b *= 0.5;
             }
@@ -334,7 +355,7 @@ fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64
             if inside.is_some() && last_side == -1 {
                 d_a *= 0.5;
             }
-            inside = Some((t_new, h_new.dist));
+            inside = Some((t_new, c_new.gap()));
             last_side = -1;
         }
         if let Some((t_b, _)) = inside {
@@ -344,4 +365,17 @@ fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64
         }
     }
     out
+}
+
+/// [`touch_time`] of a flight's contact with the grounds, from `(t, s, h)` at most `close`
+/// from a ground, within `range`.
+fn polish(fly: &Flying, range: (f64, f64), (t, s, h): (f64, State, Hit)) -> (f64, State, Hit) {
+    let (body, grounds, flight, s0, t0) = (fly.body, fly.grounds, fly.flight, fly.s0, fly.t0);
+    let reach = 4.0 * h.dist + 1e-3 * body.radius + 1e-9;
+    let at = |t_new: f64| {
+        let s_new = flight.advance(s0, t_new - t0);
+        closest(body, grounds, &s_new, t_new, reach).map(|h_new| (s_new, h_new))
+    };
+    let (t, (s, h)) = touch_time((t, (s, h)), range.1, at);
+    (t, s, h)
 }
