@@ -153,6 +153,16 @@ pub(crate) const STILL_TRAVEL_SQUARED: f64 = 1e-24;
 /// integration difference and prediction distance: its own time-of-impact rounding.
 pub(crate) const CCD_SLACK: f64 = 1e-3;
 
+/// Rest versus bounce, the one rule: a contact approaching at `approach` (m/s) no faster than
+/// `floor` (the step's resting speed, or its pressed speed for a body touching something else,
+/// [`Policy::bounce_floor`]) rests rather than bounces: it is resolved with `e = 0`, or left to
+/// rapier's resting contact. Applied to ground impacts (`ImpactInput::material_at`), to the
+/// impulses at the step's start (`plan/impulse.rs`, `pair_plan/step_start.rs`) and to impacts
+/// between bodies (`pair_plan/decide.rs`, `pair_reconstruct/cluster.rs`).
+pub(crate) fn rests_at(approach: f64, floor: f64) -> bool {
+    approach <= floor
+}
+
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Role {
@@ -269,6 +279,18 @@ impl Policy {
     /// about the centre, no faster than the resting speed?
     pub fn is_still(&self, s: &crate::motion::State, radius: f64) -> bool {
         s.v.norm() <= self.resting_speed && s.w.norm() * radius <= self.resting_speed
+    }
+
+    /// The speed below which an impact rests rather than bounces ([`rests_at`]): the pressed
+    /// speed for a body that touched another body or a wall in the step (its bounce would
+    /// rise less than the resting gap, against rapier's solver holding it), else the resting
+    /// speed.
+    pub fn bounce_floor(&self, touching: bool) -> f64 {
+        if touching {
+            self.pressed_speed
+        } else {
+            self.resting_speed
+        }
     }
 
     /// Does a body-ground pair at gap `dist` (m, negative inside) rest this step, arriving at

@@ -8,7 +8,7 @@ use crate::model::{
 use crate::motion::State;
 use crate::plugin::bridge::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
-use crate::plugin::policy::ISOTROPIC_TOLERANCE;
+use crate::plugin::policy::{ISOTROPIC_TOLERANCE, rests_at};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
@@ -147,7 +147,7 @@ impl<'a> ImpactInput<'a> {
     /// Whether an impact approaching at `approach` (m/s) settles (slower than the resting
     /// speed, or forced), and the material it is resolved with (`e = 0` if it settles).
     fn material_at(&self, approach: f64) -> (bool, Material) {
-        let settled = self.force_settle || approach < self.resting_speed;
+        let settled = self.force_settle || rests_at(approach, self.resting_speed);
         let material = Material {
             restitution: if settled {
                 0.0

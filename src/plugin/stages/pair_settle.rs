@@ -243,11 +243,7 @@ impl AfterStep<'_> {
             a,
             self.config.law,
             material(&colliders[a.collider], &colliders[b.collider], None),
-            if touching {
-                step.policy.pressed_speed
-            } else {
-                step.policy.resting_speed
-            },
+            step.policy.bounce_floor(touching),
             ImpactTiming::StepEnd,
         )
     }

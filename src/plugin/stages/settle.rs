@@ -176,13 +176,7 @@ impl AfterStep<'_> {
             let gg = &grounds[hit.ground];
             let (point, points) = landing_point(part, gg, &s, dt, &hit, self.config.flat_tolerance);
             let material = self.registry.material_of(colliders, part.handle, gg.handle);
-            // A body that touched another body or a wall in the step: no bounce slower than a
-            // fall through the resting gap (see the pressed roles).
-            let resting_speed = if neighbours_of().touching {
-                step.policy.pressed_speed
-            } else {
-                step.policy.resting_speed
-            };
+            let resting_speed = step.policy.bounce_floor(neighbours_of().touching);
             let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
             let input =
                 ImpactInput::new(body, checked.inertia, law, material, resting_speed, timing)

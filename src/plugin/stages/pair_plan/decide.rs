@@ -10,6 +10,7 @@ use crate::motion::State;
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::material;
 use crate::plugin::policy::Role;
+use crate::plugin::policy::rests_at;
 use crate::plugin::queries::body_contact::body_contact;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
@@ -243,7 +244,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
         let forces = a.force_accel + b.force_accel;
-        let slow = closing <= policy.resting_speed;
+        let slow = rests_at(closing, policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
         // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
         // pair is not planned; it leaves before its colliders and contacts are read.

@@ -10,6 +10,7 @@ use crate::plugin::bridge::resolve::{
     BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_balls, resolve_bodies,
 };
 use crate::plugin::events::{ImpactEvent, ImpactTiming};
+use crate::plugin::policy::rests_at;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state};
@@ -125,7 +126,7 @@ fn step_start_balls(
     }
     let closing = (sa.v - sb.v).dot(&(d / len));
     let gap = len - pair.reach;
-    if closing <= policy.resting_speed || gap > closing * dt + margin {
+    if rests_at(closing, policy.resting_speed) || gap > closing * dt + margin {
         return None;
     }
     // The key orders the colliders by slot: match them to the bodies.
@@ -181,7 +182,7 @@ fn step_start_bodies(
     let reach = (sa.v - sb.v).norm() * dt + turn + margin;
     let touch = body_contact(&ga, &sa, &gb, &sb, reach)?;
     let closing = -touch.rate;
-    if closing <= policy.resting_speed || touch.dist > closing * dt + turn + margin {
+    if rests_at(closing, policy.resting_speed) || touch.dist > closing * dt + turn + margin {
         return None;
     }
     let (ca, cb) = (

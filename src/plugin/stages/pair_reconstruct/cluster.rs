@@ -14,6 +14,7 @@ use crate::plugin::bridge::resolve::{
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::TIME_ULP_FLOOR;
 use crate::plugin::policy::on_plane;
+use crate::plugin::policy::rests_at;
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landing_point};
 use crate::plugin::stages::reconstruct::rest_on_ground;
@@ -374,7 +375,7 @@ impl Cluster<'_, '_> {
             }
             Some(touch) => -touch.rate,
         };
-        if closing < self.step.policy.resting_speed {
+        if rests_at(closing, self.step.policy.resting_speed) {
             return Err(SlowTouch);
         }
         Ok(match touch {

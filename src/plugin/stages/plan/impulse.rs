@@ -8,6 +8,7 @@ use super::role::Pair;
 use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, resolve};
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
+use crate::plugin::policy::rests_at;
 use crate::plugin::queries::geometry::{BodyGeom, Hit, body_velocity_at, landing_point};
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::StepData;
@@ -61,7 +62,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 self.commit.event(event);
                 let un2 =
                     n.dot(&(body_velocity_at(&plan.state, &point) - gg.velocity_at(&point, 0.0)));
-                if un2 <= step.policy.resting_speed {
+                if rests_at(un2, step.policy.resting_speed) {
                     Role::Resting
                 } else {
                     Role::Impact
