@@ -46,8 +46,7 @@ pub enum EventKind {
     /// A ball the closed form stopped on a slope that holds it (`tan(theta) <= mu_r` and
     /// `<= mu`) put back where it stopped, at rest, after its first step in rapier's resting
     /// contact: that contact starts without the impulses of a step before and lets the ball
-    /// creep (3.6e-5 m along a 3-degree slope at 30 Hz). From then on rapier's contact holds
-    /// it and sleeps it.
+    /// creep downhill in that step. From then on rapier's contact holds it and sleeps it.
     Hold,
     /// A ball the closed form rolled (rolling resistance, spinning friction, sliding) handed
     /// to rapier's resting contact: another body or collider can touch it within the step

@@ -20,10 +20,9 @@ use nalgebra::Vector3;
 
 /// A ball's first step held at rest on a slope (`OnPlane::Held`): rapier's resting contact
 /// starts without the impulses of a step before, and in its substeps lets the ball creep
-/// downhill and sink before it holds it (3.6e-5 m along a 3-degree slope at 30 Hz). After the
-/// step the ball is put back where it stopped, if nothing else moved it; from the next step
-/// rapier's contact holds it still (a few 1e-7 m while it sinks to its resting depth) and
-/// sleeps it.
+/// downhill and sink before it holds it. After the step the ball is put back where it
+/// stopped, if nothing else moved it, so that it rests where the closed form stopped it; from
+/// the next step rapier's contact, warm-started, holds it still and sleeps it.
 pub(crate) struct FirstHold {
     pub body: RigidBodyHandle,
     pub collider: ColliderHandle,

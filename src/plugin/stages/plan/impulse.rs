@@ -21,9 +21,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// (`plan.touched`), its event pushed, and the pair `Resting` if the point now leaves
     /// slower than the resting speed, else `Impact` (out of rapier's solver: a touching pair
     /// kept in the solver after the impulse would let a heavy body landing on this one in
-    /// the same step press it into the ground; a box rocking on two edges, bounced in turn at
-    /// the step's start and end, comes to rest by the energy cap). No impulse: `Resting`. Writes nothing to
-    /// rapier (the state is written once the body's plan is done).
+    /// the same step press it into the ground). No impulse: `Resting`. Writes nothing to
+    /// rapier (the state is written, through the commit, once the body's plan is done).
     pub(super) fn step_start_impulse(
         &mut self,
         reads: BodyReads,
