@@ -7,6 +7,7 @@
 use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig};
 use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
@@ -89,6 +90,9 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) registry: Registry,
     pub(crate) user_hooks: H,
     pub(crate) step: StepData,
+    /// The tables rapier's hook calls read during its step (`hooks/lookup.rs`), built by the
+    /// install stage.
+    pub(crate) lookup: Lookup,
     /// Where the plugin's hook flags are (see `hooks/flags.rs`).
     pub(crate) flags: HookFlags,
     /// What the last step left for the next (`state/memory.rs`).
@@ -119,6 +123,7 @@ impl<H> ImpactPlugin<H> {
             },
             user_hooks,
             step: StepData::default(),
+            lookup: Lookup::default(),
             flags: HookFlags::default(),
             memory: Memory::default(),
             pair_index: PairIndex::default(),
@@ -159,6 +164,7 @@ impl<H> ImpactPlugin<H> {
             registry,
             user_hooks: old,
             step,
+            lookup,
             flags,
             memory,
             pair_index,
@@ -169,6 +175,7 @@ impl<H> ImpactPlugin<H> {
             registry,
             user_hooks,
             step,
+            lookup,
             flags,
             memory,
             pair_index,

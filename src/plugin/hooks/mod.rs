@@ -139,7 +139,7 @@ impl<H> ImpactPlugin<H> {
     /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
     /// solver without bounce).
     pub(crate) fn role(&self, key: &PairKey) -> Role {
-        let lookup = &self.step.lookup;
+        let lookup = &self.lookup;
         if lookup.roles_built {
             match lookup.roles.get(slot_of(key.0)) {
                 Some(Some(slot)) if slot.body == key.0 => {
@@ -178,7 +178,7 @@ impl<H> ImpactPlugin<H> {
             }
         }
         let current = self.registry.index.entry(c1).is_ok();
-        match current.then(|| self.step.lookup.pair(c1, c2)).flatten() {
+        match current.then(|| self.lookup.pair(c1, c2)).flatten() {
             Some(Looked::Pair(key, slot)) => {
                 // A body collider that is itself marked as ground (its body turned dynamic
                 // after it was marked) makes the pair two grounds: not the plugin's, as
@@ -247,7 +247,7 @@ impl<H> ImpactPlugin<H> {
     /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
     /// another collider (its flags are the user's) or outside the step's tables.
     pub(crate) fn step_user_flags(&self, c: ColliderHandle) -> Option<ActiveHooks> {
-        match self.step.lookup.user_flags.get(slot_of(c)) {
+        match self.lookup.user_flags.get(slot_of(c)) {
             Some(Some((h, user))) if *h == c => Some(*user),
             _ => None,
         }

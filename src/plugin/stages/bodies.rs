@@ -34,9 +34,11 @@ use crate::plugin::queries::observe::{
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::reconstruct::{self, Subject, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::small_list::SmallList;
-use crate::plugin::state::step::{AfterStep, Candidate, EndOfStep, FirstHold};
+use crate::plugin::state::step::{Candidate, FirstHold};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;

@@ -33,7 +33,7 @@ impl<H> ImpactPlugin<H> {
             .filter_map(|h| bodies.get(*h))
             .flat_map(|rb| rb.colliders().iter().copied())
             .collect();
-        step.lookup = Lookup::build(&step.roles, &far_colliders, flags.hooked(), |c| {
+        self.lookup = Lookup::build(&step.roles, &far_colliders, flags.hooked(), |c| {
             flags.recorded_user_flags(colliders, c)
         });
     }

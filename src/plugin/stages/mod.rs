@@ -40,6 +40,7 @@ pub(crate) mod plan;
 mod prepare;
 pub(crate) mod reconstruct;
 pub(crate) mod settle;
+pub(crate) mod view;
 mod woken;
 
 use crate::plugin::config::TimingMode;
@@ -48,8 +49,10 @@ use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
 use crate::plugin::stages::plan::Planner;
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::memory::LastStep;
-use crate::plugin::state::step::{AfterStep, EndOfStep, StepData};
+use crate::plugin::state::step::StepData;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
     ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters, MultibodyJointSet,

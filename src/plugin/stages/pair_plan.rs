@@ -44,8 +44,9 @@ use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::state::handles::PairKey;
-use crate::plugin::state::handles::{HandleMap, HandleSet, slot_of};
+use crate::plugin::state::handles::{HandleMap, slot_of};
 use crate::plugin::state::registry::Registry;
+use crate::plugin::state::step::PairPlan;
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
@@ -54,41 +55,6 @@ use decide::{Judge, Planned};
 use gather::Members;
 use index::{Around, Candidates, candidates};
 use nalgebra::Vector3;
-
-/// A pair of bodies with a role this step.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct PlannedPair {
-    pub a: RigidBodyHandle,
-    pub b: RigidBodyHandle,
-    /// The pair's key ([`pair_key`] of the two bodies' colliders).
-    pub key: PairKey,
-    /// Two centred balls: the line of centres is the contact normal, and `reach` the
-    /// centres' distance at contact. Otherwise any shapes (`body_contact.rs` finds the
-    /// contact).
-    pub balls: bool,
-    /// The two radii summed, skins included (m): the centres' distance at contact (balls;
-    /// for other shapes, their bounding radii summed).
-    pub reach: f64,
-    /// Unit contact normal at the step's start, from `a` to `b` (the line of centres for
-    /// balls).
-    pub normal: Vector3<f64>,
-    pub role: Role,
-    /// Its bodies need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
-    /// `Resting` one that rapier would bounce higher than the resting gap gets zero
-    /// restitution. A pair with hook flags is never recycled by rapier's contact detection, so
-    /// only the pairs that need them are hooked.
-    pub hooked: bool,
-}
-
-/// The pairs of the step.
-#[derive(Default)]
-pub(crate) struct PairPlan {
-    pub pairs: Vec<PlannedPair>,
-    /// Each pair's role by [`pair_key`].
-    pub roles: HandleMap<PairKey, Role>,
-    /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
-    pub members: HandleSet<RigidBodyHandle>,
-}
 
 /// The key of the pair of two body colliders, the same whichever comes first.
 pub(crate) fn pair_key(c1: ColliderHandle, c2: ColliderHandle) -> PairKey {

@@ -39,14 +39,14 @@ use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
 use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::pair_plan::PlannedPair;
 use crate::plugin::stages::reconstruct::ccd_consistent;
 use crate::plugin::stages::settle::Checked;
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::{HandleMap, HandleSet};
 use crate::plugin::state::small_list::SmallList;
-use crate::plugin::state::step::AfterStep;
 use crate::plugin::state::step::Candidate;
-use crate::plugin::state::step::EndOfStep;
+use crate::plugin::state::step::PlannedPair;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 

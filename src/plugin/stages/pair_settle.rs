@@ -19,9 +19,10 @@ use crate::plugin::policy::EndCheck;
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state, touched_besides_grounds};
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::pair_plan::PlannedPair;
 use crate::plugin::stages::settle::Checked;
-use crate::plugin::state::step::{AfterStep, EndOfStep};
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
+use crate::plugin::state::step::PlannedPair;
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
 };

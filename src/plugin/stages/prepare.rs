@@ -16,8 +16,9 @@ use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
 use crate::plugin::queries::observe::{snapshot, surely_far};
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::memory::LastStep;
-use crate::plugin::state::step::{Candidate, EndOfStep, StepData};
+use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderSet, IntegrationParameters, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
@@ -43,7 +44,7 @@ impl<H> ImpactPlugin<H> {
     ) -> StepData {
         self.events.clear();
         // The hooks' tables are rebuilt at the end of the plan.
-        self.step.lookup = Lookup::default();
+        self.lookup = Lookup::default();
         self.registry.sync(bodies, colliders);
         let dt = to_f64(params.dt);
         let g = vec_to_na(gravity);

@@ -22,9 +22,9 @@ use crate::plugin::policy::{CCD_SLACK, MOVED_AS_FLOWN_ROUNDING, STILL_TRAVEL_SQU
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
 };
-use crate::plugin::state::step::AfterStep;
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::step::Candidate;
-use crate::plugin::state::step::EndOfStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ColliderSet, RigidBody};
 

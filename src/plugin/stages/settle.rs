@@ -28,10 +28,10 @@ use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
     NonGround, ground_geom, neighbours, touched_besides_grounds,
 };
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::small_list::SmallList;
-use crate::plugin::state::step::AfterStep;
 use crate::plugin::state::step::Candidate;
-use crate::plugin::state::step::EndOfStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{

@@ -14,7 +14,8 @@ use crate::plugin::queries::filter;
 use crate::plugin::queries::observe::{body_geom, rapier_state};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
-use crate::plugin::state::step::{AfterStep, EndOfStep};
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, PhysicsHooks, RigidBodySet};
 
 impl<H: PhysicsHooks> ImpactPlugin<H> {

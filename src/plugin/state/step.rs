@@ -2,18 +2,9 @@
 //! step to the stages after it.
 
 use crate::motion::{Flight, Rolling, State};
-use crate::plugin::config::{ImpactConfig, TimingMode};
-use crate::plugin::events::ImpactEvent;
-use crate::plugin::hooks::flags::HookFlags;
-use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
-use crate::plugin::queries::observe::Sets;
-use crate::plugin::stages::commit::Commit;
-use crate::plugin::stages::pair_plan::PairPlan;
-use crate::plugin::state::handles::{HandleMap, PairKey};
-use crate::plugin::state::memory::Memory;
-use crate::plugin::state::registry::Registry;
+use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
@@ -112,58 +103,39 @@ pub(crate) struct StepData {
     pub candidates: Vec<Candidate>,
     /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).
     pub asleep: Vec<RigidBodyHandle>,
-    pub lookup: Lookup,
 }
 
-/// The step's data in `after_step`, with rapier's sets after its step.
-pub(crate) struct EndOfStep<'a> {
-    pub data: StepData,
-    pub sets: Sets<'a>,
+/// A pair of bodies with a role this step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlannedPair {
+    pub a: RigidBodyHandle,
+    pub b: RigidBodyHandle,
+    /// The pair's key ([`pair_key`] of the two bodies' colliders).
+    pub key: PairKey,
+    /// Two centred balls: the line of centres is the contact normal, and `reach` the
+    /// centres' distance at contact. Otherwise any shapes (`body_contact.rs` finds the
+    /// contact).
+    pub balls: bool,
+    /// The two radii summed, skins included (m): the centres' distance at contact (balls;
+    /// for other shapes, their bounding radii summed).
+    pub reach: f64,
+    /// Unit contact normal at the step's start, from `a` to `b` (the line of centres for
+    /// balls).
+    pub normal: Vector3<f64>,
+    pub role: Role,
+    /// Its bodies need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
+    /// `Resting` one that rapier would bounce higher than the resting gap gets zero
+    /// restitution. A pair with hook flags is never recycled by rapier's contact detection, so
+    /// only the pairs that need them are hooked.
+    pub hooked: bool,
 }
 
-impl std::ops::Deref for EndOfStep<'_> {
-    type Target = StepData;
-    fn deref(&self) -> &StepData {
-        &self.data
-    }
-}
-
-impl std::ops::DerefMut for EndOfStep<'_> {
-    fn deref_mut(&mut self) -> &mut StepData {
-        &mut self.data
-    }
-}
-
-/// What the stages after rapier's step read of the plugin (the configuration, the registry,
-/// the hook flags, this step's roles of the pairs with grounds) and the one writer they
-/// write through.
-pub(crate) struct AfterStep<'a> {
-    pub config: &'a ImpactConfig,
-    pub registry: &'a Registry,
-    pub flags: &'a HookFlags,
-    pub roles: &'a HandleMap<PairKey, Role>,
-    pub commit: Commit<'a>,
-    /// The pairs of rolling balls released at the step's end (`EventKind::Released`): their
-    /// role becomes `Resting`, so that the next step's plan, finding them within reach, does
-    /// not release them again.
-    pub released: Vec<PairKey>,
-}
-
-impl<'a> AfterStep<'a> {
-    /// The view of a plugin's parts; `exact`: `TimingMode::Exact` (see `Commit`).
-    pub fn new(
-        (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
-        memory: &'a mut Memory,
-        events: &'a mut Vec<ImpactEvent>,
-    ) -> Self {
-        let exact = config.timing == TimingMode::Exact;
-        Self {
-            config,
-            registry,
-            flags,
-            roles: &memory.roles,
-            commit: Commit::new(events, &mut memory.shadows, exact),
-            released: Vec::new(),
-        }
-    }
+/// The pairs of the step.
+#[derive(Default)]
+pub(crate) struct PairPlan {
+    pub pairs: Vec<PlannedPair>,
+    /// Each pair's role by [`pair_key`].
+    pub roles: HandleMap<PairKey, Role>,
+    /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
+    pub members: HandleSet<RigidBodyHandle>,
 }

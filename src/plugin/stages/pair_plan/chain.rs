@@ -17,13 +17,13 @@
 //! - Pairs are added and carriers expanded in a fixed order (the order they became carriers,
 //!   the plan's order of pairs), so the plan is the same every run.
 
-use super::PlannedPair;
 use super::decide::{Judge, Planned};
 use super::index::Around;
 use super::pair_key;
 use crate::plugin::policy::{CHAIN_MAX_TILT_SIN, Role};
 use crate::plugin::queries::observe::neighbours;
 use crate::plugin::state::handles::HandleMap;
+use crate::plugin::state::step::PlannedPair;
 use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle};
 use nalgebra::Vector3;
 

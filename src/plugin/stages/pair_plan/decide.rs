@@ -5,7 +5,7 @@
 
 use super::gather::{Ball, Members, geom_state};
 use super::index::PairIndex;
-use super::{PairInputs, PairPlan, PlannedPair, pair_key};
+use super::{PairInputs, pair_key};
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::material;
@@ -16,6 +16,7 @@ use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
 use crate::plugin::queries::observe::{ground_geom, held_besides, pressed_besides};
 use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::step::{PairPlan, PlannedPair};
 use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 use std::cell::OnceCell;

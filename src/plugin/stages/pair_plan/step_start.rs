@@ -2,7 +2,6 @@
 //! for grounds, `ImpactTiming::StepStart`), after which the pairs are rapier's resting
 //! contacts for the step.
 
-use super::{PairPlan, PlannedPair};
 use crate::model::Law;
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
@@ -15,6 +14,7 @@ use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state};
 use crate::plugin::stages::commit::{Commit, Origin};
+use crate::plugin::state::step::{PairPlan, PlannedPair};
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
 };

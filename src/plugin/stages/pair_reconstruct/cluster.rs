@@ -18,8 +18,8 @@ use crate::plugin::policy::rests_at;
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landing_point};
 use crate::plugin::stages::reconstruct::rest_on_ground;
-use crate::plugin::state::step::AfterStep;
-use crate::plugin::state::step::EndOfStep;
+use crate::plugin::stages::view::AfterStep;
+use crate::plugin::stages::view::EndOfStep;
 use crate::rapier::prelude::ColliderSet;
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the

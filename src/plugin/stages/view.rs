@@ -1,0 +1,67 @@
+//! What the stages after rapier's step see: the step's data with rapier's sets after its
+//! step ([`EndOfStep`]), and the plugin as they read it, with the one writer
+//! ([`AfterStep`]).
+
+use crate::plugin::config::{ImpactConfig, TimingMode};
+use crate::plugin::events::ImpactEvent;
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::policy::Role;
+use crate::plugin::queries::observe::Sets;
+use crate::plugin::stages::commit::Commit;
+use crate::plugin::state::handles::{HandleMap, PairKey};
+use crate::plugin::state::memory::Memory;
+use crate::plugin::state::registry::Registry;
+use crate::plugin::state::step::StepData;
+
+/// The step's data in `after_step`, with rapier's sets after its step.
+pub(crate) struct EndOfStep<'a> {
+    pub data: StepData,
+    pub sets: Sets<'a>,
+}
+
+impl std::ops::Deref for EndOfStep<'_> {
+    type Target = StepData;
+    fn deref(&self) -> &StepData {
+        &self.data
+    }
+}
+
+impl std::ops::DerefMut for EndOfStep<'_> {
+    fn deref_mut(&mut self) -> &mut StepData {
+        &mut self.data
+    }
+}
+
+/// What the stages after rapier's step read of the plugin (the configuration, the registry,
+/// the hook flags, this step's roles of the pairs with grounds) and the one writer they
+/// write through.
+pub(crate) struct AfterStep<'a> {
+    pub config: &'a ImpactConfig,
+    pub registry: &'a Registry,
+    pub flags: &'a HookFlags,
+    pub roles: &'a HandleMap<PairKey, Role>,
+    pub commit: Commit<'a>,
+    /// The pairs of rolling balls released at the step's end (`EventKind::Released`): their
+    /// role becomes `Resting`, so that the next step's plan, finding them within reach, does
+    /// not release them again.
+    pub released: Vec<PairKey>,
+}
+
+impl<'a> AfterStep<'a> {
+    /// The view of a plugin's parts; `exact`: `TimingMode::Exact` (see `Commit`).
+    pub fn new(
+        (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
+        memory: &'a mut Memory,
+        events: &'a mut Vec<ImpactEvent>,
+    ) -> Self {
+        let exact = config.timing == TimingMode::Exact;
+        Self {
+            config,
+            registry,
+            flags,
+            roles: &memory.roles,
+            commit: Commit::new(events, &mut memory.shadows, exact),
+            released: Vec::new(),
+        }
+    }
+}
