@@ -81,12 +81,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             sets,
             registry: self.registry,
         };
-        let Some(body) = self.start_body(handle, &scene, last, step) else {
+        // Used in place: a body's start is a large value, and every move of it a copy.
+        let mut started = self.start_body(handle, &scene, last, step);
+        let Some(body) = started.as_mut() else {
             return false;
         };
         let mut plan = body.plan();
         let reads = BodyReads {
-            body: &body,
+            body,
             scene: &scene,
             last,
         };
@@ -94,13 +96,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.plan_ground(reads, &mut plan, k, step);
         }
         let (local_com, state, touched) = (body.local_com, plan.state, plan.touched);
-        let candidate = self.candidate(body, plan);
+        self.push_candidate(body, &mut plan, step);
         if touched {
             self.commit
                 .state(bodies, handle, &state, &local_com, Origin::Correction);
-        }
-        if let Some(candidate) = candidate {
-            step.candidates.push(candidate);
         }
         true
     }

@@ -11,6 +11,7 @@ pub(crate) enum SmallList<T> {
 }
 
 impl<T> SmallList<T> {
+    #[inline]
     pub fn push(&mut self, x: T) {
         match self {
             Self::Empty => *self = Self::One(x),
@@ -27,6 +28,7 @@ impl<T> SmallList<T> {
 impl<T> std::ops::Deref for SmallList<T> {
     type Target = [T];
 
+    #[inline]
     fn deref(&self) -> &[T] {
         match self {
             Self::Empty => &[],
@@ -37,6 +39,7 @@ impl<T> std::ops::Deref for SmallList<T> {
 }
 
 impl<T> std::ops::DerefMut for SmallList<T> {
+    #[inline]
     fn deref_mut(&mut self) -> &mut [T] {
         match self {
             Self::Empty => &mut [],

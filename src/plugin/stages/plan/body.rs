@@ -178,28 +178,37 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         })
     }
 
-    /// The body's candidate for the stages after rapier's step, if they have anything to do
-    /// with it: grounds to search, resting contacts that turn, a rolling, `Exact` mode, or a
-    /// ball of an impact between bodies. Pure.
-    pub(super) fn candidate(&self, body: BodyNear, plan: BodyPlan) -> Option<Candidate> {
+    /// The body's candidate for the stages after rapier's step, pushed to `step.candidates`
+    /// if they have anything to do with it: grounds to search, resting contacts that turn, a
+    /// rolling, `Exact` mode, or a ball of an impact between bodies. Takes the body's and the
+    /// plan's lists (both are done with; taken, not copied); writes nothing else.
+    pub(super) fn push_candidate(
+        &self,
+        body: &mut BodyNear,
+        plan: &mut BodyPlan,
+        step: &mut StepData,
+    ) {
         let wanted = !plan.impact_grounds.is_empty()
             || !plan.turning_resting.is_empty()
             || plan.rolling.is_some()
             || self.config.timing == TimingMode::Exact
             || body.member;
-        wanted.then_some(Candidate {
+        if !wanted {
+            return;
+        }
+        step.candidates.push(Candidate {
             body: body.handle,
             start: plan.state,
             flight: body.flight,
             local_com: body.local_com,
-            near: body.near,
-            impact_grounds: plan.impact_grounds,
+            near: std::mem::take(&mut body.near),
+            impact_grounds: std::mem::take(&mut plan.impact_grounds),
             touched: plan.touched,
             closing: plan.closing,
-            turning_resting: plan.turning_resting,
+            turning_resting: std::mem::take(&mut plan.turning_resting),
             turns_surface: body.turns_surface,
-            rolling: plan.rolling,
-        })
+            rolling: plan.rolling.take(),
+        });
     }
 }
 
