@@ -82,8 +82,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             registry: self.registry,
         };
         // Used in place: a body's start is a large value, and every move of it a copy.
-        let mut started = self.start_body(handle, &scene, last, step);
-        let Some(body) = started.as_mut() else {
+        let mut started = None;
+        let Some(body) = self.start_body(handle, &scene, last, step, &mut started) else {
             return false;
         };
         let mut plan = body.plan();

@@ -107,13 +107,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// query or no ground is near it; then, in `Exact` mode or for a ball of an impact
     /// between bodies, its flying candidate is pushed. Reads rapier; writes only
     /// `step.candidates`.
-    pub(super) fn start_body<'c>(
+    pub(super) fn start_body<'c, 'o>(
         &self,
         handle: RigidBodyHandle,
         scene: &Scene<'c>,
         last: &LastStep,
         step: &mut StepData,
-    ) -> Option<BodyNear<'c>> {
+        out: &'o mut Option<BodyNear<'c>>,
+    ) -> Option<&'o mut BodyNear<'c>> {
         let rb = &scene.bodies[handle];
         let (start, flight, local_com) =
             snapshot(rb, step.gravity, step.dt, last.shadows.get(&handle));
@@ -140,16 +141,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
             return None;
         }
-        let mut grounds: SmallList<(usize, GroundGeom)> = near
-            .iter()
-            .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], scene.colliders)?)))
-            .collect();
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-        let start_contacts = if !turns_surface && grounds.len() > 1 {
-            nearest_first(&geom, &mut grounds, &start, reach)
-        } else {
-            SmallList::Empty
-        };
         let jointed = scene
             .sets
             .impulse_joints
@@ -161,7 +153,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 .multibody_joints
                 .rigid_body_link(handle)
                 .is_some();
-        Some(BodyNear {
+        // Filled in place: a body's start is a large value, and every move of it a copy.
+        let body = out.insert(BodyNear {
             handle,
             start,
             flight,
@@ -173,9 +166,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             member,
             turns_surface,
             jointed,
-            grounds,
-            start_contacts,
-        })
+            grounds: SmallList::Empty,
+            start_contacts: SmallList::Empty,
+        });
+        body.grounds = body
+            .near
+            .iter()
+            .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], scene.colliders)?)))
+            .collect();
+        if !turns_surface && body.grounds.len() > 1 {
+            body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
+        }
+        Some(body)
     }
 
     /// The body's candidate for the stages after rapier's step, pushed to `step.candidates`
