@@ -9,7 +9,7 @@
 
 use crate::motion::{Flight, Gyro, State};
 use crate::parry::query;
-use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, vec_to_na};
+use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, to_real, vec_to_na};
 use crate::plugin::policy::LOADED_COS;
 use crate::plugin::policy::{
     CENTRED_TOLERANCE, FAR_TEST_GROWTH, FAR_TEST_MARGIN, SPIN_UP_ALLOWANCE,
@@ -74,14 +74,14 @@ pub(crate) fn surely_far(
         // Torque-free motion speeds an anisotropic body's spin up by at most I_max / I_min.
         let inv = rb.mass_properties().local_mprops.inv_principal_inertia;
         let spin_up = if inv.is_finite() && inv.min_element() > 0.0 {
-            SPIN_UP_ALLOWANCE as Real * inv.max_element() / inv.min_element()
+            to_real(SPIN_UP_ALLOWANCE) * inv.max_element() / inv.min_element()
         } else {
             1.0
         };
         speed += spin_up * w.length() * radius;
     }
-    let half = (radius + speed * dt + margin) * FAR_TEST_GROWTH as Real
-        + FAR_TEST_MARGIN as Real * (1.0 + com.abs().max_element() + local_com.length());
+    let half = (radius + speed * dt + margin) * to_real(FAR_TEST_GROWTH)
+        + to_real(FAR_TEST_MARGIN) * (1.0 + com.abs().max_element() + local_com.length());
     if !half.is_finite() || !com.is_finite() {
         return Some(false);
     }
