@@ -295,7 +295,10 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         body: RigidBodyHandle,
     ) -> Result<(), ConfigError> {
-        self.registry.add_ground_body(bodies, colliders, body)
+        for h in Registry::ground_body_colliders(bodies, body)? {
+            self.registry.insert_ground(bodies, colliders, h, None)?;
+        }
+        Ok(())
     }
 
     /// Sets or clears (`None`) the material override of a ground.

@@ -15,11 +15,10 @@ use nalgebra::Vector3;
 /// cone and, for `e <= 1`, dissipates.
 pub(super) fn jam_resolution<K: Compliance>(
     k: &K,
-    n: &Vector3<f64>,
+    n: Vector3<f64>,
     material: &Material,
     u1: &Vector3<f64>,
 ) -> (Vector3<f64>, Regime) {
-    let n = *n;
     let mu = material.friction;
     let un = n.dot(u1);
     let ut = u1 - n * un;

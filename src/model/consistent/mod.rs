@@ -108,7 +108,7 @@ pub(crate) fn consistent_impulse<K: Compliance>(
             stuck = true;
         }
         let Some(event) = run.segment(mode) else {
-            return jam_resolution(k, &n, material, u1);
+            return jam_resolution(k, n, material, u1);
         };
         if run.ends_at(event, material.restitution) {
             break;

@@ -298,10 +298,7 @@ impl AfterStep<'_> {
         colliders: &'a ColliderSet,
         step: &StepData,
     ) -> SmallList<GroundGeom<'a>> {
-        cand.impact_grounds
-            .iter()
-            .filter_map(|i| self.pair_geom(&step.grounds[*i], geom, colliders))
-            .collect()
+        self.pair_geoms(cand.impact_grounds.iter().copied(), geom, colliders, step)
     }
 
     /// The geometry of the grounds of a candidate's resting pairs turning fast, each ground
@@ -314,11 +311,24 @@ impl AfterStep<'_> {
         step: &StepData,
     ) -> SmallList<GroundGeom<'a>> {
         let listed = &cand.turning_resting;
-        listed
+        let once = listed
             .iter()
             .enumerate()
             .filter(|(k, (i, _))| !listed[..*k].iter().any(|(j, _)| j == i))
-            .filter_map(|(_, (i, _))| self.pair_geom(&step.grounds[*i], geom, colliders))
+            .map(|(_, (i, _))| *i);
+        self.pair_geoms(once, geom, colliders, step)
+    }
+
+    /// [`AfterStep::pair_geom`] of each ground of these indices (in `StepData::grounds`).
+    fn pair_geoms<'a>(
+        &self,
+        indices: impl Iterator<Item = usize>,
+        geom: &BodyGeom,
+        colliders: &'a ColliderSet,
+        step: &StepData,
+    ) -> SmallList<GroundGeom<'a>> {
+        indices
+            .filter_map(|i| self.pair_geom(&step.grounds[i], geom, colliders))
             .collect()
     }
 

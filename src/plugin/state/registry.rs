@@ -43,13 +43,12 @@ pub(crate) struct Registry {
 }
 
 impl Registry {
-    /// [`crate::ImpactPlugin::add_ground_body`].
-    pub fn add_ground_body(
-        &mut self,
+    /// The colliders [`crate::ImpactPlugin::add_ground_body`] marks: every collider of
+    /// `body`, which must exist, have one, and not be dynamic.
+    pub fn ground_body_colliders(
         bodies: &RigidBodySet,
-        colliders: &ColliderSet,
         body: RigidBodyHandle,
-    ) -> Result<(), ConfigError> {
+    ) -> Result<Vec<ColliderHandle>, ConfigError> {
         let rb = bodies.get(body).ok_or(ConfigError::NotABody(body))?;
         let handles: Vec<ColliderHandle> = rb.colliders().to_vec();
         let Some(first) = handles.first() else {
@@ -58,10 +57,7 @@ impl Registry {
         if rb.is_dynamic() {
             return Err(ConfigError::DynamicGround(*first));
         }
-        for h in handles {
-            self.insert_ground(bodies, colliders, h, None)?;
-        }
-        Ok(())
+        Ok(handles)
     }
 
     /// [`crate::ImpactPlugin::set_ground_material`].
