@@ -154,7 +154,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 .rigid_body_link(handle)
                 .is_some();
         // Filled in place: a body's start is a large value, and every move of it a copy.
-        let body = out.insert(BodyNear {
+        let body = out.get_or_insert_with(|| BodyNear {
             handle,
             start,
             flight,
