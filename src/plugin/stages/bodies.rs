@@ -36,24 +36,24 @@ use crate::plugin::stages::reconstruct::{self, Subject, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::plugin::state::handles::{HandleSet, PairKey};
+use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, FirstHold};
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodySet};
 use nalgebra::Vector3;
 
 impl<H> ImpactPlugin<H> {
-    /// Routes every candidate not in `moved_together` (see the module's contract). A body
+    /// Routes every candidate not in `step.moved_together` (see the module's contract). A body
     /// rapier put to sleep in the step rests: rapier zeroed its velocities, and its contacts
     /// have left the solver's graph, so that it would look free and fall for a step.
     pub(super) fn reconstruct_bodies(
         &mut self,
         step: &EndOfStep,
-        moved_together: &HandleSet<RigidBodyHandle>,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
     ) {
+        let moved_together = &step.moved_together;
         let mut view = self.after_view();
         for cand in &step.candidates {
             let awake_managed = bodies
@@ -77,11 +77,10 @@ impl<H> ImpactPlugin<H> {
     pub(super) fn settle_pairs(
         &mut self,
         step: &EndOfStep,
-        moved_together: &HandleSet<RigidBodyHandle>,
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let mut view = self.after_view();
+        let (moved_together, mut view) = (&step.moved_together, self.after_view());
         for pair in &step.pairs.pairs {
             if pair.role == Role::Impact
                 && !(moved_together.contains(&pair.a) && moved_together.contains(&pair.b))
@@ -143,7 +142,7 @@ impl AfterStep<'_> {
             || !ccd_consistent(rb, cand, step.dt, step.dt, step);
         if !disturbed && !cand.impact_grounds.is_empty() {
             // A ground it may roll into: where it does, that impact, and on from there.
-            let obstacles = self.impact_ground_geoms(cand, &geom, colliders, step);
+            let obstacles = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
             if let Some(touch) = reconstruct::rolling_touch(cand, motion, &geom, &obstacles, step) {
                 self.rolled_into(bodies, colliders, &subject, motion, &obstacles, touch);
                 return;
@@ -211,7 +210,7 @@ impl AfterStep<'_> {
             return;
         }
         let geom = body_geom(rb, colliders, &cand.local_com);
-        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
+        let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(rb);
         match first_search(rb, &subject, mode != TimingMode::Step && free) {
@@ -241,7 +240,7 @@ impl AfterStep<'_> {
         colliders: &ColliderSet,
     ) -> bool {
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
-        let grounds = self.turning_resting_geoms(cand, &geom, colliders, step);
+        let grounds = self.turning_resting_geoms(&cand.turning_resting, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         let why = EndCheck::TurningResting {
             turns_surface: cand.turns_surface,
@@ -487,7 +486,7 @@ impl AfterStep<'_> {
             return;
         }
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
-        let grounds = self.impact_ground_geoms(cand, &geom, colliders, step);
+        let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
     }

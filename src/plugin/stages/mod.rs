@@ -51,6 +51,7 @@ use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
 use crate::plugin::stages::plan::Planner;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
+use crate::plugin::state::handles::HandleSet;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::math::Vector;
@@ -136,10 +137,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
     ) {
-        let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
         let mut step = EndOfStep {
             data: std::mem::take(&mut self.step),
-            sets,
+            sets: Sets::new(narrow_phase, impulse_joints, multibody_joints),
+            moved_together: HandleSet::default(),
         };
         if !step.active {
             return;
@@ -148,10 +149,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.memory.keep_roles(&mut step);
         self.measure_ground_motion(&mut step, bodies);
         self.check_woken(&step, bodies, colliders);
-        let moved_together =
+        step.moved_together =
             pair_reconstruct::move_clusters(&mut self.after_view(), bodies, colliders, &step);
-        self.reconstruct_bodies(&step, &moved_together, bodies, colliders);
-        self.settle_pairs(&step, &moved_together, bodies, colliders);
+        self.reconstruct_bodies(&step, bodies, colliders);
+        self.settle_pairs(&step, bodies, colliders);
         self.put_back_held(&step, bodies);
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);

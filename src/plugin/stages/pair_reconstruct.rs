@@ -259,7 +259,8 @@ fn cluster_balls<'s>(
                 .filter(|_| centred_ball(part))
                 .map(|b| to_f64(b.radius) + part.skin);
             let collider = part.handle;
-            let mut grounds = view.impact_ground_geoms(cand, &geom, colliders, step);
+            let mut grounds =
+                view.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
             let rolling_on = match &cand.rolling {
                 Some((g, _)) => {
                     grounds.push(view.pair_geom(&step.grounds[*g], &geom, colliders)?);

@@ -289,28 +289,28 @@ impl AfterStep<'_> {
         })
     }
 
-    /// The geometry of a candidate's `Impact` grounds, without its `Filtered` pairs (no
-    /// contact for the plugin).
+    /// The geometry of a candidate's `Impact` grounds (`Candidate::impact_grounds`), without
+    /// its `Filtered` pairs (no contact for the plugin).
     pub fn impact_ground_geoms<'a>(
         &self,
-        cand: &Candidate,
+        impact_grounds: &[usize],
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
         step: &StepData,
     ) -> SmallList<GroundGeom<'a>> {
-        self.pair_geoms(cand.impact_grounds.iter().copied(), geom, colliders, step)
+        self.pair_geoms(impact_grounds.iter().copied(), geom, colliders, step)
     }
 
-    /// The geometry of the grounds of a candidate's resting pairs turning fast, each ground
-    /// once (a body of several colliders lists it per collider).
+    /// The geometry of the grounds of a candidate's resting pairs turning fast
+    /// (`Candidate::turning_resting`), each ground once (a body of several colliders lists it
+    /// per collider).
     pub fn turning_resting_geoms<'a>(
         &self,
-        cand: &Candidate,
+        listed: &[(usize, Vector3<f64>)],
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
         step: &StepData,
     ) -> SmallList<GroundGeom<'a>> {
-        let listed = &cand.turning_resting;
         let once = listed
             .iter()
             .enumerate()

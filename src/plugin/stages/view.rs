@@ -8,15 +8,19 @@ use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
-use crate::plugin::state::handles::{HandleMap, PairKey};
+use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
+use crate::rapier::prelude::RigidBodyHandle;
 
 /// The step's data in `after_step`, with rapier's sets after its step.
 pub(crate) struct EndOfStep<'a> {
     pub data: StepData,
     pub sets: Sets<'a>,
+    /// The bodies the pair clusters moved together (`pair_reconstruct::move_clusters`): the
+    /// later stages leave them alone.
+    pub moved_together: HandleSet<RigidBodyHandle>,
 }
 
 impl std::ops::Deref for EndOfStep<'_> {

@@ -5,7 +5,7 @@
 //! provably cannot close ([`cannot_close`]).
 
 use super::instant::{closest, plane_contact_on};
-use super::plane::flat_throughout;
+use super::plane::flat_relative;
 use super::{BodyGeom, BodyPart, GroundGeom, Hit};
 use crate::motion::{Flight, State};
 use crate::plugin::policy::{
@@ -50,7 +50,7 @@ const TOUCH_SAMPLES: usize = 16;
 
 /// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of
 /// mass, so its rotation does not move it) without linear damping against grounds whose
-/// every query over the flight is one face's plane ([`flat_throughout`]) and towards which
+/// every query over the flight is one face's plane ([`flat_relative`] of a still ground) and towards which
 /// the acceleration does not point (`n.a <= 0`: a concave gap, so the approach, once
 /// started, ends on the ground): the gap to each plane is `d + un t + an t^2 / 2`, exactly,
 /// and the impact is its downward root. `None` where that does not apply, or where the
@@ -85,7 +85,7 @@ fn ball_on_flat(fly: &Flying, t_from: f64, t_to: f64) -> Option<Search> {
         if ground.skip.contains(&part.handle) {
             continue;
         }
-        if !flat_throughout(part, ground, s0, travel, body.radius) {
+        if ground.v != Vector3::zeros() || !flat_relative(part, ground, s0, travel, body.radius) {
             return None;
         }
         let (d, n, _) = plane_contact_on(part, ground, s0, t0, center, None).ok()?;
@@ -171,7 +171,7 @@ pub(crate) fn cannot_close(
     }
     // Any point of the body moves at most this far in the step.
     let travel = speed.max(FLIGHT_SPEED_FLOOR) * dt;
-    if !flat_throughout(part, ground, s, travel, radius) {
+    if ground.v != Vector3::zeros() || !flat_relative(part, ground, s, travel, radius) {
         return false;
     }
     // The lowest the centre of mass's flight goes along `n` in the step:

@@ -1,5 +1,5 @@
-//! Flat faces: whether a flight stays over one flat face of a ground ([`flat_throughout`],
-//! [`flat_relative`]), whether the grounds near a rolling ball are pieces of one plane that
+//! Flat faces: whether a flight stays over one flat face of a ground ([`flat_relative`]),
+//! whether the grounds near a rolling ball are pieces of one plane that
 //! cover its path ([`plane_piece_of`], [`one_plane_under`]), and the landing points of a flat
 //! face of the body ([`landing_point`]).
 
@@ -12,24 +12,13 @@ use crate::plugin::policy::{FACE_ROUNDING, FACE_SIZE_FLOOR};
 use nalgebra::{Isometry3, Vector3};
 
 /// Is every query of `part` against `ground` over a flight from `s` in which every point of
-/// the body moves at most `travel` the direct plane query of one face, with the body's support
-/// point over it? For a ground that does not move (no velocity): a half-space, or a cuboid
-/// whose face the direct query picks stays picked and under the body wherever it goes (the
-/// part's origin within `travel` plus its offset turning, the support point within `radius`
-/// of the centre of mass). The part must have a support map.
-pub(crate) fn flat_throughout(
-    part: &BodyPart,
-    ground: &GroundGeom,
-    s: &State,
-    travel: f64,
-    radius: f64,
-) -> bool {
-    ground.v == Vector3::zeros() && flat_relative(part, ground, s, travel, radius)
-}
-
-/// [`flat_throughout`] for a ground that may translate (without turning), with `travel`
-/// measured relative to it: in the ground's frame the ground is still and the body moves by
-/// its velocity relative to it.
+/// the body moves at most `travel` relative to the ground the direct plane query of one face,
+/// with the body's support point over it? For a ground that does not turn (it may translate;
+/// `travel` is then measured in its frame, where it is still): a half-space, or a cuboid whose
+/// face the direct query picks stays picked and under the body wherever it goes (the part's
+/// origin within `travel` plus its offset turning, the support point within `radius` of the
+/// centre of mass). The part must have a support map. A caller that needs the ground still as
+/// well asks `ground.v` itself.
 pub(crate) fn flat_relative(
     part: &BodyPart,
     ground: &GroundGeom,

@@ -401,22 +401,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Option<SmallList<ColliderHandle>> {
         let ball = slide.ball;
-        let (handle, part, gg, others, on_ground) = (
-            ball.handle,
-            ball.part,
-            ball.gg,
-            ball.others,
-            &ball.on_ground,
-        );
+        let (handle, part, gg) = (ball.handle, ball.part, ball.gg);
         let (colliders, friction) = (scene.colliders, slide.friction);
         let mut pieces = SmallList::One(gg.handle);
         let default = (
             self.config.rolling_resistance,
             self.config.spinning_friction,
         );
-        for og in others {
+        for og in ball.others {
             let gap = step.policy.resting_gap;
-            if matches!(contact_checked(part, og, on_ground, 0.0, gap), Ok(None)) {
+            if matches!(
+                contact_checked(part, og, &ball.on_ground, 0.0, gap),
+                Ok(None)
+            ) {
                 continue;
             }
             let same = self
