@@ -10,7 +10,8 @@
 //! - `hooks/`: what runs inside rapier's step (the `PhysicsHooks` impl, its flags and tables).
 //! - `queries/`: read-only questions the stages share (contact geometry and time of impact,
 //!   the ground index, rapier's filtering, what the step observes of rapier).
-//! - `state/`: what the plugin keeps (the registry of grounds and bodies, handle-keyed tables).
+//! - `state/`: what the plugin keeps (the registry of grounds and bodies, the memory between
+//!   steps, the step's data, handle-keyed tables).
 //! - `bridge/`: the hand-over to the model and the conversions between rapier's and the
 //!   model's numbers.
 //! - `policy.rs`: every threshold, named once.

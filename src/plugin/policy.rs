@@ -42,7 +42,7 @@ pub(crate) const CHAIN_MAX_TILT_SIN: f64 = 0.1;
 /// still on its plane when its closest ground contact is within this many metres per metre of
 /// radius (at least per metre) and the contact's normal is the plane's to this many parts of
 /// one (the rounding of the closed form's `f64` arithmetic, far below any real gap).
-pub(crate) const ON_PLANE_TOLERANCE: f64 = 1e-9;
+const ON_PLANE_TOLERANCE: f64 = 1e-9;
 
 /// Is a ball of contact radius `radius` (m), whose closest ground contact is at gap `dist`
 /// (m) with unit normal `normal`, still on the plane of unit normal `plane`?
@@ -77,11 +77,11 @@ pub(crate) const CENTRED_TOLERANCE: f64 = 1e-9;
 /// How close to a ground counts as touching for the searches, per metre of the body's size,
 /// and its bounds (m): small beside rapier's contact skin and prediction distance, large beside
 /// the rounding of a contact query in `f32`.
-pub(crate) const TOUCH_TOLERANCE: f64 = 1e-3;
+const TOUCH_TOLERANCE: f64 = 1e-3;
 /// See [`TOUCH_TOLERANCE`] (m).
-pub(crate) const TOUCH_TOLERANCE_MIN: f64 = 1e-7;
+const TOUCH_TOLERANCE_MIN: f64 = 1e-7;
 /// See [`TOUCH_TOLERANCE`] (m).
-pub(crate) const TOUCH_TOLERANCE_MAX: f64 = 1e-3;
+const TOUCH_TOLERANCE_MAX: f64 = 1e-3;
 
 /// How close to a ground counts as touching (m) for a body of bounding radius `radius` (m).
 pub(crate) fn touch_tolerance(radius: f64) -> f64 {
@@ -273,6 +273,12 @@ impl Policy {
             held_speed: (4.0 * resting_speed).max(2.0 * g * dt),
             prediction,
         }
+    }
+
+    /// How far beyond touching a contact is looked for (m): the resting gap or rapier's
+    /// prediction distance, whichever is larger (what rapier's narrow phase can report).
+    pub fn contact_margin(&self) -> f64 {
+        self.resting_gap.max(self.prediction)
     }
 
     /// Is a ball of contact radius `radius` (m) at rest in `s`: its centre, and its surface

@@ -138,7 +138,7 @@ impl<H> ImpactPlugin<H> {
     /// The role of a managed pair in the current step (`Resting` when unknown: a pair the
     /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
     /// solver without bounce).
-    pub(crate) fn role(&self, key: &PairKey) -> Role {
+    fn role(&self, key: &PairKey) -> Role {
         let lookup = &self.lookup;
         if lookup.roles_built {
             match lookup.roles.get(slot_of(key.0)) {
@@ -160,7 +160,7 @@ impl<H> ImpactPlugin<H> {
     /// managed body-ground pair, `None` for another pair. The step's table answers the pairs
     /// `before_step` gave a role (most of them) without looking at the sets; the others are
     /// checked (a pair the plugin did not see coming is `Resting`).
-    pub(crate) fn pair_in_step(
+    fn pair_in_step(
         &self,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
@@ -212,14 +212,14 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// The hook flags the user asked for on a collider.
-    pub(crate) fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
+    fn user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
         self.step_user_flags(c)
             .unwrap_or_else(|| self.flags.recorded_user_flags(colliders, c))
     }
 
     /// `Some((body collider, ground collider))` when the pair is a managed body against a
     /// ground.
-    pub(crate) fn managed_pair(
+    fn managed_pair(
         &self,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
@@ -246,7 +246,7 @@ impl<H> ImpactPlugin<H> {
 
     /// Inside rapier's step: the user's flags of a collider the plugin flagged, `None` for
     /// another collider (its flags are the user's) or outside the step's tables.
-    pub(crate) fn step_user_flags(&self, c: ColliderHandle) -> Option<ActiveHooks> {
+    fn step_user_flags(&self, c: ColliderHandle) -> Option<ActiveHooks> {
         match self.lookup.user_flags.get(slot_of(c)) {
             Some(Some((h, user))) if *h == c => Some(*user),
             _ => None,

@@ -185,8 +185,9 @@ pub(crate) struct BodyStalled;
 /// Conservative advancement on the signed distance (steps of `dist / bound`, where `bound`
 /// caps how fast any two surface points can approach over what is left of the interval: the
 /// centres' relative speed plus each turning body's angular speed times its bounding radius,
-/// cannot step over a touch), then Newton's method from the outside and bisection once an
-/// iterate penetrates, to rounding. A pair already touching and approaching at `t` touches at
+/// cannot step over a touch), then the one root search of a contact time
+/// ([`touch_time`]: Newton's method from the outside, regula falsi once an iterate
+/// penetrates), to rounding. A pair already touching and approaching at `t` touches at
 /// `t`.
 pub(crate) fn first_body_touch(
     a: &Mover,

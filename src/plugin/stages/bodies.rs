@@ -16,7 +16,7 @@
 //!
 //! The checks are the settle stage's (`settle.rs`); every write and event goes through the
 //! commit (`commit.rs`). Also here: the balls held at rest on a slope for their first step,
-//! put back (`put_back_held`), and the pairs between bodies left to rapier's end state.
+//! put back (`put_back_held`).
 
 use crate::motion::{Rolling, State};
 use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_to_na};
@@ -26,7 +26,7 @@ use crate::plugin::bridge::resolve::{
 use crate::plugin::config::TimingMode;
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
-use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, Role, on_plane};
+use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, on_plane};
 use crate::plugin::queries::geometry::{GroundGeom, Hit, Search, closest, first_impact};
 use crate::plugin::queries::observe::{
     body_geom, pushed_by_other, rapier_state, touched_besides_grounds, touches_other,
@@ -70,24 +70,6 @@ impl<H> ImpactPlugin<H> {
         }
         let released = std::mem::take(&mut view.released);
         self.memory.release(released);
-    }
-
-    /// The `Impact` pairs between bodies not moved together: rapier's end state (the pair
-    /// out of its solver), checked at the step's end (`AfterStep::pair_end`).
-    pub(super) fn settle_pairs(
-        &mut self,
-        step: &EndOfStep,
-        bodies: &mut RigidBodySet,
-        colliders: &ColliderSet,
-    ) {
-        let (moved_together, mut view) = (&step.moved_together, self.after_view());
-        for pair in &step.pairs.pairs {
-            if pair.role == Role::Impact
-                && !(moved_together.contains(&pair.a) && moved_together.contains(&pair.b))
-            {
-                view.pair_end(bodies, colliders, pair, step);
-            }
-        }
     }
 
     /// The balls held at rest on a slope for their first step (`FirstHold`): each put back
@@ -405,7 +387,7 @@ impl AfterStep<'_> {
         };
         let end = on_new.advance_checked(&after, step.dt - t)?;
         // Still on the new ground's plane at the end, and in no other ground.
-        let reach = step.policy.resting_gap.max(step.policy.prediction);
+        let reach = step.policy.contact_margin();
         let last = closest(geom, subject.grounds, &end, step.dt, reach)?;
         on_plane(last.dist, &last.normal, &n, radius).then_some((end, event))
     }

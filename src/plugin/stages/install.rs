@@ -18,7 +18,7 @@ impl<H> ImpactPlugin<H> {
     /// planned bodies with a ground near them; `far`: the awake managed bodies with none.
     pub(super) fn install(
         &mut self,
-        step: &mut StepData,
+        step: &StepData,
         (bodies, colliders): (&RigidBodySet, &mut ColliderSet),
         (near, far): (&[RigidBodyHandle], &[RigidBodyHandle]),
         unmanaged: bool,

@@ -31,16 +31,16 @@
 //! Every write into rapier and every event goes through the one writer (`commit.rs`).
 
 mod bodies;
-pub(crate) mod commit;
+mod commit;
 mod install;
 pub(crate) mod pair_plan;
-pub(crate) mod pair_reconstruct;
+mod pair_reconstruct;
 mod pair_settle;
-pub(crate) mod plan;
+mod plan;
 mod prepare;
-pub(crate) mod reconstruct;
-pub(crate) mod settle;
-pub(crate) mod view;
+mod reconstruct;
+mod settle;
+mod view;
 mod woken;
 
 use crate::plugin::config::TimingMode;
@@ -121,7 +121,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             self.plan_bodies(&mut step, to_plan, bodies, colliders, &sets, &last);
         survey.far.extend(not_near);
         let planned = (near.as_slice(), survey.far.as_slice());
-        self.install(&mut step, (bodies, colliders), planned, survey.unmanaged);
+        self.install(&step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
         self.step = step;
     }
@@ -145,7 +145,6 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         if !step.active {
             return;
         }
-        step.active = false;
         self.memory.keep_roles(&mut step);
         self.measure_ground_motion(&mut step, bodies);
         self.check_woken(&step, bodies, colliders);
@@ -190,7 +189,8 @@ impl<H> ImpactPlugin<H> {
         let (pairs, woken) = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
         step.pairs = pairs;
         let config = self.config;
-        let mut commit = self.commit();
+        let exact = config.timing == TimingMode::Exact;
+        let mut commit = Commit::new(&mut self.events, &mut self.memory.shadows, exact);
         for body in woken {
             commit.wake(bodies, body);
         }
@@ -241,12 +241,6 @@ impl<H> ImpactPlugin<H> {
             }
         }
         (near, not_near)
-    }
-
-    /// The writer of the step (`commit.rs`).
-    fn commit(&mut self) -> Commit<'_> {
-        let exact = self.config.timing == TimingMode::Exact;
-        Commit::new(&mut self.events, &mut self.memory.shadows, exact)
     }
 
     /// What the stages after rapier's step read of the plugin, and the writer.

@@ -21,14 +21,14 @@
 //! [`CHAIN_MAX_TILT_SIN`](crate::plugin::policy::CHAIN_MAX_TILT_SIN); two balls closing slower
 //! than the pressed speed start none). A pair's closing speed is along the line of centres for
 //! two balls, and for other shapes the contact points' along parry's normal plus what the
-//! bodies' turning can add (angular speed times bounding radius). Its one write into rapier: a
-//! sleeping body an `Impact` pair may reach is woken, so that the step plans it as an awake
-//! body.
+//! bodies' turning can add (angular speed times bounding radius). It writes nothing into
+//! rapier: it returns the sleeping bodies an `Impact` pair may reach, which the caller wakes
+//! through the commit, so that the step plans them as awake bodies.
 //!
 //! Its parts, in the order they run: gather the members (`gather.rs`), find the pairs that
 //! may meet (`index.rs`), decide each pair's role (`decide.rs`), expand the chains of
-//! carriers (`chain.rs`), then wake the sleeping members. `Step` mode's impulses at the
-//! step's start are `step_start.rs`.
+//! carriers (`chain.rs`), then list the sleeping members to wake. `Step` mode's impulses at
+//! the step's start are `step_start.rs`.
 
 mod chain;
 mod decide;

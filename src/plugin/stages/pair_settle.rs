@@ -2,7 +2,8 @@
 //! `pair_reconstruct.rs` (something else touched a body, or a search gave up) are checked at
 //! rapier's end state, in which the pair was out of rapier's solver.
 //!
-//! Contract: [`AfterStep::pair_end`] reads rapier's end states of the pair's two bodies; where
+//! Contract: [`AfterStep::pair_end`] reads the pair's two bodies as the step leaves them
+//! (rapier's end states, or a member's state as the bodies stage already corrected it); where
 //! they met in the step, it resolves their impact with the model at the step's end
 //! (`ImpactTiming::StepEnd`), moves them apart along the contact normal to touching, each by
 //! its inverse-mass share (a `PushOut` event each), checks each against the grounds near it
@@ -15,7 +16,8 @@ use crate::plugin::bridge::resolve::{
     resolve_bodies,
 };
 use crate::plugin::events::{EventKind, ImpactTiming};
-use crate::plugin::policy::EndCheck;
+use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state, touched_besides_grounds};
 use crate::plugin::stages::commit::Origin;
@@ -27,6 +29,26 @@ use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
+
+impl<H> ImpactPlugin<H> {
+    /// The `Impact` pairs between bodies not moved together: rapier's end state (the pair
+    /// out of its solver), checked at the step's end (`AfterStep::pair_end`).
+    pub(super) fn settle_pairs(
+        &mut self,
+        step: &EndOfStep,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let (moved_together, mut view) = (&step.moved_together, self.after_view());
+        for pair in &step.pairs.pairs {
+            if pair.role == Role::Impact
+                && !(moved_together.contains(&pair.a) && moved_together.contains(&pair.b))
+            {
+                view.pair_end(bodies, colliders, pair, step);
+            }
+        }
+    }
+}
 
 impl AfterStep<'_> {
     /// After the step, for an `Impact` pair of balls not moved together (something else

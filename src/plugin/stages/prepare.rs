@@ -90,7 +90,7 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         last: &LastStep,
     ) -> Survey {
-        let margin = to_real(step.policy.resting_gap.max(step.policy.prediction));
+        let margin = to_real(step.policy.contact_margin());
         let g_len = gravity.length();
         let mut survey = Survey {
             to_plan: Vec::new(),

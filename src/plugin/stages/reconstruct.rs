@@ -179,7 +179,7 @@ pub(crate) fn rolling_touch(
     obstacles: &[GroundGeom],
     step: &EndOfStep,
 ) -> Option<(f64, State, Hit)> {
-    let reach = step.policy.resting_gap.max(step.policy.prediction);
+    let reach = step.policy.contact_margin();
     let at = |t: f64| {
         let s = motion.advance(&cand.start, t);
         let hit = closest(geom, obstacles, &s, t, reach);

@@ -27,7 +27,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         bodies: &mut RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let (user_hooks, flags) = (&self.user_hooks, &self.flags);
+        let user_hooks = &self.user_hooks;
         let reads = (&self.config, &self.registry, &self.flags);
         let mut view = AfterStep::new(reads, &mut self.memory, &mut self.events);
         let (impulse_joints, multibody_joints) =
@@ -40,8 +40,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 continue;
             }
             let refused = |bodies: &RigidBodySet, part: ColliderHandle, ground: ColliderHandle| {
-                let user = flags.recorded_user_flags(colliders, part)
-                    | flags.recorded_user_flags(colliders, ground);
+                let user = view.flags.recorded_user_flags(colliders, part)
+                    | view.flags.recorded_user_flags(colliders, ground);
                 colliders[ground].parent().is_some_and(|ground_body| {
                     filter::joint_disables_contacts(
                         impulse_joints,

@@ -1,5 +1,7 @@
-//! What the plugin keeps between calls: the registry of grounds and managed bodies
-//! (`registry.rs`) and the handle-keyed tables everything else is built from (`handles.rs`).
+//! What the plugin keeps: the registry of grounds and managed bodies (`registry.rs`), the
+//! memory one step leaves for the next (`memory.rs`), the step's own data carried from the
+//! plan to the stages after rapier's step (`step.rs`), and the tables everything else is
+//! built from (`handles.rs`, `small_list.rs`).
 
 pub(crate) mod handles;
 pub(crate) mod memory;

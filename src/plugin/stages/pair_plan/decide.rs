@@ -29,7 +29,7 @@ pub(super) struct Judge<'p, 'a, H> {
     pub bodies: &'p RigidBodySet,
     pub members: &'p Members<'a>,
     pub index: &'p PairIndex,
-    /// `resting_gap.max(prediction)` (m): the slack of every reach and closing test.
+    /// `Policy::contact_margin` (m): the slack of every reach and closing test.
     pub margin: f64,
     /// The unit direction of gravity, zero without gravity.
     pub down: Vector3<f64>,
@@ -66,7 +66,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             bodies,
             members,
             index,
-            margin: policy.resting_gap.max(policy.prediction),
+            margin: policy.contact_margin(),
             down: inputs
                 .gravity
                 .try_normalize(0.0)

@@ -88,7 +88,7 @@ impl<'a> Members<'a> {
                 || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
         });
         let movers = is_mover.iter().filter(|m| **m).count();
-        let (margin, dt) = (policy.resting_gap.max(policy.prediction), inputs.dt);
+        let (margin, dt) = (policy.contact_margin(), inputs.dt);
         let g_len = inputs.gravity.norm();
         let swept: Vec<f64> = balls
             .iter()

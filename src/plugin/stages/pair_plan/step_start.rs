@@ -118,7 +118,7 @@ fn step_start_balls(
     inputs: &StepStart,
 ) -> Resolved {
     let (colliders, policy, dt) = (inputs.colliders, inputs.policy, inputs.dt);
-    let margin = policy.resting_gap.max(policy.prediction);
+    let margin = policy.contact_margin();
     let d = sb.com - sa.com;
     let len = d.norm();
     if len == 0.0 {
@@ -177,7 +177,7 @@ fn step_start_bodies(
         vec_to_na(rb.local_center_of_mass()),
     );
     let (ga, gb) = (body_geom(ra, colliders, &la), body_geom(rb, colliders, &lb));
-    let margin = policy.resting_gap.max(policy.prediction);
+    let margin = policy.contact_margin();
     let turn = (sa.w.norm() * ga.radius + sb.w.norm() * gb.radius) * dt;
     let reach = (sa.v - sb.v).norm() * dt + turn + margin;
     let touch = body_contact(&ga, &sa, &gb, &sb, reach)?;

@@ -409,7 +409,7 @@ impl Cluster<'_, '_> {
         let reach = ball.geom.radius
             + s.v.norm() * left
             + accel * left * left
-            + step.policy.resting_gap.max(step.policy.prediction);
+            + step.policy.contact_margin();
         let half = to_real(reach);
         let centre = vec_from_na(&s.com);
         view.registry

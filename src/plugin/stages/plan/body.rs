@@ -124,7 +124,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
         let dt = step.dt;
         let speed = flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
-        let reach = speed * dt + step.policy.resting_gap.max(step.policy.prediction);
+        let reach = speed * dt + step.policy.contact_margin();
         let sphere = Aabb::from_half_extents(
             vec_from_na(&start.com),
             Vector::splat(to_real(geom.radius + reach)),
