@@ -11,8 +11,9 @@
 //! (bouncing), `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5),
 //! `--rolling-resistance MU_R` (0), `--dt DT` (s, 1/60),
 //! `--seed N` (the layout's jitter, 1), `--pairs` (the balls' impacts with each other by the
-//! plugin too, `set_all_dynamic_bodies_impact`), `--f64` (needs `--features f64`), `--csv PATH`
-//! (trace of the first ball).
+//! plugin too, `set_all_dynamic_bodies_impact`), `--profile` (the time of each stage of the
+//! step, the bodies and pairs each took, and the writes into rapier: `ImpactPlugin::profile`),
+//! `--f64` (needs `--features f64`), `--csv PATH` (trace of the first ball).
 //!
 //! Scenes (balls of radius 5 cm, each start position jittered by up to 2 cm):
 //! - `bouncing`: a grid of 20 x 20 balls per layer, 15 cm apart, layers 15 cm apart from 1 m
@@ -38,7 +39,7 @@ mod common;
 use common::{Args, CSV, F64, MODE, Mode, Rng, TraceCsv, flag, real, switch, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, Stage, StepProfile};
 use std::time::Instant;
 
 const ABOUT: &str = "N balls raining on a ground: milliseconds per step, with the plugin or \
@@ -79,6 +80,10 @@ fn main() {
         switch(
             "--pairs",
             "the balls' impacts with each other by the plugin too (set_all_dynamic_bodies_impact)",
+        ),
+        switch(
+            "--profile",
+            "print the time of each stage of the step and the bodies each took (plugin modes)",
         ),
         F64,
         CSV,
@@ -159,7 +164,9 @@ fn main() {
         (_, Some(ground)) => common::plugin(mode, Law::Guarded, &mut world, ground),
         (Mode::Rapier, None) => None,
     };
+    let profiling = args.on("--profile");
     if let Some(p) = plugin.as_mut() {
+        p.set_profiling(profiling);
         p.set_all_dynamic_bodies_impact(args.on("--pairs"));
         p.set_config(ImpactConfig {
             rolling_resistance: mu_r,
@@ -176,6 +183,7 @@ fn main() {
     }
 
     let mut times = Vec::with_capacity(steps as usize);
+    let mut profile = StepProfile::default();
     let mut impacts = 0usize;
     // Steps after which some ball is still awake: a whole run's cost is as much how long the
     // scene takes to fall asleep as what a step costs (a pile settles sooner or later by the
@@ -188,6 +196,9 @@ fn main() {
             .filter(|e| e.kind == EventKind::Impact)
             .count();
         times.push(start.elapsed().as_secs_f64() * 1e3);
+        if let Some(p) = plugin.as_ref().and_then(|p| p.profile()) {
+            profile.accumulate(p);
+        }
         if world
             .bodies
             .iter()
@@ -230,6 +241,61 @@ fn main() {
     println!(
         "{:>12.4} {median:>12.4} {max:>12.4} {impacts:>10} {asleep:>8} {below:>14} {awake_steps:>12}",
         total / steps as f64
+    );
+    if profiling && plugin.is_some() {
+        print_profile(&profile, steps);
+    }
+}
+
+/// The run's profile: each stage's time per step and share of the step, then the bodies and
+/// pairs each stage took per step.
+fn print_profile(profile: &StepProfile, steps: u64) {
+    let per_step = |d: std::time::Duration| d.as_secs_f64() * 1e3 / steps as f64;
+    let whole: f64 = Stage::ALL.iter().map(|s| per_step(profile.time(*s))).sum();
+    println!("profile, per step: {:>12} {:>8}", "ms", "share");
+    for stage in Stage::ALL {
+        let ms = per_step(profile.time(stage));
+        println!(
+            "  {:<22} {ms:>12.4} {:>7.1}%",
+            stage.name(),
+            100.0 * ms / whole
+        );
+    }
+    let plugin = per_step(profile.plugin_time());
+    println!(
+        "  {:<22} {plugin:>12.4} {:>7.1}%",
+        "plugin (all but rapier)",
+        100.0 * plugin / whole
+    );
+    let commit = per_step(profile.commit);
+    println!(
+        "  {:<22} {commit:>12.4} {:>7.1}%",
+        "commit (in the above)",
+        100.0 * commit / whole
+    );
+    let c = &profile.counts;
+    let avg = |n: usize| n as f64 / steps as f64;
+    println!(
+        "bodies per step: asleep {:.1}, far {:.1}, planned {:.1}, near a ground {:.1}, candidates {:.1}, hooked {:.1}",
+        avg(c.asleep),
+        avg(c.far),
+        avg(c.planned),
+        avg(c.near),
+        avg(c.candidates),
+        avg(c.hooked_bodies)
+    );
+    println!(
+        "pairs per step: impact {:.1}, resting {:.1}, rolling {:.1}, rapier's {:.1}, between bodies {:.1}",
+        avg(c.impact_pairs),
+        avg(c.resting_pairs),
+        avg(c.rolling_pairs),
+        avg(c.rapier_pairs),
+        avg(c.body_pairs)
+    );
+    println!(
+        "writes per step {:.1}, events per step {:.2}",
+        avg(c.writes),
+        avg(c.events)
     );
 }
 

@@ -8,6 +8,7 @@ use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig};
 use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
+use crate::plugin::profile::{StepProfile, Stopwatch};
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
@@ -100,6 +101,8 @@ pub struct ImpactPlugin<H = ()> {
     /// The opted-in balls' swept spheres, refitted each step (`stages/pair_plan/index.rs`).
     pub(crate) pair_index: PairIndex,
     pub(crate) events: Vec<ImpactEvent>,
+    /// The step's profile, when profiling is on.
+    pub(crate) stopwatch: Stopwatch,
 }
 
 impl ImpactPlugin<()> {
@@ -128,6 +131,7 @@ impl<H> ImpactPlugin<H> {
             memory: Memory::default(),
             pair_index: PairIndex::default(),
             events: Vec::new(),
+            stopwatch: Stopwatch::default(),
         })
     }
 
@@ -169,6 +173,7 @@ impl<H> ImpactPlugin<H> {
             memory,
             pair_index,
             events,
+            stopwatch,
         } = self;
         let plugin = ImpactPlugin {
             config,
@@ -180,8 +185,21 @@ impl<H> ImpactPlugin<H> {
             memory,
             pair_index,
             events,
+            stopwatch,
         };
         (plugin, old)
+    }
+
+    /// Turns the step's profile on or off (off by default): with it on, each step records the
+    /// time of each of its stages, the bodies and pairs each took and the writes into rapier
+    /// ([`Self::profile`]).
+    pub fn set_profiling(&mut self, on: bool) {
+        self.stopwatch.set_on(on);
+    }
+
+    /// The last step's profile, while profiling is on ([`Self::set_profiling`]).
+    pub fn profile(&self) -> Option<&StepProfile> {
+        self.stopwatch.profile()
     }
 
     /// Every change the plugin made to a body in the last step: the impacts and the

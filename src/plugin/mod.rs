@@ -15,6 +15,7 @@
 //! - `bridge/`: the hand-over to the model and the conversions between rapier's and the
 //!   model's numbers.
 //! - `policy.rs`: every threshold, named once.
+//! - `profile.rs`: the step's profile (time per stage, bodies per role, writes), when on.
 
 mod bridge;
 mod config;
@@ -22,6 +23,7 @@ mod events;
 mod hooks;
 mod impact_plugin;
 mod policy;
+mod profile;
 mod queries;
 mod stages;
 mod state;
@@ -29,3 +31,4 @@ mod state;
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
 pub use events::{EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;
+pub use profile::{BodyCounts, Stage, StepProfile};

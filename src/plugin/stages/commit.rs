@@ -13,11 +13,13 @@
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, vec_from_na};
 use crate::plugin::events::ImpactEvent;
+use crate::plugin::profile::StepProfile;
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
 use crate::rapier::math::Pose;
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
+use std::time::Instant;
 
 /// Where a written state comes from, which decides whether `Exact` mode keeps it.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -37,6 +39,8 @@ pub(crate) struct Commit<'a> {
     shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
     /// `Exact` mode: states of [`Origin::Model`] are remembered.
     exact: bool,
+    /// The step's profile, when profiling: each write counted and timed.
+    log: Option<&'a mut StepProfile>,
 }
 
 impl<'a> Commit<'a> {
@@ -44,11 +48,13 @@ impl<'a> Commit<'a> {
         events: &'a mut Vec<ImpactEvent>,
         shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
         exact: bool,
+        log: Option<&'a mut StepProfile>,
     ) -> Self {
         Self {
             events,
             shadows,
             exact,
+            log,
         }
     }
 
@@ -83,9 +89,11 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         origin: Origin,
     ) {
+        let started = self.clock();
         let rb = &mut bodies[body];
         write_pose_and_velocities(rb, s, local_com, true);
         self.remember(body, rb, s, origin);
+        self.logged(started);
     }
 
     /// Writes a free flight's end into `body` (woken up): the translation and linear
@@ -99,6 +107,7 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         exact_spin: bool,
     ) {
+        let started = self.clock();
         let rb = &mut bodies[body];
         write_pose_and_velocities(rb, s, local_com, false);
         let w = vec_from_na(&s.w);
@@ -106,12 +115,28 @@ impl<'a> Commit<'a> {
             rb.set_angvel(w, true);
         }
         self.remember(body, rb, s, Origin::Model);
+        self.logged(started);
     }
 
     /// Wakes a sleeping body the step must plan.
     pub fn wake(&mut self, bodies: &mut RigidBodySet, body: RigidBodyHandle) {
+        let started = self.clock();
         if let Some(rb) = bodies.get_mut(body) {
             rb.wake_up(true);
+        }
+        self.logged(started);
+    }
+
+    /// The clock at a write's start, when profiling.
+    fn clock(&self) -> Option<Instant> {
+        self.log.as_ref().map(|_| Instant::now())
+    }
+
+    /// One write done, started at `started`: counted and timed, when profiling.
+    fn logged(&mut self, started: Option<Instant>) {
+        if let (Some(log), Some(started)) = (self.log.as_deref_mut(), started) {
+            log.commit += started.elapsed();
+            log.counts.writes += 1;
         }
     }
 

@@ -45,6 +45,8 @@ mod woken;
 
 use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::policy::Role;
+use crate::plugin::profile::{BodyCounts, Stage};
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
@@ -80,6 +82,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             &world.multibody_joints,
         );
         world.step_with_events(&*self, events);
+        self.stopwatch.lap(Stage::Rapier);
         self.after_step(
             &mut world.bodies,
             &mut world.colliders,
@@ -106,23 +109,36 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         impulse_joints: &ImpulseJointSet,
         multibody_joints: &MultibodyJointSet,
     ) {
+        self.stopwatch.start_step();
         let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
         let mut step = self.prepare(gravity, params, bodies, colliders);
+        self.stopwatch.lap(Stage::Prepare);
         if !step.active {
             self.step = step;
             return;
         }
         let last = self.memory.begin_step(&mut step);
         self.plan_pairs(&mut step, bodies, colliders, &sets, &last);
+        self.stopwatch.lap(Stage::PairPlan);
         let rapier_gravity = (gravity, params.dt);
         let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
+        self.stopwatch.lap(Stage::Survey);
         let to_plan = std::mem::take(&mut survey.to_plan);
+        let planned = to_plan.len();
         let (near, not_near) =
             self.plan_bodies(&mut step, to_plan, bodies, colliders, &sets, &last);
+        self.stopwatch.lap(Stage::Plan);
+        self.stopwatch.count(|c| {
+            (c.asleep, c.far, c.planned) = (step.asleep.len(), survey.far.len(), planned);
+            (c.near, c.candidates) = (near.len(), step.candidates.len());
+        });
         survey.far.extend(not_near);
         let planned = (near.as_slice(), survey.far.as_slice());
         self.install(&step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
+        self.stopwatch.lap(Stage::Install);
+        let hooked = self.flags.hooked().len();
+        self.stopwatch.count(|c| count_roles(c, &step, hooked));
         self.step = step;
     }
 
@@ -145,15 +161,23 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         if !step.active {
             return;
         }
+        self.stopwatch.restart();
         self.memory.keep_roles(&mut step);
         self.measure_ground_motion(&mut step, bodies);
         self.check_woken(&step, bodies, colliders);
+        self.stopwatch.lap(Stage::Woken);
         step.moved_together =
             pair_reconstruct::move_clusters(&mut self.after_view(), bodies, colliders, &step);
+        self.stopwatch.lap(Stage::PairClusters);
         self.reconstruct_bodies(&step, bodies, colliders);
+        self.stopwatch.lap(Stage::Bodies);
         self.settle_pairs(&step, bodies, colliders);
+        self.stopwatch.lap(Stage::PairEnds);
         self.put_back_held(&step, bodies);
         bodies.propagate_modified_body_positions_to_colliders(colliders);
+        self.stopwatch.lap(Stage::Holds);
+        let events = self.events.len();
+        self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.memory.spare.candidates = std::mem::take(&mut step.data.candidates);
     }
@@ -190,7 +214,8 @@ impl<H> ImpactPlugin<H> {
         step.pairs = pairs;
         let config = self.config;
         let exact = config.timing == TimingMode::Exact;
-        let mut commit = Commit::new(&mut self.events, &mut self.memory.shadows, exact);
+        let log = self.stopwatch.commit_log();
+        let mut commit = Commit::new(&mut self.events, &mut self.memory.shadows, exact, log);
         for body in woken {
             commit.wake(bodies, body);
         }
@@ -230,7 +255,12 @@ impl<H> ImpactPlugin<H> {
             flags: &self.flags,
             user_hooks: &self.user_hooks,
             prev_holds: &self.memory.holds,
-            commit: Commit::new(&mut self.events, &mut self.memory.shadows, exact),
+            commit: Commit::new(
+                &mut self.events,
+                &mut self.memory.shadows,
+                exact,
+                self.stopwatch.commit_log(),
+            ),
         };
         for handle in to_plan {
             let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
@@ -246,6 +276,21 @@ impl<H> ImpactPlugin<H> {
     /// What the stages after rapier's step read of the plugin, and the writer.
     fn after_view(&mut self) -> AfterStep<'_> {
         let reads = (&self.config, &self.registry, &self.flags);
-        AfterStep::new(reads, &mut self.memory, &mut self.events)
+        let writes = (&mut self.events, self.stopwatch.commit_log());
+        AfterStep::new(reads, &mut self.memory, writes)
     }
+}
+
+/// The step's pairs by role, and the hooked bodies, into the profile's counts.
+fn count_roles(counts: &mut BodyCounts, step: &StepData, hooked: usize) {
+    for role in step.roles.values() {
+        match role {
+            Role::Impact => counts.impact_pairs += 1,
+            Role::Resting => counts.resting_pairs += 1,
+            Role::Rolling => counts.rolling_pairs += 1,
+            Role::Rapier | Role::Filtered => counts.rapier_pairs += 1,
+        }
+    }
+    counts.body_pairs = step.pairs.pairs.len();
+    counts.hooked_bodies = hooked;
 }

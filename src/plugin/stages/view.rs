@@ -6,6 +6,7 @@ use crate::plugin::config::{ImpactConfig, TimingMode};
 use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
+use crate::plugin::profile::StepProfile;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
@@ -56,7 +57,7 @@ impl<'a> AfterStep<'a> {
     pub fn new(
         (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
         memory: &'a mut Memory,
-        events: &'a mut Vec<ImpactEvent>,
+        (events, log): (&'a mut Vec<ImpactEvent>, Option<&'a mut StepProfile>),
     ) -> Self {
         let exact = config.timing == TimingMode::Exact;
         Self {
@@ -64,7 +65,7 @@ impl<'a> AfterStep<'a> {
             registry,
             flags,
             roles: &memory.roles,
-            commit: Commit::new(events, &mut memory.shadows, exact),
+            commit: Commit::new(events, &mut memory.shadows, exact, log),
             released: Vec::new(),
         }
     }
