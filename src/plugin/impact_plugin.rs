@@ -120,10 +120,7 @@ impl<H> ImpactPlugin<H> {
         config.validate()?;
         Ok(Self {
             config,
-            registry: Registry {
-                flags_stale: true,
-                ..Default::default()
-            },
+            registry: Registry::default(),
             user_hooks,
             step: StepData::default(),
             lookup: Lookup::default(),

@@ -15,18 +15,17 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 
 impl<H> ImpactPlugin<H> {
     /// Flags the colliders the step's hooks need and builds the hooks' tables. `near`: the
-    /// planned bodies with a ground near them; `far`: the awake managed bodies with none.
+    /// planned bodies whose pairs with grounds need the hooks; `far`: the awake managed
+    /// bodies with no ground near them.
     pub(super) fn install(
         &mut self,
         step: &StepData,
         (bodies, colliders): (&RigidBodySet, &mut ColliderSet),
         (near, far): (&[RigidBodyHandle], &[RigidBodyHandle]),
-        unmanaged: bool,
     ) {
         let members = self.hooked_pair_members(step);
         self.flags
-            .update(&self.registry, near, &members, unmanaged, bodies, colliders);
-        self.registry.flags_stale = false;
+            .update(&self.registry, near, &members, bodies, colliders);
         let flags = &self.flags;
         let far_colliders: Vec<ColliderHandle> = far
             .iter()
