@@ -2,9 +2,12 @@
 //! (issue 4, "Scene"). `cargo bench --bench scene`; a filter picks groups, e.g.
 //! `cargo bench --bench scene -- bouncing/1000`.
 //!
-//! Groups, each at N = 100, 1 000 and 10 000 balls (radius 5 cm, e = 0.8, mu = 0.5, dt = 1/60,
-//! rapier's default parameters) on a fixed cuboid ground, with the benchmark named
-//! `GROUP/N/MODE`, `MODE` = `rapier` (rapier alone, no plugin), `step`, `toi` or `exact`:
+//! Groups of N balls (radius 5 cm, e = 0.8, mu = 0.5, dt = 1/60, rapier's default parameters)
+//! on a fixed cuboid ground, with the benchmark named `GROUP/N/MODE`, `MODE` = `rapier`
+//! (rapier alone, no plugin), `step`, `toi` or `exact`. Each scene of the `many_balls`
+//! example's cost table (`--scene bouncing|idle|pile|rolling`, `--pairs`, `--tiles`) has a
+//! group here. `bouncing`, `idle` and `pile` run at N = 100, 1 000 and 10 000 in every mode;
+//! the others at one size, in the modes named:
 //!
 //! - `bouncing`: one layer of balls 15 cm apart (they never touch each other), released
 //!   5-45 cm above the ground (seeded jitter), so every ball bounces on the ground several
@@ -15,13 +18,23 @@
 //!   five layers deep, sleeping disabled so the pile stays awake: most contacts are rapier's
 //!   (ball on ball, ball on wall); the bottom layer rests on the ground (the plugin hands those
 //!   contacts to rapier with `e = 0`).
+//! - `pile_pairs/500` (`rapier`, `toi`, `exact`): the example's pile size (10 x 10 balls a
+//!   layer, five layers) as in `pile`, every ball opted in to impacts between bodies
+//!   (`ImpactPlugin::set_all_dynamic_bodies_impact`), timed from the drop: the balls land on
+//!   each other and on the ground and the pile forms, so the plugin resolves impacts between
+//!   bodies (a settled pile gives them none), against rapier's own contacts.
 //! - `tiles8/500`, `tiles64/500`: 500 balls as in `bouncing` over a floor of 8 x 8 or 64 x 64
 //!   fixed cuboid tiles, every fixed collider ground: the cost must not grow with the grounds.
+//! - `rolling/1000` (`rapier`, `exact`): one layer of balls 15 cm apart resting on the ground,
+//!   each rolling at 1 m/s along x without slip, rolling resistance 0.001
+//!   (`ImpactConfig::rolling_resistance`; rapier alone has none): the plugin's closed-form
+//!   rolling against rapier's resting contact.
 //!
-//! `bouncing` and `idle` time a window of `WINDOW` steps from the release and start again from
-//! a freshly built scene (not timed) when it is used up, so every sample averages the same
-//! motion. `pile` is built and settled once per benchmark (not timed) and then stepped on:
-//! its state barely changes. Each iteration is one `step`, timed alone.
+//! `bouncing`, `idle`, `pile_pairs`, `tiles` and `rolling` time a window of `WINDOW` steps
+//! from the release and start again from a freshly built scene (not timed) when it is used up,
+//! so every sample averages the same motion. `pile` is built and settled once per benchmark
+//! (not timed) and then stepped on: its state barely changes. Each iteration is one `step`,
+//! timed alone.
 
 // Precision-generic: `Real` is f32 or f64 (feature `f64`).
 #![allow(clippy::unnecessary_cast)]
@@ -60,6 +73,19 @@ const MODES: [(Mode, &str); 4] = [
     (Mode::Plugin(TimingMode::TimeOfImpact), "toi"),
     (Mode::Plugin(TimingMode::Exact), "exact"),
 ];
+/// `pile_pairs`' modes.
+const PAIR_MODES: [(Mode, &str); 3] = [MODES[0], MODES[2], MODES[3]];
+/// `rolling`'s modes.
+const ROLLING_MODES: [(Mode, &str); 2] = [MODES[0], MODES[3]];
+
+/// What the plugin does beyond the ground's impacts.
+#[derive(Clone, Copy, Default)]
+struct Extras {
+    /// Every dynamic body opted in to impacts between bodies.
+    pairs: bool,
+    /// `ImpactConfig::rolling_resistance`.
+    rolling_resistance: f64,
+}
 
 fn real(x: f64) -> Real {
     x as Real
@@ -107,14 +133,20 @@ fn ball(world: &mut PhysicsWorld, p: [f64; 3], sleep: bool) {
     );
 }
 
-/// The scene with the plugin in `mode` (none for rapier alone), `ground` its ground, or every
-/// fixed collider (`None`).
-fn with_plugin(world: PhysicsWorld, ground: Option<ColliderHandle>, mode: Mode) -> Scene {
+/// The scene with the plugin in `mode` (none for rapier alone) doing `extras`, `ground` its
+/// ground, or every fixed collider (`None`).
+fn with_plugin(
+    world: PhysicsWorld,
+    ground: Option<ColliderHandle>,
+    mode: Mode,
+    extras: Extras,
+) -> Scene {
     let plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
             let mut p = ImpactPlugin::new(ImpactConfig {
                 timing,
+                rolling_resistance: extras.rolling_resistance,
                 ..Default::default()
             })
             .expect("valid configuration");
@@ -124,6 +156,7 @@ fn with_plugin(world: PhysicsWorld, ground: Option<ColliderHandle>, mode: Mode) 
                     .expect("the ground exists"),
                 None => p.set_all_fixed_colliders_ground(true),
             }
+            p.set_all_dynamic_bodies_impact(extras.pairs);
             Some(p)
         }
     };
@@ -163,14 +196,15 @@ fn add_layer(world: &mut PhysicsWorld, n: usize, lift: f64) {
 fn layer(n: usize, lift: f64, mode: Mode) -> Scene {
     let (mut world, ground) = world_with_ground(grid_half(n) + 1.0);
     add_layer(&mut world, n, lift);
-    let mut scene = with_plugin(world, Some(ground), mode);
+    let mut scene = with_plugin(world, Some(ground), mode, Extras::default());
     // The first step builds rapier's broad phase: not part of the window.
     scene.step();
     scene
 }
 
-/// `n` balls dropped into a walled box about five layers deep, settled for 3 s, never asleep.
-fn pile(n: usize, mode: Mode) -> Scene {
+/// `n` balls about to drop into a walled box about five layers deep, 2 cm apart in height,
+/// never asleep; with `pairs`, every ball opted in to impacts between bodies.
+fn dropped_pile(n: usize, mode: Mode, pairs: bool) -> Scene {
     let pitch = 2.0 * RADIUS + 0.01;
     let side = ((n as f64 / 5.0).sqrt().ceil() as usize).max(2);
     let inner = 0.5 * side as f64 * pitch; // half width of the box
@@ -201,7 +235,16 @@ fn pile(n: usize, mode: Mode) -> Scene {
         ];
         ball(&mut world, p, false);
     }
-    let mut scene = with_plugin(world, Some(ground), mode);
+    let extras = Extras {
+        pairs,
+        ..Default::default()
+    };
+    with_plugin(world, Some(ground), mode, extras)
+}
+
+/// `n` balls dropped into a walled box (`dropped_pile`) and settled for 3 s.
+fn pile(n: usize, mode: Mode) -> Scene {
+    let mut scene = dropped_pile(n, mode, false);
     for _ in 0..(3.0 / DT) as usize {
         scene.step();
     }
@@ -224,11 +267,17 @@ fn configure(
 }
 
 /// A window of `WINDOW` steps from a fresh scene (`build`, not timed), built again when used
-/// up, in group `name` for every mode.
-fn windowed_group(c: &mut Criterion, name: &str, n: usize, build: impl Fn(Mode) -> Scene) {
+/// up, in group `name` for each of `modes`.
+fn windowed_group(
+    c: &mut Criterion,
+    name: &str,
+    n: usize,
+    modes: &[(Mode, &str)],
+    build: impl Fn(Mode) -> Scene,
+) {
     let mut group = c.benchmark_group(name);
     configure(&mut group, n);
-    for (mode, label) in MODES {
+    for &(mode, label) in modes {
         // Built on first use, so a filtered-out benchmark costs nothing.
         let mut scene: Option<Scene> = None;
         group.bench_function(BenchmarkId::from_parameter(label), |b| {
@@ -254,7 +303,9 @@ fn windowed_group(c: &mut Criterion, name: &str, n: usize, build: impl Fn(Mode) 
 /// `bouncing` (lift 0) and `idle` (lift 100 m).
 fn windowed(c: &mut Criterion, name: &str, lift: f64) {
     for n in SIZES {
-        windowed_group(c, &format!("{name}/{n}"), n, |mode| layer(n, lift, mode));
+        windowed_group(c, &format!("{name}/{n}"), n, &MODES, |mode| {
+            layer(n, lift, mode)
+        });
     }
 }
 
@@ -284,6 +335,24 @@ fn piled(c: &mut Criterion) {
     }
 }
 
+/// `pile_pairs/500`: the example's pile (`--scene pile --pairs`: 500 balls, 10 x 10 a layer)
+/// with impacts between bodies, timed from the drop, where they happen.
+fn piled_pairs(c: &mut Criterion) {
+    const BALLS: usize = 500;
+    windowed_group(
+        c,
+        &format!("pile_pairs/{BALLS}"),
+        BALLS,
+        &PAIR_MODES,
+        |mode| {
+            let mut scene = dropped_pile(BALLS, mode, true);
+            // The first step builds rapier's broad phase: not part of the window.
+            scene.step();
+            scene
+        },
+    );
+}
+
 /// A floor of `tiles` x `tiles` fixed cuboids (top at y = 0) `half` m wide each way from the
 /// origin, every fixed collider ground (`set_all_fixed_colliders_ground`), under one layer of
 /// `n` balls as in `layer`.
@@ -307,7 +376,7 @@ fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
         }
     }
     add_layer(&mut world, n, 0.0);
-    let mut scene = with_plugin(world, None, mode);
+    let mut scene = with_plugin(world, None, mode, Extras::default());
     scene.step();
     scene
 }
@@ -317,11 +386,64 @@ fn tiled_layer(n: usize, tiles: usize, mode: Mode) -> Scene {
 fn tiled(c: &mut Criterion) {
     const BALLS: usize = 500;
     for tiles in [8, 64] {
-        windowed_group(c, &format!("tiles{tiles}/{BALLS}"), BALLS, |mode| {
+        windowed_group(c, &format!("tiles{tiles}/{BALLS}"), BALLS, &MODES, |mode| {
             tiled_layer(BALLS, tiles, mode)
         });
     }
 }
 
-criterion_group!(benches, bouncing, idle, piled, tiled);
+/// Rolling speed (m/s) of the `rolling` scene's balls.
+const ROLL_SPEED: f64 = 1.0;
+/// Rolling resistance of the `rolling` scene (the plugin's).
+const ROLLING_RESISTANCE: f64 = 0.001;
+
+/// One layer of `n` balls on a square grid 15 cm apart (seeded jitter along the ground),
+/// resting on the ground and rolling along x at `ROLL_SPEED` without slip, the ground wide
+/// enough that none rolls off it in the window.
+fn rolling_layer(n: usize, mode: Mode) -> Scene {
+    let reach = (WINDOW + 1) as f64 * DT * ROLL_SPEED;
+    let (mut world, ground) = world_with_ground(grid_half(n) + reach + 1.0);
+    let side = (n as f64).sqrt().ceil() as usize;
+    let centre = grid_half(n);
+    let mut rng = Rng::new(SEED);
+    for i in 0..n {
+        let (row, col) = (i / side, i % side);
+        let (x, z) = (
+            col as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
+            row as f64 * SPACING - centre + rng.uniform(-0.02, 0.02),
+        );
+        world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(real(x), real(RADIUS), real(z)))
+                .linvel(Vector::new(real(ROLL_SPEED), 0.0, 0.0))
+                .angvel(Vector::new(0.0, 0.0, real(-ROLL_SPEED / RADIUS))),
+            ColliderBuilder::ball(real(RADIUS))
+                .restitution(real(RESTITUTION))
+                .friction(real(FRICTION)),
+        );
+    }
+    let extras = Extras {
+        rolling_resistance: ROLLING_RESISTANCE,
+        ..Default::default()
+    };
+    let mut scene = with_plugin(world, Some(ground), mode, extras);
+    // The first step builds rapier's broad phase: not part of the window.
+    scene.step();
+    scene
+}
+
+/// `rolling/1000`: 1 000 balls rolling on the ground (`--scene rolling --rolling-resistance
+/// 0.001`).
+fn rolling(c: &mut Criterion) {
+    const BALLS: usize = 1_000;
+    windowed_group(
+        c,
+        &format!("rolling/{BALLS}"),
+        BALLS,
+        &ROLLING_MODES,
+        |mode| rolling_layer(BALLS, mode),
+    );
+}
+
+criterion_group!(benches, bouncing, idle, piled, piled_pairs, tiled, rolling);
 criterion_main!(benches);
