@@ -120,7 +120,10 @@ impl<H> ImpactPlugin<H> {
         config.validate()?;
         Ok(Self {
             config,
-            registry: Registry::default(),
+            registry: Registry {
+                flags_stale: true,
+                ..Default::default()
+            },
             user_hooks,
             step: StepData::default(),
             lookup: Lookup::default(),

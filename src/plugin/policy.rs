@@ -299,16 +299,6 @@ impl Policy {
         }
     }
 
-    /// Would rapier's own restitution bounce a contact it solves, of combined restitution
-    /// `e` (rapier's combination of the colliders' own coefficients), closing at `closing`
-    /// (m/s) in the step, visibly? rapier bounces a contact the step it is new (no impulse
-    /// the step before) at `e` times the approach, or every step at `e >= 1`: below the
-    /// pressed speed that bounce cannot rise above the resting gap, and is rapier's resting
-    /// noise. A pair it would bounce visibly is given the plugin's hooks (zero restitution).
-    pub fn rapier_bounces(&self, e: f64, closing: f64) -> bool {
-        closing > 0.0 && (e >= 1.0 || e * closing > self.pressed_speed)
-    }
-
     /// Does a body-ground pair at gap `dist` (m, negative inside) rest this step, arriving at
     /// the ground at normal speed `arrival` (m/s, `>= 0`)? `was_resting`: rapier held the
     /// pair at rest last step. `pressed`: asked only where it decides, whether the body

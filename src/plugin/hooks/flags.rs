@@ -1,20 +1,27 @@
-//! The plugin's hook flags: on the colliders of the managed bodies whose pairs need them this
-//! step, and nowhere else.
+//! The plugin's hook flags: on the grounds, or on the managed bodies near a ground.
 //!
 //! rapier calls the hooks of a contact pair when either collider has the flag, and never
 //! recycles the contacts of such a pair (`IntegrationParameters::contact_recycling`: a pair
-//! with hook flags is fully updated every step). So only the bodies with a pair the plugin
-//! takes from rapier or changes are flagged (the plan says which: `Planned::Near { hooked }`):
-//! an `Impact` within reach, a `Rolling` ball, a ball held on a slope, a resting pair rapier
-//! would bounce visibly (`Policy::rapier_bounces`), a ground with its own material; and one
-//! ball of each of the step's hooked pairs between bodies (`PlannedPair::hooked`). Every other
-//! pair, resting contacts and the grounds' pairs with far bodies included, is rapier's alone:
-//! recycled, and solved as rapier alone solves it. A flagged body keeps its flags while it
-//! sleeps (so that the step rapier wakes it, its ground pairs are the plugin's), and loses
-//! them the first awake step that does not need them. The flags the user had set are recorded
-//! and handed back: the wrapped hook is called exactly when they ask for it.
+//! with hook flags is fully updated every step). Where the flags go is a trade:
+//! - on the grounds: only ground pairs are hooked, and every contact between bodies keeps
+//!   rapier's recycling and speed; but a dynamic body the plugin does not manage (excluded,
+//!   translation locked) would have its ground pairs hooked too, and so no longer move
+//!   exactly as in rapier alone;
+//! - on the colliders of each managed body whose bounding sphere can reach a ground in the
+//!   step (found in [`ImpactPlugin::before_step`]; kept while it sleeps, taken off once it is
+//!   far, unmanaged or gone): every pair of an unmanaged body stays exactly rapier's, but the
+//!   contacts between managed bodies near a ground are hooked as well (a pile's bottom
+//!   layer: not recycled, and the hooks called).
+//!
+//! The plugin takes the first while every dynamic body in the world is managed (the usual
+//! scene), and the second from the first step some dynamic, enabled body is not. In either,
+//! one ball of each of the step's impacts between bodies, and of each resting pair rapier
+//! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
+//! too (rapier hooks a pair when either collider asks): the plugin takes the impact pairs
+//! from rapier's solver and zeroes the others' restitution. The flags the user had set are
+//! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
-use crate::plugin::state::handles::HandleMap;
+use crate::plugin::state::handles::{HandleMap, SlotTable};
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{
@@ -39,6 +46,8 @@ pub(crate) struct HookedBody {
 pub(crate) struct HookFlags {
     /// Managed bodies whose colliders carry the plugin's hook flags.
     hooked: HandleMap<RigidBodyHandle, HookedBody>,
+    /// Grounds carrying the plugin's hook flags, with the flags the user had set.
+    grounds: SlotTable<ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     stamp: u64,
 }
@@ -49,19 +58,52 @@ impl HookFlags {
         &self.hooked
     }
 
-    /// Puts the flags where this step needs them (see the module's documentation): `near`
-    /// are the managed bodies whose pairs with grounds need the hooks, `pairs` a body of each
-    /// of the step's hooked pairs between bodies (`PlannedPair::hooked`).
+    /// Puts the flags where this step needs them (see the module's documentation):
+    /// `near` are the managed bodies that can reach a ground in the step, `pairs` a body of
+    /// each of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
+    /// arrangement), `unmanaged` whether the world holds a dynamic, enabled body the plugin
+    /// does not manage. `registry.flags_stale` is read here and
+    /// cleared by the caller.
     pub fn update(
         &mut self,
         registry: &Registry,
         near: &[RigidBodyHandle],
         pairs: &[RigidBodyHandle],
+        unmanaged: bool,
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
     ) {
+        // Grounds: flagged in the first arrangement, and never once unmarked. Which grounds
+        // keep their flags changes only with the registry or the arrangement.
+        let grounds = &registry.grounds;
+        if unmanaged || registry.flags_stale {
+            self.grounds.retain(|c, user| {
+                let keep = !unmanaged && grounds.contains_key(c);
+                if !keep {
+                    restore(colliders, *c, *user);
+                }
+                keep
+            });
+        }
+        if !unmanaged {
+            for c in registry.grounds.keys() {
+                // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
+                // and narrow phase updates, which for every ground every step cost more
+                // than the rest of the plugin on a floor of 4 096 tiles.
+                let Some(flags) = colliders.get(*c).map(|co| co.active_hooks()) else {
+                    continue;
+                };
+                if !flags.contains(PLUGIN_HOOKS) {
+                    // New, or the user set the flags since the last step: theirs now.
+                    self.grounds.insert(*c, flags);
+                    set_flags(colliders, *c, flags | PLUGIN_HOOKS);
+                }
+            }
+        }
+        // Bodies: flagged in the second.
         self.stamp = self.stamp.wrapping_add(1);
         let stamp = self.stamp;
+        let near = if unmanaged { near } else { &[] };
         for handle in near.iter().chain(pairs) {
             let Some(rb) = bodies.get(*handle) else {
                 continue;
@@ -78,9 +120,10 @@ impl HookFlags {
             if entry.stamp == stamp {
                 return true;
             }
-            if bodies
-                .get(*handle)
-                .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
+            if unmanaged
+                && bodies
+                    .get(*handle)
+                    .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
             {
                 entry.stamp = stamp;
                 return true;
@@ -104,6 +147,9 @@ impl HookFlags {
             // Not flagged by the plugin, or the user has set new flags since.
             return flags;
         }
+        if let Some(user) = self.grounds.get(c) {
+            return *user;
+        }
         co.parent()
             .and_then(|p| self.hooked.get(&p))
             .and_then(|e| e.colliders.iter().find(|(h, _)| *h == c))
@@ -112,12 +158,16 @@ impl HookFlags {
 
     /// Takes the plugin's hook flags off every collider: the user's flags back.
     pub fn restore_all(&mut self, colliders: &mut ColliderSet) {
+        for (c, user) in self.grounds.iter() {
+            restore(colliders, *c, *user);
+        }
         for entry in self.hooked.values() {
             for (c, user) in entry.colliders.iter() {
                 restore(colliders, *c, *user);
             }
         }
         self.hooked.clear();
+        self.grounds = SlotTable::default();
     }
 }
 

@@ -1,8 +1,8 @@
 //! The plugin as rapier's `PhysicsHooks`.
 //!
 //! Called by rapier's narrow phase (every step, for every pair with a hook flag: the plugin sets
-//! `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on the colliders of the managed bodies whose
-//! pairs need it this step, see `hooks/flags.rs`) and by its CCD. It reads the roles
+//! `FILTER_CONTACT_PAIRS | MODIFY_SOLVER_CONTACTS` on the grounds, or on the colliders of the
+//! managed bodies near a ground, see `hooks/flags.rs`) and by its CCD. It reads the roles
 //! [`ImpactPlugin::before_step`] assigned:
 //! - a managed dynamic body against a ground with role `Impact`: `filter_contact_pair`
 //!   returns `Some(SolverFlags::empty())`. rapier still computes the manifold and reports its

@@ -15,17 +15,18 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 
 impl<H> ImpactPlugin<H> {
     /// Flags the colliders the step's hooks need and builds the hooks' tables. `near`: the
-    /// planned bodies whose pairs with grounds need the hooks; `far`: the awake managed
-    /// bodies with no ground near them.
+    /// planned bodies with a ground near them; `far`: the awake managed bodies with none.
     pub(super) fn install(
         &mut self,
         step: &StepData,
         (bodies, colliders): (&RigidBodySet, &mut ColliderSet),
         (near, far): (&[RigidBodyHandle], &[RigidBodyHandle]),
+        unmanaged: bool,
     ) {
         let members = self.hooked_pair_members(step);
         self.flags
-            .update(&self.registry, near, &members, bodies, colliders);
+            .update(&self.registry, near, &members, unmanaged, bodies, colliders);
+        self.registry.flags_stale = false;
         let flags = &self.flags;
         let far_colliders: Vec<ColliderHandle> = far
             .iter()

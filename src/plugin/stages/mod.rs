@@ -50,7 +50,7 @@ use crate::plugin::profile::{BodyCounts, Stage};
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
-use crate::plugin::stages::plan::{Planned, Planner};
+use crate::plugin::stages::plan::Planner;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::HandleSet;
@@ -133,12 +133,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             (c.near, c.candidates) = (near.len(), step.candidates.len());
         });
         survey.far.extend(not_near);
-        let hooked: Vec<RigidBodyHandle> = near
-            .iter()
-            .filter_map(|(body, hooked)| hooked.then_some(*body))
-            .collect();
-        let planned = (hooked.as_slice(), survey.far.as_slice());
-        self.install(&step, (bodies, colliders), planned);
+        let planned = (near.as_slice(), survey.far.as_slice());
+        self.install(&step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
         self.stopwatch.lap(Stage::Install);
         let hooked = self.flags.hooked().len();
@@ -236,9 +232,8 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
-    /// Plans each body of `to_plan` (`plan/`); returns those with a ground near them (with
-    /// whether their pairs need the plugin's hooks) and the others, each in the order
-    /// planned.
+    /// Plans each body of `to_plan` (`plan/`); returns those with a ground near them and
+    /// the others, each in the order planned.
     fn plan_bodies(
         &mut self,
         step: &mut StepData,
@@ -247,7 +242,7 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
-    ) -> (Vec<(RigidBodyHandle, bool)>, Vec<RigidBodyHandle>)
+    ) -> (Vec<RigidBodyHandle>, Vec<RigidBodyHandle>)
     where
         H: PhysicsHooks,
     {
@@ -268,9 +263,11 @@ impl<H> ImpactPlugin<H> {
             ),
         };
         for handle in to_plan {
-            match planner.plan_body(handle, bodies, colliders, sets, last, step) {
-                Planned::Near { hooked } => near.push((handle, hooked)),
-                Planned::Far => not_near.push(handle),
+            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
+            if is_near {
+                near.push(handle);
+            } else {
+                not_near.push(handle);
             }
         }
         (near, not_near)

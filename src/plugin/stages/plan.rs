@@ -47,17 +47,6 @@ pub(crate) fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
     false
 }
 
-/// What the plan found of one body.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub(crate) enum Planned {
-    /// No ground near it.
-    Far,
-    /// A ground near it; `hooked`: a pair of it needs the plugin's hooks in rapier's step
-    /// (an `Impact` within reach, a `Rolling`, a held ball, a resting pair rapier would bounce
-    /// visibly, a ground with its own material).
-    Near { hooked: bool },
-}
-
 /// The plan stage's view of the plugin: what it reads, and the events of `Step` mode's
 /// step-start impulses.
 pub(crate) struct Planner<'a, H> {
@@ -75,8 +64,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// the roles of its pairs with the grounds near it (in `step.roles`), its candidate (in
     /// `step.candidates`), and in `Step` mode the impulses of the contacts that close in the
     /// step (written, with their events). The step's gravity and length are `step.gravity`
-    /// and `step.dt`. Returns whether a ground is near it, and whether its pairs need the
-    /// plugin's hooks in rapier's step.
+    /// and `step.dt`. Returns whether a ground is near it (its colliders then need the
+    /// plugin's hook flags in the bodies arrangement).
     pub fn plan_body(
         &mut self,
         handle: RigidBodyHandle,
@@ -85,7 +74,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         sets: &Sets,
         last: &LastStep,
         step: &mut StepData,
-    ) -> Planned {
+    ) -> bool {
         let scene = Scene {
             bodies,
             colliders,
@@ -95,7 +84,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // Used in place: a body's start is a large value, and every move of it a copy.
         let mut started = None;
         let Some(body) = self.start_body(handle, &scene, last, step, &mut started) else {
-            return Planned::Far;
+            return false;
         };
         let mut plan = body.plan();
         let reads = BodyReads {
@@ -107,13 +96,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.plan_ground(reads, &mut plan, k, step);
         }
         let (local_com, state, touched) = (body.local_com, plan.state, plan.touched);
-        let hooked = plan.hooked;
         self.push_candidate(body, &mut plan, step);
         if touched {
             self.commit
                 .state(bodies, handle, &state, &local_com, Origin::Correction);
         }
-        Planned::Near { hooked }
+        true
     }
 
     /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?

@@ -29,6 +29,8 @@ pub(super) struct Survey {
     pub to_plan: Vec<RigidBodyHandle>,
     /// Awake bodies with no ground in reach: no roles (see `Lookup::roles`).
     pub far: Vec<RigidBodyHandle>,
+    /// A dynamic body the plugin does not manage: it decides where the hook flags go.
+    pub unmanaged: bool,
 }
 
 impl<H> ImpactPlugin<H> {
@@ -93,9 +95,11 @@ impl<H> ImpactPlugin<H> {
         let mut survey = Survey {
             to_plan: Vec::new(),
             far: Vec::new(),
+            unmanaged: false,
         };
         for (handle, rb) in bodies.iter() {
             if !self.registry.manages(handle, rb) {
+                survey.unmanaged |= rb.is_dynamic() && rb.is_enabled();
                 continue;
             }
             if rb.is_sleeping() {

@@ -38,6 +38,8 @@ pub(crate) struct Registry {
     pub all_impact: bool,
     /// The grounds' motions over the step and the BVH that finds those near a body.
     pub index: GroundIndex,
+    /// A ground was unmarked since the grounds' hook flags were last put in place.
+    pub flags_stale: bool,
 }
 
 impl Registry {
@@ -179,9 +181,11 @@ impl Registry {
         }
     }
 
-    /// A ground was marked, unmarked or given a material: the index is stale.
+    /// A ground was marked, unmarked or given a material: the index and the hooks' ground
+    /// table are stale.
     pub fn changed(&mut self) {
         self.index.invalidate();
+        self.flags_stale = true;
     }
 
     /// The ground entry of a collider, `None` when it is not a ground.

@@ -257,11 +257,13 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
         let held_last_step = OnceCell::new();
         let held_pair = || *held_last_step.get_or_init(|| self.held(a, b));
-        // rapier's own bounce of a pair it solves (`Policy::rapier_bounces`); a held pair's
-        // is noise.
-        let rapier_bounces = closes && closing > 0.0 && {
+        // rapier's own bounce of a pair it solves: `e` times the approach, the step the
+        // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
+        // cannot rise above the resting gap (below the pressed speed) it is rapier's resting
+        // noise, and the pair keeps rapier's restitution.
+        let rapier_bounces = closing > 0.0 && closes && {
             let e = material(ca, cb, None).restitution;
-            policy.rapier_bounces(e, closing) && (e >= 1.0 || !held_pair())
+            e >= 1.0 || e * closing > policy.pressed_speed && !held_pair()
         };
         // Slower than the resting speed it is no impact: rapier's resting contact, left as it
         // is where rapier's bounce of it is noise, and not planned.

@@ -76,8 +76,6 @@ pub(super) struct BodyPlan {
     pub held: bool,
     /// The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
     pub rolling_pieces: Option<SmallList<ColliderHandle>>,
-    /// A pair needs the plugin's hooks in rapier's step (`Planner::needs_hooks`).
-    pub hooked: bool,
 }
 
 impl BodyNear<'_> {
@@ -92,7 +90,6 @@ impl BodyNear<'_> {
             rolling: None,
             held: false,
             rolling_pieces: None,
-            hooked: false,
         }
     }
 

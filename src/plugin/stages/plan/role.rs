@@ -4,7 +4,6 @@
 
 use super::body::{BodyNear, BodyPlan, BodyReads, StartContact};
 use super::{Planner, closes_within};
-use crate::plugin::bridge::resolve::material;
 use crate::plugin::config::TimingMode;
 use crate::plugin::policy::Role;
 use crate::plugin::queries::filter;
@@ -59,7 +58,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let role = if self.filtered(body, scene, key) {
                 Role::Filtered
             } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
-                plan.hooked = true;
                 role
             } else {
                 self.contact_role(reads, plan, pair, &mut verdict, step)
@@ -143,20 +141,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
         }
         verdict.any_impact |= role == Role::Impact && reachable;
-        plan.hooked |= match role {
-            Role::Impact => reachable,
-            Role::Rolling => true,
-            // Held (its contact points moved), or a ground whose material overrides rapier's
-            // friction.
-            Role::Resting => {
-                plan.held
-                    || self
-                        .registry
-                        .entry(gg.handle)
-                        .is_some_and(|g| g.material.is_some())
-            }
-            Role::Rapier | Role::Filtered => false,
-        };
         // Only asked of a ground the search may run against (a single part's pair that is
         // not `Impact` does not make one).
         verdict.clear = verdict.clear
@@ -234,15 +218,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let pressed =
             || measured && touched_besides_grounds(body.handle, rb, scene.sets, self.registry);
         if step.policy.rests(dist, arrival, was_resting, pressed) {
-            // rapier keeps it, hooked (for zero restitution) only where its own bounce
-            // would show.
-            let closing = if un < 0.0 || dist > 0.0 { arrival } else { 0.0 };
-            let closes = closes_within(dist, un, an, step.dt);
-            plan.hooked |= closes && {
-                let colliders = scene.colliders;
-                let e = material(&colliders[key.0], &colliders[key.1], None).restitution;
-                step.policy.rapier_bounces(e, closing)
-            };
             Role::Resting
         } else if self.config.timing == TimingMode::Step
             && closes_within(dist, un, n.dot(&(flight.accel)), step.dt)
