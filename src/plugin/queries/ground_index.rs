@@ -73,6 +73,18 @@ impl GroundMotion {
             .is_some_and(|(n, d)| n.dot(centre) - half * n.abs().element_sum() > d)
     }
 
+    /// Does the ground miss the ball `centre ± radius` over the whole step (its swept box,
+    /// and its plane, beyond the ball)? A ground that misses the cube of the same half-width
+    /// misses the ball.
+    pub fn misses_ball(&self, centre: Vector, radius: Real) -> bool {
+        let nearest = centre.clamp(self.aabb.mins, self.aabb.maxs);
+        if (nearest - centre).length_squared() > radius * radius {
+            return true;
+        }
+        self.plane
+            .is_some_and(|(n, d)| n.dot(centre) - radius * n.length() > d)
+    }
+
     /// Is the ground still over the step (parentless or on a fixed body)?
     pub fn is_still(&self) -> bool {
         self.body.is_none()
@@ -318,6 +330,26 @@ impl GroundIndex {
             || self.tree.intersect_aabb(&cube).next().is_some()
     }
 
+    /// The indices of the grounds whose swept AABB (and plane) meets the ball `centre ±
+    /// radius`, in increasing order: [`Self::near`], less the grounds in the cube's corners
+    /// when it meets several (the tiles of a floor around a ball resting on one; a lone ground
+    /// near the cube is kept, as the test would cost about what it saves).
+    pub fn near_ball(
+        &self,
+        motions: &[GroundMotion],
+        centre: Vector,
+        radius: Real,
+    ) -> SmallList<usize> {
+        let cube = self.near(motions, centre, radius);
+        if cube.len() <= 1 {
+            return cube;
+        }
+        cube.iter()
+            .copied()
+            .filter(|i| !motions[*i].misses_ball(centre, radius))
+            .collect()
+    }
+
     /// The indices of the grounds whose swept AABB meets the cube `centre ± half`, in
     /// increasing order.
     pub fn near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
@@ -483,6 +515,36 @@ mod tests {
             .iter()
             .map(|i| index.motions[*i].handle)
             .collect()
+    }
+
+    #[test]
+    fn the_ball_query_leaves_out_the_tiles_in_the_cubes_corners_only() {
+        // Four tiles 0.2 m wide meeting at the origin, tops at y = 0.
+        let mut world = PhysicsWorld::default();
+        let tiles: Vec<ColliderHandle> = [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)]
+            .iter()
+            .map(|(x, z)| {
+                world.colliders.insert(
+                    ColliderBuilder::cuboid(0.1, 0.1, 0.1).translation(Vector::new(*x, -0.1, *z)),
+                )
+            })
+            .collect();
+        let reg = registry(&tiles);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        let found = |at: Vector, r: Real| -> (usize, usize) {
+            let cube = index.near(&index.motions, at, r).len();
+            (cube, index.near_ball(&index.motions, at, r).len())
+        };
+        // 4 cm from the corner of the first tile, 6 cm up, reach 7 cm: the cube reaches the three
+        // others' boxes (loosened by the gap), the ball only the one under it and the two
+        // beside it, not the one across the corner.
+        let at = Vector::new(-0.1 + 0.06, 0.06, -0.1 + 0.06);
+        assert_eq!(found(at, 0.07), (4, 3));
+        // Every ground the ball meets, the cube meets: the ball query is a subset, and over
+        // a tile's middle far from the others it is that tile alone.
+        assert_eq!(found(Vector::new(-0.15, 0.05, -0.15), 0.06), (1, 1));
+        assert_eq!(found(Vector::new(0.0, 0.05, 0.0), 0.06), (4, 4));
     }
 
     #[test]

@@ -132,7 +132,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let near =
             self.registry
                 .index
-                .near(&step.grounds, sphere.center(), sphere.half_extents().x);
+                .near_ball(&step.grounds, sphere.center(), sphere.half_extents().x);
         let member = step.pairs.members.contains(&handle);
         if near.is_empty() {
             if self.config.timing == TimingMode::Exact || member {
