@@ -1,5 +1,8 @@
 //! A list that keeps one element inline: the adapter's per-body and per-step lists.
 
+/// The capacity a list takes when it spills to a `Vec`.
+const SPILL_CAPACITY: usize = 8;
+
 /// A list that keeps one element inline and spills to a `Vec` beyond: most bodies have one
 /// collider and touch one ground, and the per-step lists of the adapter then allocate nothing.
 #[derive(Clone, Debug, Default)]
@@ -17,7 +20,11 @@ impl<T> SmallList<T> {
             Self::Empty => *self = Self::One(x),
             Self::One(_) => {
                 if let Self::One(a) = std::mem::take(self) {
-                    *self = Self::Many(vec![a, x]);
+                    // Room for a few more: a ball over a tiled floor is near several tiles,
+                    // and growing one by one reallocates at each.
+                    let mut v = Vec::with_capacity(SPILL_CAPACITY);
+                    v.extend([a, x]);
+                    *self = Self::Many(v);
                 }
             }
             Self::Many(v) => v.push(x),
@@ -60,6 +67,11 @@ impl<'s, T> IntoIterator for &'s SmallList<T> {
 
 impl<T> FromIterator<T> for SmallList<T> {
     fn from_iter<I: IntoIterator<Item = T>>(iter: I) -> Self {
+        let iter = iter.into_iter();
+        let (at_least, _) = iter.size_hint();
+        if at_least > 1 {
+            return Self::Many(iter.collect());
+        }
         let mut list = Self::Empty;
         for x in iter {
             list.push(x);
