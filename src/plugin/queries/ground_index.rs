@@ -334,6 +334,7 @@ impl GroundIndex {
     /// radius`, in increasing order: [`Self::near`], less the grounds in the cube's corners
     /// when it meets several (the tiles of a floor around a ball resting on one; a lone ground
     /// near the cube is kept, as the test would cost about what it saves).
+    #[inline]
     pub fn near_ball(
         &self,
         motions: &[GroundMotion],
