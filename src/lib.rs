@@ -35,8 +35,8 @@ mod motion;
 pub mod plugin;
 
 pub use plugin::{
-    BodyCounts, ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
-    ImpactTiming, Stage, StepProfile, TimingMode,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming,
+    Stage, StepCounts, StepProfile, TimingMode,
 };
 
 /// Long-form documentation: the model's derivation and the integration guide.

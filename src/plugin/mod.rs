@@ -31,4 +31,4 @@ mod state;
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
 pub use events::{EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;
-pub use profile::{BodyCounts, Stage, StepProfile};
+pub use profile::{Stage, StepCounts, StepProfile};

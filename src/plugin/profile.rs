@@ -11,18 +11,21 @@ use std::time::{Duration, Instant};
 pub enum Stage {
     /// The step's thresholds and the grounds' poses over the step.
     Prepare,
-    /// The pairs of opted-in bodies that may meet, and their roles.
+    /// The pairs of opted-in bodies that may meet, and their roles (with last step's memory
+    /// handed to the plan).
     PairPlan,
     /// Which managed bodies are asleep, far from every ground, or to be planned.
     Survey,
     /// The planned bodies' pairs with the grounds near them, and their candidates.
     Plan,
-    /// The hook flags and the tables rapier's hook calls read.
+    /// The hook flags and the tables rapier's hook calls read (with the plan's memory put
+    /// back).
     Install,
     /// rapier's own step, with the plugin's hooks (timed only when
     /// [`ImpactPlugin::step`](crate::ImpactPlugin::step) drives it).
     Rapier,
-    /// The bodies asleep at the start that rapier woke, checked.
+    /// The bodies asleep at the start that rapier woke, checked (with this step's roles kept
+    /// for the next and the moving grounds' motion measured, which come first).
     Woken,
     /// The clusters of impacts between bodies, moved together.
     PairClusters,
@@ -30,13 +33,14 @@ pub enum Stage {
     Bodies,
     /// The pairs between bodies not moved together, checked at the step's end.
     PairEnds,
-    /// The balls held at rest on a slope, put back; the colliders moved to their bodies.
+    /// The balls held at rest on a slope, put back (with the finish: the colliders moved to
+    /// their bodies).
     Holds,
 }
 
 impl Stage {
     /// Every stage, in the order they run.
-    pub const ALL: [Stage; 11] = [
+    pub const ALL: &'static [Stage] = &[
         Stage::Prepare,
         Stage::PairPlan,
         Stage::Survey,
@@ -49,6 +53,9 @@ impl Stage {
         Stage::PairEnds,
         Stage::Holds,
     ];
+
+    /// How many stages there are.
+    const COUNT: usize = Stage::Holds as usize + 1;
 
     /// The stage's name, as `docs/architecture.md` writes it.
     pub fn name(self) -> &'static str {
@@ -67,25 +74,25 @@ impl Stage {
         }
     }
 
+    /// The stage's place in [`Stage::ALL`] (the variants are declared in that order).
     fn index(self) -> usize {
-        Stage::ALL
-            .iter()
-            .position(|s| *s == self)
-            .expect("every stage is in Stage::ALL")
+        self as usize
     }
 }
 
-/// How many managed bodies each stage took in one step, and what the step wrote.
+/// What one step did, counted: the managed bodies the stages before rapier's step sorted, the
+/// pairs by role, the hooked bodies, the writes into rapier and the events.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
-pub struct BodyCounts {
+pub struct StepCounts {
     /// Asleep at the step's start: nothing read but their sleep state.
     pub asleep: usize,
     /// Surely far from every ground (the survey's bound): not planned.
     pub far: usize,
     /// Planned (near a ground by the survey's bound, or a member of a pair between bodies).
     pub planned: usize,
-    /// Planned and with a ground within its swept bounding sphere.
+    /// Planned and with a ground near it (within its swept bounding sphere; a lone ground
+    /// within the sphere's bounding cube counts).
     pub near: usize,
     /// With a candidate for the stages after rapier's step.
     pub candidates: usize,
@@ -100,7 +107,9 @@ pub struct BodyCounts {
     pub rapier_pairs: usize,
     /// Pairs between opted-in bodies with a role this step.
     pub body_pairs: usize,
-    /// Bodies with the plugin's hook flags on their colliders at rapier's step.
+    /// Bodies with the plugin's hook flags on their colliders at rapier's step. While every
+    /// dynamic body is managed the flags are on the grounds instead (`docs/integration.md`),
+    /// and this counts only the balls flagged for pairs between bodies.
     pub hooked_bodies: usize,
     /// Writes into rapier's bodies (a state, a flight's end, a wake-up): each costs rapier
     /// an update of the body in its next step.
@@ -109,15 +118,53 @@ pub struct BodyCounts {
     pub events: usize,
 }
 
+impl std::ops::AddAssign for StepCounts {
+    fn add_assign(&mut self, o: StepCounts) {
+        // Destructured whole, so that a new count cannot be left out.
+        let StepCounts {
+            asleep,
+            far,
+            planned,
+            near,
+            candidates,
+            impact_pairs,
+            resting_pairs,
+            rolling_pairs,
+            rapier_pairs,
+            body_pairs,
+            hooked_bodies,
+            writes,
+            events,
+        } = o;
+        for (total, add) in [
+            (&mut self.asleep, asleep),
+            (&mut self.far, far),
+            (&mut self.planned, planned),
+            (&mut self.near, near),
+            (&mut self.candidates, candidates),
+            (&mut self.impact_pairs, impact_pairs),
+            (&mut self.resting_pairs, resting_pairs),
+            (&mut self.rolling_pairs, rolling_pairs),
+            (&mut self.rapier_pairs, rapier_pairs),
+            (&mut self.body_pairs, body_pairs),
+            (&mut self.hooked_bodies, hooked_bodies),
+            (&mut self.writes, writes),
+            (&mut self.events, events),
+        ] {
+            *total += add;
+        }
+    }
+}
+
 /// One step's profile: the time of each stage and the counts.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StepProfile {
-    times: [Duration; Stage::ALL.len()],
-    /// The bodies and pairs each stage took.
-    pub counts: BodyCounts,
+    times: [Duration; Stage::COUNT],
+    /// What the step did, counted.
+    pub counts: StepCounts,
     /// The time spent inside the one writer (part of the stages' times): the setters only;
     /// what a write costs rapier shows in its next step.
-    pub commit: Duration,
+    pub commit_time: Duration,
 }
 
 impl StepProfile {
@@ -140,21 +187,8 @@ impl StepProfile {
         for (t, o) in self.times.iter_mut().zip(other.times) {
             *t += o;
         }
-        self.commit += other.commit;
-        let (c, o) = (&mut self.counts, &other.counts);
-        c.asleep += o.asleep;
-        c.far += o.far;
-        c.planned += o.planned;
-        c.near += o.near;
-        c.candidates += o.candidates;
-        c.impact_pairs += o.impact_pairs;
-        c.resting_pairs += o.resting_pairs;
-        c.rolling_pairs += o.rolling_pairs;
-        c.rapier_pairs += o.rapier_pairs;
-        c.body_pairs += o.body_pairs;
-        c.hooked_bodies += o.hooked_bodies;
-        c.writes += o.writes;
-        c.events += o.events;
+        self.commit_time += other.commit_time;
+        self.counts += other.counts;
     }
 }
 
@@ -166,7 +200,11 @@ pub(crate) struct Stopwatch {
 }
 
 impl Stopwatch {
+    /// Profiling on or off; turning it on when it is on keeps the last step's profile.
     pub fn set_on(&mut self, on: bool) {
+        if on == self.profile.is_some() {
+            return;
+        }
         self.profile = on.then(StepProfile::default);
         self.lap = None;
     }
@@ -200,7 +238,7 @@ impl Stopwatch {
     }
 
     /// Records counts, when profiling.
-    pub fn count(&mut self, f: impl FnOnce(&mut BodyCounts)) {
+    pub fn count(&mut self, f: impl FnOnce(&mut StepCounts)) {
         if let Some(p) = self.profile.as_mut() {
             f(&mut p.counts);
         }

@@ -135,7 +135,7 @@ impl<'a> Commit<'a> {
     /// One write done, started at `started`: counted and timed, when profiling.
     fn logged(&mut self, started: Option<Instant>) {
         if let (Some(log), Some(started)) = (self.log.as_deref_mut(), started) {
-            log.commit += started.elapsed();
+            log.commit_time += started.elapsed();
             log.counts.writes += 1;
         }
     }

@@ -46,7 +46,7 @@ mod woken;
 use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Role;
-use crate::plugin::profile::{BodyCounts, Stage};
+use crate::plugin::profile::{Stage, StepCounts};
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
@@ -124,12 +124,12 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
         self.stopwatch.lap(Stage::Survey);
         let to_plan = std::mem::take(&mut survey.to_plan);
-        let planned = to_plan.len();
+        let planned_count = to_plan.len();
         let (near, not_near) =
             self.plan_bodies(&mut step, to_plan, bodies, colliders, &sets, &last);
         self.stopwatch.lap(Stage::Plan);
         self.stopwatch.count(|c| {
-            (c.asleep, c.far, c.planned) = (step.asleep.len(), survey.far.len(), planned);
+            (c.asleep, c.far, c.planned) = (step.asleep.len(), survey.far.len(), planned_count);
             (c.near, c.candidates) = (near.len(), step.candidates.len());
         });
         survey.far.extend(not_near);
@@ -139,6 +139,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.stopwatch.lap(Stage::Install);
         let hooked = self.flags.hooked().len();
         self.stopwatch.count(|c| count_roles(c, &step, hooked));
+        // The counting is the profile's own cost, charged to no stage.
+        self.stopwatch.restart();
         self.step = step;
     }
 
@@ -282,7 +284,7 @@ impl<H> ImpactPlugin<H> {
 }
 
 /// The step's pairs by role, and the hooked bodies, into the profile's counts.
-fn count_roles(counts: &mut BodyCounts, step: &StepData, hooked: usize) {
+fn count_roles(counts: &mut StepCounts, step: &StepData, hooked: usize) {
     for role in step.roles.values() {
         match role {
             Role::Impact => counts.impact_pairs += 1,
