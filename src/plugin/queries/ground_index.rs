@@ -12,6 +12,8 @@
 //!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
 //!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
 //!   cube and the log of their number, never with the number of grounds;
+//!   [`GroundIndex::near_ball`]: the same, less the grounds in the cube's corners that the
+//!   ball inside it misses (the plan's grounds near a body);
 //! - the motions are in a deterministic order (by collider handle), and an index into
 //!   [`GroundIndex::motions`] names a ground for the whole step.
 
@@ -533,19 +535,34 @@ mod tests {
         let reg = registry(&tiles);
         let mut index = GroundIndex::default();
         index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
-        let found = |at: Vector, r: Real| -> (usize, usize) {
-            let cube = index.near(&index.motions, at, r).len();
-            (cube, index.near_ball(&index.motions, at, r).len())
+        let handles = |list: &[usize]| -> Vec<ColliderHandle> {
+            list.iter().map(|i| index.motions[*i].handle).collect()
         };
-        // 4 cm from the corner of the first tile, 6 cm up, reach 7 cm: the cube reaches the three
-        // others' boxes (loosened by the gap), the ball only the one under it and the two
-        // beside it, not the one across the corner.
+        let found = |at: Vector, r: Real| {
+            let cube = handles(&index.near(&index.motions, at, r));
+            let ball = handles(&index.near_ball(&index.motions, at, r));
+            // The ball is inside the cube: never a ground the cube misses.
+            assert!(
+                ball.iter().all(|h| cube.contains(h)),
+                "{ball:?} of {cube:?}"
+            );
+            (cube, ball)
+        };
+        // 4 cm from the corner of the first tile, 6 cm up, reach 7 cm: the cube reaches the
+        // three others' boxes (loosened by the gap), the ball the one under it and the two
+        // beside it, not the one across the corner (6.5 cm to the two beside it, 7.4 cm to the
+        // one across).
         let at = Vector::new(-0.1 + 0.06, 0.06, -0.1 + 0.06);
-        assert_eq!(found(at, 0.07), (4, 3));
-        // Every ground the ball meets, the cube meets: the ball query is a subset, and over
-        // a tile's middle far from the others it is that tile alone.
-        assert_eq!(found(Vector::new(-0.15, 0.05, -0.15), 0.06), (1, 1));
-        assert_eq!(found(Vector::new(0.0, 0.05, 0.0), 0.06), (4, 4));
+        let (cube, ball) = found(at, 0.07);
+        assert_eq!(cube, tiles);
+        assert_eq!(ball, tiles[..3].to_vec());
+        // Over a tile's middle far from the others it is that tile alone; at the corner where
+        // the four meet, all four.
+        assert_eq!(
+            found(Vector::new(-0.15, 0.05, -0.15), 0.06).1,
+            vec![tiles[0]]
+        );
+        assert_eq!(found(Vector::new(0.0, 0.05, 0.0), 0.06).1, tiles);
     }
 
     #[test]

@@ -70,7 +70,9 @@ impl<T> FromIterator<T> for SmallList<T> {
         let iter = iter.into_iter();
         let (at_least, _) = iter.size_hint();
         if at_least > 1 {
-            return Self::Many(iter.collect());
+            let mut v = Vec::with_capacity(at_least.max(SPILL_CAPACITY));
+            v.extend(iter);
+            return Self::Many(v);
         }
         let mut list = Self::Empty;
         for x in iter {
