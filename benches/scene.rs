@@ -1,12 +1,12 @@
-//! Milliseconds per step of whole scenes, rapier alone against the plugin in each timing mode
-//! (issue 4, "Scene"). `cargo bench --bench scene`; a filter picks groups, e.g.
+//! Milliseconds per step of whole scenes, rapier alone against the plugin in each timing mode.
+//! `cargo bench --bench scene`; a filter picks groups, e.g.
 //! `cargo bench --bench scene -- bouncing/1000`.
 //!
 //! Groups of N balls (radius 5 cm, e = 0.8, mu = 0.5, dt = 1/60, rapier's default parameters)
 //! on a fixed cuboid ground, with the benchmark named `GROUP/N/MODE`, `MODE` = `rapier`
-//! (rapier alone, no plugin), `step`, `toi` or `exact`. Each scene of the `many_balls`
-//! example's cost table (`--scene bouncing|idle|pile|rolling`, `--pairs`, `--tiles`) has a
-//! group here. `bouncing`, `idle` and `pile` run at N = 100, 1 000 and 10 000 in every mode;
+//! (rapier alone, no plugin), `step`, `toi` or `exact`. The `many_balls` scenes of the
+//! cost model in `docs/integration.md` (`--scene bouncing|idle|pile|rolling`, the pile with
+//! `--pairs`, `--tiles`) each have a group here; the bouncing scene with `--pairs` has none. `bouncing`, `idle` and `pile` run at N = 100, 1 000 and 10 000 in every mode;
 //! the others at one size, in the modes named:
 //!
 //! - `bouncing`: one layer of balls 15 cm apart (they never touch each other), released
