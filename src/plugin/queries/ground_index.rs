@@ -326,10 +326,12 @@ impl GroundIndex {
     /// Does any ground's swept AABB meet the cube `centre ± half`?
     pub fn any_near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> bool {
         let cube = Aabb::from_half_extents(centre, Vector::splat(half));
+        // An empty tree (only half-spaces and moving grounds) is not traversed: setting up
+        // the traversal costs as much as the rest of a far body's survey.
         self.listed
             .iter()
             .any(|i| !motions[*i].misses_cube(centre, half))
-            || self.tree.intersect_aabb(&cube).next().is_some()
+            || !self.tree.is_empty() && self.tree.intersect_aabb(&cube).next().is_some()
     }
 
     /// The indices of the grounds whose swept AABB (and plane) meets the ball `centre ±
@@ -363,7 +365,8 @@ impl GroundIndex {
             .copied()
             .filter(|i| !motions[*i].misses_cube(centre, half))
             .collect();
-        for leaf in self.tree.intersect_aabb(&cube) {
+        let leaves = (!self.tree.is_empty()).then(|| self.tree.intersect_aabb(&cube));
+        for leaf in leaves.into_iter().flatten() {
             out.push(leaf as usize);
         }
         if out.len() > 1 {
