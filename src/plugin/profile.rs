@@ -249,3 +249,36 @@ impl Stopwatch {
         self.profile.as_mut()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_stage_is_listed_once_in_its_place() {
+        assert_eq!(Stage::ALL.len(), Stage::COUNT);
+        for (i, stage) in Stage::ALL.iter().enumerate() {
+            assert_eq!(stage.index(), i, "{stage:?}");
+        }
+        let mut names: Vec<&str> = Stage::ALL.iter().map(|s| s.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), Stage::COUNT);
+    }
+
+    #[test]
+    fn accumulating_adds_every_count_and_time() {
+        let mut step = StepProfile::default();
+        step.times[Stage::Plan.index()] = Duration::from_micros(3);
+        step.commit_time = Duration::from_micros(1);
+        step.counts.far = 2;
+        step.counts.events = 5;
+        let mut run = StepProfile::default();
+        run.accumulate(&step);
+        run.accumulate(&step);
+        assert_eq!(run.time(Stage::Plan), Duration::from_micros(6));
+        assert_eq!(run.plugin_time(), Duration::from_micros(6));
+        assert_eq!(run.commit_time, Duration::from_micros(2));
+        assert_eq!((run.counts.far, run.counts.events), (4, 10));
+    }
+}
