@@ -345,14 +345,12 @@ impl GroundIndex {
         centre: Vector,
         radius: Real,
     ) -> SmallList<usize> {
-        let cube = self.near(motions, centre, radius);
-        if cube.len() <= 1 {
-            return cube;
+        let mut near = self.near(motions, centre, radius);
+        // Several grounds are a spilled list, filtered where it is.
+        if let SmallList::Many(list) = &mut near {
+            list.retain(|i| !motions[*i].misses_ball(centre, radius));
         }
-        cube.iter()
-            .copied()
-            .filter(|i| !motions[*i].misses_ball(centre, radius))
-            .collect()
+        near
     }
 
     /// The indices of the grounds whose swept AABB meets the cube `centre ± half`, in
