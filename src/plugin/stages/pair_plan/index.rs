@@ -56,8 +56,9 @@ impl PairIndex {
         self.tree.optimize_incremental(&mut self.workspace);
     }
 
-    /// Every pair of balls (indices in this step's list, the smaller first) whose boxes meet:
-    /// one traversal of the tree against itself.
+    /// Every pair of balls (indices in this step's list, the smaller first) whose boxes meet,
+    /// in increasing order: one traversal of the tree against itself. (The tree's own order
+    /// depends on its history, which a restored plugin does not have.)
     fn overlapping(&mut self) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
         let ball_of = &self.ball_of;
@@ -66,6 +67,7 @@ impl PairIndex {
                 let (i, j) = (ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
                 out.push((i.min(j), i.max(j)));
             });
+        out.sort_unstable();
         out
     }
 
@@ -170,6 +172,8 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
             }
         }
     }
+    // In increasing order, as the traversal's: not the tree's, which depends on its history.
+    pairs.sort_unstable();
     Candidates {
         pairs,
         traversed: None,
@@ -193,7 +197,7 @@ impl<'p> Around<'p> {
         }
     }
 
-    /// Appends ball `m`'s neighbours to `out`, in the tree's order (or the traversal's).
+    /// Appends ball `m`'s neighbours to `out`, in increasing order.
     pub(super) fn of(&self, m: usize, members: &Members, out: &mut Vec<usize>) {
         match &self.traversed {
             Some(pairs) => out.extend(
@@ -201,7 +205,11 @@ impl<'p> Around<'p> {
                     .get_or_init(|| Overlaps::new(members.balls.len(), pairs))
                     .of(m),
             ),
-            None => out.extend(self.index.meeting(&members.leaves[m].1)),
+            None => {
+                let from = out.len();
+                out.extend(self.index.meeting(&members.leaves[m].1));
+                out[from..].sort_unstable();
+            }
         }
     }
 }
