@@ -35,8 +35,8 @@ mod motion;
 pub mod plugin;
 
 pub use plugin::{
-    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming,
-    Stage, StepCounts, StepProfile, TimingMode,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
+    ImpactSnapshot, ImpactTiming, RestoreError, Stage, StepCounts, StepProfile, TimingMode,
 };
 
 /// Long-form documentation: the model's derivation and the integration guide.

@@ -125,7 +125,10 @@ pub struct ImpactConfig {
 }
 
 /// Checks a rolling coefficient: finite and `>= 0`.
-fn rolling_coefficient(field: &'static str, value: Option<f64>) -> Result<(), ConfigError> {
+pub(crate) fn rolling_coefficient(
+    field: &'static str,
+    value: Option<f64>,
+) -> Result<(), ConfigError> {
     match value {
         Some(v) if !(v.is_finite() && v >= 0.0) => {
             Err(ConfigError::InvalidConfig { field, value: v })

@@ -4,7 +4,7 @@
 //! The step itself is in `stages/` (`before_step`, `after_step`: a list of stage calls each),
 //! the hook calls rapier makes during its step in `hooks/`.
 
-use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig};
+use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig, rolling_coefficient};
 use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
@@ -228,11 +228,8 @@ impl<H> ImpactPlugin<H> {
     ) -> Result<(), ConfigError> {
         match coefficients {
             Some((rr, sp)) => {
-                for (field, value) in [("rolling_resistance", rr), ("spinning_friction", sp)] {
-                    if !(value.is_finite() && value >= 0.0) {
-                        return Err(ConfigError::InvalidConfig { field, value });
-                    }
-                }
+                rolling_coefficient("rolling_resistance", Some(rr))?;
+                rolling_coefficient("spinning_friction", Some(sp))?;
                 self.registry.body_rolling.insert(body, (rr, sp));
             }
             None => {

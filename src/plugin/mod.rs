@@ -16,6 +16,7 @@
 //!   model's numbers.
 //! - `policy.rs`: every threshold, named once.
 //! - `profile.rs`: the step's profile (time per stage, bodies per role, writes), when on.
+//! - `snapshot.rs`: save and resume ([`ImpactSnapshot`]).
 
 mod bridge;
 mod config;
@@ -25,6 +26,7 @@ mod impact_plugin;
 mod policy;
 mod profile;
 mod queries;
+mod snapshot;
 mod stages;
 mod state;
 
@@ -32,3 +34,4 @@ pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
 pub use events::{EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;
 pub use profile::{Stage, StepCounts, StepProfile};
+pub use snapshot::{ImpactSnapshot, RestoreError};

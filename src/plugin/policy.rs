@@ -165,6 +165,10 @@ pub(crate) fn rests_at(approach: f64, floor: f64) -> bool {
 
 /// What the plugin does with a body-ground collider pair during the step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub(crate) enum Role {
     /// Out of rapier's solver (and its restitution pass): the plugin resolves it.
     Impact,

@@ -21,7 +21,7 @@
 //! from rapier's solver and zeroes the others' restitution. The flags the user had set are
 //! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
-use crate::plugin::state::handles::{HandleMap, SlotTable};
+use crate::plugin::state::handles::{ArenaOrder, HandleMap, SlotTable};
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{
@@ -207,6 +207,65 @@ fn flag_body(entry: &mut HookedBody, rb: &RigidBody, colliders: &mut ColliderSet
             *user = flags;
             set_flags(colliders, *c, flags | PLUGIN_HOOKS);
         }
+    }
+}
+
+/// What [`HookFlags`] carries to the next step, in arena order (`snapshot.rs`): which
+/// colliders carry the plugin's flags, and the user's flags (bits of `ActiveHooks`) each
+/// replaced.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub(crate) struct SavedFlags {
+    hooked: Vec<SavedHookedBody>,
+    grounds: Vec<(ColliderHandle, u32)>,
+    stamp: u64,
+}
+
+/// A hooked body: its flagged colliders with the user's flags, and its stamp.
+type SavedHookedBody = (RigidBodyHandle, Vec<(ColliderHandle, u32)>, u64);
+
+impl HookFlags {
+    /// Where the flags are and whose they replaced.
+    pub fn save(&self) -> SavedFlags {
+        let mut hooked: Vec<_> = self
+            .hooked
+            .iter()
+            .map(|(body, entry)| {
+                let colliders = entry.colliders.iter().map(|(c, u)| (*c, u.bits()));
+                (*body, colliders.collect(), entry.stamp)
+            })
+            .collect();
+        hooked.sort_unstable_by_key(|(body, ..)| body.arena_order());
+        SavedFlags {
+            hooked,
+            grounds: self.grounds.iter().map(|(c, u)| (*c, u.bits())).collect(),
+            stamp: self.stamp,
+        }
+    }
+
+    /// The record `saved` was taken from: the plugin's flags on a restored world's colliders
+    /// are known as the plugin's again, and the user's handed back as before.
+    pub fn from_saved(saved: &SavedFlags) -> Self {
+        let user = ActiveHooks::from_bits_retain;
+        let mut flags = Self {
+            stamp: saved.stamp,
+            ..Self::default()
+        };
+        for (body, colliders, stamp) in &saved.hooked {
+            let colliders = colliders.iter().map(|(c, u)| (*c, user(*u))).collect();
+            let entry = HookedBody {
+                colliders,
+                stamp: *stamp,
+            };
+            flags.hooked.insert(*body, entry);
+        }
+        for (c, u) in &saved.grounds {
+            flags.grounds.insert(*c, user(*u));
+        }
+        flags
     }
 }
 

@@ -33,7 +33,11 @@ use std::hash::BuildHasherDefault;
 use crate::plugin::state::handles::{HandleHasher, slot_of};
 
 /// A registered ground collider.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub(crate) struct GroundEntry {
     /// Material override.
     pub material: Option<Material>,

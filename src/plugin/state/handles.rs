@@ -96,3 +96,45 @@ impl<V: Copy> SlotTable<V> {
 
 /// The collider handle pair key of a body collider and a ground collider.
 pub(crate) type PairKey = (ColliderHandle, ColliderHandle);
+
+/// A handle's (or a pair of handles') arena position, the order snapshots list tables in: a
+/// hash map's own order depends on its history.
+pub(crate) trait ArenaOrder {
+    /// The key to sort by.
+    fn arena_order(&self) -> [u32; 4];
+}
+
+impl ArenaOrder for ColliderHandle {
+    fn arena_order(&self) -> [u32; 4] {
+        let (i, g) = self.into_raw_parts();
+        [i, g, 0, 0]
+    }
+}
+
+impl ArenaOrder for crate::rapier::prelude::RigidBodyHandle {
+    fn arena_order(&self) -> [u32; 4] {
+        let (i, g) = self.into_raw_parts();
+        [i, g, 0, 0]
+    }
+}
+
+impl ArenaOrder for PairKey {
+    fn arena_order(&self) -> [u32; 4] {
+        let ([a, b, ..], [c, d, ..]) = (self.0.arena_order(), self.1.arena_order());
+        [a, b, c, d]
+    }
+}
+
+/// A map's entries in arena order.
+pub(crate) fn sorted_entries<K: ArenaOrder + Copy, V: Clone>(map: &HandleMap<K, V>) -> Vec<(K, V)> {
+    let mut entries: Vec<(K, V)> = map.iter().map(|(k, v)| (*k, v.clone())).collect();
+    entries.sort_unstable_by_key(|(k, _)| k.arena_order());
+    entries
+}
+
+/// A set's members in arena order.
+pub(crate) fn sorted_members<K: ArenaOrder + Copy>(set: &HandleSet<K>) -> Vec<K> {
+    let mut members: Vec<K> = set.iter().copied().collect();
+    members.sort_unstable_by_key(ArenaOrder::arena_order);
+    members
+}

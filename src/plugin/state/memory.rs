@@ -2,7 +2,9 @@
 
 use crate::motion::State;
 use crate::plugin::policy::Role;
-use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
+use crate::plugin::state::handles::{
+    HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
+};
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::RigidBody;
@@ -11,7 +13,11 @@ use nalgebra::Vector3;
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
 /// rather than from its rounding.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
 pub(crate) struct Shadow {
     pub com: Vector3<f64>,
     pub v: Vector3<f64>,
@@ -22,6 +28,19 @@ pub(crate) struct Shadow {
 }
 
 impl Shadow {
+    /// Every number finite (a snapshot's shadow is checked before it is restored).
+    pub fn is_finite(&self) -> bool {
+        let written = [
+            self.written_translation,
+            self.written_linvel,
+            self.written_angvel,
+        ];
+        [self.com, self.v, self.w]
+            .iter()
+            .all(|v| v.iter().all(|x| x.is_finite()))
+            && written.iter().all(|v| v.is_finite())
+    }
+
     /// The shadow of the state `s` just written into `rb`.
     pub fn of(rb: &RigidBody, s: &State) -> Self {
         Self {
@@ -106,5 +125,42 @@ impl Memory {
         self.pair_roles = std::mem::take(&mut step.pairs.roles);
         self.holds.clear();
         self.holds.extend(step.holds.keys().copied());
+    }
+}
+
+/// What [`Memory`] carries to the next step, in arena order (`snapshot.rs`); the spare
+/// tables are allocations only.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub(crate) struct SavedMemory {
+    pub shadows: Vec<(RigidBodyHandle, Shadow)>,
+    pub roles: Vec<(PairKey, Role)>,
+    pub pair_roles: Vec<(PairKey, Role)>,
+    pub holds: Vec<PairKey>,
+}
+
+impl Memory {
+    /// What the next step would read.
+    pub fn save(&self) -> SavedMemory {
+        SavedMemory {
+            shadows: sorted_entries(&self.shadows),
+            roles: sorted_entries(&self.roles),
+            pair_roles: sorted_entries(&self.pair_roles),
+            holds: sorted_members(&self.holds),
+        }
+    }
+
+    /// The memory `saved` was taken from (less its spare allocations).
+    pub fn from_saved(saved: &SavedMemory) -> Self {
+        Self {
+            shadows: saved.shadows.iter().copied().collect(),
+            roles: saved.roles.iter().copied().collect(),
+            pair_roles: saved.pair_roles.iter().copied().collect(),
+            holds: saved.holds.iter().copied().collect(),
+            spare: Spare::default(),
+        }
     }
 }

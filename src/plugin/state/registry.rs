@@ -9,9 +9,9 @@
 use crate::model::Material;
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::material;
-use crate::plugin::config::{ConfigError, GroundMaterial};
+use crate::plugin::config::{ConfigError, GroundMaterial, rolling_coefficient};
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
-use crate::plugin::state::handles::{HandleMap, HandleSet};
+use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
 };
@@ -247,6 +247,69 @@ impl Registry {
             (Some(b), Some(g)) => material(b, g, over),
             _ => over.unwrap_or(Material::new(0.0, 0.0)),
         }
+    }
+}
+
+/// What the user registered ([`Registry`] less its index, which is built from it), in arena
+/// order (`snapshot.rs`).
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub(crate) struct SavedRegistry {
+    grounds: Vec<(ColliderHandle, GroundEntry)>,
+    all_fixed: bool,
+    unmarked: Vec<ColliderHandle>,
+    excluded: Vec<RigidBodyHandle>,
+    body_rolling: Vec<(RigidBodyHandle, (f64, f64))>,
+    impact_bodies: Vec<RigidBodyHandle>,
+    all_impact: bool,
+    flags_stale: bool,
+}
+
+impl Registry {
+    /// The registrations.
+    pub fn save(&self) -> SavedRegistry {
+        SavedRegistry {
+            grounds: sorted_entries(&self.grounds),
+            all_fixed: self.all_fixed,
+            unmarked: sorted_members(&self.unmarked),
+            excluded: sorted_members(&self.excluded),
+            body_rolling: sorted_entries(&self.body_rolling),
+            impact_bodies: sorted_members(&self.impact_bodies),
+            all_impact: self.all_impact,
+            flags_stale: self.flags_stale,
+        }
+    }
+
+    /// The registry `saved` was taken from, its index to be built at the next step; every
+    /// coefficient checked as its setter checks it.
+    pub fn from_saved(saved: &SavedRegistry) -> Result<Self, ConfigError> {
+        for (_, entry) in &saved.grounds {
+            if let Some(m) = &entry.material {
+                m.validate().map_err(ConfigError::Material)?;
+            }
+            rolling_coefficient("rolling_resistance", entry.rolling.0)?;
+            rolling_coefficient("spinning_friction", entry.rolling.1)?;
+        }
+        for (_, (rr, sp)) in &saved.body_rolling {
+            rolling_coefficient("rolling_resistance", Some(*rr))?;
+            rolling_coefficient("spinning_friction", Some(*sp))?;
+        }
+        let mut registry = Self {
+            grounds: saved.grounds.iter().copied().collect(),
+            all_fixed: saved.all_fixed,
+            unmarked: saved.unmarked.iter().copied().collect(),
+            excluded: saved.excluded.iter().copied().collect(),
+            body_rolling: saved.body_rolling.iter().copied().collect(),
+            impact_bodies: saved.impact_bodies.iter().copied().collect(),
+            all_impact: saved.all_impact,
+            index: GroundIndex::default(),
+            flags_stale: saved.flags_stale,
+        };
+        registry.index.invalidate();
+        Ok(registry)
     }
 }
 
