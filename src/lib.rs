@@ -35,7 +35,7 @@ mod motion;
 pub mod plugin;
 
 pub use plugin::{
-    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
+    ConfigError, Diagnostic, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
     ImpactSnapshot, ImpactTiming, RestoreError, Stage, StepCounts, StepProfile, TimingMode,
 };
 

@@ -1121,3 +1121,251 @@ fn exact_mode_flies_a_damped_ball_in_closed_form() {
     assert!((vy - v).abs() <= tol * v0, "speed {vy} vs {v}");
     assert!((yy - y).abs() <= tol * y0, "height {yy} vs {y}");
 }
+
+#[test]
+fn values_too_large_are_refused_naming_the_field_and_its_range() {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let mut p = plugin(TimingMode::Exact);
+    let with = |restitution, friction, rolling| GroundMaterial {
+        rolling_resistance: rolling,
+        ..GroundMaterial::new(restitution, friction)
+    };
+    for (material, field) in [
+        (with(1e38, 0.5, None), "restitution"),
+        (with(1e300, 0.5, None), "restitution"),
+        (with(10.5, 0.5, None), "restitution"),
+        (with(0.5, 1e3, None), "friction"),
+        (with(0.5, 0.5, Some(1e300)), "rolling_resistance"),
+        (with(0.5, 0.5, Some(-1.0)), "rolling_resistance"),
+    ] {
+        let e = p
+            .add_ground_with_material(&world.bodies, &world.colliders, ground, material)
+            .unwrap_err();
+        assert!(
+            matches!(e, ConfigError::MaterialOutOfRange { field: f, .. } if f == field),
+            "{material:?}: {e:?}"
+        );
+        let message = e.to_string();
+        assert!(
+            message.contains(&format!("GroundMaterial::{field}")) && message.contains("[0, "),
+            "{message}"
+        );
+    }
+    assert!(!p.is_ground(ground));
+    // The ends of the ranges are taken.
+    p.add_ground_with_material(
+        &world.bodies,
+        &world.colliders,
+        ground,
+        with(10.0, 100.0, Some(100.0)),
+    )
+    .unwrap();
+
+    let bad = |config: ImpactConfig| ImpactPlugin::new(config).err();
+    let base = ImpactConfig::default();
+    for (config, field) in [
+        (
+            ImpactConfig {
+                resting_speed: Some(1e300),
+                ..base
+            },
+            "resting_speed",
+        ),
+        (
+            ImpactConfig {
+                resting_gap: Some(1e300),
+                ..base
+            },
+            "resting_gap",
+        ),
+        (
+            ImpactConfig {
+                flat_tolerance: 2.0,
+                ..base
+            },
+            "flat_tolerance",
+        ),
+        (
+            ImpactConfig {
+                rolling_resistance: 1e300,
+                ..base
+            },
+            "rolling_resistance",
+        ),
+        (
+            ImpactConfig {
+                spinning_friction: 101.0,
+                ..base
+            },
+            "spinning_friction",
+        ),
+    ] {
+        let e = bad(config).expect("refused");
+        assert!(
+            matches!(e, ConfigError::InvalidConfig { field: f, .. } if f == field),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string().contains(&format!("ImpactConfig::{field}")),
+            "{e}"
+        );
+    }
+    let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
+    assert!(matches!(
+        p.set_body_rolling(ball, Some((0.1, 1e300))),
+        Err(ConfigError::InvalidConfig {
+            field: "spinning_friction",
+            ..
+        })
+    ));
+}
+
+/// A ball dropped on a half-space, its collider's or the ground's friction and restitution
+/// set by `set`, stepped by rapier alone (`plugin_on` `None`) or with the plugin, the ground
+/// registered with its material if any: the positions of 60 steps, the diagnostics and the
+/// number of events.
+fn dropped_with(
+    set: impl Fn(&mut PhysicsWorld, ColliderHandle, ColliderHandle),
+    plugin_on: Option<Option<GroundMaterial>>,
+) -> (Vec<Vector>, Vec<rapier_impact::Diagnostic>, usize) {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up()).restitution(0.8),
+    );
+    let (ball, ball_co) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 0.5, 0.0))
+            .linvel(Vector::new(1.0, 0.0, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.8).friction(0.5),
+    );
+    set(&mut world, ball_co, ground);
+    // Free flight is rapier's own integrator in this mode: a pair left to rapier makes the
+    // whole run rapier's.
+    let mut p = plugin(TimingMode::TimeOfImpact);
+    let mut positions = Vec::new();
+    let mut diagnostics = Vec::new();
+    let mut events = 0;
+    if let Some(material) = plugin_on {
+        match material {
+            Some(m) => p.add_ground_with_material(&world.bodies, &world.colliders, ground, m),
+            None => p.add_ground(&world.bodies, &world.colliders, ground),
+        }
+        .unwrap();
+    }
+    for _ in 0..60 {
+        if plugin_on.is_some() {
+            p.step(&mut world);
+        } else {
+            world.step();
+        }
+        diagnostics.extend_from_slice(p.diagnostics());
+        events += p.events().len();
+        positions.push(world.bodies[ball].translation());
+    }
+    (positions, diagnostics, events)
+}
+
+#[test]
+fn a_collider_with_coefficients_out_of_range_is_left_to_rapier_and_reported_once() {
+    type Set = fn(&mut PhysicsWorld, ColliderHandle, ColliderHandle);
+    let cases: [(&str, Set, bool); 4] = [
+        (
+            "ball friction inf",
+            |w, b, _| w.colliders[b].set_friction(Real::INFINITY),
+            true,
+        ),
+        (
+            "ground restitution NaN",
+            |w, _, g| w.colliders[g].set_restitution(Real::NAN),
+            false,
+        ),
+        (
+            "ball restitution -0.5",
+            |w, b, _| w.colliders[b].set_restitution(-0.5),
+            true,
+        ),
+        (
+            "ball restitution 50",
+            |w, b, _| w.colliders[b].set_restitution(50.0),
+            true,
+        ),
+    ];
+    for (label, set, on_ball) in cases {
+        let (alone, ..) = dropped_with(set, None);
+        let (with_plugin, diagnostics, events) = dropped_with(set, Some(None));
+        assert_eq!(with_plugin, alone, "{label}: not rapier's run");
+        assert_eq!(events, 0, "{label}");
+        assert_eq!(diagnostics.len(), 1, "{label}: {diagnostics:?}");
+        let rapier_impact::Diagnostic::CoefficientsOutOfRange { collider, .. } = diagnostics[0]
+        else {
+            panic!("{label}: {diagnostics:?}");
+        };
+        // The ball's collider was inserted second.
+        assert_eq!(collider.into_raw_parts().0 == 1, on_ball, "{label}");
+        // A ground material of the plugin's replaces the coefficients: resolved, not reported.
+        let material = Some(GroundMaterial::new(0.8, 0.5));
+        let (_, diagnostics, events) = dropped_with(set, Some(material));
+        assert!(
+            diagnostics.is_empty() && events > 0,
+            "{label}: {diagnostics:?}, {events}"
+        );
+    }
+    // In range: resolved, not reported.
+    let (_, diagnostics, events) = dropped_with(|_, _, _| {}, Some(None));
+    assert!(diagnostics.is_empty() && events > 0);
+}
+
+#[test]
+fn a_state_beyond_rapiers_numbers_is_not_written_and_is_reported() {
+    for timing in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+        // Ten times this approach speed is beyond rapier's number range.
+        let speed = Real::MAX / 4.0;
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, 0.1, 0.0))
+                .linvel(Vector::new(0.0, -speed, 0.0)),
+            ColliderBuilder::ball(0.1).restitution(10.0),
+        );
+        let mut p = plugin(timing);
+        p.add_ground_with_material(
+            &world.bodies,
+            &world.colliders,
+            ground,
+            GroundMaterial::new(10.0, 0.0),
+        )
+        .unwrap();
+        let mut reported = false;
+        for _ in 0..3 {
+            p.step(&mut world);
+            for d in p.diagnostics() {
+                assert_eq!(
+                    *d,
+                    rapier_impact::Diagnostic::NonFiniteState { body: ball },
+                    "{timing:?}"
+                );
+                reported = true;
+            }
+            for ev in p.events() {
+                assert!(
+                    ev.ke_after.is_finite() && ev.normal_impulse.is_finite(),
+                    "{timing:?}: {ev:?}"
+                );
+            }
+            let rb = &world.bodies[ball];
+            assert!(
+                rb.linvel().is_finite() || !reported,
+                "{timing:?}: the plugin wrote {:?}",
+                rb.linvel()
+            );
+        }
+        assert!(reported, "{timing:?}: no diagnostic");
+    }
+}

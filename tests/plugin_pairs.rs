@@ -788,3 +788,63 @@ fn balls_that_pass_through_each_other_in_the_step_end_path_still_meet() {
         );
     }
 }
+
+#[test]
+fn a_pair_with_coefficients_out_of_range_is_rapiers_and_reported_once() {
+    let run = |with_plugin: bool| {
+        let mut w = world(0.0);
+        let (a, ca) = ball(
+            &mut w,
+            Vector3::zeros(),
+            Vector3::x(),
+            Vector3::zeros(),
+            0.1,
+            0.9,
+            0.2,
+        );
+        let (b, _) = ball(
+            &mut w,
+            Vector3::new(0.5, 0.0, 0.0),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            0.1,
+            0.9,
+            0.2,
+        );
+        w.colliders[ca].set_friction(real(f64::NAN));
+        let mut p = ImpactPlugin::new(ImpactConfig {
+            timing: TimingMode::TimeOfImpact,
+            ..Default::default()
+        })
+        .unwrap();
+        p.add_impact_body(&w.bodies, a).unwrap();
+        p.add_impact_body(&w.bodies, b).unwrap();
+        let mut diagnostics = Vec::new();
+        let mut events = 0;
+        for _ in 0..60 {
+            if with_plugin {
+                p.step(&mut w);
+            } else {
+                w.step();
+            }
+            diagnostics.extend_from_slice(p.diagnostics());
+            events += p.events().len();
+        }
+        let v = |h: RigidBodyHandle| w.bodies[h].linvel();
+        ((v(a), v(b)), diagnostics, events)
+    };
+    let (alone, ..) = run(false);
+    let (with_plugin, diagnostics, events) = run(true);
+    // The balls met (rapier's bounce moved the second).
+    assert!(wide(alone.1.x) > 0.5, "{alone:?}");
+    assert_eq!(with_plugin, alone);
+    assert_eq!(events, 0);
+    assert!(
+        matches!(
+            diagnostics[..],
+            [rapier_impact::Diagnostic::CoefficientsOutOfRange { restitution, .. }]
+                if (restitution - 0.9).abs() < 1e-6
+        ),
+        "{diagnostics:?}"
+    );
+}

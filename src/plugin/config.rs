@@ -29,6 +29,32 @@ pub enum TimingMode {
     Exact,
 }
 
+/// The largest restitution the plugin takes, from a ground material or a collider: above 1 a
+/// contact adds energy (a game's bumper may); 10 already multiplies each approach speed
+/// tenfold, and much larger values overflow rapier's `f32` velocities within a few bounces.
+pub(crate) const MAX_RESTITUTION: f64 = 10.0;
+/// The largest friction, rolling-resistance and spinning-friction coefficient the plugin
+/// takes: beyond a few every contact grips and every roll stops at once, so larger values
+/// change nothing and are taken for a mistake.
+pub(crate) const MAX_FRICTION: f64 = 100.0;
+/// The largest resting speed (m/s) and resting gap (m): a threshold of that size makes every
+/// contact rest.
+pub(crate) const MAX_THRESHOLD: f64 = 1e3;
+/// The largest flat-landing tolerance (a tilt, rad): at 1 every face lands flat.
+pub(crate) const MAX_FLAT_TOLERANCE: f64 = 1.0;
+
+/// Is `value` in `[0, max]` (so finite)?
+fn in_range(value: f64, max: f64) -> bool {
+    (0.0..=max).contains(&value)
+}
+
+/// Are a collider's (or a material's) restitution and friction in the plugin's ranges
+/// (`[0, 10]` and `[0, 100]`)? A collider outside them is left to rapier
+/// ([`crate::Diagnostic::CoefficientsOutOfRange`]).
+pub(crate) fn coefficients_in_range(restitution: f64, friction: f64) -> bool {
+    in_range(restitution, MAX_RESTITUTION) && in_range(friction, MAX_FRICTION)
+}
+
 /// A material that replaces, for one ground, the coefficients rapier would combine from the
 /// two colliders.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,11 +63,12 @@ pub enum TimingMode {
     derive(serde::Serialize, serde::Deserialize)
 )]
 pub struct GroundMaterial {
-    /// Coefficient of restitution `e`, finite and `>= 0` (1 = elastic).
+    /// Coefficient of restitution `e`, in `[0, 10]` (1 = elastic; above 1 the contact adds
+    /// energy).
     pub restitution: f64,
-    /// Coefficient of friction `mu`, finite and `>= 0`.
+    /// Coefficient of friction `mu`, in `[0, 100]`.
     pub friction: f64,
-    /// Rolling resistance `mu_r` on this ground (dimensionless, finite and `>= 0`), or `None`
+    /// Rolling resistance `mu_r` on this ground (dimensionless, in `[0, 100]`), or `None`
     /// for the body's or the configuration's (see [`ImpactConfig::rolling_resistance`]).
     pub rolling_resistance: Option<f64>,
     /// Spinning friction `mu_sp` on this ground, or `None` (see
@@ -60,11 +87,27 @@ impl GroundMaterial {
         }
     }
 
-    /// Checks `e >= 0`, `mu >= 0`, `mu_r >= 0`, `mu_sp >= 0`, all finite.
+    /// Checks every coefficient's range: `e` in `[0, 10]`, `mu`, `mu_r` and `mu_sp` in
+    /// `[0, 100]` (NaN and infinities refused).
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.to_model().validate().map_err(ConfigError::Material)?;
-        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
-        rolling_coefficient("spinning_friction", self.spinning_friction)
+        let out = |field, value| ConfigError::MaterialOutOfRange { field, value };
+        if !in_range(self.restitution, MAX_RESTITUTION) {
+            return Err(out("restitution", self.restitution));
+        }
+        if !in_range(self.friction, MAX_FRICTION) {
+            return Err(out("friction", self.friction));
+        }
+        for (field, value) in [
+            ("rolling_resistance", self.rolling_resistance),
+            ("spinning_friction", self.spinning_friction),
+        ] {
+            match value {
+                Some(v) if !in_range(v, MAX_FRICTION) => return Err(out(field, v)),
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     pub(crate) fn to_model(self) -> Material {
@@ -86,7 +129,7 @@ pub struct ImpactConfig {
     pub law: Law,
     /// When inside a step impacts are resolved (default [`TimingMode::Exact`]).
     pub timing: TimingMode,
-    /// Resting approach speed (m/s), finite and `>= 0`, or `None` for the automatic value
+    /// Resting approach speed (m/s), in `[0, 1000]`, or `None` for the automatic value
     /// `max(0.5 |g| dt, 1e-3)`: the speed gravity adds in half a step.
     ///
     /// A contact within [`ImpactConfig::resting_gap`] of the ground whose normal speed at the
@@ -96,12 +139,12 @@ pub struct ImpactConfig {
     /// this is resolved with `e = 0` (friction still by the model), after which the contact is
     /// a resting one.
     pub resting_speed: Option<f64>,
-    /// Resting gap (m), finite and `>= 0`, or `None` for rapier's allowed linear error
+    /// Resting gap (m), in `[0, 1000]`, or `None` for rapier's allowed linear error
     /// (`IntegrationParameters::allowed_linear_error()`, 5 mm at the default length unit):
     /// how close to the ground a slow contact must be to count as resting.
     pub resting_gap: Option<f64>,
     /// Flat-landing tolerance (dimensionless, height difference over the size of the landing
-    /// face: the tilt in radians), finite and `>= 0`, default `1e-3`.
+    /// face: the tilt in radians), in `[0, 1]`, default `1e-3`.
     ///
     /// When a polyhedral face or edge lands, its vertices whose height above the contact plane
     /// is within this tolerance and that approach the ground are one simultaneous impact at
@@ -112,28 +155,24 @@ pub struct ImpactConfig {
     /// is resolved with `e = 0`, so a body caught in a rapid sequence of impacts comes to rest
     /// on the ground instead of bouncing indefinitely.
     pub max_impacts_per_step: usize,
-    /// Rolling resistance `mu_r` (dimensionless, finite and `>= 0`, default 0): while a ball
+    /// Rolling resistance `mu_r` (dimensionless, in `[0, 100]`, default 0): while a ball
     /// the plugin rolls in closed form rolls without slip, a torque `mu_r R N` opposes it
     /// (`docs/model.md`). Which value a ball gets: the ground's
     /// ([`GroundMaterial::rolling_resistance`]), else the ball's
     /// ([`crate::ImpactPlugin::set_body_rolling`]), else this.
     pub rolling_resistance: f64,
-    /// Spinning friction `mu_sp` (dimensionless, finite and `>= 0`, default 0): a torque
+    /// Spinning friction `mu_sp` (dimensionless, in `[0, 100]`, default 0): a torque
     /// `mu_sp R N` about the ground normal opposes a rolling ball's spin about it. Chosen as
     /// [`ImpactConfig::rolling_resistance`] is.
     pub spinning_friction: f64,
 }
 
-/// Checks a rolling coefficient: finite and `>= 0`.
-pub(crate) fn rolling_coefficient(
-    field: &'static str,
-    value: Option<f64>,
-) -> Result<(), ConfigError> {
-    match value {
-        Some(v) if !(v.is_finite() && v >= 0.0) => {
-            Err(ConfigError::InvalidConfig { field, value: v })
-        }
-        _ => Ok(()),
+/// Checks a body's or the configuration's rolling coefficient: in `[0, 100]`.
+pub(crate) fn rolling_coefficient(field: &'static str, value: f64) -> Result<(), ConfigError> {
+    if in_range(value, MAX_FRICTION) {
+        Ok(())
+    } else {
+        Err(ConfigError::InvalidConfig { field, value })
     }
 }
 
@@ -155,22 +194,22 @@ impl Default for ImpactConfig {
 impl ImpactConfig {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let check = |field: &'static str, value: f64| {
-            if value.is_finite() && value >= 0.0 {
+        let check = |field: &'static str, value: f64, max: f64| {
+            if in_range(value, max) {
                 Ok(())
             } else {
                 Err(ConfigError::InvalidConfig { field, value })
             }
         };
         if let Some(v) = self.resting_speed {
-            check("resting_speed", v)?;
+            check("resting_speed", v, MAX_THRESHOLD)?;
         }
         if let Some(v) = self.resting_gap {
-            check("resting_gap", v)?;
+            check("resting_gap", v, MAX_THRESHOLD)?;
         }
-        check("flat_tolerance", self.flat_tolerance)?;
-        check("rolling_resistance", self.rolling_resistance)?;
-        check("spinning_friction", self.spinning_friction)?;
+        check("flat_tolerance", self.flat_tolerance, MAX_FLAT_TOLERANCE)?;
+        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
+        rolling_coefficient("spinning_friction", self.spinning_friction)?;
         if self.max_impacts_per_step == 0 {
             return Err(ConfigError::InvalidConfig {
                 field: "max_impacts_per_step",
@@ -185,15 +224,24 @@ impl ImpactConfig {
 /// set it. Nothing is validated inside a step, and nothing there panics.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ConfigError {
-    /// A config field is out of range (NaN, infinite, negative, or zero where `>= 1`).
+    /// A config field (or a body's rolling coefficient) is outside its documented range
+    /// (NaN, infinite, negative, too large, or zero where `>= 1`).
     InvalidConfig {
-        /// The field of [`ImpactConfig`].
+        /// The field of [`ImpactConfig`] (or of [`crate::ImpactPlugin::set_body_rolling`]).
         field: &'static str,
         /// The value refused.
         value: f64,
     },
-    /// A ground material's coefficient is negative or not finite.
+    /// A ground material's restitution or friction is negative or not finite.
     Material(ModelError),
+    /// A ground material's coefficient is above its documented range (or, for the rolling
+    /// coefficients, outside it).
+    MaterialOutOfRange {
+        /// The field of [`GroundMaterial`].
+        field: &'static str,
+        /// The value refused.
+        value: f64,
+    },
     /// The handle is not a collider of the set (never inserted, or removed).
     NotACollider(ColliderHandle),
     /// The collider is not a ground of this plugin.
@@ -212,10 +260,17 @@ pub enum ConfigError {
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::InvalidConfig { field, value } => {
-                write!(f, "ImpactConfig::{field} is out of range: {value}")
-            }
+            Self::InvalidConfig { field, value } => write!(
+                f,
+                "ImpactConfig::{field} is {value}, outside its range {}",
+                range_of(field)
+            ),
             Self::Material(e) => write!(f, "invalid ground material: {e}"),
+            Self::MaterialOutOfRange { field, value } => write!(
+                f,
+                "GroundMaterial::{field} is {value}, outside its range {}",
+                range_of(field)
+            ),
             Self::NotACollider(h) => write!(f, "{h:?} is not a collider of this collider set"),
             Self::NotAGround(h) => write!(f, "collider {h:?} is not a ground of this plugin"),
             Self::NotABody(h) => write!(f, "{h:?} is not a rigid body of this body set"),
@@ -232,6 +287,18 @@ impl fmt::Display for ConfigError {
             ),
         }
     }
+}
+
+/// A field's documented range, for the error's message.
+fn range_of(field: &str) -> String {
+    let max = match field {
+        "restitution" => MAX_RESTITUTION,
+        "friction" | "rolling_resistance" | "spinning_friction" => MAX_FRICTION,
+        "resting_speed" | "resting_gap" => MAX_THRESHOLD,
+        "flat_tolerance" => MAX_FLAT_TOLERANCE,
+        _ => return ">= 1".to_string(),
+    };
+    format!("[0, {max}]")
 }
 
 impl std::error::Error for ConfigError {

@@ -122,3 +122,71 @@ pub struct ImpactEvent {
     /// Kinetic energy of the body after the impact (J).
     pub ke_after: f64,
 }
+
+impl ImpactEvent {
+    /// Every number finite (an event whose numbers are not is never reported: the writer
+    /// refuses the state it comes with, [`Diagnostic::NonFiniteState`]).
+    pub(crate) fn is_finite(&self) -> bool {
+        [self.point, self.normal, self.impulse, self.tangent_impulse]
+            .iter()
+            .all(|v| v.is_finite())
+            && [
+                self.time,
+                self.approach_speed,
+                self.normal_impulse,
+                self.restitution,
+                self.friction,
+                self.ke_before,
+                self.ke_after,
+            ]
+            .iter()
+            .all(|x| x.is_finite())
+    }
+}
+
+/// Something the plugin left to rapier instead of resolving it, reported after the step it
+/// happened in ([`crate::ImpactPlugin::diagnostics`]). Not a change to a body: nothing was
+/// written for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub enum Diagnostic {
+    /// The collider's restitution or friction is outside the plugin's ranges (NaN,
+    /// infinite, negative, restitution above 10 or friction above 100): every pair of it
+    /// without a ground material of the plugin's stays rapier's, unchanged, rather than being
+    /// resolved with a value the plugin made up. Reported once per collider, the first step
+    /// the plugin meets it in a pair.
+    CoefficientsOutOfRange {
+        /// The collider.
+        collider: ColliderHandle,
+        /// Its restitution, as set.
+        restitution: f64,
+        /// Its friction, as set.
+        friction: f64,
+    },
+    /// A state the plugin computed for the body was not finite, or beyond rapier's number
+    /// range (an impulse from an extreme input): it was not written, no event reports it, and
+    /// the body keeps the state rapier gave it for this step.
+    NonFiniteState {
+        /// The body.
+        body: RigidBodyHandle,
+    },
+}
+
+/// What a step reports: its events and its diagnostics, cleared when the next step starts.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Reports {
+    pub events: Vec<ImpactEvent>,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl Reports {
+    /// A new step reports afresh.
+    pub fn clear(&mut self) {
+        self.events.clear();
+        self.diagnostics.clear();
+    }
+}

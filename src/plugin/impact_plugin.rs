@@ -5,7 +5,7 @@
 //! the hook calls rapier makes during its step in `hooks/`.
 
 use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig, rolling_coefficient};
-use crate::plugin::events::ImpactEvent;
+use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::profile::{StepProfile, Stopwatch};
@@ -100,7 +100,8 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) memory: Memory,
     /// The opted-in balls' swept spheres, refitted each step (`stages/pair_plan/index.rs`).
     pub(crate) pair_index: PairIndex,
-    pub(crate) events: Vec<ImpactEvent>,
+    /// The last step's events and diagnostics.
+    pub(crate) reports: Reports,
     /// The step's profile, when profiling is on.
     pub(crate) stopwatch: Stopwatch,
 }
@@ -130,7 +131,7 @@ impl<H> ImpactPlugin<H> {
             flags: HookFlags::default(),
             memory: Memory::default(),
             pair_index: PairIndex::default(),
-            events: Vec::new(),
+            reports: Reports::default(),
             stopwatch: Stopwatch::default(),
         })
     }
@@ -172,7 +173,7 @@ impl<H> ImpactPlugin<H> {
             flags,
             memory,
             pair_index,
-            events,
+            reports,
             stopwatch,
         } = self;
         let plugin = ImpactPlugin {
@@ -184,7 +185,7 @@ impl<H> ImpactPlugin<H> {
             flags,
             memory,
             pair_index,
-            events,
+            reports,
             stopwatch,
         };
         (plugin, old)
@@ -205,7 +206,14 @@ impl<H> ImpactPlugin<H> {
     /// Every change the plugin made to a body in the last step: the impacts and the
     /// corrections (see [`crate::EventKind`]), cleared by the next [`Self::before_step`].
     pub fn events(&self) -> &[ImpactEvent] {
-        &self.events
+        &self.reports.events
+    }
+
+    /// What the plugin left to rapier in the last step instead of resolving it (a collider
+    /// whose coefficients are out of range, reported once; a state that was not finite),
+    /// cleared by the next [`Self::before_step`]. Nothing was written for them.
+    pub fn diagnostics(&self) -> &[Diagnostic] {
+        &self.reports.diagnostics
     }
 
     /// Leaves `body` to rapier entirely: its ground contacts are rapier's, bounce included.
@@ -218,8 +226,8 @@ impl<H> ImpactPlugin<H> {
         self.registry.excluded.remove(&body);
     }
 
-    /// A ball's own rolling resistance and spinning friction (dimensionless, finite and
-    /// `>= 0`; `None` for the configuration's): used on every ground without an override of
+    /// A ball's own rolling resistance and spinning friction (dimensionless, each in
+    /// `[0, 100]`; `None` for the configuration's): used on every ground without an override of
     /// its own (see [`ImpactConfig::rolling_resistance`]).
     pub fn set_body_rolling(
         &mut self,
@@ -228,8 +236,8 @@ impl<H> ImpactPlugin<H> {
     ) -> Result<(), ConfigError> {
         match coefficients {
             Some((rr, sp)) => {
-                rolling_coefficient("rolling_resistance", Some(rr))?;
-                rolling_coefficient("spinning_friction", Some(sp))?;
+                rolling_coefficient("rolling_resistance", rr)?;
+                rolling_coefficient("spinning_friction", sp)?;
                 self.registry.body_rolling.insert(body, (rr, sp));
             }
             None => {

@@ -31,7 +31,7 @@ mod stages;
 mod state;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
-pub use events::{EventKind, ImpactEvent, ImpactTiming};
+pub use events::{Diagnostic, EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;
 pub use profile::{Stage, StepCounts, StepProfile};
 pub use snapshot::{ImpactSnapshot, RestoreError};

@@ -13,7 +13,7 @@
 //! anything changes.
 
 use crate::plugin::config::{ConfigError, ImpactConfig};
-use crate::plugin::events::ImpactEvent;
+use crate::plugin::events::{Diagnostic, ImpactEvent};
 use crate::plugin::hooks::flags::{HookFlags, SavedFlags};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
@@ -94,6 +94,7 @@ pub struct ImpactSnapshot {
     memory: SavedMemory,
     flags: SavedFlags,
     events: Vec<ImpactEvent>,
+    diagnostics: Vec<Diagnostic>,
 }
 
 /// Why [`ImpactPlugin::restore`] refused a snapshot; the plugin is left as it was.
@@ -154,7 +155,8 @@ impl<H> ImpactPlugin<H> {
             registry: self.registry.save(),
             memory: self.memory.save(),
             flags: self.flags.save(),
-            events: self.events.clone(),
+            events: self.reports.events.clone(),
+            diagnostics: self.reports.diagnostics.clone(),
         }
     }
 
@@ -182,7 +184,8 @@ impl<H> ImpactPlugin<H> {
         self.registry = registry;
         self.flags = HookFlags::from_saved(&snapshot.flags);
         self.memory = Memory::from_saved(&snapshot.memory);
-        self.events.clone_from(&snapshot.events);
+        self.reports.events.clone_from(&snapshot.events);
+        self.reports.diagnostics.clone_from(&snapshot.diagnostics);
         // Built again at the next step.
         self.step = StepData::default();
         self.lookup = Lookup::default();

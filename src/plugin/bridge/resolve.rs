@@ -77,13 +77,14 @@ impl Inertia {
 }
 
 /// Restitution and friction of a body collider against a ground: the ground's override, or
-/// rapier's combination of the two colliders' coefficients (their combine rules). Negative or
-/// NaN values that rapier tolerates become 0.
+/// rapier's combination of the two colliders' coefficients (their combine rules). A pair of a
+/// collider out of the plugin's ranges never gets here (it is rapier's, and reported:
+/// `Diagnostic::CoefficientsOutOfRange`), and every combination of values in range is finite
+/// and `>= 0`: nothing is changed here.
 pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material>) -> Material {
     if let Some(m) = over {
         return m;
     }
-    let clean = |x: f64| if x.is_finite() && x > 0.0 { x } else { 0.0 };
     let e = CoefficientCombineRule::combine(
         body.restitution(),
         ground.restitution(),
@@ -96,7 +97,7 @@ pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material
         body.friction_combine_rule(),
         ground.friction_combine_rule(),
     );
-    Material::new(clean(to_f64(e)), clean(to_f64(mu)))
+    Material::new(to_f64(e), to_f64(mu))
 }
 
 /// Everything about one impact that is not geometry.

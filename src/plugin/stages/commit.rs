@@ -11,12 +11,12 @@
 //! ([`Origin::Correction`]) is not: rapier's precision is its truth.
 
 use crate::motion::State;
-use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, vec_from_na};
-use crate::plugin::events::ImpactEvent;
+use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na};
+use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::profile::StepProfile;
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
-use crate::rapier::math::Pose;
+use crate::rapier::math::{Pose, Real};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -33,9 +33,9 @@ pub(crate) enum Origin {
     Correction,
 }
 
-/// The step's writer: the events of the step and `Exact` mode's shadows.
+/// The step's writer: the events and diagnostics of the step and `Exact` mode's shadows.
 pub(crate) struct Commit<'a> {
-    events: &'a mut Vec<ImpactEvent>,
+    reports: &'a mut Reports,
     shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
     /// `Exact` mode: states of [`Origin::Model`] are remembered.
     exact: bool,
@@ -45,39 +45,49 @@ pub(crate) struct Commit<'a> {
 
 impl<'a> Commit<'a> {
     pub fn new(
-        events: &'a mut Vec<ImpactEvent>,
+        reports: &'a mut Reports,
         shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
         exact: bool,
         log: Option<&'a mut StepProfile>,
     ) -> Self {
         Self {
-            events,
+            reports,
             shadows,
             exact,
             log,
         }
     }
 
-    /// Reports one change made to a body.
+    /// Reports one change made to a body; an event whose numbers are not all finite is
+    /// dropped (its state is refused too: [`Self::state`]).
     pub fn event(&mut self, event: ImpactEvent) {
-        self.events.push(event);
+        if event.is_finite() {
+            self.reports.events.push(event);
+        }
     }
 
-    /// Reports changes made to bodies, in order.
+    /// Reports changes made to bodies, in order ([`Self::event`] each).
     pub fn events(&mut self, events: impl IntoIterator<Item = ImpactEvent>) {
-        self.events.extend(events);
+        for event in events {
+            self.event(event);
+        }
+    }
+
+    /// Reports what the step left to rapier.
+    pub fn diagnose(&mut self, diagnostic: Diagnostic) {
+        self.reports.diagnostics.push(diagnostic);
     }
 
     /// Withdraws the events reported from index `from` on: those of an attempt that was
     /// abandoned before anything of it was written (a cluster the search gave up on).
     pub fn withdraw(&mut self, from: usize) {
-        self.events.truncate(from);
+        self.reports.events.truncate(from);
     }
 
     /// The step's events so far (a body's events of this step start at an index taken
     /// before its stage ran: `reported()`).
     pub fn reported(&self) -> &[ImpactEvent] {
-        self.events
+        &self.reports.events
     }
 
     /// Writes `s` into `body` (woken up): its pose and velocities.
@@ -89,6 +99,10 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         origin: Origin,
     ) {
+        if !fits(s, local_com) {
+            self.diagnose(Diagnostic::NonFiniteState { body });
+            return;
+        }
         let started = self.clock();
         let rb = &mut bodies[body];
         write_pose_and_velocities(rb, s, local_com, true);
@@ -107,6 +121,10 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         exact_spin: bool,
     ) {
+        if !fits(s, local_com) {
+            self.diagnose(Diagnostic::NonFiniteState { body });
+            return;
+        }
         let started = self.clock();
         let rb = &mut bodies[body];
         write_pose_and_velocities(rb, s, local_com, false);
@@ -145,6 +163,20 @@ impl<'a> Commit<'a> {
             self.shadows.insert(body, Shadow::of(rb, s));
         }
     }
+}
+
+/// Does the state, written as a pose and velocities, fit in rapier's numbers (every value
+/// finite in `Real`)? A state that does not is refused: nothing the plugin writes is NaN or
+/// infinite.
+fn fits(s: &State, local_com: &Vector3<f64>) -> bool {
+    let limit = to_f64(Real::MAX);
+    let translation = s.com - s.rot * local_com;
+    let q = s.rot.coords;
+    [translation, s.v, s.w]
+        .iter()
+        .flat_map(|v| v.iter())
+        .chain(q.iter())
+        .all(|x| x.abs() <= limit)
 }
 
 /// Sets a body's pose and velocities (woken up) from an `f64` state: the full pose, or

@@ -133,6 +133,9 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             (c.near, c.candidates) = (near.len(), step.candidates.len());
         });
         survey.far.extend(not_near);
+        if !self.reports.diagnostics.is_empty() {
+            self.memory.report_once(&mut self.reports.diagnostics);
+        }
         let planned = (near.as_slice(), survey.far.as_slice());
         self.install(&step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
@@ -178,7 +181,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.put_back_held(&step, bodies);
         bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.stopwatch.lap(Stage::Holds);
-        let events = self.events.len();
+        let events = self.reports.events.len();
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.memory.spare.candidates = std::mem::take(&mut step.data.candidates);
@@ -217,7 +220,10 @@ impl<H> ImpactPlugin<H> {
         let config = self.config;
         let exact = config.timing == TimingMode::Exact;
         let log = self.stopwatch.commit_log();
-        let mut commit = Commit::new(&mut self.events, &mut self.memory.shadows, exact, log);
+        let mut commit = Commit::new(&mut self.reports, &mut self.memory.shadows, exact, log);
+        for diagnostic in std::mem::take(&mut step.pairs.refused) {
+            commit.diagnose(diagnostic);
+        }
         for body in woken {
             commit.wake(bodies, body);
         }
@@ -258,7 +264,7 @@ impl<H> ImpactPlugin<H> {
             user_hooks: &self.user_hooks,
             prev_holds: &self.memory.holds,
             commit: Commit::new(
-                &mut self.events,
+                &mut self.reports,
                 &mut self.memory.shadows,
                 exact,
                 self.stopwatch.commit_log(),
@@ -278,7 +284,7 @@ impl<H> ImpactPlugin<H> {
     /// What the stages after rapier's step read of the plugin, and the writer.
     fn after_view(&mut self) -> AfterStep<'_> {
         let reads = (&self.config, &self.registry, &self.flags);
-        let writes = (&mut self.events, self.stopwatch.commit_log());
+        let writes = (&mut self.reports, self.stopwatch.commit_log());
         AfterStep::new(reads, &mut self.memory, writes)
     }
 }

@@ -91,13 +91,19 @@ pub(crate) fn plan_pairs<H: PhysicsHooks>(
     bodies: &RigidBodySet,
     inputs: &PairInputs<H>,
 ) -> (PairPlan, Vec<RigidBodyHandle>) {
-    let Some(members) = Members::gather(bodies, inputs) else {
-        return (PairPlan::default(), Vec::new());
+    let mut refused = Vec::new();
+    let Some(members) = Members::gather(bodies, inputs, &mut refused) else {
+        let plan = PairPlan {
+            refused,
+            ..PairPlan::default()
+        };
+        return (plan, Vec::new());
     };
     index.update(&members.leaves);
     let found = candidates(index, &members);
-    let Planned { plan, woken } = plan_members(index, bodies, inputs, &members, found);
+    let Planned { mut plan, woken } = plan_members(index, bodies, inputs, &members, found);
     index.clear_list(&members.leaves);
+    plan.refused = refused;
     (plan, woken)
 }
 

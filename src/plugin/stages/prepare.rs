@@ -42,7 +42,7 @@ impl<H> ImpactPlugin<H> {
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) -> StepData {
-        self.events.clear();
+        self.reports.clear();
         // The hooks' tables are rebuilt at the end of the plan.
         self.lookup = Lookup::default();
         self.registry.sync(bodies, colliders);

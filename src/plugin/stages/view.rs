@@ -3,7 +3,7 @@
 //! ([`AfterStep`]).
 
 use crate::plugin::config::{ImpactConfig, TimingMode};
-use crate::plugin::events::ImpactEvent;
+use crate::plugin::events::Reports;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
 use crate::plugin::profile::StepProfile;
@@ -57,7 +57,7 @@ impl<'a> AfterStep<'a> {
     pub fn new(
         (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
         memory: &'a mut Memory,
-        (events, log): (&'a mut Vec<ImpactEvent>, Option<&'a mut StepProfile>),
+        (reports, log): (&'a mut Reports, Option<&'a mut StepProfile>),
     ) -> Self {
         let exact = config.timing == TimingMode::Exact;
         Self {
@@ -65,7 +65,7 @@ impl<'a> AfterStep<'a> {
             registry,
             flags,
             roles: &memory.roles,
-            commit: Commit::new(events, &mut memory.shadows, exact, log),
+            commit: Commit::new(reports, &mut memory.shadows, exact, log),
             released: Vec::new(),
         }
     }

@@ -29,7 +29,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     ) {
         let user_hooks = &self.user_hooks;
         let reads = (&self.config, &self.registry, &self.flags);
-        let writes = (&mut self.events, self.stopwatch.commit_log());
+        let writes = (&mut self.reports, self.stopwatch.commit_log());
         let mut view = AfterStep::new(reads, &mut self.memory, writes);
         let (impulse_joints, multibody_joints) =
             (step.sets.impulse_joints, step.sets.multibody_joints);

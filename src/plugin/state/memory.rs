@@ -1,6 +1,7 @@
 //! What the plugin remembers from one step to the next.
 
 use crate::motion::State;
+use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
     HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
@@ -8,7 +9,7 @@ use crate::plugin::state::handles::{
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::RigidBody;
-use crate::rapier::prelude::RigidBodyHandle;
+use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// Exact-mode `f64` state of a body as last written, so the next step continues from it
@@ -67,6 +68,8 @@ pub(crate) struct Memory {
     pub pair_roles: HandleMap<PairKey, Role>,
     /// The pairs held at rest (`StepData::holds`).
     pub holds: HandleSet<PairKey>,
+    /// The colliders reported for coefficients out of range (`Diagnostic`), each once.
+    pub reported: HandleSet<ColliderHandle>,
     /// Tables a step fills again, kept from the step before so that their allocations are.
     pub spare: Spare,
 }
@@ -119,6 +122,15 @@ impl Memory {
         }
     }
 
+    /// Keeps each collider's first report of coefficients out of range only: a collider is
+    /// met in a pair at every step until its coefficients change.
+    pub fn report_once(&mut self, diagnostics: &mut Vec<Diagnostic>) {
+        diagnostics.retain(|d| match d {
+            Diagnostic::CoefficientsOutOfRange { collider, .. } => self.reported.insert(*collider),
+            _ => true,
+        });
+    }
+
     /// After rapier's step: this step's roles and holds become what the next step reads.
     pub fn keep_roles(&mut self, step: &mut StepData) {
         self.roles = std::mem::take(&mut step.roles);
@@ -140,6 +152,7 @@ pub(crate) struct SavedMemory {
     pub roles: Vec<(PairKey, Role)>,
     pub pair_roles: Vec<(PairKey, Role)>,
     pub holds: Vec<PairKey>,
+    pub reported: Vec<ColliderHandle>,
 }
 
 impl Memory {
@@ -150,6 +163,7 @@ impl Memory {
             roles: sorted_entries(&self.roles),
             pair_roles: sorted_entries(&self.pair_roles),
             holds: sorted_members(&self.holds),
+            reported: sorted_members(&self.reported),
         }
     }
 
@@ -160,6 +174,7 @@ impl Memory {
             roles: saved.roles.iter().copied().collect(),
             pair_roles: saved.pair_roles.iter().copied().collect(),
             holds: saved.holds.iter().copied().collect(),
+            reported: saved.reported.iter().copied().collect(),
             spare: Spare::default(),
         }
     }

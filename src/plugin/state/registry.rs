@@ -287,15 +287,18 @@ impl Registry {
     /// coefficient checked as its setter checks it.
     pub fn from_saved(saved: &SavedRegistry) -> Result<Self, ConfigError> {
         for (_, entry) in &saved.grounds {
-            if let Some(m) = &entry.material {
-                m.validate().map_err(ConfigError::Material)?;
-            }
-            rolling_coefficient("rolling_resistance", entry.rolling.0)?;
-            rolling_coefficient("spinning_friction", entry.rolling.1)?;
+            let m = entry.material.unwrap_or(Material::new(0.0, 0.0));
+            let material = GroundMaterial {
+                restitution: m.restitution,
+                friction: m.friction,
+                rolling_resistance: entry.rolling.0,
+                spinning_friction: entry.rolling.1,
+            };
+            material.validate()?;
         }
         for (_, (rr, sp)) in &saved.body_rolling {
-            rolling_coefficient("rolling_resistance", Some(*rr))?;
-            rolling_coefficient("spinning_friction", Some(*sp))?;
+            rolling_coefficient("rolling_resistance", *rr)?;
+            rolling_coefficient("spinning_friction", *sp)?;
         }
         let mut registry = Self {
             grounds: saved.grounds.iter().copied().collect(),

@@ -2,6 +2,7 @@
 //! step to the stages after it.
 
 use crate::motion::{Flight, Rolling, State};
+use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
@@ -138,4 +139,6 @@ pub(crate) struct PairPlan {
     pub roles: HandleMap<PairKey, Role>,
     /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
     pub members: HandleSet<RigidBodyHandle>,
+    /// The opted-in bodies' colliders whose coefficients are out of range: no members.
+    pub refused: Vec<Diagnostic>,
 }

@@ -6,6 +6,8 @@ use super::PairInputs;
 use super::index::slot_of_body;
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use crate::plugin::config::coefficients_in_range;
+use crate::plugin::events::Diagnostic;
 use crate::plugin::queries::geometry::BodyGeom;
 use crate::plugin::queries::observe::{body_geom, centred, rapier_state};
 use crate::rapier::math::Vector;
@@ -59,8 +61,14 @@ pub(super) struct Members<'a> {
 impl<'a> Members<'a> {
     /// The members of the step, or `None` when no pair can be planned (no body takes pairs,
     /// fewer than two members, or none of them awake: two sleeping bodies cannot meet).
-    /// Reads the bodies, their colliders and the registry; writes nothing.
-    pub(super) fn gather<H>(bodies: &RigidBodySet, inputs: &PairInputs<'a, H>) -> Option<Self> {
+    /// Reads the bodies, their colliders and the registry; writes only `refused`: an opted-in
+    /// body whose collider's coefficients are out of the plugin's ranges is no member (its
+    /// pairs stay rapier's), and is listed there.
+    pub(super) fn gather<H>(
+        bodies: &RigidBodySet,
+        inputs: &PairInputs<'a, H>,
+        refused: &mut Vec<Diagnostic>,
+    ) -> Option<Self> {
         let registry = inputs.registry;
         if !registry.any_pairs()
             || !bodies
@@ -72,7 +80,7 @@ impl<'a> Members<'a> {
         let balls: Vec<Ball> = bodies
             .iter()
             .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
-            .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders))
+            .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders, refused))
             .collect();
         if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
             return None;
@@ -117,19 +125,30 @@ impl<'a> Members<'a> {
 }
 
 /// The member of one opted-in body, or `None` when its pairs stay rapier's: not exactly one
-/// collider, a disabled or sensor collider, or a shape that is neither a centred ball (met in
+/// collider, a disabled or sensor collider, coefficients out of range (listed in `refused`),
+/// or a shape that is neither a centred ball (met in
 /// closed form) nor convex (parry's contact manifolds of a compound or a mesh are in their
 /// pieces' frames). Reads the body and its collider only.
 fn member<'a>(
     handle: RigidBodyHandle,
     rb: &RigidBody,
     colliders: &'a ColliderSet,
+    refused: &mut Vec<Diagnostic>,
 ) -> Option<Ball<'a>> {
     let [collider] = rb.colliders() else {
         return None;
     };
     let co = colliders.get(*collider)?;
     if !co.is_enabled() || co.is_sensor() {
+        return None;
+    }
+    let (restitution, friction) = (to_f64(co.restitution()), to_f64(co.friction()));
+    if !coefficients_in_range(restitution, friction) {
+        refused.push(Diagnostic::CoefficientsOutOfRange {
+            collider: *collider,
+            restitution,
+            friction,
+        });
         return None;
     }
     // Centred on the centre of mass in the body's frame, where both are exact.

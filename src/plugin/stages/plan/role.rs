@@ -4,7 +4,9 @@
 
 use super::body::{BodyNear, BodyPlan, BodyReads, StartContact};
 use super::{Planner, closes_within};
-use crate::plugin::config::TimingMode;
+use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::config::{TimingMode, coefficients_in_range};
+use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
@@ -55,7 +57,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         for part in &body.geom.parts {
             let key = (part.handle, gg.handle);
             let pair = Pair { k, part, gg, key };
-            let role = if self.filtered(body, scene, key) {
+            let role = if self.filtered(body, scene, key) || self.coefficients_refused(scene, key) {
                 Role::Filtered
             } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
                 role
@@ -86,6 +88,37 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         joint_filtered
             || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
             || self.user_refuses(bodies, colliders, key)
+    }
+
+    /// Is a collider of the pair out of the plugin's coefficient ranges, with no ground
+    /// material to replace them? The pair is then rapier's, as a filtered one is (nothing made
+    /// up for it), and each such collider is diagnosed (reported once, `Memory::reported`).
+    /// Reads the two colliders; the registry only when one is out of range.
+    fn coefficients_refused(&mut self, scene: &Scene, key: PairKey) -> bool {
+        let out = |c| {
+            scene.colliders.get(c).filter(|co| {
+                !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
+            })
+        };
+        let (body, ground) = (out(key.0), out(key.1));
+        if body.is_none() && ground.is_none()
+            || self
+                .registry
+                .entry(key.1)
+                .is_some_and(|g| g.material.is_some())
+        {
+            return false;
+        }
+        for (c, co) in [(key.0, body), (key.1, ground)] {
+            if let Some(co) = co {
+                self.commit.diagnose(Diagnostic::CoefficientsOutOfRange {
+                    collider: c,
+                    restitution: to_f64(co.restitution()),
+                    friction: to_f64(co.friction()),
+                });
+            }
+        }
+        true
     }
 
     /// The role of a pair rapier's filtering keeps, by its contact at the body's current
