@@ -228,6 +228,9 @@ pub(crate) enum EndCheck {
     /// rapier's end state of a body asleep at the start and woken inside the step (rapier
     /// solved it without its ground contacts).
     Woken,
+    /// rapier's end state of a body whose flight the search found clear, where rapier's
+    /// integrator ends lower than that flight (`TimeOfImpact` mode, `StepData::integrator_lag`).
+    Lagged,
     /// rapier's end state of a rolling ball something else acted on, in which it flew
     /// without its ground; `fall` (m/s) is the step's fall, `|a.n| dt`.
     DisturbedRolling { fall: f64 },
@@ -335,6 +338,8 @@ impl Policy {
     /// | `RapierEnd` | touching, approaching | impact |
     /// | `RapierEnd` | deeper than the gap, leaving (it swung through the ground) | push out, velocity kept |
     /// | `Woken` | deeper than the gap, approaching | impact, `e = 0` |
+    /// | `Lagged` | deeper than the gap, approaching | impact |
+    /// | `Lagged` | deeper than the gap, leaving | push out, velocity kept |
     /// | `DisturbedRolling` | into the ground no faster than the step's fall plus the resting speed | push out, stopped |
     /// | `DisturbedRolling` | faster (something pushed it down) | impact, `e = 0` |
     /// | `TurningResting` | deeper than the gap, a point swinging down, not (slow and touching) and not pressed at its pivot | impact, `e = 0` if slower than a fall through the gap |
@@ -356,6 +361,8 @@ impl Policy {
             }
             EndCheck::RapierEnd if deep => EndAction::PushOut { stop: false },
             EndCheck::Woken if deep && approaching => EndAction::Impact { settle: true },
+            EndCheck::Lagged if deep && approaching => EndAction::Impact { settle: false },
+            EndCheck::Lagged if deep => EndAction::PushOut { stop: false },
             EndCheck::DisturbedRolling { fall } => {
                 if un >= -(fall + self.resting_speed) {
                     EndAction::PushOut { stop: true }

@@ -12,7 +12,7 @@ mod plane;
 pub(crate) use impact_time::{
     Gap, Search, Sweep, cannot_close, earliest_touch, first_impact, touch_time,
 };
-pub(crate) use instant::{closest, contact, contact_checked};
+pub(crate) use instant::{closest, contact, contact_checked, contact_from_side};
 pub(crate) use plane::{
     COPLANAR_TOLERANCE, PlaneNear, flat_relative, landing_point, one_plane_under, plane_piece_of,
 };

@@ -58,6 +58,12 @@ impl<H> ImpactPlugin<H> {
                 to_f64(params.allowed_linear_error()),
                 to_f64(params.prediction_distance()),
             ),
+            integrator_lag: match self.config.timing {
+                TimingMode::TimeOfImpact => {
+                    dt * dt / (2.0 * params.num_solver_iterations.max(1) as f64)
+                }
+                TimingMode::Step | TimingMode::Exact => 0.0,
+            },
             down: g.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
             gravity: g,
             ..Default::default()

@@ -23,7 +23,10 @@ use crate::plugin::bridge::resolve::{
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::filter;
-use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, closest, landing_point};
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, GroundGeom, Hit, body_velocity_at, closest, contact_from_side,
+    landing_point, part_pose,
+};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
     NonGround, ground_geom, neighbours, touched_besides_grounds,
@@ -144,9 +147,12 @@ impl AfterStep<'_> {
                 .get_or_insert_with(|| neighbours(body, rb, &step.sets, self.registry, &step.down))
         };
         for k in 0..self.config.max_impacts_per_step {
-            let Some(hit) = closest(checked.geom, grounds, &s, dt, 0.0) else {
+            let found = closest(checked.geom, grounds, &s, dt, 0.0);
+            let gap = step.policy.resting_gap;
+            let Some(hit) = found.or_else(|| passed_through(checked, &s, dt, gap)) else {
                 break;
             };
+            let hit = on_entry_side(hit, checked, &s, dt);
             let rule = if k == 0 { why } else { EndCheck::RapierEnd };
             let action = step.policy.end_action(rule, hit.dist, hit.un, || {
                 let around = neighbours_of();
@@ -406,6 +412,81 @@ impl AfterStep<'_> {
             step.dt,
         ));
     }
+}
+
+/// `hit` measured from the side of its ground the body came from. The closest contact of a
+/// body that went deep into a thin ground in the step (a spinning plate's corner, a step-end
+/// push, a fast small capsule) is out of its nearest face, which may be the far one: pushed
+/// out there, the body would end under the ground (and, on a thin slab above a floor, be
+/// pushed through both). Where the body's part was at the step's start is outside the
+/// ground: a contact on a face whose plane has it behind is taken again on the face towards
+/// it (`contact_from_side`). A body with no start state (asleep at the start) keeps `hit`.
+fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
+    let Some(cand) = checked.cand else {
+        return hit;
+    };
+    let part = &checked.geom.parts[hit.part];
+    let ground = &checked.grounds[hit.ground];
+    let from = start_point(cand, part, ground, dt);
+    // The face's plane: the hit's point less its signed distance along the normal.
+    let face = hit.point - hit.normal * hit.dist;
+    if hit.normal.dot(&(from - face)) >= 0.0 {
+        return hit;
+    }
+    match contact_from_side(part, ground, s, dt, from, false) {
+        Some((dist, normal, point)) => Hit {
+            dist,
+            normal,
+            point,
+            un: normal.dot(&(body_velocity_at(s, &point) - ground.velocity_at(&point, dt))),
+            ..hit
+        },
+        None => hit,
+    }
+}
+
+/// Where a part of the body was at the step's start, carried with `ground` to `t`.
+fn start_point(cand: &Candidate, part: &BodyPart, ground: &GroundGeom, t: f64) -> Vector3<f64> {
+    let start = nalgebra::Point3::from(part_pose(part, &cand.start).translation.vector);
+    (ground.pose_at(t) * ground.pose_at(0.0).inverse() * start).coords
+}
+
+/// The contact of a body that went through a thin ground in the step and ends clear of it
+/// on the far side, where no contact is found (a fast ball a heavy one pushed into a 2 cm
+/// slab, a spinning plate): a part over a face it was in front of at the step's start is
+/// measured from that face (`contact_from_side`, the face itself, not its plane: a body that
+/// fell past the ground's edge is not below it). The deepest such, if any part is deeper
+/// than `gap` (m) below it (a body touching a face from beside it is not through it).
+fn passed_through(checked: &Checked, s: &State, dt: f64, gap: f64) -> Option<Hit> {
+    let cand = checked.cand?;
+    let mut deepest: Option<Hit> = None;
+    for (i, part) in checked.geom.parts.iter().enumerate() {
+        for (j, ground) in checked.grounds.iter().enumerate() {
+            if ground.skip.contains(&part.handle) {
+                continue;
+            }
+            let from = start_point(cand, part, ground, dt);
+            let Some((dist, normal, point)) = contact_from_side(part, ground, s, dt, from, true)
+            else {
+                continue;
+            };
+            // In front of that face at the start, and below it now.
+            let face = point - normal * dist;
+            let was_in_front = normal.dot(&(from - face)) >= 0.0;
+            if dist < -gap && was_in_front && deepest.is_none_or(|d| dist < d.dist) {
+                let u = body_velocity_at(s, &point) - ground.velocity_at(&point, dt);
+                deepest = Some(Hit {
+                    part: i,
+                    ground: j,
+                    dist,
+                    normal,
+                    point,
+                    un: normal.dot(&u),
+                });
+            }
+        }
+    }
+    deepest
 }
 
 /// Is a turning resting body's resting contact point on the ground of `hit` pushed into it

@@ -91,6 +91,12 @@ pub(crate) struct StepData {
     pub down: Vector3<f64>,
     /// The world's gravity (m/s^2).
     pub gravity: Vector3<f64>,
+    /// How much lower than the exact flight the end state that stands after a step clear
+    /// of impacts can be, per unit of acceleration (s^2): in `TimeOfImpact` mode rapier's
+    /// substepped integrator, which moves a body by `(N + 1) / 2N a dt^2` in `N` substeps
+    /// where the flight moves it `a dt^2 / 2`, so `dt^2 / 2N`; 0 in the other modes (`Exact`
+    /// writes the flight; `Step` does not search).
+    pub integrator_lag: f64,
     pub roles: HandleMap<PairKey, Role>,
     /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to

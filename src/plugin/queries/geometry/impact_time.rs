@@ -139,6 +139,11 @@ pub(crate) struct Sweep<'q> {
     pub dt: f64,
     pub radius: f64,
     pub speed: f64,
+    /// How much further than the flight the state that stands at the step's end may have
+    /// gone, per unit of acceleration (s^2): `StepData::integrator_lag`; a pair is clear
+    /// only if that state ends no deeper than `gap` (m, the resting gap) either.
+    pub lag: f64,
+    pub gap: f64,
 }
 
 /// Can the pair provably not meet in `[0, dt]` of the `sweep` from `s`, so that
@@ -165,6 +170,8 @@ pub(crate) fn cannot_close(
         dt,
         radius,
         speed,
+        lag,
+        gap,
     } = *sweep;
     if !(dt >= 0.0 && speed.is_finite() && radius.is_finite() && dist.is_finite()) {
         return false;
@@ -190,7 +197,9 @@ pub(crate) fn cannot_close(
     };
     let turn = flight.max_angular_speed(s) * dt * radius;
     let rounding = POSITION_ROUNDING * (1.0 + s.com.norm() + dist.abs());
-    let low = dist + sink - turn - rounding;
+    // The integrator's lag counts where it could carry the end state deeper than the gap.
+    let lagged = (lag * an.min(0.0) + gap).min(0.0);
+    let low = dist + sink + lagged - turn - rounding;
     low > touch_tolerance(radius) && travel <= CLEAR_SEARCH_STEPS * low
 }
 

@@ -221,6 +221,75 @@ pub(super) fn plane_contact_on(
     locator: Vector3<f64>,
     triangle: Option<Triangle>,
 ) -> Result<PairContact, Option<Vector3<f64>>> {
+    let centre = part_pose(part, s).translation.vector;
+    plane_contact_facing(part, ground, s, t, (locator, centre), triangle, true)
+}
+
+/// The contact of a body part at `s` with the plane of the face of a flat ground on the side
+/// `from` is on (a world point at `t`, where the body was outside the ground): the cuboid's
+/// face towards it, the half-space, or the mesh or heightfield triangle under it with its
+/// normal turned towards it; the plane extends past the face, as the body may have gone in
+/// across the face's edge. A body that went deep into or through a thin ground is then
+/// measured from the side it came from, not from the nearest face, which may be the far one.
+/// `bounded`: only over the face itself (a body that went through the ground, rather than
+/// past its edge). `None`: no flat ground under `from` (or, `bounded`, not over it).
+pub(crate) fn contact_from_side(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    from: Vector3<f64>,
+    bounded: bool,
+) -> Option<PairContact> {
+    use crate::parry::shape::TypedShape;
+    match ground.shape.as_typed_shape() {
+        TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
+            plane_contact_facing(part, ground, s, t, (from, from), None, bounded).ok()
+        }
+        TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
+            // The triangle the body's support point is over: one under `from` (of a
+            // heightfield cell's two), else the one under where that triangle's plane says
+            // it is (across a mesh's diagonal); unbounded, else the first one's plane.
+            let under = triangles_under(ground, t, &from);
+            let facing = |tri: &Triangle, bounded| {
+                plane_contact_facing(part, ground, s, t, (from, from), Some(*tri), bounded)
+            };
+            let mut over = None;
+            for tri in &under {
+                match facing(tri, true) {
+                    Ok(found) => return Some(found),
+                    Err(Some(p)) => over = over.or(Some(p)),
+                    Err(None) => {}
+                }
+            }
+            let across = over.and_then(|p| {
+                triangles_under(ground, t, &p)
+                    .iter()
+                    .find_map(|tri| facing(tri, true).ok())
+            });
+            across.or_else(|| {
+                under
+                    .first()
+                    .filter(|_| !bounded)
+                    .and_then(|tri| facing(tri, false).ok())
+            })
+        }
+        _ => None,
+    }
+}
+
+/// [`plane_contact_on`], the face chosen by `locator` and a mesh triangle's normal turned
+/// towards `side` (`(locator, side)`); `bounded`: the body's support point must lie over the
+/// face (else its plane, unbounded).
+fn plane_contact_facing(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    (locator, side): (Vector3<f64>, Vector3<f64>),
+    triangle: Option<Triangle>,
+    bounded: bool,
+) -> Result<PairContact, Option<Vector3<f64>>> {
     use crate::parry::shape::TypedShape;
     let pose_g = ground.pose_at(t);
     let local = |v: Vector3<f64>| pose_g.rotation * v;
@@ -263,7 +332,7 @@ pub(super) fn plane_contact_on(
     }
     let mut n = n / len;
     let pose_b = part_pose(part, s);
-    if matches!(face, Face::Tri(_)) && n.dot(&(pose_b.translation.vector - q)) < 0.0 {
+    if matches!(face, Face::Tri(_)) && n.dot(&(side - q)) < 0.0 {
         // A mesh triangle has no outside: the body's side is.
         n = -n;
     }
@@ -285,6 +354,7 @@ pub(super) fn plane_contact_on(
     let over = support - n * height;
     let tol = FACE_ROUNDING * (1.0 + body_point.norm());
     let inside = match face {
+        _ if !bounded => true,
         Face::Unbounded => true,
         Face::Rect { axis, half } => {
             let p = pose_g

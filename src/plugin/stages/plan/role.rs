@@ -190,6 +190,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                 dt: step.dt,
                                 radius: body.geom.radius,
                                 speed: body.speed,
+                                lag: step.integrator_lag,
+                                gap: step.policy.resting_gap,
                             },
                             (dist, n),
                         )

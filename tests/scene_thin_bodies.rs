@@ -1,0 +1,269 @@
+//! Nothing ends under the ground: thin and small bodies thrown hard at every ground kind,
+//! in every timing mode at 30 and 60 Hz, end no step below a ground they were resolved
+//! against and never fall through; the reproductions of the cases that did (a spinning plate
+//! pushed out through a slab's far face, a ball left below a half-space by rapier's
+//! integrator at dt = 0.5 s, a light ball struck by a heavy one next to a thin slab).
+//!
+//! Every ground's top is at `y = 0`; the throws print, per case, how many bodies rapier alone
+//! and the plugin leave below it at the end. Throws per case: 25; set
+//! `RAPIER_IMPACT_THROWS` for more.
+
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
+mod scene_support;
+
+use rapier_impact::rapier::na::Unit;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+use scene_support::*;
+
+const MODES: [TimingMode; 3] = [
+    TimingMode::Step,
+    TimingMode::TimeOfImpact,
+    TimingMode::Exact,
+];
+
+/// The grounds, each with its top at `y = 0`.
+fn ground(kind: &str) -> ColliderBuilder {
+    let builder = match kind {
+        // 0.65 m thick, as in the report.
+        "cuboid" => ColliderBuilder::cuboid(100.0, 0.3263522, 100.0)
+            .translation(Vector::new(0.0, -0.3263522, 0.0)),
+        // Wide enough that no throw leaves it in the 1.5 s of a run (at most 45 m).
+        "slab" => slab_ground(100.0, 0.01),
+        "trimesh" => trimesh_ground(100.0),
+        "heightfield" => ColliderBuilder::heightfield(
+            rapier_impact::rapier::parry::utils::Array2::zeros(8, 8),
+            Vector::new(200.0, 1.0, 200.0),
+        ),
+        _ => ColliderBuilder::halfspace(Unit::new_unchecked(Vector::Y)),
+    };
+    builder.restitution(0.5).friction(0.8)
+}
+
+/// The lowest point of a body (m).
+fn bottom(world: &PhysicsWorld, body: RigidBodyHandle) -> f64 {
+    world.bodies[body]
+        .colliders()
+        .iter()
+        .map(|c| wide(world.colliders[*c].compute_aabb().mins.y))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// One throw of `body` at the ground `kind`, `steps` steps of `dt`, by rapier alone (`None`)
+/// or the plugin: whether the body ends below the ground. With the plugin, asserts at every
+/// step that a body resolved against the ground in the step ends above it (within rapier's
+/// allowed linear error).
+fn throw(
+    kind: &str,
+    body: (RigidBodyBuilder, ColliderBuilder),
+    dt: f64,
+    steps: usize,
+    timing: Option<TimingMode>,
+    label: &str,
+) -> bool {
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(dt);
+    let (_, g) = world.insert(RigidBodyBuilder::fixed(), ground(kind));
+    let (b, _) = world.insert(body.0, body.1);
+    let mut plugin = timing.map(|timing| {
+        let mut p = ImpactPlugin::new(ImpactConfig {
+            timing,
+            ..Default::default()
+        })
+        .unwrap();
+        p.add_ground(&world.bodies, &world.colliders, g).unwrap();
+        p
+    });
+    let allowed = wide(world.integration_parameters.allowed_linear_error());
+    for k in 0..steps {
+        match plugin.as_mut() {
+            Some(p) => {
+                p.step(&mut world);
+                assert_finite(&world, label);
+                if p.events().iter().any(|e| e.body == b) {
+                    let depth = -bottom(&world, b);
+                    assert!(
+                        depth <= allowed + penetration_rounding(1.0),
+                        "{label}: step {}: {depth:e} m below the ground it was resolved against: {:?}",
+                        k + 1,
+                        p.events()
+                    );
+                }
+            }
+            None => world.step(),
+        }
+    }
+    // Fallen through: its centre below the surface.
+    wide(world.bodies[b].translation().y) < 0.0
+}
+
+fn throws() -> usize {
+    std::env::var("RAPIER_IMPACT_THROWS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(25)
+}
+
+/// The `k`-th thrown body: a plate (0.53 x 0.036 x 0.33 m half extents) or a capsule of
+/// radius 4-10 mm, 0.7 m up, thrown down at up to 40 m/s with spins up to 60 rad/s.
+fn thrown(plate: bool, k: usize) -> (RigidBodyBuilder, ColliderBuilder) {
+    let mut r = jitter(0x9e37_79b9_7f4a_7c15 ^ ((k as u64 + 1) * 0x2545_f491), 1.0);
+    let v = Vector::new(
+        real(20.0 * r()),
+        real(-20.0 - 20.0 * r().abs()),
+        real(20.0 * r()),
+    );
+    let w = Vector::new(real(60.0 * r()), real(60.0 * r()), real(60.0 * r()));
+    let rot = Vector::new(real(3.0 * r()), real(3.0 * r()), real(3.0 * r()));
+    let rb = RigidBodyBuilder::dynamic()
+        .translation(Vector::new(0.0, 0.7, 0.0))
+        .rotation(rot)
+        .linvel(v)
+        .angvel(w);
+    let co = if plate {
+        ColliderBuilder::cuboid(0.5296442, 0.03566227, 0.32917637)
+    } else {
+        let radius = 0.007 + 0.003 * r();
+        ColliderBuilder::capsule_y(real(0.02 + 0.03 * r().abs()), real(radius))
+    };
+    (rb, co.restitution(0.5).friction(0.8))
+}
+
+#[test]
+fn thin_plates_and_small_capsules_thrown_at_every_ground_never_end_under_it() {
+    let n = throws();
+    for kind in ["cuboid", "slab", "trimesh", "heightfield"] {
+        for plate in [true, false] {
+            let shape = if plate { "plate" } else { "capsule" };
+            for hz in [30.0, 60.0] {
+                let dt = 1.0 / hz;
+                let steps = (1.5 / dt) as usize;
+                let alone = (0..n)
+                    .filter(|k| throw(kind, thrown(plate, *k), dt, steps, None, ""))
+                    .count();
+                let mut counts = Vec::new();
+                for timing in MODES {
+                    let fell = (0..n)
+                        .filter(|k| {
+                            let label =
+                                format!("{shape} on {kind} at {hz} Hz, {timing:?}, throw {k}");
+                            throw(kind, thrown(plate, *k), dt, steps, Some(timing), &label)
+                        })
+                        .count();
+                    counts.push(fell);
+                }
+                println!(
+                    "{shape} on {kind} at {hz} Hz: below at the end of {n} throws: rapier alone {alone}, Step/TimeOfImpact/Exact {counts:?}"
+                );
+                assert_eq!(counts, [0, 0, 0], "{shape} on {kind} at {hz} Hz");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_reported_plate_bounces_back_up_in_step_mode() {
+    // The reproduction of the report: `Step`, dt = 1/30, a plate pushed out through its
+    // ground's far face at the second step and falling for good.
+    let tilt = Rotation::from_xyzw(0.5862187, 0.21144369, 0.7815203, -0.029413436);
+    let rb = RigidBodyBuilder::dynamic()
+        .translation(Vector::new(0.0, 0.6791001, 0.0))
+        .rotation(tilt.to_scaled_axis())
+        .linvel(Vector::new(8.711226, -39.290848, 19.714771))
+        .angvel(Vector::new(-60.935722, -28.231802, 13.872842));
+    let co = ColliderBuilder::cuboid(0.5296442, 0.03566227, 0.32917637)
+        .restitution(0.5)
+        .friction(0.8);
+    for timing in MODES {
+        let label = format!("reported plate, {timing:?}");
+        let fell = throw(
+            "cuboid",
+            (rb.clone(), co.clone()),
+            1.0 / 30.0,
+            60,
+            Some(timing),
+            &label,
+        );
+        assert!(!fell, "{label}");
+    }
+}
+
+#[test]
+fn a_ball_at_half_a_second_a_step_never_ends_under_its_ground() {
+    for timing in MODES {
+        let label = format!("dt = 0.5 s, {timing:?}");
+        let rb = RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 1.0, 0.0))
+            .linvel(Vector::new(1.0, -2.0, 0.0))
+            .angvel(Vector::new(0.0, 0.0, 5.0));
+        let co = ColliderBuilder::ball(0.1).restitution(0.8);
+        let mut world = PhysicsWorld::default();
+        world.integration_parameters.dt = 0.5;
+        let (_, g) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ground("halfspace").restitution(0.8),
+        );
+        let (b, _) = world.insert(rb, co);
+        let mut p = ImpactPlugin::new(ImpactConfig {
+            timing,
+            ..Default::default()
+        })
+        .unwrap();
+        p.add_ground(&world.bodies, &world.colliders, g).unwrap();
+        let allowed = wide(world.integration_parameters.allowed_linear_error());
+        for k in 0..20 {
+            p.step(&mut world);
+            let depth = -bottom(&world, b);
+            assert!(
+                depth <= allowed + penetration_rounding(1.0),
+                "{label}: step {}: {depth:e} m under",
+                k + 1
+            );
+        }
+    }
+}
+
+#[test]
+fn a_light_ball_struck_by_a_heavy_one_over_a_thin_slab_stays_on_it() {
+    // A 5 g ball on a 2 cm slab (no floor under it), struck from above by a 40 kg ball at
+    // speeds up to 8 m/s, in every mode at 30 Hz.
+    for timing in MODES {
+        for k in 0..8 {
+            let speed = 1.0 + k as f64;
+            let label = format!("{timing:?}, heavy ball at {speed} m/s");
+            let mut world = PhysicsWorld::default();
+            world.integration_parameters.dt = 1.0 / 30.0;
+            let (_, g) = world.insert(RigidBodyBuilder::fixed(), ground("slab"));
+            let r_light = 0.0106;
+            let (light, _) = world.insert(
+                RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(r_light), 0.0)),
+                ColliderBuilder::ball(real(r_light))
+                    .density(1000.0)
+                    .restitution(0.5),
+            );
+            let (heavy, _) = world.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.03, 0.4, 0.0))
+                    .linvel(Vector::new(0.0, real(-speed), 0.0)),
+                ColliderBuilder::ball(0.2).density(1194.0).restitution(0.5),
+            );
+            let mut p = ImpactPlugin::new(ImpactConfig {
+                timing,
+                ..Default::default()
+            })
+            .unwrap();
+            p.add_ground(&world.bodies, &world.colliders, g).unwrap();
+            for _ in 0..60 {
+                p.step(&mut world);
+                assert_finite(&world, &label);
+            }
+            for body in [light, heavy] {
+                assert!(
+                    wide(world.bodies[body].translation().y) > 0.0,
+                    "{label}: {body:?} fell through"
+                );
+            }
+        }
+    }
+}
