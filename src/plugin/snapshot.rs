@@ -3,8 +3,8 @@
 //!
 //! Contract: a snapshot holds everything one step leaves for the next (the configuration,
 //! the registrations, `Exact` mode's `f64` shadows, the roles and holds of last step's pairs,
-//! where the plugin's hook flags are and the user's flags they replaced, and the last step's
-//! events), and nothing that is built again from it and the world (the ground index, the
+//! where the plugin's hook flags are and the user's flags they replaced, the colliders already
+//! reported out of range, and the last step's events), and nothing that is built again from it and the world (the ground index, the
 //! pair index, the hooks' tables, the step's own tables): a plugin restored from it, stepping
 //! the world saved with it, steps bit for bit as the plugin it was taken from. Its tables are
 //! listed in arena order, so that the same state gives the same snapshot whatever the
@@ -13,7 +13,7 @@
 //! anything changes.
 
 use crate::plugin::config::{ConfigError, ImpactConfig};
-use crate::plugin::events::{Diagnostic, ImpactEvent};
+use crate::plugin::events::ImpactEvent;
 use crate::plugin::hooks::flags::{HookFlags, SavedFlags};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
@@ -35,7 +35,8 @@ const LAYOUT: u32 = 1;
 /// contents are the plugin's own and may change between versions of this crate; a snapshot
 /// of another layout is refused, not misread. rapier's world holds infinities (a fixed body's
 /// mass properties), so save it in a format that keeps them (CBOR, bincode, MessagePack; not
-/// JSON). The snapshot itself holds only finite numbers.
+/// JSON). The snapshot itself holds only finite numbers: it keeps the last step's events but
+/// not its diagnostics (they may quote a collider's NaN, and the collider is in the world).
 ///
 /// ```
 /// use rapier_impact::rapier::prelude::*;
@@ -94,7 +95,6 @@ pub struct ImpactSnapshot {
     memory: SavedMemory,
     flags: SavedFlags,
     events: Vec<ImpactEvent>,
-    diagnostics: Vec<Diagnostic>,
 }
 
 /// Why [`ImpactPlugin::restore`] refused a snapshot; the plugin is left as it was.
@@ -156,13 +156,12 @@ impl<H> ImpactPlugin<H> {
             memory: self.memory.save(),
             flags: self.flags.save(),
             events: self.reports.events.clone(),
-            diagnostics: self.reports.diagnostics.clone(),
         }
     }
 
     /// Puts the plugin in the state `snapshot` was taken in, its hook and profiling aside:
     /// stepping the world saved with it then goes on bit for bit as the run it was taken
-    /// from. Everything the plugin held before is replaced. Refused, with the plugin left
+    /// from. Everything the plugin held before is replaced ([`Self::diagnostics`] is empty). Refused, with the plugin left
     /// as it was, when the snapshot has another layout, was taken inside a step, or holds a
     /// value the setters refuse.
     pub fn restore(&mut self, snapshot: &ImpactSnapshot) -> Result<(), RestoreError> {
@@ -185,7 +184,7 @@ impl<H> ImpactPlugin<H> {
         self.flags = HookFlags::from_saved(&snapshot.flags);
         self.memory = Memory::from_saved(&snapshot.memory);
         self.reports.events.clone_from(&snapshot.events);
-        self.reports.diagnostics.clone_from(&snapshot.diagnostics);
+        self.reports.diagnostics.clear();
         // Built again at the next step.
         self.step = StepData::default();
         self.lookup = Lookup::default();

@@ -1,0 +1,414 @@
+//! A state-machine stress test (proptest): random sequences of what users do to a simulation
+//! with the plugin (insert and remove bodies and grounds, opt bodies in and out of impacts
+//! between bodies, exclude them, change materials and collider coefficients, teleport, set
+//! velocities, change gravity and dt, switch timing modes and laws, save and restore, step),
+//! checked after every step: no panic, every body finite, every event finite with its
+//! after-state what was written, no impact gaining energy under `Consistent` and `Guarded`,
+//! friction in the cone, no event for a pair rapier filters, and no body below a ground it
+//! was resolved against in the step.
+//!
+//! Every ground's top is at `y = 0` over a half-space floor, so "below a ground" is below
+//! `y = 0`. Cases: 24 by default (sequences of up to 24 operations); set
+//! `RAPIER_IMPACT_STRESS_CASES` for a long run.
+
+#![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
+
+mod scene_support;
+
+use proptest::prelude::*;
+use rapier_impact::model::Law;
+use rapier_impact::rapier::na::Unit;
+use rapier_impact::rapier::prelude::*;
+use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
+use scene_support::*;
+
+/// One thing a user does.
+#[derive(Clone, Debug)]
+enum Op {
+    /// A ball (radius, restitution, friction) at a place, with a velocity and a spin.
+    Ball(f64, f64, f64, [f64; 3], [f64; 3], [f64; 3]),
+    /// A box (half extents: thin plates included) likewise.
+    Cuboid([f64; 3], f64, f64, [f64; 3], [f64; 3], [f64; 3]),
+    /// A capsule (half height, radius) likewise.
+    Capsule(f64, f64, f64, [f64; 3], [f64; 3], [f64; 3]),
+    /// Removes the `k`-th body (modulo the count).
+    RemoveBody(usize),
+    /// A ground of kind `0..4` (thick cuboid, 2 cm slab, trimesh, heightfield) around `(x, z)`,
+    /// its top at `y = 0`.
+    Ground(u8, f64, f64),
+    RemoveGround(usize),
+    OptIn(usize),
+    OptOut(usize),
+    AllImpact(bool),
+    Exclude(usize),
+    Include(usize),
+    /// A ground's material override (`None`: rapier's coefficients).
+    GroundMaterial(usize, Option<(f64, f64)>),
+    /// A body collider's restitution and friction set through rapier, in range or not.
+    Coefficients(usize, f64, f64),
+    Teleport(usize, [f64; 3]),
+    Velocity(usize, [f64; 3], [f64; 3]),
+    Gravity(f64),
+    Dt(u8),
+    Mode(u8),
+    Law(u8),
+    /// Saves the world and the plugin and resumes from the copies.
+    SaveRestore,
+    Step(u8),
+}
+
+fn place() -> impl Strategy<Value = [f64; 3]> {
+    (-2.0f64..2.0, 0.0f64..2.0, -2.0f64..2.0).prop_map(|(x, y, z)| [x, y, z])
+}
+
+fn vel(max: f64) -> impl Strategy<Value = [f64; 3]> {
+    prop::array::uniform3(-max..max)
+}
+
+/// A coefficient in range, or now and then one out of range that rapier itself survives
+/// (an infinite restitution makes rapier's own velocities NaN: the plugin leaves that pair to
+/// rapier, so it is no test of the plugin).
+fn coefficient(max: f64, out: &'static [f64]) -> impl Strategy<Value = f64> {
+    prop_oneof![8 => 0.0..max, 1 => prop::sample::select(out)]
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    let k = 0usize..16;
+    prop_oneof![
+        4 => (0.004f64..0.3, 0.0f64..=1.0, 0.0f64..1.5, place(), vel(40.0), vel(60.0))
+            .prop_map(|(r, e, mu, p, v, w)| Op::Ball(r, e, mu, p, v, w)),
+        2 => (
+            prop::array::uniform3(0.01f64..0.5),
+            0.0f64..=1.0,
+            0.0f64..1.5,
+            place(),
+            vel(40.0),
+            vel(60.0)
+        )
+            .prop_map(|(h, e, mu, p, v, w)| Op::Cuboid(h, e, mu, p, v, w)),
+        1 => (0.01f64..0.2, 0.004f64..0.1, 0.0f64..=1.0, place(), vel(40.0), vel(60.0))
+            .prop_map(|(h, r, e, p, v, w)| Op::Capsule(h, r, e, p, v, w)),
+        1 => k.clone().prop_map(Op::RemoveBody),
+        2 => (0u8..4, -2.0f64..2.0, -2.0f64..2.0).prop_map(|(kind, x, z)| Op::Ground(kind, x, z)),
+        1 => k.clone().prop_map(Op::RemoveGround),
+        2 => k.clone().prop_map(Op::OptIn),
+        1 => k.clone().prop_map(Op::OptOut),
+        1 => any::<bool>().prop_map(Op::AllImpact),
+        1 => k.clone().prop_map(Op::Exclude),
+        1 => k.clone().prop_map(Op::Include),
+        1 => (k.clone(), prop::option::of((0.0f64..=1.0, 0.0f64..1.5)))
+            .prop_map(|(g, m)| Op::GroundMaterial(g, m)),
+        1 => (
+            k.clone(),
+            coefficient(1.0, &[f64::NAN, -0.5, 50.0]),
+            coefficient(1.5, &[f64::NAN, f64::INFINITY, -0.5, 1e30])
+        )
+            .prop_map(|(b, e, mu)| Op::Coefficients(b, e, mu)),
+        1 => (k.clone(), place()).prop_map(|(b, p)| Op::Teleport(b, p)),
+        1 => (k.clone(), vel(40.0), vel(60.0)).prop_map(|(b, v, w)| Op::Velocity(b, v, w)),
+        1 => (-20.0f64..0.0).prop_map(Op::Gravity),
+        1 => (0u8..4).prop_map(Op::Dt),
+        1 => (0u8..3).prop_map(Op::Mode),
+        1 => (0u8..3).prop_map(Op::Law),
+        1 => Just(Op::SaveRestore),
+        8 => (1u8..12).prop_map(Op::Step),
+    ]
+}
+
+/// The simulation under test and what the checks need to know of it.
+struct Sim {
+    world: PhysicsWorld,
+    plugin: ImpactPlugin,
+    bodies: Vec<RigidBodyHandle>,
+    /// The grounds added (the floor is not among them: it stays).
+    grounds: Vec<ColliderHandle>,
+    floor: ColliderHandle,
+    /// A ball rapier's collision groups keep off everything: the plugin must leave it be.
+    ghost: RigidBodyHandle,
+    stats: Stats,
+    steps: usize,
+}
+
+impl Sim {
+    fn new() -> Self {
+        let mut world = PhysicsWorld::default();
+        let (_, floor) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(Unit::new_unchecked(Vector::Y))
+                .restitution(0.7)
+                .friction(0.5),
+        );
+        let groups = InteractionGroups::new(Group::GROUP_2, Group::NONE, InteractionTestMode::And);
+        let (ghost, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.0, 3.0)),
+            ColliderBuilder::ball(0.1).collision_groups(groups),
+        );
+        let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+        plugin
+            .add_ground(&world.bodies, &world.colliders, floor)
+            .unwrap();
+        Sim {
+            world,
+            plugin,
+            bodies: Vec::new(),
+            grounds: Vec::new(),
+            floor,
+            ghost,
+            stats: Stats::new(),
+            steps: 0,
+        }
+    }
+
+    fn body(&self, k: usize) -> Option<RigidBodyHandle> {
+        (!self.bodies.is_empty()).then(|| self.bodies[k % self.bodies.len()])
+    }
+
+    fn insert(&mut self, rb: RigidBodyBuilder, co: ColliderBuilder) {
+        let (body, _) = self.world.insert(rb, co);
+        self.bodies.push(body);
+    }
+
+    fn moving(p: [f64; 3], v: [f64; 3], w: [f64; 3]) -> RigidBodyBuilder {
+        let r = |a: [f64; 3]| Vector::new(real(a[0]), real(a[1]), real(a[2]));
+        RigidBodyBuilder::dynamic()
+            .translation(r(p) + Vector::new(0.0, 0.6, 0.0))
+            .linvel(r(v))
+            .angvel(r(w))
+    }
+
+    fn apply(&mut self, op: &Op) {
+        let (bodies, colliders) = (&self.world.bodies, &self.world.colliders);
+        match op {
+            Op::Ball(r, e, mu, p, v, w) => self.insert(
+                Self::moving(*p, *v, *w),
+                ColliderBuilder::ball(real(*r))
+                    .restitution(real(*e))
+                    .friction(real(*mu)),
+            ),
+            Op::Cuboid(h, e, mu, p, v, w) => self.insert(
+                Self::moving(*p, *v, *w),
+                ColliderBuilder::cuboid(real(h[0]), real(h[1]), real(h[2]))
+                    .restitution(real(*e))
+                    .friction(real(*mu)),
+            ),
+            Op::Capsule(h, r, e, p, v, w) => self.insert(
+                Self::moving(*p, *v, *w),
+                ColliderBuilder::capsule_y(real(*h), real(*r)).restitution(real(*e)),
+            ),
+            Op::RemoveBody(k) => {
+                if let Some(b) = self.body(*k) {
+                    self.bodies.retain(|h| *h != b);
+                    self.world.remove_body(b);
+                }
+            }
+            Op::Ground(kind, x, z) => {
+                let builder = match kind {
+                    0 => ColliderBuilder::cuboid(1.0, 0.3, 1.0)
+                        .translation(Vector::new(0.0, -0.3, 0.0)),
+                    1 => slab_ground(1.0, 0.01),
+                    2 => trimesh_ground(1.0),
+                    _ => ColliderBuilder::heightfield(
+                        rapier_impact::rapier::parry::utils::Array2::zeros(4, 4),
+                        Vector::new(2.0, 1.0, 2.0),
+                    ),
+                };
+                let rb =
+                    RigidBodyBuilder::fixed().translation(Vector::new(real(*x), 0.0, real(*z)));
+                let (_, ground) = self
+                    .world
+                    .insert(rb, builder.restitution(0.6).friction(0.8));
+                let bodies = &self.world.bodies;
+                self.plugin
+                    .add_ground(bodies, &self.world.colliders, ground)
+                    .unwrap();
+                self.grounds.push(ground);
+            }
+            Op::RemoveGround(k) => {
+                if !self.grounds.is_empty() {
+                    let g = self.grounds.remove(k % self.grounds.len());
+                    self.plugin.remove_ground(g);
+                    let parent = self.world.colliders[g].parent();
+                    if let Some(parent) = parent {
+                        self.world.remove_body(parent);
+                    }
+                }
+            }
+            Op::OptIn(k) => {
+                if let Some(b) = self.body(*k) {
+                    // A body the plugin refuses (not dynamic) is an error, not a panic.
+                    let _ = self.plugin.add_impact_body(bodies, b);
+                }
+            }
+            Op::OptOut(k) => {
+                if let Some(b) = self.body(*k) {
+                    self.plugin.remove_impact_body(b);
+                }
+            }
+            Op::AllImpact(on) => self.plugin.set_all_dynamic_bodies_impact(*on),
+            Op::Exclude(k) => {
+                if let Some(b) = self.body(*k) {
+                    self.plugin.exclude_body(b);
+                }
+            }
+            Op::Include(k) => {
+                if let Some(b) = self.body(*k) {
+                    self.plugin.include_body(b);
+                }
+            }
+            Op::GroundMaterial(k, m) => {
+                let g = if self.grounds.is_empty() {
+                    self.floor
+                } else {
+                    self.grounds[k % self.grounds.len()]
+                };
+                let m = m.map(|(e, mu)| rapier_impact::GroundMaterial::new(e, mu));
+                self.plugin.set_ground_material(g, m).unwrap();
+            }
+            Op::Coefficients(k, e, mu) => {
+                if let Some(b) = self.body(*k) {
+                    let c = bodies[b].colliders()[0];
+                    let _ = colliders;
+                    let co = &mut self.world.colliders[c];
+                    co.set_restitution(real(*e));
+                    co.set_friction(real(*mu));
+                }
+            }
+            Op::Teleport(k, p) => {
+                if let Some(b) = self.body(*k) {
+                    let t = Vector::new(real(p[0]), real(p[1]) + 0.6, real(p[2]));
+                    self.world.bodies[b].set_translation(t, true);
+                }
+            }
+            Op::Velocity(k, v, w) => {
+                if let Some(b) = self.body(*k) {
+                    let rb = &mut self.world.bodies[b];
+                    rb.set_linvel(Vector::new(real(v[0]), real(v[1]), real(v[2])), true);
+                    rb.set_angvel(Vector::new(real(w[0]), real(w[1]), real(w[2])), true);
+                }
+            }
+            Op::Gravity(g) => self.world.gravity = Vector::new(0.0, real(*g), 0.0),
+            Op::Dt(k) => {
+                self.world.integration_parameters.dt =
+                    real([1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0][*k as usize]);
+            }
+            Op::Mode(k) => {
+                let timing = [
+                    TimingMode::Step,
+                    TimingMode::TimeOfImpact,
+                    TimingMode::Exact,
+                ][*k as usize];
+                let config = ImpactConfig {
+                    timing,
+                    ..*self.plugin.config()
+                };
+                self.plugin.set_config(config).unwrap();
+            }
+            Op::Law(k) => {
+                let law = [Law::Document, Law::Consistent, Law::Guarded][*k as usize];
+                let config = ImpactConfig {
+                    law,
+                    ..*self.plugin.config()
+                };
+                self.plugin.set_config(config).unwrap();
+            }
+            Op::SaveRestore => {
+                let snapshot = self.plugin.snapshot();
+                let world = &self.world;
+                let copy = PhysicsWorld {
+                    gravity: world.gravity,
+                    integration_parameters: world.integration_parameters,
+                    islands: world.islands.clone(),
+                    broad_phase: world.broad_phase.clone(),
+                    narrow_phase: world.narrow_phase.clone(),
+                    bodies: world.bodies.clone(),
+                    colliders: world.colliders.clone(),
+                    impulse_joints: world.impulse_joints.clone(),
+                    multibody_joints: world.multibody_joints.clone(),
+                    soft_bodies: world.soft_bodies.clone(),
+                    ..PhysicsWorld::default()
+                };
+                let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+                plugin.restore(&snapshot).unwrap();
+                assert_eq!(plugin.snapshot(), snapshot);
+                (self.world, self.plugin) = (copy, plugin);
+            }
+            Op::Step(n) => {
+                for _ in 0..*n {
+                    self.step();
+                }
+            }
+        }
+    }
+
+    /// One step and the checks.
+    fn step(&mut self) {
+        self.plugin.step(&mut self.world);
+        self.steps += 1;
+        let label = format!("step {}", self.steps);
+        let world = &self.world;
+        assert_finite(world, &label);
+        let events = self.plugin.events();
+        let law = self.plugin.config().law;
+        for ev in events {
+            if law == Law::Document {
+                assert!(
+                    ev.ke_after.is_finite() && ev.normal_impulse.is_finite(),
+                    "{label}: {ev:?}"
+                );
+            } else {
+                check_event(ev, &mut self.stats, &label);
+            }
+            assert_ne!(
+                ev.body, self.ghost,
+                "{label}: an event for a pair rapier filters: {ev:?}"
+            );
+        }
+        if law != Law::Document {
+            check_pair_energy(events, &label);
+        }
+        check_written(world, events, &mut self.stats, &label);
+        // No body below a ground it was resolved against in the step.
+        let allowed = wide(world.integration_parameters.allowed_linear_error());
+        for ev in events.iter().filter(|ev| ev.body2.is_none()) {
+            let Some(rb) = world.bodies.get(ev.body) else {
+                continue;
+            };
+            let bottom = rb
+                .colliders()
+                .iter()
+                .map(|c| wide(world.colliders[*c].compute_aabb().mins.y))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                bottom >= -(allowed + penetration_rounding(1.0)),
+                "{label}: body {:?} ends {:e} m below the ground it was resolved against: {ev:?}",
+                ev.body,
+                -bottom
+            );
+        }
+    }
+}
+
+fn cases() -> u32 {
+    std::env::var("RAPIER_IMPACT_STRESS_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_sequences_of_user_operations_keep_every_guarantee(
+        ops in prop::collection::vec(op(), 1..24)
+    ) {
+        let mut sim = Sim::new();
+        for op in &ops {
+            sim.apply(op);
+        }
+        // A last stretch, so that every sequence ends with steps.
+        for _ in 0..30 {
+            sim.step();
+        }
+    }
+}
