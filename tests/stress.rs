@@ -367,12 +367,23 @@ impl Sim {
             check_pair_energy(events, &label);
         }
         check_written(world, events, &mut self.stats, &label);
-        // No body below a ground it was resolved against in the step.
+        // No body below a ground it was resolved against in the step: every ground's top is
+        // at y = 0, over its footprint (the floor's is everywhere); a body beside a ground
+        // (pushed out of its side) is not under it.
         let allowed = wide(world.integration_parameters.allowed_linear_error());
         for ev in events.iter().filter(|ev| ev.body2.is_none()) {
             let Some(rb) = world.bodies.get(ev.body) else {
                 continue;
             };
+            let Some(ground) = world.colliders.get(ev.ground) else {
+                continue;
+            };
+            let (footprint, c) = (ground.compute_aabb(), rb.center_of_mass());
+            let over = (footprint.mins.x < c.x && c.x < footprint.maxs.x)
+                && (footprint.mins.z < c.z && c.z < footprint.maxs.z);
+            if !over {
+                continue;
+            }
             let bottom = rb
                 .colliders()
                 .iter()

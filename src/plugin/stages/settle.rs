@@ -447,8 +447,11 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
 
 /// Where a part of the body was at the step's start, carried with `ground` to `t`.
 fn start_point(cand: &Candidate, part: &BodyPart, ground: &GroundGeom, t: f64) -> Vector3<f64> {
-    let start = nalgebra::Point3::from(part_pose(part, &cand.start).translation.vector);
-    (ground.pose_at(t) * ground.pose_at(0.0).inverse() * start).coords
+    let start = part_pose(part, &cand.start).translation.vector;
+    if ground.v == Vector3::zeros() && ground.w == Vector3::zeros() {
+        return start;
+    }
+    (ground.pose_at(t) * ground.pose_at(0.0).inverse() * nalgebra::Point3::from(start)).coords
 }
 
 /// The contact of a body that went through a thin ground in the step and ends clear of it

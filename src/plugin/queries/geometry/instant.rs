@@ -221,8 +221,7 @@ pub(super) fn plane_contact_on(
     locator: Vector3<f64>,
     triangle: Option<Triangle>,
 ) -> Result<PairContact, Option<Vector3<f64>>> {
-    let centre = part_pose(part, s).translation.vector;
-    plane_contact_facing(part, ground, s, t, (locator, centre), triangle, true)
+    plane_contact_facing(part, ground, s, t, (locator, None), triangle, true)
 }
 
 /// The contact of a body part at `s` with the plane of the face of a flat ground on the side
@@ -244,7 +243,7 @@ pub(crate) fn contact_from_side(
     use crate::parry::shape::TypedShape;
     match ground.shape.as_typed_shape() {
         TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
-            plane_contact_facing(part, ground, s, t, (from, from), None, bounded).ok()
+            plane_contact_facing(part, ground, s, t, (from, Some(from)), None, bounded).ok()
         }
         TypedShape::TriMesh(_) | TypedShape::HeightField(_) => {
             // The triangle the body's support point is over: one under `from` (of a
@@ -252,7 +251,7 @@ pub(crate) fn contact_from_side(
             // it is (across a mesh's diagonal); unbounded, else the first one's plane.
             let under = triangles_under(ground, t, &from);
             let facing = |tri: &Triangle, bounded| {
-                plane_contact_facing(part, ground, s, t, (from, from), Some(*tri), bounded)
+                plane_contact_facing(part, ground, s, t, (from, Some(from)), Some(*tri), bounded)
             };
             let mut over = None;
             for tri in &under {
@@ -279,14 +278,14 @@ pub(crate) fn contact_from_side(
 }
 
 /// [`plane_contact_on`], the face chosen by `locator` and a mesh triangle's normal turned
-/// towards `side` (`(locator, side)`); `bounded`: the body's support point must lie over the
-/// face (else its plane, unbounded).
+/// towards `side` (`(locator, side)`; `None`: the part's centre); `bounded`: the body's
+/// support point must lie over the face (else its plane, unbounded).
 fn plane_contact_facing(
     part: &BodyPart,
     ground: &GroundGeom,
     s: &State,
     t: f64,
-    (locator, side): (Vector3<f64>, Vector3<f64>),
+    (locator, side): (Vector3<f64>, Option<Vector3<f64>>),
     triangle: Option<Triangle>,
     bounded: bool,
 ) -> Result<PairContact, Option<Vector3<f64>>> {
@@ -332,6 +331,7 @@ fn plane_contact_facing(
     }
     let mut n = n / len;
     let pose_b = part_pose(part, s);
+    let side = side.unwrap_or(pose_b.translation.vector);
     if matches!(face, Face::Tri(_)) && n.dot(&(side - q)) < 0.0 {
         // A mesh triangle has no outside: the body's side is.
         n = -n;
