@@ -12,9 +12,9 @@
 
 mod scene_support;
 
+use rapier_impact::TimingMode;
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactPlugin, TimingMode};
 use scene_support::*;
 
 const MODES: [TimingMode; 3] = [
@@ -66,15 +66,7 @@ fn throw(
     world.integration_parameters.dt = real(dt);
     let (_, g) = world.insert(RigidBodyBuilder::fixed(), ground(kind));
     let (b, _) = world.insert(body.0, body.1);
-    let mut plugin = timing.map(|timing| {
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            ..Default::default()
-        })
-        .unwrap();
-        p.add_ground(&world.bodies, &world.colliders, g).unwrap();
-        p
-    });
+    let mut plugin = timing.map(|timing| plugin_on(&world, g, timing));
     let allowed = wide(world.integration_parameters.allowed_linear_error());
     for k in 0..steps {
         match plugin.as_mut() {
@@ -205,12 +197,7 @@ fn a_ball_at_half_a_second_a_step_never_ends_under_its_ground() {
             ground("halfspace").restitution(0.8),
         );
         let (b, _) = world.insert(rb, co);
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            ..Default::default()
-        })
-        .unwrap();
-        p.add_ground(&world.bodies, &world.colliders, g).unwrap();
+        let mut p = plugin_on(&world, g, timing);
         let allowed = wide(world.integration_parameters.allowed_linear_error());
         for k in 0..20 {
             p.step(&mut world);
@@ -248,12 +235,7 @@ fn a_light_ball_struck_by_a_heavy_one_over_a_thin_slab_stays_on_it() {
                     .linvel(Vector::new(0.0, real(-speed), 0.0)),
                 ColliderBuilder::ball(0.2).density(1194.0).restitution(0.5),
             );
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                timing,
-                ..Default::default()
-            })
-            .unwrap();
-            p.add_ground(&world.bodies, &world.colliders, g).unwrap();
+            let mut p = plugin_on(&world, g, timing);
             for _ in 0..60 {
                 p.step(&mut world);
                 assert_finite(&world, &label);

@@ -9,7 +9,7 @@ mod scene_support;
 
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, ImpactSnapshot, TimingMode};
-use scene_support::{events_hash, jitter, real, state_hash, walled_box};
+use scene_support::{events_hash, jitter, real, saved_world, state_hash, walled_box};
 
 const STEPS: usize = 240;
 /// The steps after which the run is saved and resumed: the first, one in the thick of the
@@ -20,24 +20,6 @@ const MODES: [TimingMode; 3] = [
     TimingMode::TimeOfImpact,
     TimingMode::Exact,
 ];
-
-/// A copy of what rapier's serialization keeps of a world: every set and the islands, the
-/// broad and narrow phases; the pipelines and the CCD solver (workspaces) new.
-fn saved_world(world: &PhysicsWorld) -> PhysicsWorld {
-    PhysicsWorld {
-        gravity: world.gravity,
-        integration_parameters: world.integration_parameters,
-        islands: world.islands.clone(),
-        broad_phase: world.broad_phase.clone(),
-        narrow_phase: world.narrow_phase.clone(),
-        bodies: world.bodies.clone(),
-        colliders: world.colliders.clone(),
-        impulse_joints: world.impulse_joints.clone(),
-        multibody_joints: world.multibody_joints.clone(),
-        soft_bodies: world.soft_bodies.clone(),
-        ..PhysicsWorld::default()
-    }
-}
 
 /// The scene: a floor, a box of walls, a crowd of opted-in balls dropped into it, boxes,
 /// two rolling balls (one with its own rolling resistance), a ball at rest on a 10-degree

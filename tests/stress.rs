@@ -313,20 +313,7 @@ impl Sim {
             }
             Op::SaveRestore => {
                 let snapshot = self.plugin.snapshot();
-                let world = &self.world;
-                let copy = PhysicsWorld {
-                    gravity: world.gravity,
-                    integration_parameters: world.integration_parameters,
-                    islands: world.islands.clone(),
-                    broad_phase: world.broad_phase.clone(),
-                    narrow_phase: world.narrow_phase.clone(),
-                    bodies: world.bodies.clone(),
-                    colliders: world.colliders.clone(),
-                    impulse_joints: world.impulse_joints.clone(),
-                    multibody_joints: world.multibody_joints.clone(),
-                    soft_bodies: world.soft_bodies.clone(),
-                    ..PhysicsWorld::default()
-                };
+                let copy = saved_world(&self.world);
                 let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
                 plugin.restore(&snapshot).unwrap();
                 assert_eq!(plugin.snapshot(), snapshot);

@@ -539,3 +539,21 @@ pub fn jitter(seed: u64, half_width: f64) -> impl FnMut() -> f64 {
         ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0) * half_width
     }
 }
+
+/// A copy of what rapier's serialization keeps of a world: every set and the islands, the
+/// broad and narrow phases; the pipelines and the CCD solver (workspaces) new.
+pub fn saved_world(world: &PhysicsWorld) -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: world.gravity,
+        integration_parameters: world.integration_parameters,
+        islands: world.islands.clone(),
+        broad_phase: world.broad_phase.clone(),
+        narrow_phase: world.narrow_phase.clone(),
+        bodies: world.bodies.clone(),
+        colliders: world.colliders.clone(),
+        impulse_joints: world.impulse_joints.clone(),
+        multibody_joints: world.multibody_joints.clone(),
+        soft_bodies: world.soft_bodies.clone(),
+        ..PhysicsWorld::default()
+    }
+}

@@ -114,6 +114,28 @@ pub(crate) struct Hit {
     pub un: f64,
 }
 
+impl Hit {
+    /// The hit of part `part` on ground `ground` (indices), at the contact `(dist, normal,
+    /// point)` of the body at `s`, time `t`: its normal speed from the two velocities there.
+    pub fn at(
+        (part, ground): (usize, usize),
+        gg: &GroundGeom,
+        s: &State,
+        t: f64,
+        (dist, normal, point): PairContact,
+    ) -> Self {
+        let u = body_velocity_at(s, &point) - gg.velocity_at(&point, t);
+        Hit {
+            part,
+            ground,
+            dist,
+            normal,
+            point,
+            un: normal.dot(&u),
+        }
+    }
+}
+
 /// The collider's world pose for the body at `s`.
 pub(crate) fn part_pose(part: &BodyPart, s: &State) -> Isometry3<f64> {
     Isometry3::from_parts(Translation3::from(s.com), s.rot) * part.local

@@ -24,8 +24,7 @@ use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Hit, body_velocity_at, closest, contact_from_side,
-    landing_point, part_pose,
+    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, landing_point, part_pose,
 };
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
@@ -434,13 +433,7 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
         return hit;
     }
     match contact_from_side(part, ground, s, dt, from, false) {
-        Some((dist, normal, point)) => Hit {
-            dist,
-            normal,
-            point,
-            un: normal.dot(&(body_velocity_at(s, &point) - ground.velocity_at(&point, dt))),
-            ..hit
-        },
+        Some(found) => Hit::at((hit.part, hit.ground), ground, s, dt, found),
         None => hit,
     }
 }
@@ -469,23 +462,14 @@ fn passed_through(checked: &Checked, s: &State, dt: f64, gap: f64) -> Option<Hit
                 continue;
             }
             let from = start_point(cand, part, ground, dt);
-            let Some((dist, normal, point)) = contact_from_side(part, ground, s, dt, from, true)
-            else {
+            let Some(found) = contact_from_side(part, ground, s, dt, from, true) else {
                 continue;
             };
             // In front of that face at the start, and below it now.
-            let face = point - normal * dist;
-            let was_in_front = normal.dot(&(from - face)) >= 0.0;
+            let (dist, normal, point) = found;
+            let was_in_front = normal.dot(&(from - (point - normal * dist))) >= 0.0;
             if dist < -gap && was_in_front && deepest.is_none_or(|d| dist < d.dist) {
-                let u = body_velocity_at(s, &point) - ground.velocity_at(&point, dt);
-                deepest = Some(Hit {
-                    part: i,
-                    ground: j,
-                    dist,
-                    normal,
-                    point,
-                    un: normal.dot(&u),
-                });
+                deepest = Some(Hit::at((i, j), ground, s, dt, found));
             }
         }
     }

@@ -3,7 +3,7 @@
 //! heightfield's triangle) and from parry otherwise, and the closest contact over a body's
 //! parts and the grounds.
 
-use super::{BodyGeom, BodyPart, GroundGeom, Hit, PairContact, body_velocity_at, part_pose};
+use super::{BodyGeom, BodyPart, GroundGeom, Hit, PairContact, part_pose};
 use crate::motion::State;
 use crate::parry::query;
 use crate::parry::shape::Triangle;
@@ -396,17 +396,9 @@ pub(crate) fn closest(
             if ground.skip.contains(&part.handle) {
                 continue;
             }
-            if let Some((dist, normal, point)) = contact(part, ground, s, t, prediction) {
-                if best.is_none_or(|b| dist < b.dist) {
-                    let u = body_velocity_at(s, &point) - ground.velocity_at(&point, t);
-                    best = Some(Hit {
-                        part: i,
-                        ground: j,
-                        dist,
-                        normal,
-                        point,
-                        un: normal.dot(&u),
-                    });
+            if let Some(found) = contact(part, ground, s, t, prediction) {
+                if best.is_none_or(|b| found.0 < b.dist) {
+                    best = Some(Hit::at((i, j), ground, s, t, found));
                 }
             }
         }
