@@ -175,7 +175,12 @@ impl<H> ImpactPlugin<H> {
             return Err(RestoreError::MidStep);
         }
         snapshot.config.validate().map_err(RestoreError::Invalid)?;
-        if !snapshot.memory.shadows.iter().all(|(_, s)| s.is_finite()) {
+        let sides_finite = snapshot
+            .memory
+            .mesh_sides
+            .iter()
+            .all(|(_, n)| n.iter().all(|x| x.is_finite()));
+        if !sides_finite || !snapshot.memory.shadows.iter().all(|(_, s)| s.is_finite()) {
             return Err(RestoreError::NotFinite);
         }
         let registry = Registry::from_saved(&snapshot.registry).map_err(RestoreError::Invalid)?;

@@ -70,6 +70,9 @@ pub(crate) struct Memory {
     pub holds: HandleSet<PairKey>,
     /// The colliders reported for coefficients out of range (`Diagnostic`), each once.
     pub reported: HandleSet<ColliderHandle>,
+    /// The side of each mesh or heightfield ground its bodies were on at the last step's
+    /// start (`StepData::mesh_sides`).
+    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
     /// Tables a step fills again, kept from the step before so that their allocations are.
     pub spare: Spare,
 }
@@ -79,6 +82,7 @@ pub(crate) struct LastStep {
     pub shadows: HandleMap<RigidBodyHandle, Shadow>,
     pub roles: HandleMap<PairKey, Role>,
     pub pair_roles: HandleMap<PairKey, Role>,
+    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
 }
 
 /// Tables a step fills again, kept from the step before.
@@ -101,10 +105,12 @@ impl Memory {
         step.candidates = std::mem::take(&mut self.spare.candidates);
         step.candidates.clear();
         let pair_roles = std::mem::take(&mut self.pair_roles);
+        let mesh_sides = std::mem::take(&mut self.mesh_sides);
         LastStep {
             shadows,
             roles,
             pair_roles,
+            mesh_sides,
         }
     }
 
@@ -135,6 +141,7 @@ impl Memory {
     pub fn keep_roles(&mut self, step: &mut StepData) {
         self.roles = std::mem::take(&mut step.roles);
         self.pair_roles = std::mem::take(&mut step.pairs.roles);
+        self.mesh_sides = std::mem::take(&mut step.mesh_sides);
         self.holds.clear();
         self.holds.extend(step.holds.keys().copied());
     }
@@ -153,6 +160,7 @@ pub(crate) struct SavedMemory {
     pub pair_roles: Vec<(PairKey, Role)>,
     pub holds: Vec<PairKey>,
     pub reported: Vec<ColliderHandle>,
+    pub mesh_sides: Vec<(PairKey, Vector3<f64>)>,
 }
 
 impl Memory {
@@ -164,6 +172,7 @@ impl Memory {
             pair_roles: sorted_entries(&self.pair_roles),
             holds: sorted_members(&self.holds),
             reported: sorted_members(&self.reported),
+            mesh_sides: sorted_entries(&self.mesh_sides),
         }
     }
 
@@ -175,6 +184,7 @@ impl Memory {
             pair_roles: saved.pair_roles.iter().copied().collect(),
             holds: saved.holds.iter().copied().collect(),
             reported: saved.reported.iter().copied().collect(),
+            mesh_sides: saved.mesh_sides.iter().copied().collect(),
             spare: Spare::default(),
         }
     }

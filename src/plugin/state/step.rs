@@ -102,6 +102,10 @@ pub(crate) struct StepData {
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
     /// where the normal force holds the ball (`hooks/mod.rs`).
     pub holds: HandleMap<PairKey, Vector3<f64>>,
+    /// The side (the contact normal at the step's start) of each pair of a body with a mesh
+    /// or heightfield ground: a mesh has no inside, and a body found on the other side at
+    /// the next step crossed it (`Planner::mesh_side`).
+    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
     /// The balls held at rest this step and not the last (`FirstHold`).
     pub first_holds: Vec<FirstHold>,
     /// The pairs of opted-in balls and their roles (`pair_plan.rs`).

@@ -5,13 +5,15 @@
 use super::body::{BodyNear, BodyPlan, BodyReads, StartContact};
 use super::{Planner, closes_within};
 use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::bridge::resolve::{Inertia, Site, correction};
 use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::events::Diagnostic;
+use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::Role;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, Hit, PairContact, Sweep, body_velocity_at,
-    cannot_close, contact_checked,
+    cannot_close, contact_checked, contact_from_side, part_pose,
 };
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
@@ -121,6 +123,81 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         true
     }
 
+    /// A mesh or heightfield has no inside: a contact's normal is turned towards the body. A
+    /// body found on the other side than at the last step's start crossed the surface
+    /// (rapier's resting contact can let a thin body through a mesh's edge): while it is over
+    /// the face, it is put back on the side it was on, by its depth measured from that side,
+    /// its speed into the ground removed (a `PushOut` at the step's start, written with the
+    /// plan's state), and the contact found again. Records the side of the pair's contact
+    /// for the next step (`StepData::mesh_sides`). Other grounds: `found` as it is.
+    fn mesh_side(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        found: StartContact,
+        step: &mut StepData,
+    ) -> StartContact {
+        use crate::parry::shape::TypedShape;
+        let Pair { part, gg, key, .. } = pair;
+        let Ok(Some((dist, n, _))) = found else {
+            return found;
+        };
+        let mesh = matches!(
+            gg.shape.as_typed_shape(),
+            TypedShape::TriMesh(_) | TypedShape::HeightField(_)
+        );
+        if !mesh {
+            return found;
+        }
+        let body = reads.body;
+        let mut found = found;
+        if let Some(side) = reads
+            .last
+            .mesh_sides
+            .get(&key)
+            .filter(|side| side.dot(&n) < 0.0)
+        {
+            let centre = part_pose(part, &plan.state).translation.vector;
+            let from = centre + side * (2.0 * body.geom.radius + dist.abs());
+            let crossed = contact_from_side(part, gg, &plan.state, 0.0, from, true)
+                .filter(|(depth, ..)| *depth < 0.0);
+            if let Some((depth, normal, point)) = crossed {
+                let before = plan.state;
+                plan.state.com -= normal * depth;
+                let vn = normal.dot(&plan.state.v);
+                if vn < 0.0 {
+                    plan.state.v -= normal * vn;
+                }
+                plan.touched = true;
+                let site = Site {
+                    body: body.handle,
+                    collider: part.handle,
+                    ground: gg.handle,
+                    body2: None,
+                    normal,
+                    point: point - normal * depth,
+                };
+                let inertia = Inertia::of(&reads.scene.bodies[body.handle]);
+                let mut event = correction(
+                    EventKind::PushOut,
+                    &site,
+                    &inertia,
+                    &before,
+                    &plan.state,
+                    0.0,
+                );
+                event.timing = ImpactTiming::StepStart;
+                self.commit.event(event);
+                found = contact_checked(part, gg, &plan.state, 0.0, body.reach);
+            }
+        }
+        if let Ok(Some((_, n, _))) = found {
+            step.mesh_sides.insert(key, n);
+        }
+        found
+    }
+
     /// The role of a pair rapier's filtering keeps, by its contact at the body's current
     /// state: out of reach, rapier's (parry cannot query it), resting, `Step` mode's impulse
     /// or impact, a resting ball's rolling, held or reached (`rest_on_ground`); records the
@@ -142,6 +219,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
             _ => contact_checked(part, gg, &plan.state, 0.0, body.reach),
         };
+        let found = self.mesh_side(reads, plan, pair, found, step);
         let contact0 = found.as_ref().ok().copied().flatten();
         // A pair beyond reach cannot touch in this step: out of the solver, and no search
         // after the step.
