@@ -331,10 +331,9 @@ fn plane_contact_facing(
     }
     let mut n = n / len;
     let pose_b = part_pose(part, s);
-    let side = side.unwrap_or(pose_b.translation.vector);
-    if matches!(face, Face::Tri(_)) && n.dot(&(side - q)) < 0.0 {
-        // A mesh triangle has no outside: the body's side is.
-        n = -n;
+    let toward = side.unwrap_or(pose_b.translation.vector);
+    if matches!(face, Face::Tri(_)) && n.dot(&(toward - q)) < 0.0 {
+        n = -n; // A mesh triangle has no outside: the body's side (or `side`) is.
     }
     let support = match part.shape.as_ball() {
         // Written out in `f64`, as `ball_plane_contact` does: parry's support map takes the
