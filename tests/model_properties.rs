@@ -48,6 +48,12 @@ prop_compose! {
     /// [0.025, 1] m, random principal axes and normal, `|r_i| <= 1` m with `r.n < 0`,
     /// `|v_i|, |w_i| <= 5`, approach speed in [1e-3, 5] m/s.
     fn arb_case(e_s: BoxedStrategy<f64>, mu_s: BoxedStrategy<f64>)
+        (c in arb_walton_case(e_s, mu_s, Just(0.0).boxed())) -> Case { c }
+}
+
+prop_compose! {
+    /// [`arb_case`] with Walton's tangential restitution drawn from `beta_s`.
+    fn arb_walton_case(e_s: BoxedStrategy<f64>, mu_s: BoxedStrategy<f64>, beta_s: BoxedStrategy<f64>)
         (log_m in -2.0..2.0f64,
          radii in [0.025..1.0f64, 0.025..1.0f64, 0.025..1.0f64],
          euler in [-3.2..3.2f64, -1.6..1.6f64, -3.2..3.2f64],
@@ -56,7 +62,7 @@ prop_compose! {
          v in [-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64],
          w in [-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64],
          approach in 1e-3..5.0f64,
-         e in e_s, mu in mu_s) -> Case {
+         e in e_s, mu in mu_s, beta in beta_s) -> Case {
         let mass = 10f64.powf(log_m);
         let moments = Vector3::from(radii).map(|k| mass * k * k);
         let axes = *Rotation3::from_euler_angles(euler[0], euler[1], euler[2]).matrix();
@@ -70,7 +76,8 @@ prop_compose! {
         let mut velocity = BodyVelocity { linear: Vector3::from(v), angular: Vector3::from(w) };
         let un = n.dot(&model_support::contact_velocity(&velocity, &contact));
         velocity.linear -= n * (un + approach);
-        Case { body, inertia, velocity, contact, material: Material::new(e, mu) }
+        let material = Material::new(e, mu).with_tangential_restitution(beta);
+        Case { body, inertia, velocity, contact, material }
     }
 }
 
@@ -163,6 +170,32 @@ proptest! {
                 let g = gain(&c, &i);
                 prop_assert!(g < 0.0, "{law:?} {:?} with e = 0: relative energy change {g:e}, expected < 0", i.regime);
             }
+        }
+    }
+}
+
+proptest! {
+    // Walton's tangential restitution over its whole range: the same guarantees as Coulomb
+    // friction (no energy gain for e <= 1 under `Consistent` and `Guarded`, the impulse in
+    // the cone and pushing, the contact not approaching after).
+    #![proptest_config(config(50_000))]
+
+    #[test]
+    fn tangential_restitution_keeps_every_guarantee(
+        c in arb_walton_case((0.0..=1.0).boxed(), (0.0..=2.0).boxed(), (-1.0..=1.0).boxed())
+    ) {
+        let n = c.contact.normal;
+        let un1 = n.dot(&model_support::contact_velocity(&c.velocity, &c.contact));
+        for law in [Law::Consistent, Law::Guarded] {
+            let i = run(law, &c)?;
+            let g = gain(&c, &i);
+            prop_assert!(g <= ENERGY_TOLERANCE, "{law:?} {:?}: relative energy gain {g:e}; {i:?}", i.regime);
+            let pn = i.impulse.dot(&n);
+            let pt = (i.impulse - n * pn).norm();
+            let bound = c.material.friction * pn * (1.0 + 1e-12) + 1e-15 * i.impulse.norm();
+            prop_assert!(pn >= 0.0 && pt <= bound, "{law:?} {:?}: P_n {pn:e}, |P_t| {pt:e} > {bound:e}", i.regime);
+            let un2 = n.dot(&model_support::contact_velocity(&i.velocity, &c.contact));
+            prop_assert!(un2 >= -1e-12 * un1.abs(), "{law:?} {:?}: u_n after {un2:e}, before {un1:e}", i.regime);
         }
     }
 }

@@ -3,8 +3,10 @@
 //!
 //! With the relative contact velocity `u1 = v + w × r - u_ground` and `u_n = n.u1 < 0`:
 //!
-//! - sticking (eqs. 10-12): `P = K^-1 (-e u_n n - u1)`, accepted when `P.n >= 0` and
-//!   `|P_t| <= mu P.n` (erratum 3);
+//! - sticking (eqs. 10-12): `P = K^-1 (-(1+e) u_n n - (1+beta0) u_t)`, the impulse that
+//!   leaves the contact velocity at `-e u_n n - beta0 u_t` (Walton's tangential
+//!   restitution; `beta0 = 0` is the document's stick to zero slip), accepted when
+//!   `P.n >= 0` and `|P_t| <= mu P.n` (erratum 3);
 //! - slipping (eqs. 13-19): `P = p (n - mu s)` with `s` the unit initial slip and
 //!   `p = -(1+e) u_n / (n.K (n - mu s))` (eq. 19 corrected, erratum 1). With zero initial
 //!   slip, `s` is the invariant slip direction (erratum 2), which for an isotropic body
@@ -28,12 +30,17 @@ pub(crate) fn document_impulse<K: Compliance>(
     material: &Material,
     u1: &Vector3<f64>,
 ) -> Result<(Vector3<f64>, Regime, Vector3<f64>), ModelError> {
-    let (e, mu) = (material.restitution, material.friction);
+    let (e, mu, beta) = (
+        material.restitution,
+        material.friction,
+        material.tangential_restitution,
+    );
     let un = n.dot(u1);
     let ut = u1 - n * un;
 
-    // Sticking, eqs. (10)-(12): target contact velocity -e u_n n.
-    let d = -(n * ((1.0 + e) * un)) - ut;
+    // Sticking, eqs. (10)-(12): target contact velocity -e u_n n - beta0 u_t. With
+    // beta0 = 0 the factor is exactly 1 and `d` is the document's, bit for bit.
+    let d = -(n * ((1.0 + e) * un)) - ut * (1.0 + beta);
     let stick = k.solve(&d);
     let stick_n = stick.dot(n);
     let stick_t = stick - n * stick_n;

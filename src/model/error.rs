@@ -29,6 +29,21 @@ pub enum ModelError {
     NegativeRestitution(f64),
     /// The coefficient of friction is negative. The model needs `mu >= 0`.
     NegativeFriction(f64),
+    /// The tangential restitution `beta0` is outside `[-1, 1]` (or not finite).
+    TangentialRestitutionOutOfRange(f64),
+    /// A restitution curve has no point: it needs at least one `(speed, e)`.
+    EmptyRestitutionCurve,
+    /// A point of a restitution curve is refused: a speed or an `e` that is not finite or
+    /// is negative, or a speed below the previous point's (the points go by increasing
+    /// speed).
+    InvalidCurvePoint {
+        /// The point's index in the curve.
+        index: usize,
+        /// Its approach speed (m/s).
+        speed: f64,
+        /// Its coefficient of restitution.
+        restitution: f64,
+    },
     /// The contact normal is not of unit length (its length is given).
     NonUnitNormal(f64),
     /// The document's slip law has no solution: its denominator (eq. 19, corrected)
@@ -66,6 +81,21 @@ impl fmt::Display for ModelError {
             Self::NegativeFriction(mu) => {
                 write!(f, "coefficient of friction must be >= 0, got {mu}")
             }
+            Self::TangentialRestitutionOutOfRange(b) => {
+                write!(f, "tangential restitution must be in [-1, 1], got {b}")
+            }
+            Self::EmptyRestitutionCurve => {
+                write!(f, "a restitution curve needs at least one (speed, e) point")
+            }
+            Self::InvalidCurvePoint {
+                index,
+                speed,
+                restitution,
+            } => write!(
+                f,
+                "restitution curve point {index} (speed {speed} m/s, e {restitution}) is refused: \
+                 speeds and e must be finite and >= 0, speeds in increasing order"
+            ),
             Self::NonUnitNormal(len) => {
                 write!(f, "contact normal must have unit length, got length {len}")
             }
@@ -109,4 +139,13 @@ pub(crate) fn check_coefficients(restitution: f64, friction: f64) -> Result<(), 
         return Err(ModelError::NegativeFriction(friction));
     }
     Ok(())
+}
+
+/// Checks a tangential restitution: finite and in `[-1, 1]`.
+pub(crate) fn check_tangential_restitution(beta0: f64) -> Result<(), ModelError> {
+    if (-1.0..=1.0).contains(&beta0) {
+        Ok(())
+    } else {
+        Err(ModelError::TangentialRestitutionOutOfRange(beta0))
+    }
 }

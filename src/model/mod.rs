@@ -14,12 +14,14 @@ mod consistent;
 mod document;
 mod error;
 mod pair;
+mod restitution;
 pub mod seed;
 mod types;
 
 pub use consistent::SWERVE_TOLERANCE;
 pub use error::ModelError;
 pub use pair::{PairContact, PairImpact, resolve_pair};
+pub use restitution::RestitutionCurve;
 pub use types::{Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, Regime};
 
 use collision_matrix::OneBody;
@@ -106,16 +108,21 @@ fn inputs_plainly_valid(
     let (l, w) = (&velocity.linear, &velocity.angular);
     let (n, o, g) = (&contact.normal, &contact.offset, &contact.ground_velocity);
     let a = &body.inv_inertia;
-    let (e, mu) = (material.restitution, material.friction);
+    let (e, mu, beta) = (
+        material.restitution,
+        material.friction,
+        material.tangential_restitution,
+    );
     // Whole 3-vectors (and the tensor's columns), added as a tree.
     let vectors = ((l + w) + (n + o)) + (g + a.column(0));
     let columns = a.column(1) + a.column(2);
     let all = vectors + columns;
-    let sum = (all.x + all.y) + (all.z + body.mass) + (e + mu);
+    let sum = (all.x + all.y) + (all.z + body.mass) + ((e + mu) + beta);
     if !(sum.is_finite()
         && body.mass > 0.0
         && e >= 0.0
         && mu >= 0.0
+        && beta.abs() <= 1.0
         && (n.norm_squared() - 1.0).abs() <= 2e-6)
     {
         return false;
@@ -428,8 +435,17 @@ pub(crate) fn unphysical(
         return Some(Fallback::PullingNormalImpulse);
     }
     if regime == Regime::Slip && material.friction > 0.0 {
+        // Friction may turn the slip back as far as the tangential restitution gives back
+        // (Walton's slip regime: the reversal a grip with beta0 > 0 would have had), no
+        // further.
         let along_after = (u2 - n * n.dot(u2)).dot(slip);
-        if along_after < -1e-12 * u1.norm() {
+        let beta = material.tangential_restitution;
+        let given_back = if beta > 0.0 {
+            beta * (u1 - n * n.dot(u1)).dot(slip)
+        } else {
+            0.0
+        };
+        if along_after < -given_back - 1e-12 * u1.norm() {
             return Some(Fallback::SlipReversal);
         }
     }

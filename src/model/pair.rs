@@ -10,7 +10,7 @@
 //! ([`Body::fixed`]) that is [`super::resolve`]'s problem exactly.
 
 use super::collision_matrix::{Compliance, OneBody, TwoBodies};
-use super::error::{ModelError, check_coefficients, finite3};
+use super::error::{ModelError, finite3};
 use super::types::{Body, BodyVelocity, Fallback, Law, Material, Regime};
 use super::{
     DocumentOutcome, consistent, document, isotropic_inverse_inertia, separating_law, unphysical,
@@ -308,7 +308,7 @@ fn validate(
             .map_err(|e| named(e, "b.mass", "b.inv_inertia"))?;
     }
     contact.validate()?;
-    check_coefficients(material.restitution, material.friction)
+    material.validate()
 }
 
 /// `Body::validate`'s error, naming which body's field.

@@ -2,7 +2,7 @@
 //! material, the chosen law, and the resolved impact. All vectors are in one
 //! world frame of the caller's choosing; nothing here assumes an "up" axis.
 
-use super::error::{ModelError, check_coefficients, finite, finite3};
+use super::error::{ModelError, check_coefficients, check_tangential_restitution, finite, finite3};
 use nalgebra::{Matrix3, Vector3};
 
 /// The inertial properties of the impacting body, in the world frame.
@@ -253,11 +253,14 @@ impl Contact {
     }
 }
 
-/// The contact's material: Newton's coefficient of restitution and Coulomb's friction.
+/// The contact's material: Newton's coefficient of restitution, Coulomb's friction and
+/// Walton's tangential restitution (Walton's three parameters, see `docs/model.md`).
 ///
 /// Build it with [`Material::new`] (or [`Default`], rapier's collider defaults) and set
-/// fields after: it is `#[non_exhaustive]`, so that a coefficient added later breaks no
-/// caller.
+/// fields after, or with [`Material::with_tangential_restitution`]: it is
+/// `#[non_exhaustive]`, so that a coefficient added later breaks no caller. A restitution
+/// that depends on the impact speed is a [`super::RestitutionCurve`], evaluated at the
+/// contact's approach speed into [`Material::restitution`] before the impact is resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
@@ -269,6 +272,12 @@ pub struct Material {
     pub restitution: f64,
     /// Coefficient of friction `mu >= 0`.
     pub friction: f64,
+    /// Tangential restitution `beta0` in `[-1, 1]` (default 0): a contact that grips ends the
+    /// impact with its tangential contact velocity at `-beta0` times the incoming one, if the
+    /// friction cone allows it (0: it stops, Coulomb's stick; 1: it reverses, a superball;
+    /// -1: friction leaves it alone). Otherwise the contact slips, as with `beta0 = 0`.
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    pub tangential_restitution: f64,
 }
 
 impl Default for Material {
@@ -285,12 +294,22 @@ impl Material {
         Self {
             restitution,
             friction,
+            tangential_restitution: 0.0,
         }
     }
 
-    /// Checks `e >= 0`, `mu >= 0`, both finite.
+    /// The same material with Walton's tangential restitution `beta0` (in `[-1, 1]`).
+    pub fn with_tangential_restitution(self, beta0: f64) -> Self {
+        Self {
+            tangential_restitution: beta0,
+            ..self
+        }
+    }
+
+    /// Checks `e >= 0`, `mu >= 0`, `beta0` in `[-1, 1]`, all finite.
     pub fn validate(&self) -> Result<(), ModelError> {
-        check_coefficients(self.restitution, self.friction)
+        check_coefficients(self.restitution, self.friction)?;
+        check_tangential_restitution(self.tangential_restitution)
     }
 }
 
@@ -343,7 +362,8 @@ pub enum Fallback {
     PullingNormalImpulse,
     /// The slip denominator is `<= 0` (Painleve-like jam).
     Jam,
-    /// Friction along the initial slip direction overshot: the slip reversed.
+    /// Friction along the initial slip direction overshot: the slip reversed (beyond
+    /// `-beta0` times the initial slip, which a tangential restitution `beta0 > 0` allows).
     SlipReversal,
     /// The document's result gained kinetic energy with `e <= 1`.
     EnergyGain,

@@ -24,6 +24,7 @@
 mod dop853;
 mod jam;
 mod swerve;
+mod tangential;
 
 use super::collision_matrix::{Compliance, ContactK};
 use super::types::{Material, Regime};
@@ -83,8 +84,25 @@ enum Event {
     Finished,
 }
 
-/// Result of the integration: the impulse on the body (world) and the regime.
+/// The consistent law's impulse on the body (world) and its regime: the integration below,
+/// then Walton's tangential restitution where the material has one
+/// ([`tangential::rebound`]).
 pub(crate) fn consistent_impulse<K: Compliance>(
+    k: &K,
+    n: &Vector3<f64>,
+    material: &Material,
+    u1: &Vector3<f64>,
+) -> (Vector3<f64>, Regime) {
+    let (impulse, regime) = coulomb_impulse(k, n, material, u1);
+    if material.tangential_restitution == 0.0 {
+        return (impulse, regime);
+    }
+    tangential::rebound(k, n, material, u1, impulse, regime)
+}
+
+/// The integration with Coulomb friction and Stronge's restitution: the impulse on the body
+/// (world) and the regime.
+fn coulomb_impulse<K: Compliance>(
     k: &K,
     n: &Vector3<f64>,
     material: &Material,
