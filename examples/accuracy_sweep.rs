@@ -526,7 +526,7 @@ fn run_putt(dt: f64, mode: Mode, law: Law) -> f64 {
     if let Some(p) = plugin.as_mut() {
         let config = ImpactConfig {
             rolling_resistance: mu_r,
-            ..*p.config()
+            ..p.config().clone()
         };
         p.set_config(config).expect("a valid configuration");
     }

@@ -170,7 +170,7 @@ fn main() {
         p.set_all_dynamic_bodies_impact(args.on("--pairs"));
         p.set_config(ImpactConfig {
             rolling_resistance: mu_r,
-            ..*p.config()
+            ..p.config().clone()
         })
         .unwrap_or_else(|e| args.fail(&e.to_string()));
     }

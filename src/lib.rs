@@ -34,6 +34,7 @@ pub mod model;
 mod motion;
 pub mod plugin;
 
+pub use model::RestitutionCurve;
 pub use plugin::{
     ConfigError, Diagnostic, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
     ImpactSnapshot, ImpactTiming, RestoreError, Stage, StepCounts, StepProfile, TimingMode,

@@ -16,7 +16,8 @@ use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
-    ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode,
+    ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, RestitutionCurve,
+    TimingMode,
 };
 
 #[test]
@@ -1138,9 +1139,21 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
         (with(0.5, 1e3, None), "friction"),
         (with(0.5, 0.5, Some(1e300)), "rolling_resistance"),
         (with(0.5, 0.5, Some(-1.0)), "rolling_resistance"),
+        (
+            with(0.5, 0.5, None).with_tangential_restitution(1.5),
+            "tangential_restitution",
+        ),
+        (
+            with(0.5, 0.5, None).with_tangential_restitution(f64::NAN),
+            "tangential_restitution",
+        ),
+        (
+            with(0.5, 0.5, None).with_restitution_curve(curve(&[(0.0, 0.5), (2.0, 10.5)])),
+            "restitution_curve",
+        ),
     ] {
         let e = p
-            .add_ground_with_material(&world.bodies, &world.colliders, ground, material)
+            .add_ground_with_material(&world.bodies, &world.colliders, ground, material.clone())
             .unwrap_err();
         assert!(
             matches!(e, ConfigError::MaterialOutOfRange { field: f, .. } if f == field),
@@ -1148,7 +1161,8 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
         );
         let message = e.to_string();
         assert!(
-            message.contains(&format!("GroundMaterial::{field}")) && message.contains("[0, "),
+            message.contains(&format!("GroundMaterial::{field}"))
+                && (message.contains("[0, ") || message.contains("[-1, 1]")),
             "{message}"
         );
     }
@@ -1168,37 +1182,51 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
         (
             ImpactConfig {
                 resting_speed: Some(1e300),
-                ..base
+                ..base.clone()
             },
             "resting_speed",
         ),
         (
             ImpactConfig {
                 resting_gap: Some(1e300),
-                ..base
+                ..base.clone()
             },
             "resting_gap",
         ),
         (
             ImpactConfig {
                 flat_tolerance: 2.0,
-                ..base
+                ..base.clone()
             },
             "flat_tolerance",
         ),
         (
             ImpactConfig {
                 rolling_resistance: 1e300,
-                ..base
+                ..base.clone()
             },
             "rolling_resistance",
         ),
         (
             ImpactConfig {
                 spinning_friction: 101.0,
-                ..base
+                ..base.clone()
             },
             "spinning_friction",
+        ),
+        (
+            ImpactConfig {
+                tangential_restitution: -1.01,
+                ..base.clone()
+            },
+            "tangential_restitution",
+        ),
+        (
+            ImpactConfig {
+                restitution_curve: Some(curve(&[(1.0, 12.0)])),
+                ..base.clone()
+            },
+            "restitution_curve",
         ),
     ] {
         let e = bad(config).expect("refused");
@@ -1219,6 +1247,50 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
             ..
         })
     ));
+    // A body's own tangential restitution and curve: refused at the call, nothing kept.
+    for beta in [1.5, -2.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(
+            p.set_body_tangential_restitution(ball, Some(beta)),
+            Err(ConfigError::InvalidConfig {
+                field: "tangential_restitution",
+                ..
+            })
+        ));
+    }
+    assert!(matches!(
+        p.set_body_restitution_curve(ball, Some(curve(&[(0.5, 0.2), (1.0, 11.0)]))),
+        Err(ConfigError::InvalidConfig {
+            field: "restitution_curve",
+            ..
+        })
+    ));
+    assert_eq!(p.body_tangential_restitution(ball), None);
+    assert_eq!(p.body_restitution_curve(ball), None);
+    p.set_body_tangential_restitution(ball, Some(-1.0)).unwrap();
+    p.set_body_restitution_curve(ball, Some(curve(&[(0.0, 10.0)])))
+        .unwrap();
+    assert_eq!(p.body_tangential_restitution(ball), Some(-1.0));
+    assert_eq!(p.body_restitution_curve(ball), Some(&curve(&[(0.0, 10.0)])));
+    p.set_body_tangential_restitution(ball, None).unwrap();
+    assert_eq!(p.body_tangential_restitution(ball), None);
+    // A curve's own points are refused where it is built.
+    for points in [
+        &[][..],
+        &[(1.0, 0.5), (0.5, 0.5)][..],
+        &[(-1.0, 0.5)][..],
+        &[(0.0, -0.1)][..],
+        &[(f64::NAN, 0.5)][..],
+    ] {
+        assert!(
+            RestitutionCurve::new(points.to_vec()).is_err(),
+            "{points:?}"
+        );
+    }
+}
+
+/// A restitution curve through `points`, which must be valid.
+fn curve(points: &[(f64, f64)]) -> RestitutionCurve {
+    RestitutionCurve::new(points.to_vec()).expect("valid curve")
 }
 
 /// A ball dropped on a half-space, its collider's or the ground's friction and restitution
@@ -1247,9 +1319,11 @@ fn dropped_with(
     let mut positions = Vec::new();
     let mut diagnostics = Vec::new();
     let mut events = 0;
-    if let Some(material) = plugin_on {
+    if let Some(material) = &plugin_on {
         match material {
-            Some(m) => p.add_ground_with_material(&world.bodies, &world.colliders, ground, m),
+            Some(m) => {
+                p.add_ground_with_material(&world.bodies, &world.colliders, ground, m.clone())
+            }
             None => p.add_ground(&world.bodies, &world.colliders, ground),
         }
         .unwrap();

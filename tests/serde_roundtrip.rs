@@ -10,7 +10,7 @@ use rapier_impact::model::{
 };
 use rapier_impact::na::{Matrix3, Vector3};
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, TimingMode};
+use rapier_impact::{GroundMaterial, ImpactConfig, ImpactPlugin, RestitutionCurve, TimingMode};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
@@ -33,9 +33,33 @@ fn configuration_and_materials_round_trip() {
         max_impacts_per_step: 7,
         rolling_resistance: 0.015,
         spinning_friction: 0.02,
+        tangential_restitution: -0.35,
+        restitution_curve: Some(
+            RestitutionCurve::new(vec![(0.2, 0.0), (0.2, 0.9), (7.5, 0.55)]).unwrap(),
+        ),
     };
     let json = round_trip(&config);
     assert!(json.contains("TimeOfImpact"), "{json}");
+    // A curve is its points; one whose points are refused is refused on the way in too.
+    assert!(json.contains("[[0.2,0.0],[0.2,0.9],[7.5,0.55]]"), "{json}");
+    let unsorted = json.replace("[7.5,0.55]", "[0.1,0.55]");
+    let err = serde_json::from_str::<ImpactConfig>(&unsorted).unwrap_err();
+    assert!(
+        err.to_string().contains("restitution curve point 2"),
+        "{err}"
+    );
+    // A configuration written before the two fields existed reads with their defaults.
+    let older = serde_json::to_string(&ImpactConfig::default())
+        .unwrap()
+        .replace(
+            ",\"tangential_restitution\":0.0,\"restitution_curve\":null",
+            "",
+        );
+    assert!(!older.contains("tangential"), "{older}");
+    assert_eq!(
+        serde_json::from_str::<ImpactConfig>(&older).unwrap(),
+        ImpactConfig::default()
+    );
     round_trip(&ImpactConfig::default());
     round_trip(&GroundMaterial::new(0.35, 1.0 / 3.0));
     round_trip(&GroundMaterial {
@@ -43,6 +67,11 @@ fn configuration_and_materials_round_trip() {
         spinning_friction: Some(0.3),
         ..GroundMaterial::new(0.35, 1.0 / 3.0)
     });
+    round_trip(
+        &GroundMaterial::new(0.35, 1.0 / 3.0)
+            .with_tangential_restitution(0.5)
+            .with_restitution_curve(RestitutionCurve::threshold(1.0, 0.6).unwrap()),
+    );
 }
 
 #[test]
@@ -59,7 +88,7 @@ fn model_inputs_and_outputs_round_trip() {
         Vector3::new(0.0, 0.6, 0.8),
         Vector3::new(0.01, -0.03, -0.02),
     );
-    let material = Material::new(0.8, 0.3);
+    let material = Material::new(0.8, 0.3).with_tangential_restitution(0.25);
     round_trip(&body);
     round_trip(&velocity);
     round_trip(&contact);

@@ -1,14 +1,18 @@
 //! Save and resume: rapier's world and the plugin's snapshot saved at a step and given back
 //! to a new plugin go on bit for bit as the run they were taken from, in every timing mode,
 //! with impacts between bodies, rolling balls, a ball held on a slope, a moving ground and a
-//! body the plugin does not manage; with the `serde-serialize` feature, through CBOR too.
+//! body the plugin does not manage, tangential restitutions and restitution curves of the
+//! configuration, of bodies and of a ground; with the `serde-serialize` feature, through CBOR too.
 //! A new plugin that is not restored does not (so the scenes exercise what the snapshot
 //! carries), and the user's hook flags come back as they were set.
 
 mod scene_support;
 
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, ImpactSnapshot, TimingMode};
+use rapier_impact::{
+    GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactSnapshot, RestitutionCurve,
+    TimingMode,
+};
 use scene_support::{events_hash, jitter, real, saved_world, state_hash, walled_box};
 
 const STEPS: usize = 240;
@@ -38,6 +42,7 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
     let config = ImpactConfig {
         timing,
         rolling_resistance: 0.02,
+        tangential_restitution: 0.2,
         ..ImpactConfig::default()
     };
     let mut plugin = ImpactPlugin::new(config).unwrap();
@@ -61,13 +66,21 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
         );
         plugin.add_impact_body(&world.bodies, body).unwrap();
     }
+    // Boxes with their own tangential restitution and restitution curve.
+    let curve = RestitutionCurve::new(vec![(0.5, 0.0), (0.5, 0.6), (4.0, 0.3)]).unwrap();
     for i in 0..3 {
-        world.insert(
+        let (body, _) = world.insert(
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(real(3.0 + i as f64), 0.8, 2.0))
                 .angvel(Vector::new(3.0, 1.0, real(i as f64))),
             ColliderBuilder::cuboid(0.2, 0.05, 0.15).restitution(0.5),
         );
+        plugin
+            .set_body_tangential_restitution(body, Some(-0.3))
+            .unwrap();
+        plugin
+            .set_body_restitution_curve(body, Some(curve.clone()))
+            .unwrap();
     }
     let (slow, _) = world.insert(
         RigidBodyBuilder::dynamic()
@@ -113,11 +126,18 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
     );
     plugin.exclude_body(left);
-    for ground in [floor, slope, platform] {
+    for ground in [floor, slope] {
         plugin
             .add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
     }
+    // A ground with its own tangential restitution and curve.
+    let material = GroundMaterial::new(0.6, 0.5)
+        .with_tangential_restitution(0.7)
+        .with_restitution_curve(RestitutionCurve::threshold(0.3, 0.8).unwrap());
+    plugin
+        .add_ground_with_material(&world.bodies, &world.colliders, platform, material)
+        .unwrap();
     (world, plugin)
 }
 

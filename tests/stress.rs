@@ -299,7 +299,7 @@ impl Sim {
                 ][*k as usize];
                 let config = ImpactConfig {
                     timing,
-                    ..*self.plugin.config()
+                    ..self.plugin.config().clone()
                 };
                 self.plugin.set_config(config).unwrap();
             }
@@ -307,7 +307,7 @@ impl Sim {
                 let law = [Law::Document, Law::Consistent, Law::Guarded][*k as usize];
                 let config = ImpactConfig {
                     law,
-                    ..*self.plugin.config()
+                    ..self.plugin.config().clone()
                 };
                 self.plugin.set_config(config).unwrap();
             }

@@ -1,7 +1,7 @@
 //! The plugin's configuration, the per-ground material override, and the error a bad
 //! setting or registration returns at the call that made it.
 
-use crate::model::{Law, Material, ModelError};
+use crate::model::{Law, Material, ModelError, RestitutionCurve};
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use core::fmt;
 
@@ -48,6 +48,39 @@ fn in_range(value: f64, max: f64) -> bool {
     (0.0..=max).contains(&value)
 }
 
+/// Checks a tangential restitution (in `[-1, 1]`) and a restitution curve (every `e` at most
+/// [`MAX_RESTITUTION`]; the curve checked its own points when it was built); `error` builds
+/// the error from the field's name and the value refused.
+fn check_bounce(
+    tangential_restitution: Option<f64>,
+    restitution_curve: Option<&RestitutionCurve>,
+    error: impl Fn(&'static str, f64) -> ConfigError,
+) -> Result<(), ConfigError> {
+    if let Some(beta) = tangential_restitution {
+        if !(-1.0..=1.0).contains(&beta) {
+            return Err(error("tangential_restitution", beta));
+        }
+    }
+    if let Some(curve) = restitution_curve {
+        if curve.max() > MAX_RESTITUTION {
+            return Err(error("restitution_curve", curve.max()));
+        }
+    }
+    Ok(())
+}
+
+/// Checks a body's own tangential restitution and restitution curve
+/// ([`crate::ImpactPlugin::set_body_tangential_restitution`],
+/// [`crate::ImpactPlugin::set_body_restitution_curve`]).
+pub(crate) fn body_bounce(
+    tangential_restitution: Option<f64>,
+    restitution_curve: Option<&RestitutionCurve>,
+) -> Result<(), ConfigError> {
+    check_bounce(tangential_restitution, restitution_curve, |field, value| {
+        ConfigError::InvalidConfig { field, value }
+    })
+}
+
 /// Are a collider's (or a material's) restitution and friction in the plugin's ranges
 /// (`[0, 10]` and `[0, 100]`)? A collider outside them is left to rapier
 /// ([`crate::Diagnostic::CoefficientsOutOfRange`]).
@@ -57,7 +90,7 @@ pub(crate) fn coefficients_in_range(restitution: f64, friction: f64) -> bool {
 
 /// A material that replaces, for one ground, the coefficients rapier would combine from the
 /// two colliders.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
@@ -74,21 +107,48 @@ pub struct GroundMaterial {
     /// Spinning friction `mu_sp` on this ground, or `None` (see
     /// [`ImpactConfig::spinning_friction`]).
     pub spinning_friction: Option<f64>,
+    /// Walton's tangential restitution `beta0` on this ground, in `[-1, 1]`, or `None` for the
+    /// body's or the configuration's (see [`ImpactConfig::tangential_restitution`]).
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    pub tangential_restitution: Option<f64>,
+    /// Restitution as a function of the impact speed on this ground, replacing `restitution`,
+    /// or `None` for the body's or the configuration's, else `restitution` (see
+    /// [`ImpactConfig::restitution_curve`]).
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    pub restitution_curve: Option<RestitutionCurve>,
 }
 
 impl GroundMaterial {
-    /// Restitution and friction, and no rolling coefficients of its own.
+    /// Restitution and friction, and no other coefficient of its own.
     pub fn new(restitution: f64, friction: f64) -> Self {
         Self {
             restitution,
             friction,
             rolling_resistance: None,
             spinning_friction: None,
+            tangential_restitution: None,
+            restitution_curve: None,
         }
     }
 
-    /// Checks every coefficient's range: `e` in `[0, 10]`, `mu`, `mu_r` and `mu_sp` in
-    /// `[0, 100]` (NaN and infinities refused).
+    /// The same material with Walton's tangential restitution `beta0` on this ground.
+    pub fn with_tangential_restitution(self, beta0: f64) -> Self {
+        Self {
+            tangential_restitution: Some(beta0),
+            ..self
+        }
+    }
+
+    /// The same material with a restitution that depends on the impact speed on this ground.
+    pub fn with_restitution_curve(self, curve: RestitutionCurve) -> Self {
+        Self {
+            restitution_curve: Some(curve),
+            ..self
+        }
+    }
+
+    /// Checks every coefficient's range: `e` in `[0, 10]` (the curve's too), `mu`, `mu_r` and
+    /// `mu_sp` in `[0, 100]`, `beta0` in `[-1, 1]` (NaN and infinities refused).
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.to_model().validate().map_err(ConfigError::Material)?;
         let out = |field, value| ConfigError::MaterialOutOfRange { field, value };
@@ -107,10 +167,16 @@ impl GroundMaterial {
                 _ => {}
             }
         }
-        Ok(())
+        check_bounce(
+            self.tangential_restitution,
+            self.restitution_curve.as_ref(),
+            out,
+        )
     }
 
-    pub(crate) fn to_model(self) -> Material {
+    /// The constant coefficients it overrides (its tangential restitution is kept apart: when
+    /// it has none, the body's or the configuration's applies).
+    pub(crate) fn to_model(&self) -> Material {
         Material::new(self.restitution, self.friction)
     }
 }
@@ -118,7 +184,7 @@ impl GroundMaterial {
 /// How the plugin resolves ground impacts. Build it with [`Default`] and change the fields
 /// you need; [`ImpactConfig::validate`] (called by the plugin whenever a config is set)
 /// rejects values out of range.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
@@ -165,6 +231,23 @@ pub struct ImpactConfig {
     /// `mu_sp R N` about the ground normal opposes a rolling ball's spin about it. Chosen as
     /// [`ImpactConfig::rolling_resistance`] is.
     pub spinning_friction: f64,
+    /// Walton's tangential restitution `beta0`, in `[-1, 1]`, default 0 (Coulomb's stick): a
+    /// contact that grips leaves with `-beta0` times its incoming tangential contact velocity
+    /// when the friction cone allows it ([`crate::model::Material::tangential_restitution`]).
+    /// Which value an impact gets: the ground's ([`GroundMaterial::tangential_restitution`]),
+    /// else the body's ([`crate::ImpactPlugin::set_body_tangential_restitution`]; between two
+    /// bodies, the mean of those that have one), else this.
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    pub tangential_restitution: f64,
+    /// Restitution as a function of the normal approach speed of the contact point
+    /// ([`RestitutionCurve`]), replacing the constant `e` of the colliders (or of a
+    /// [`GroundMaterial`]) where set, default `None`. Which curve an impact gets: the ground's
+    /// ([`GroundMaterial::restitution_curve`]), else the body's
+    /// ([`crate::ImpactPlugin::set_body_restitution_curve`]; between two bodies that both
+    /// have one, the mean of the two), else this; with none, the constant `e`. Every `e` of
+    /// a curve is at most 10.
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    pub restitution_curve: Option<RestitutionCurve>,
 }
 
 /// Checks a body's or the configuration's rolling coefficient: in `[0, 100]`.
@@ -187,6 +270,8 @@ impl Default for ImpactConfig {
             max_impacts_per_step: 8,
             rolling_resistance: 0.0,
             spinning_friction: 0.0,
+            tangential_restitution: 0.0,
+            restitution_curve: None,
         }
     }
 }
@@ -210,6 +295,10 @@ impl ImpactConfig {
         check("flat_tolerance", self.flat_tolerance, MAX_FLAT_TOLERANCE)?;
         rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
         rolling_coefficient("spinning_friction", self.spinning_friction)?;
+        body_bounce(
+            Some(self.tangential_restitution),
+            self.restitution_curve.as_ref(),
+        )?;
         if self.max_impacts_per_step == 0 {
             return Err(ConfigError::InvalidConfig {
                 field: "max_impacts_per_step",
@@ -296,6 +385,8 @@ fn range_of(field: &str) -> String {
         "friction" | "rolling_resistance" | "spinning_friction" => MAX_FRICTION,
         "resting_speed" | "resting_gap" => MAX_THRESHOLD,
         "flat_tolerance" => MAX_FLAT_TOLERANCE,
+        "tangential_restitution" => return "[-1, 1]".to_string(),
+        "restitution_curve" => return format!("(each e) [0, {MAX_RESTITUTION}]"),
         _ => return ">= 1".to_string(),
     };
     format!("[0, {max}]")

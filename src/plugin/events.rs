@@ -63,7 +63,7 @@ pub enum EventKind {
 /// `ke_after` is the kinetic energy of the state the change left; where it is the last change in
 /// the step and no flight follows (`timing` `StepEnd`), that state is what was written into rapier.
 /// For the corrections (`kind` not `Impact`), `regime` is `Separating`, `law` `Consistent`,
-/// `contact_points` 0, `restitution` and `friction` 0, `settled` true, and `impulse` the change of
+/// `contact_points` 0, `restitution`, `friction` and `tangential_restitution` 0, `settled` true, and `impulse` the change of
 /// linear momentum (zero for a change of pose only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
@@ -113,10 +113,13 @@ pub struct ImpactEvent {
     /// `true` when the approach was below the resting speed and the impact was resolved with
     /// `e = 0`: the body came to rest on the ground.
     pub settled: bool,
-    /// Restitution coefficient used (after combining or override; 0 when `settled`).
+    /// Restitution coefficient used: rapier's combination of the colliders', a ground's
+    /// override, or a restitution curve's `e` at this `approach_speed` (0 when `settled`).
     pub restitution: f64,
     /// Friction coefficient used.
     pub friction: f64,
+    /// Walton's tangential restitution `beta0` used (0 is Coulomb's stick).
+    pub tangential_restitution: f64,
     /// Kinetic energy of the body before the impact (J).
     pub ke_before: f64,
     /// Kinetic energy of the body after the impact (J).
@@ -136,6 +139,7 @@ impl ImpactEvent {
                 self.normal_impulse,
                 self.restitution,
                 self.friction,
+                self.tangential_restitution,
                 self.ke_before,
                 self.ke_after,
             ]

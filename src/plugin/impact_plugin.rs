@@ -4,6 +4,7 @@
 //! The step itself is in `stages/` (`before_step`, `after_step`: a list of stage calls each),
 //! the hook calls rapier makes during its step in `hooks/`.
 
+use crate::model::RestitutionCurve;
 use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig, rolling_coefficient};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::hooks::flags::HookFlags;
@@ -245,6 +246,59 @@ impl<H> ImpactPlugin<H> {
             }
         }
         Ok(())
+    }
+
+    /// The material a ground was given ([`Self::add_ground_with_material`],
+    /// [`Self::set_ground_material`]), if it is a ground and has one.
+    pub fn ground_material(&self, collider: ColliderHandle) -> Option<GroundMaterial> {
+        self.registry.ground_material(collider)
+    }
+
+    /// The rolling resistance and spinning friction `body` has of its own
+    /// ([`Self::set_body_rolling`]), if any.
+    pub fn body_rolling(&self, body: RigidBodyHandle) -> Option<(f64, f64)> {
+        self.registry.body_rolling.get(&body).copied()
+    }
+
+    /// A body's own tangential restitution `beta0` (Walton's, in `[-1, 1]`; `None` for the
+    /// configuration's): used in its impacts on every ground without one of its own, and in
+    /// its impacts with other bodies (the mean of the two bodies' where both have one). See
+    /// [`ImpactConfig::tangential_restitution`].
+    pub fn set_body_tangential_restitution(
+        &mut self,
+        body: RigidBodyHandle,
+        beta0: Option<f64>,
+    ) -> Result<(), ConfigError> {
+        self.registry.set_body_tangential_restitution(body, beta0)
+    }
+
+    /// A body's own tangential restitution ([`Self::set_body_tangential_restitution`]).
+    pub fn body_tangential_restitution(&self, body: RigidBodyHandle) -> Option<f64> {
+        self.registry
+            .body_bounce
+            .get(&body)
+            .and_then(|b| b.tangential_restitution)
+    }
+
+    /// A body's own restitution as a function of the impact speed (`None` for the
+    /// configuration's): replaces the constant `e` in its impacts on every ground without a
+    /// curve of its own, and in its impacts with other bodies (the mean of the two curves where
+    /// both bodies have one). Every `e` of the curve must be at most 10. See
+    /// [`ImpactConfig::restitution_curve`].
+    pub fn set_body_restitution_curve(
+        &mut self,
+        body: RigidBodyHandle,
+        curve: Option<RestitutionCurve>,
+    ) -> Result<(), ConfigError> {
+        self.registry.set_body_restitution_curve(body, curve)
+    }
+
+    /// A body's own restitution curve ([`Self::set_body_restitution_curve`]).
+    pub fn body_restitution_curve(&self, body: RigidBodyHandle) -> Option<&RestitutionCurve> {
+        self.registry
+            .body_bounce
+            .get(&body)
+            .and_then(|b| b.restitution_curve.as_ref())
     }
 
     /// Opts `body` in to impacts between bodies: its impacts with another opted-in body are

@@ -25,7 +25,7 @@ use core::fmt;
 
 /// The layout of [`ImpactSnapshot`]: a snapshot of another layout is refused by
 /// [`ImpactPlugin::restore`] rather than misread.
-const LAYOUT: u32 = 1;
+const LAYOUT: u32 = 2;
 
 /// The plugin's state between two steps, to resume a simulation bit for bit: save it beside
 /// rapier's world, and give both back ([`ImpactPlugin::restore`] and the world as it was
@@ -151,7 +151,7 @@ impl<H> ImpactPlugin<H> {
         ImpactSnapshot {
             layout: LAYOUT,
             mid_step: self.step.active,
-            config: self.config,
+            config: self.config.clone(),
             registry: self.registry.save(),
             memory: self.memory.save(),
             flags: self.flags.save(),
@@ -184,7 +184,7 @@ impl<H> ImpactPlugin<H> {
             return Err(RestoreError::NotFinite);
         }
         let registry = Registry::from_saved(&snapshot.registry).map_err(RestoreError::Invalid)?;
-        self.config = snapshot.config;
+        self.config = snapshot.config.clone();
         self.registry = registry;
         self.flags = HookFlags::from_saved(&snapshot.flags);
         self.memory = Memory::from_saved(&snapshot.memory);

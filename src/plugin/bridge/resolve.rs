@@ -4,6 +4,7 @@
 
 use crate::model::{
     self, Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, ModelError,
+    RestitutionCurve,
 };
 use crate::motion::State;
 use crate::plugin::bridge::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
@@ -100,12 +101,48 @@ pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material
     Material::new(to_f64(e), to_f64(mu))
 }
 
+/// A contact's coefficients before its approach speed is known: the constant ones (with the
+/// tangential restitution), and the restitution curve that replaces the constant `e` where
+/// one applies (two for a pair of bodies that each have one: their mean).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ContactMaterial<'a> {
+    constant: Material,
+    curves: [Option<&'a RestitutionCurve>; 2],
+}
+
+impl<'a> ContactMaterial<'a> {
+    /// `constant`, with `e` from `curves` where the first is set (the mean of both if both
+    /// are).
+    pub fn new(constant: Material, curves: [Option<&'a RestitutionCurve>; 2]) -> Self {
+        Self { constant, curves }
+    }
+
+    /// The material of an impact approaching at `approach` (m/s): the one `e(v_n)` every
+    /// decision of the plugin about this contact's bounce uses.
+    pub fn at(&self, approach: f64) -> Material {
+        let restitution = match self.curves {
+            [None, _] => return self.constant,
+            [Some(c), None] => c.at(approach),
+            [Some(a), Some(b)] => 0.5 * (a.at(approach) + b.at(approach)),
+        };
+        Material {
+            restitution,
+            ..self.constant
+        }
+    }
+
+    /// The Coulomb friction coefficient.
+    pub fn friction(&self) -> f64 {
+        self.constant.friction
+    }
+}
+
 /// Everything about one impact that is not geometry.
 pub(crate) struct ImpactInput<'a> {
     pub body: RigidBodyHandle,
     pub inertia: &'a Inertia,
     pub law: Law,
-    pub material: Material,
+    pub material: ContactMaterial<'a>,
     /// Approach speeds below this (m/s) are resolved with `e = 0`.
     pub resting_speed: f64,
     /// Resolve with `e = 0` whatever the speed (last impact allowed in the step).
@@ -121,7 +158,7 @@ impl<'a> ImpactInput<'a> {
         body: RigidBodyHandle,
         inertia: &'a Inertia,
         law: Law,
-        material: Material,
+        material: ContactMaterial<'a>,
         resting_speed: f64,
         timing: ImpactTiming,
     ) -> Self {
@@ -146,16 +183,17 @@ impl<'a> ImpactInput<'a> {
     }
 
     /// Whether an impact approaching at `approach` (m/s) settles (slower than the resting
-    /// speed, or forced), and the material it is resolved with (`e = 0` if it settles).
+    /// speed, or forced), and the material it is resolved with (`e = 0` if it settles, else
+    /// the material's `e` at that speed).
     fn material_at(&self, approach: f64) -> (bool, Material) {
         let settled = self.force_settle || rests_at(approach, self.resting_speed);
-        let material = Material {
-            restitution: if settled {
-                0.0
-            } else {
-                self.material.restitution
-            },
-            ..self.material
+        let material = if settled {
+            Material {
+                restitution: 0.0,
+                ..self.material.at(0.0)
+            }
+        } else {
+            self.material.at(approach)
         };
         (settled, material)
     }
@@ -289,7 +327,7 @@ impl<'a> ImpactInput<'a> {
     pub fn between(
         a: &PairSide<'a>,
         law: Law,
-        material: Material,
+        material: ContactMaterial<'a>,
         resting_speed: f64,
         timing: ImpactTiming,
     ) -> Self {
@@ -573,6 +611,7 @@ fn event(
         settled: resolution.settled,
         restitution: resolution.material.restitution,
         friction: resolution.material.friction,
+        tangential_restitution: resolution.material.tangential_restitution,
         ke_before,
         ke_after,
     }

@@ -43,6 +43,9 @@ pub(crate) struct GroundEntry {
     pub material: Option<Material>,
     /// Rolling resistance and spinning friction overrides (`GroundMaterial`).
     pub rolling: (Option<f64>, Option<f64>),
+    /// Tangential restitution override (`GroundMaterial`); the ground's restitution curve,
+    /// if any, is the registry's (`Registry::ground_curves`).
+    pub tangential: Option<f64>,
     /// Marked by the all-fixed-colliders mode rather than by the user.
     pub automatic: bool,
 }
@@ -509,6 +512,7 @@ mod tests {
                     GroundEntry {
                         material: None,
                         rolling: (None, None),
+                        tangential: None,
                         automatic: false,
                     },
                 )

@@ -350,7 +350,9 @@ impl AfterStep<'_> {
     ) -> Option<(State, ImpactEvent)> {
         let (cand, geom, step) = (subject.cand, subject.geom, subject.step);
         let part = &geom.parts[hit.part];
-        let material = self.registry.material_of(colliders, part.handle, og.handle);
+        let material = self
+            .registry
+            .material_of(colliders, part.handle, og.handle, self.config);
         let input = ImpactInput::new(
             cand.body,
             inertia,
@@ -385,7 +387,7 @@ impl AfterStep<'_> {
             normal: n,
             radius,
             inertia_ratio: inertia.ball_ratio(radius)?,
-            friction: material.friction,
+            friction: material.friction(),
             rolling_resistance,
             spinning_friction,
             accel: motion.accel,

@@ -217,7 +217,7 @@ impl<H> ImpactPlugin<H> {
         };
         let (pairs, woken) = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
         step.pairs = pairs;
-        let config = self.config;
+        let config = &self.config;
         let exact = config.timing == TimingMode::Exact;
         let log = self.stopwatch.commit_log();
         let mut commit = Commit::new(&mut self.reports, &mut self.memory.shadows, exact, log);
@@ -230,6 +230,8 @@ impl<H> ImpactPlugin<H> {
         if config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
             let inputs = StepStart {
                 colliders,
+                registry: &self.registry,
+                config,
                 law: config.law,
                 max_impacts: config.max_impacts_per_step,
                 flat_tolerance: config.flat_tolerance,

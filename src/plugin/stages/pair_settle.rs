@@ -12,9 +12,9 @@
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_f64, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
-    BodyContactAt, ImpactInput, Inertia, PairSide, Site, correction, material, resolve_balls,
-    resolve_bodies,
+    BodyContactAt, ImpactInput, Inertia, PairSide, Site, correction, resolve_balls, resolve_bodies,
 };
+use crate::plugin::config::ImpactConfig;
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::{EndCheck, Role};
@@ -24,6 +24,7 @@ use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
+use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::PlannedPair;
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
@@ -50,7 +51,7 @@ impl<H> ImpactPlugin<H> {
     }
 }
 
-impl AfterStep<'_> {
+impl<'v> AfterStep<'v> {
     /// After the step, for an `Impact` pair of balls not moved together (something else
     /// touched one, or a search gave up): rapier's end state, in which the pair was out of
     /// its solver, so that the balls may have passed into, or right through, each other. If
@@ -257,15 +258,19 @@ impl AfterStep<'_> {
         b: &PairSide,
         colliders: &ColliderSet,
         step: &EndOfStep,
-    ) -> ImpactInput<'a> {
+    ) -> ImpactInput<'a>
+    where
+        'v: 'a,
+    {
         let pressed = |h: RigidBodyHandle, rb: &RigidBody| {
             touched_besides_grounds(h, rb, &step.sets, self.registry)
         };
         let touching = pressed(a.body, ra) || pressed(b.body, rb);
+        let (registry, config): (&'v Registry, &'v ImpactConfig) = (self.registry, self.config);
         ImpactInput::between(
             a,
-            self.config.law,
-            material(&colliders[a.collider], &colliders[b.collider], None),
+            config.law,
+            registry.pair_material_of(colliders, a.collider, b.collider, config),
             step.policy.bounce_floor(touching),
             ImpactTiming::StepEnd,
         )

@@ -84,7 +84,9 @@ pub(crate) fn through_impacts(
         let part = &geom.parts[hit.part];
         let gg = &grounds[hit.ground];
         let (point, points) = landing_point(part, gg, &s, t, &hit, view.config.flat_tolerance);
-        let material = view.registry.material_of(colliders, part.handle, gg.handle);
+        let material = view
+            .registry
+            .material_of(colliders, part.handle, gg.handle, view.config);
         let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
         let last_allowed = count + 1 >= view.config.max_impacts_per_step;
         let input = ImpactInput::new(

@@ -180,7 +180,9 @@ impl AfterStep<'_> {
             let part = &checked.geom.parts[hit.part];
             let gg = &grounds[hit.ground];
             let (point, points) = landing_point(part, gg, &s, dt, &hit, self.config.flat_tolerance);
-            let material = self.registry.material_of(colliders, part.handle, gg.handle);
+            let material =
+                self.registry
+                    .material_of(colliders, part.handle, gg.handle, self.config);
             let resting_speed = step.policy.bounce_floor(neighbours_of().touching);
             let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
             let input =

@@ -6,10 +6,12 @@
 //! collider set (the plugin's hook flags are put on at each step, `hooks/flags.rs`). Every
 //! registration is validated at the call that makes it ([`ConfigError`]).
 
-use crate::model::Material;
+use crate::model::{Material, RestitutionCurve};
 use crate::plugin::bridge::convert::to_f64;
-use crate::plugin::bridge::resolve::material;
-use crate::plugin::config::{ConfigError, GroundMaterial, rolling_coefficient};
+use crate::plugin::bridge::resolve::{ContactMaterial, material};
+use crate::plugin::config::{
+    ConfigError, GroundMaterial, ImpactConfig, body_bounce, rolling_coefficient,
+};
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
 use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
 use crate::rapier::prelude::{
@@ -30,6 +32,13 @@ pub(crate) struct Registry {
     /// Balls' own rolling resistance and spinning friction
     /// ([`crate::ImpactPlugin::set_body_rolling`]).
     pub body_rolling: HandleMap<RigidBodyHandle, (f64, f64)>,
+    /// Grounds' restitution curves ([`GroundMaterial::restitution_curve`]), kept out of
+    /// [`GroundEntry`] so that the index's copy of the entries stays plain data.
+    pub ground_curves: HandleMap<ColliderHandle, RestitutionCurve>,
+    /// Bodies' own tangential restitution and restitution curve
+    /// ([`crate::ImpactPlugin::set_body_tangential_restitution`],
+    /// [`crate::ImpactPlugin::set_body_restitution_curve`]).
+    pub body_bounce: HandleMap<RigidBodyHandle, BodyBounce>,
     /// Bodies whose impacts with each other the plugin resolves
     /// ([`crate::ImpactPlugin::add_impact_body`]).
     pub impact_bodies: HandleSet<RigidBodyHandle>,
@@ -73,11 +82,25 @@ impl Registry {
             .grounds
             .get_mut(&collider)
             .ok_or(ConfigError::NotAGround(collider))?;
-        entry.material = material.map(GroundMaterial::to_model);
+        entry.material = material.as_ref().map(GroundMaterial::to_model);
         entry.rolling = rolling_of_material(material.as_ref());
+        entry.tangential = material.as_ref().and_then(|m| m.tangential_restitution);
         // Only the hooks' table holds materials: no rebuild of the index.
         self.index.set_entry(collider, *entry);
+        self.set_ground_curve(collider, material);
         Ok(())
+    }
+
+    /// Keeps a ground's restitution curve, or forgets it.
+    fn set_ground_curve(&mut self, collider: ColliderHandle, material: Option<GroundMaterial>) {
+        match material.and_then(|m| m.restitution_curve) {
+            Some(curve) => {
+                self.ground_curves.insert(collider, curve);
+            }
+            None => {
+                self.ground_curves.remove(&collider);
+            }
+        }
     }
 
     /// [`crate::ImpactPlugin::remove_ground`].
@@ -88,6 +111,7 @@ impl Registry {
 
     pub fn unmark(&mut self, collider: ColliderHandle) -> bool {
         self.changed();
+        self.ground_curves.remove(&collider);
         self.grounds.remove(&collider).is_some()
     }
 
@@ -134,11 +158,13 @@ impl Registry {
         self.grounds.insert(
             collider,
             GroundEntry {
-                material: material.map(GroundMaterial::to_model),
+                material: material.as_ref().map(GroundMaterial::to_model),
                 rolling: rolling_of_material(material.as_ref()),
+                tangential: material.as_ref().and_then(|m| m.tangential_restitution),
                 automatic: false,
             },
         );
+        self.set_ground_curve(collider, material);
         Ok(())
     }
 
@@ -146,6 +172,10 @@ impl Registry {
     /// colliders in all-fixed mode.
     pub fn sync(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
+        if !self.ground_curves.is_empty() {
+            self.ground_curves
+                .retain(|h, _| colliders.get(*h).is_some());
+        }
         self.unmarked.retain(|h| colliders.get(*h).is_some());
         if self.all_fixed {
             let new: Vec<ColliderHandle> = colliders
@@ -174,6 +204,7 @@ impl Registry {
                     GroundEntry {
                         material: None,
                         rolling: (None, None),
+                        tangential: None,
                         automatic: true,
                     },
                 );
@@ -235,19 +266,150 @@ impl Registry {
         (over.0.unwrap_or(own.0), over.1.unwrap_or(own.1))
     }
 
-    /// The material of a body collider against a ground collider.
-    pub fn material_of(
+    /// The material a ground was given, rebuilt from its entry and its curve.
+    pub fn ground_material(&self, collider: ColliderHandle) -> Option<GroundMaterial> {
+        let entry = self.grounds.get(&collider)?;
+        let m = entry.material?;
+        Some(GroundMaterial {
+            restitution: m.restitution,
+            friction: m.friction,
+            rolling_resistance: entry.rolling.0,
+            spinning_friction: entry.rolling.1,
+            tangential_restitution: entry.tangential,
+            restitution_curve: self.ground_curves.get(&collider).cloned(),
+        })
+    }
+
+    /// The friction coefficient of a body collider against a ground collider: the ground's
+    /// override, else rapier's combination.
+    pub fn friction_of(
         &self,
         colliders: &ColliderSet,
         body: ColliderHandle,
         ground: ColliderHandle,
-    ) -> Material {
+    ) -> f64 {
         let over = self.grounds.get(&ground).and_then(|g| g.material);
         match (colliders.get(body), colliders.get(ground)) {
-            (Some(b), Some(g)) => material(b, g, over),
-            _ => over.unwrap_or(Material::new(0.0, 0.0)),
+            (Some(b), Some(g)) => material(b, g, over).friction,
+            _ => over.map_or(0.0, |m| m.friction),
         }
     }
+
+    /// The material of a body collider against a ground collider: the constant coefficients
+    /// (the ground's override, else rapier's combination), the tangential restitution and
+    /// the restitution curve (each the ground's, else the body's, else `config`'s).
+    pub fn material_of<'a>(
+        &'a self,
+        colliders: &ColliderSet,
+        body: ColliderHandle,
+        ground: ColliderHandle,
+        config: &'a ImpactConfig,
+    ) -> ContactMaterial<'a> {
+        let entry = self.grounds.get(&ground);
+        let over = entry.and_then(|g| g.material);
+        let body_collider = colliders.get(body);
+        let constant = match (body_collider, colliders.get(ground)) {
+            (Some(b), Some(g)) => material(b, g, over),
+            _ => over.unwrap_or(Material::new(0.0, 0.0)),
+        };
+        let own = self.bounce_of(body_collider.and_then(|co| co.parent()));
+        let ground_curve = if self.ground_curves.is_empty() {
+            None
+        } else {
+            self.ground_curves.get(&ground)
+        };
+        let beta = entry
+            .and_then(|g| g.tangential)
+            .or(own.and_then(|b| b.tangential_restitution))
+            .unwrap_or(config.tangential_restitution);
+        let curve = ground_curve
+            .or(own.and_then(|b| b.restitution_curve.as_ref()))
+            .or(config.restitution_curve.as_ref());
+        ContactMaterial::new(constant.with_tangential_restitution(beta), [curve, None])
+    }
+
+    /// The material of an impact between the bodies of colliders `a` and `b`: rapier's
+    /// combination of their constant coefficients; the tangential restitution and the
+    /// restitution curve each the bodies' own (the mean of the two when both have one), else
+    /// `config`'s.
+    pub fn pair_material_of<'a>(
+        &'a self,
+        colliders: &ColliderSet,
+        a: ColliderHandle,
+        b: ColliderHandle,
+        config: &'a ImpactConfig,
+    ) -> ContactMaterial<'a> {
+        let (ca, cb) = (&colliders[a], &colliders[b]);
+        let constant = material(ca, cb, None);
+        let (own_a, own_b) = (self.bounce_of(ca.parent()), self.bounce_of(cb.parent()));
+        let beta_a = own_a.and_then(|o| o.tangential_restitution);
+        let beta_b = own_b.and_then(|o| o.tangential_restitution);
+        let beta = match (beta_a, beta_b) {
+            (Some(x), Some(y)) => 0.5 * (x + y),
+            (Some(x), None) | (None, Some(x)) => x,
+            (None, None) => config.tangential_restitution,
+        };
+        let curve_a = own_a.and_then(|o| o.restitution_curve.as_ref());
+        let curve_b = own_b.and_then(|o| o.restitution_curve.as_ref());
+        let curves = match (curve_a, curve_b) {
+            (None, None) => [config.restitution_curve.as_ref(), None],
+            (Some(c), None) | (None, Some(c)) => [Some(c), None],
+            (Some(x), Some(y)) => [Some(x), Some(y)],
+        };
+        ContactMaterial::new(constant.with_tangential_restitution(beta), curves)
+    }
+
+    /// A body's own tangential restitution and restitution curve, if it has either.
+    #[inline]
+    fn bounce_of(&self, body: Option<RigidBodyHandle>) -> Option<&BodyBounce> {
+        if self.body_bounce.is_empty() {
+            return None;
+        }
+        self.body_bounce.get(&body?)
+    }
+
+    /// [`crate::ImpactPlugin::set_body_tangential_restitution`].
+    pub fn set_body_tangential_restitution(
+        &mut self,
+        body: RigidBodyHandle,
+        beta0: Option<f64>,
+    ) -> Result<(), ConfigError> {
+        body_bounce(beta0, None)?;
+        self.update_bounce(body, |b| b.tangential_restitution = beta0);
+        Ok(())
+    }
+
+    /// [`crate::ImpactPlugin::set_body_restitution_curve`].
+    pub fn set_body_restitution_curve(
+        &mut self,
+        body: RigidBodyHandle,
+        curve: Option<RestitutionCurve>,
+    ) -> Result<(), ConfigError> {
+        body_bounce(None, curve.as_ref())?;
+        self.update_bounce(body, |b| b.restitution_curve = curve);
+        Ok(())
+    }
+
+    /// Changes a body's own settings, forgetting the body when it has none left.
+    fn update_bounce(&mut self, body: RigidBodyHandle, change: impl FnOnce(&mut BodyBounce)) {
+        let mut bounce = self.body_bounce.remove(&body).unwrap_or_default();
+        change(&mut bounce);
+        if bounce != BodyBounce::default() {
+            self.body_bounce.insert(body, bounce);
+        }
+    }
+}
+
+/// A body's own tangential restitution and restitution curve, each `None` for the
+/// configuration's.
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub(crate) struct BodyBounce {
+    pub tangential_restitution: Option<f64>,
+    pub restitution_curve: Option<RestitutionCurve>,
 }
 
 /// What the user registered ([`Registry`] less its index, which is built from it), in arena
@@ -263,6 +425,8 @@ pub(crate) struct SavedRegistry {
     unmarked: Vec<ColliderHandle>,
     excluded: Vec<RigidBodyHandle>,
     body_rolling: Vec<(RigidBodyHandle, (f64, f64))>,
+    ground_curves: Vec<(ColliderHandle, RestitutionCurve)>,
+    body_bounce: Vec<(RigidBodyHandle, BodyBounce)>,
     impact_bodies: Vec<RigidBodyHandle>,
     all_impact: bool,
     flags_stale: bool,
@@ -277,6 +441,8 @@ impl Registry {
             unmarked: sorted_members(&self.unmarked),
             excluded: sorted_members(&self.excluded),
             body_rolling: sorted_entries(&self.body_rolling),
+            ground_curves: sorted_entries(&self.ground_curves),
+            body_bounce: sorted_entries(&self.body_bounce),
             impact_bodies: sorted_members(&self.impact_bodies),
             all_impact: self.all_impact,
             flags_stale: self.flags_stale,
@@ -293,12 +459,22 @@ impl Registry {
                 friction: m.friction,
                 rolling_resistance: entry.rolling.0,
                 spinning_friction: entry.rolling.1,
+                tangential_restitution: entry.tangential,
+                restitution_curve: None,
             };
             material.validate()?;
+        }
+        for (_, curve) in &saved.ground_curves {
+            GroundMaterial::new(0.0, 0.0)
+                .with_restitution_curve(curve.clone())
+                .validate()?;
         }
         for (_, (rr, sp)) in &saved.body_rolling {
             rolling_coefficient("rolling_resistance", *rr)?;
             rolling_coefficient("spinning_friction", *sp)?;
+        }
+        for (_, own) in &saved.body_bounce {
+            body_bounce(own.tangential_restitution, own.restitution_curve.as_ref())?;
         }
         let mut registry = Self {
             grounds: saved.grounds.iter().copied().collect(),
@@ -306,6 +482,8 @@ impl Registry {
             unmarked: saved.unmarked.iter().copied().collect(),
             excluded: saved.excluded.iter().copied().collect(),
             body_rolling: saved.body_rolling.iter().copied().collect(),
+            ground_curves: saved.ground_curves.iter().cloned().collect(),
+            body_bounce: saved.body_bounce.iter().cloned().collect(),
             impact_bodies: saved.impact_bodies.iter().copied().collect(),
             all_impact: saved.all_impact,
             index: GroundIndex::default(),

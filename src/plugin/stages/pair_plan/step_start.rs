@@ -6,14 +6,16 @@ use crate::model::Law;
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
 use crate::plugin::bridge::resolve::{
-    BodyContactAt, ImpactInput, Inertia, PairSide, material, resolve_balls, resolve_bodies,
+    BodyContactAt, ImpactInput, Inertia, PairSide, resolve_balls, resolve_bodies,
 };
+use crate::plugin::config::ImpactConfig;
 use crate::plugin::events::{ImpactEvent, ImpactTiming};
 use crate::plugin::policy::rests_at;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, rapier_state};
 use crate::plugin::stages::commit::{Commit, Origin};
+use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::{PairPlan, PlannedPair};
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
@@ -24,6 +26,9 @@ use nalgebra::Vector3;
 /// colliders, the model, the configuration's caps and tolerances, and the step.
 pub(crate) struct StepStart<'a> {
     pub colliders: &'a ColliderSet,
+    /// The materials' homes: the registry and the configuration.
+    pub registry: &'a Registry,
+    pub config: &'a ImpactConfig,
     pub law: Law,
     /// At most this many impulses per member (`ImpactConfig::max_impacts_per_step`).
     pub max_impacts: usize,
@@ -155,7 +160,9 @@ fn step_start_balls(
     let input = ImpactInput::between(
         &side_a,
         inputs.law,
-        material(&colliders[ca], &colliders[cb], None),
+        inputs
+            .registry
+            .pair_material_of(colliders, ca, cb, inputs.config),
         policy.resting_speed,
         ImpactTiming::StepStart,
     );
@@ -198,7 +205,9 @@ fn step_start_bodies(
     let input = ImpactInput::between(
         &side_a,
         inputs.law,
-        material(&colliders[ca], &colliders[cb], None),
+        inputs
+            .registry
+            .pair_material_of(colliders, ca, cb, inputs.config),
         policy.resting_speed,
         ImpactTiming::StepStart,
     );

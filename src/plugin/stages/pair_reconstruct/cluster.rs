@@ -8,7 +8,7 @@ use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::{
-    BodyContactAt, GroundContactAt, ImpactInput, PairSide, Site, correction, material, resolve,
+    BodyContactAt, GroundContactAt, ImpactInput, PairSide, Site, correction, resolve,
     resolve_balls, resolve_bodies,
 };
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
@@ -158,9 +158,9 @@ impl<'c, 'a> Run<'c, 'a> {
         let part = &ball.geom.parts[hit.part];
         let gg = &ball.grounds[hit.ground];
         let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
-        let material = view
-            .registry
-            .material_of(self.cluster.colliders, part.handle, gg.handle);
+        let material =
+            view.registry
+                .material_of(self.cluster.colliders, part.handle, gg.handle, view.config);
         let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
         let (body, timing) = (ball.cand.body, ImpactTiming::InStep);
         let input = ImpactInput::new(body, &ball.inertia, law, material, resting_speed, timing);
@@ -360,10 +360,11 @@ impl Cluster<'_, '_> {
         let input = ImpactInput::between(
             &si,
             view.config.law,
-            material(
-                &self.colliders[balls[i].collider],
-                &self.colliders[balls[j].collider],
-                None,
+            view.registry.pair_material_of(
+                self.colliders,
+                balls[i].collider,
+                balls[j].collider,
+                view.config,
             ),
             self.step.policy.resting_speed,
             ImpactTiming::InStep,

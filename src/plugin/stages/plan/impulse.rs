@@ -41,9 +41,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             parts: SmallList::One(*part),
             radius: body.geom.radius,
         };
-        let material = self
-            .registry
-            .material_of(scene.colliders, part.handle, gg.handle);
+        let material =
+            self.registry
+                .material_of(scene.colliders, part.handle, gg.handle, self.config);
         let (law, resting_speed) = (self.config.law, step.policy.resting_speed);
         let timing = ImpactTiming::StepStart;
         let input = ImpactInput::new(body.handle, &inertia, law, material, resting_speed, timing);

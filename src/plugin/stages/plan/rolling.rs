@@ -307,10 +307,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         if !(an < 0.0 && plain) || !member && slow && !resisted && !carried || user_modifies {
             return None;
         }
-        let friction = self
-            .registry
-            .material_of(colliders, part.handle, gg.handle)
-            .friction;
+        let friction = self.registry.friction_of(colliders, part.handle, gg.handle);
         if !(friction.is_finite() && friction >= 0.0) {
             return None;
         }
@@ -416,11 +413,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             ) {
                 continue;
             }
-            let same = self
-                .registry
-                .material_of(colliders, part.handle, og.handle)
-                .friction
-                == friction
+            let same = self.registry.friction_of(colliders, part.handle, og.handle) == friction
                 && self.registry.rolling_of(handle, og.handle, default)
                     == self.registry.rolling_of(handle, gg.handle, default)
                 && !self
@@ -472,10 +465,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // contacts the user modifies, is an obstacle (touching it, the ball is rapier's).
         let same = |g: &GroundGeom| {
             let user = self.flags.recorded_user_flags(colliders, g.handle);
-            self.registry
-                .material_of(colliders, part.handle, g.handle)
-                .friction
-                == friction
+            self.registry.friction_of(colliders, part.handle, g.handle) == friction
                 && self.registry.rolling_of(handle, g.handle, default)
                     == (slide.rolling_resistance, slide.spinning_friction)
                 && !user.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
