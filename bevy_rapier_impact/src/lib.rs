@@ -44,10 +44,13 @@ mod plugin;
 mod step;
 mod timestep;
 
-pub use components::{Ground, ImpactSettings, ImpactSimulation};
+pub use components::{
+    Ground, ImpactSettings, ImpactSimulation, RestitutionBySpeed, TangentialRestitution,
+};
 pub use hooks::UserHooks;
 pub use messages::{ImpactErrorMessage, ImpactMessage};
 pub use plugin::{ImpactSet, RapierImpactPlugin};
 pub use rapier_impact::{
-    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactTiming, TimingMode,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactTiming,
+    RestitutionCurve, TimingMode,
 };

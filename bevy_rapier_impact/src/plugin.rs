@@ -143,7 +143,7 @@ where
             ]));
         app.add_plugins(rapier);
         if !app.world().contains_resource::<ImpactSettings>() {
-            app.insert_resource(self.settings);
+            app.insert_resource(self.settings.clone());
         }
         app.add_message::<ImpactMessage>()
             .add_message::<ImpactErrorMessage>()

@@ -22,7 +22,9 @@
 //! Nothing here panics on the world's state: a missing entity is `Entity::PLACEHOLDER` in a
 //! message, a refused ground or setting an [`ImpactErrorMessage`].
 
-use crate::components::{Ground, ImpactSettings, ImpactSimulation};
+use crate::components::{
+    BodyBounce, Ground, ImpactSettings, ImpactSimulation, RestitutionBySpeed, TangentialRestitution,
+};
 use crate::hooks::UserHooks;
 use crate::messages::{ImpactErrorMessage, ImpactMessage};
 use crate::timestep::FramePlan;
@@ -90,11 +92,27 @@ type Grounds<'w, 's> = Query<
     With<Ground>,
 >;
 
+/// The rigid body entities with their own tangential restitution or restitution curve that
+/// bevy_rapier has created, with their context.
+type Bounces<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        &'static RapierRigidBodyHandle,
+        &'static RapierContextEntityLink,
+        Option<&'static TangentialRestitution>,
+        Option<&'static RestitutionBySpeed>,
+    ),
+    Or<(With<TangentialRestitution>, With<RestitutionBySpeed>)>,
+>;
+
 /// Advances every rapier context by one frame, the core plugin around each rapier step (see
 /// the module's contract). Replaces bevy_rapier's `step_simulation::<H>`.
 pub(crate) fn step_with_impacts<H>(
     mut contexts: Contexts,
     grounds: Grounds,
+    bounces: Bounces,
     frame: FrameInputs,
     hooks: StaticSystemParam<H>,
     mut writers: StepWriters,
@@ -121,6 +139,7 @@ pub(crate) fn step_with_impacts<H>(
                     continue;
                 };
                 impact.grounds.clear();
+                impact.bounces.clear();
                 impact.applied = None;
                 fresh
             }
@@ -135,6 +154,7 @@ pub(crate) fn step_with_impacts<H>(
             &colliders.colliders,
             &mut writers.errors,
         );
+        sync_bounces(ctx, &bounces, impact, &mut plugin, &mut writers.errors);
         if !config.physics_pipeline_active {
             bodies.propagate_modified_body_positions_to_colliders(colliders);
             impact.plugin = Some(plugin);
@@ -234,12 +254,12 @@ fn apply_settings(
     plugin: &mut ImpactPlugin,
     errors: &mut MessageWriter<ImpactErrorMessage>,
 ) {
-    if impact.applied == Some(*settings) {
+    if impact.applied.as_ref() == Some(settings) {
         return;
     }
-    impact.applied = Some(*settings);
+    impact.applied = Some(settings.clone());
     if *plugin.config() != settings.config
-        && let Err(error) = plugin.set_config(settings.config)
+        && let Err(error) = plugin.set_config(settings.config.clone())
     {
         errors.write(ImpactErrorMessage {
             context: ctx,
@@ -293,6 +313,63 @@ fn sync_grounds(
         }
         keep
     });
+}
+
+/// Gives the core plugin the context's bodies' own tangential restitution and restitution
+/// curve where they changed, and takes them back from the bodies whose components, entity or
+/// rapier body are gone.
+fn sync_bounces(
+    ctx: Entity,
+    bounces: &Bounces,
+    impact: &mut ImpactSimulation,
+    plugin: &mut ImpactPlugin,
+    errors: &mut MessageWriter<ImpactErrorMessage>,
+) {
+    impact.seen.clear();
+    for (entity, handle, link, beta, curve) in bounces.iter() {
+        if link.0 != ctx {
+            continue;
+        }
+        impact.seen.insert(entity);
+        let wanted = BodyBounce {
+            tangential_restitution: beta.map(|b| b.0),
+            restitution_curve: curve.map(|c| c.0.clone()),
+        };
+        let known = impact.bounces.get(&entity);
+        if known.is_some_and(|(h, applied)| *h == handle.0 && *applied == wanted) {
+            continue;
+        }
+        if let Some((old, _)) = known.filter(|(h, _)| *h != handle.0) {
+            forget_bounce(plugin, *old);
+        }
+        let set = plugin
+            .set_body_tangential_restitution(handle.0, wanted.tangential_restitution)
+            .and_then(|()| {
+                plugin.set_body_restitution_curve(handle.0, wanted.restitution_curve.clone())
+            });
+        if let Err(error) = set {
+            errors.write(ImpactErrorMessage {
+                context: ctx,
+                entity: Some(entity),
+                error,
+            });
+        }
+        impact.bounces.insert(entity, (handle.0, wanted));
+    }
+    let seen = &impact.seen;
+    impact.bounces.retain(|entity, (handle, _)| {
+        let keep = seen.contains(entity);
+        if !keep {
+            forget_bounce(plugin, *handle);
+        }
+        keep
+    });
+}
+
+/// Takes a body's own tangential restitution and restitution curve back (never refused).
+fn forget_bounce(plugin: &mut ImpactPlugin, body: bevy_rapier3d::rapier::prelude::RigidBodyHandle) {
+    let _ = plugin.set_body_tangential_restitution(body, None);
+    let _ = plugin.set_body_restitution_curve(body, None);
 }
 
 /// The last step's core events as messages, handles turned into entities.

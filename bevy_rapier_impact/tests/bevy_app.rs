@@ -1,13 +1,15 @@
 //! The plugin in headless Bevy apps (minimal plugins, no window): the core crate's drop scene
 //! bounces as it does there, events arrive as messages naming the spawned entities, the
 //! user's hooks still run, substeps give the same trace as single steps of the same length,
-//! and the `Ground` marker and the all-fixed switch take effect.
+//! the `Ground` marker, the all-fixed switch and a body's own tangential restitution and
+//! restitution curve take effect.
 
 mod support;
 
 use bevy::prelude::*;
 use bevy_rapier_impact::{
-    ConfigError, EventKind, Ground, ImpactConfig, RapierImpactPlugin, TimingMode,
+    ConfigError, EventKind, Ground, ImpactConfig, RapierImpactPlugin, RestitutionBySpeed,
+    RestitutionCurve, TangentialRestitution, TimingMode,
 };
 use bevy_rapier3d::prelude::*;
 use rapier_impact::ImpactPlugin;
@@ -472,4 +474,62 @@ fn a_ground_on_a_dynamic_body_and_a_bad_config_are_refused_with_a_message() {
         "the last good config is kept"
     );
     assert_eq!(ImpactConfig::default().timing, TimingMode::Exact);
+}
+
+#[test]
+fn a_body_s_own_tangential_restitution_and_curve_reach_its_impacts() {
+    let mut app = app(plugin(), fixed(DT, 1), f64::from(DT));
+    spawn_ground(&mut app, true);
+    settings(&mut app).config.tangential_restitution = 0.5;
+    let curve = RestitutionCurve::new(vec![(0.0, 0.3), (10.0, 0.7)]).unwrap();
+    let ball = spawn_ball(&mut app);
+    app.world_mut().entity_mut(ball).insert((
+        TangentialRestitution(1.0),
+        RestitutionBySpeed(curve.clone()),
+        Velocity::linear(Vec3::new(1.0, 0.0, 0.0)),
+    ));
+    let first = |app: &mut App| {
+        for _ in 0..120 {
+            app.update();
+            let rec = app.world().resource::<Recorded>();
+            if let Some(m) = rec
+                .impacts
+                .iter()
+                .find(|m| m.event.kind == EventKind::Impact)
+            {
+                return m.event;
+            }
+        }
+        panic!("no impact in 2 s");
+    };
+    let event = first(&mut app);
+    assert_eq!(event.tangential_restitution, 1.0);
+    assert_eq!(event.restitution, curve.at(event.approach_speed));
+    // Removed, the configuration's value applies to the next impacts; a value out of range is
+    // refused with a message.
+    app.world_mut()
+        .entity_mut(ball)
+        .remove::<(TangentialRestitution, RestitutionBySpeed)>();
+    app.world_mut().resource_mut::<Recorded>().impacts.clear();
+    let event = first(&mut app);
+    assert_eq!(
+        (event.tangential_restitution, event.restitution),
+        (0.5, f64::from(E as f32))
+    );
+    app.world_mut()
+        .entity_mut(ball)
+        .insert(TangentialRestitution(2.0));
+    app.update();
+    let rec = app.world().resource::<Recorded>();
+    assert!(
+        matches!(
+            rec.errors.last().map(|m| &m.error),
+            Some(ConfigError::InvalidConfig {
+                field: "tangential_restitution",
+                ..
+            })
+        ),
+        "{:?}",
+        rec.errors
+    );
 }
