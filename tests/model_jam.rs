@@ -7,9 +7,8 @@
 
 mod model_support;
 
-use model_support::{Rng, anisotropic_body};
-use rapier_impact::model::{BodyVelocity, Contact, Fallback, Law, Material, resolve};
-use rapier_impact::na::Vector3;
+use model_support::{Rng, jam_prone_impact};
+use rapier_impact::model::{Fallback, Law, Material, resolve};
 
 #[test]
 fn jam_resolutions_stay_in_the_cone_and_dissipate() {
@@ -18,31 +17,8 @@ fn jam_resolutions_stay_in_the_cone_and_dissipate() {
     for case in 0..200_000 {
         // Thin and flat bodies (radii of gyration 0.025-1 m) hit on an arbitrary point
         // of their lower side: the configurations where jams live.
-        let mass = 10f64.powf(rng.uniform(-2.0, 2.0));
-        let moments = Vector3::new(
-            mass * rng.uniform(0.025, 1.0).powi(2),
-            mass * rng.uniform(0.025, 1.0).powi(2),
-            mass * rng.uniform(0.025, 1.0).powi(2),
-        );
-        let axes = rng.rotation();
-        let (body, _) = anisotropic_body(mass, &moments, &axes);
-        let n = rng.unit_vector();
-        let mut r = Vector3::new(
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-            rng.uniform(-1.0, 1.0),
-        );
-        if r.dot(&n) > 0.0 {
-            r -= n * (2.0 * r.dot(&n));
-        }
-        let mut velocity = BodyVelocity {
-            linear: rng.vector(5.0),
-            angular: rng.vector(5.0),
-        };
-        let un = n.dot(&(velocity.linear + velocity.angular.cross(&r)));
-        velocity.linear -= n * (un + rng.uniform(1e-3, 5.0));
+        let (body, velocity, contact) = jam_prone_impact(&mut rng);
         let material = Material::new(rng.uniform(0.0, 1.0), rng.uniform(0.0, 3.0));
-        let contact = Contact::fixed(n, r);
         let impact = resolve(Law::Guarded, &body, &velocity, &contact, &material)
             .expect("valid input resolves");
         if impact.fallback != Some(Fallback::Jam) {

@@ -5,7 +5,7 @@
 
 mod model_support;
 
-use model_support::{Rng, anisotropic_body};
+use model_support::{Rng, anisotropic_body, jam_prone_impact};
 use rapier_impact::model::{
     Body, BodyVelocity, Contact, Fallback, Law, Material, PairContact, Regime, resolve,
     resolve_pair,
@@ -378,31 +378,10 @@ fn hard_cases_keep_the_guarantees() {
         }
         // Jams: thin and flat bodies with high friction, hit on their lower side.
         for _ in 0..40_000 {
-            let mass = 10f64.powf(rng.uniform(-2.0, 2.0));
-            let moments = Vector3::new(
-                mass * rng.uniform(0.025, 1.0).powi(2),
-                mass * rng.uniform(0.025, 1.0).powi(2),
-                mass * rng.uniform(0.025, 1.0).powi(2),
-            );
-            let (body, _) = anisotropic_body(mass, &moments, &rng.rotation());
-            let n = rng.unit_vector();
-            let mut r = Vector3::new(
-                rng.uniform(-1.0, 1.0),
-                rng.uniform(-1.0, 1.0),
-                rng.uniform(-1.0, 1.0),
-            );
-            if r.dot(&n) > 0.0 {
-                r -= n * (2.0 * r.dot(&n));
-            }
-            let mut velocity = BodyVelocity {
-                linear: rng.vector(5.0),
-                angular: rng.vector(5.0),
-            };
-            let un = n.dot(&(velocity.linear + velocity.angular.cross(&r)));
-            velocity.linear -= n * (un + rng.uniform(1e-3, 5.0));
+            let (body, velocity, contact) = jam_prone_impact(&mut rng);
             let material = Material::new(rng.uniform(0.0, 1.0), rng.uniform(1.0, 3.0))
                 .with_tangential_restitution(beta);
-            if check("random", &body, &velocity, &Contact::fixed(n, r), &material) {
+            if check("random", &body, &velocity, &contact, &material) {
                 jams += 1;
             }
             checked += 1;

@@ -5,20 +5,13 @@
 
 mod plugin_support;
 
-use plugin_support::{F64, G, MODES, na, real, wide};
+use plugin_support::{F64, G, MODES, na, real, wide, world_with_gravity};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ConfigError, EventKind, ImpactConfig, ImpactPlugin, ImpactTiming, TimingMode};
 
 /// Tolerance on velocities, relative to the speed, where rapier's precision is the limit.
 const V_TOL: f64 = if F64 { 1e-12 } else { 2e-6 };
-
-fn world(gravity: f64) -> PhysicsWorld {
-    PhysicsWorld {
-        gravity: Vector::new(0.0, real(-gravity), 0.0),
-        ..Default::default()
-    }
-}
 
 fn ball(
     world: &mut PhysicsWorld,
@@ -109,7 +102,7 @@ fn a_slow_pair_is_rapiers_contact_as_it_is_unless_rapier_bounces_it_for_ever() {
     ] {
         for mode in MODES {
             let make = || {
-                let mut w = world(0.0);
+                let mut w = world_with_gravity(0.0);
                 let zero = Vector3::zeros();
                 let a = ball(&mut w, zero, Vector3::x() * slow, zero, 0.05, e, 0.0);
                 let b = ball(&mut w, Vector3::x() * 0.1005, zero, zero, 0.05, e, 0.0);
@@ -153,7 +146,7 @@ fn a_slow_pair_is_rapiers_contact_as_it_is_unless_rapier_bounces_it_for_ever() {
 
 #[test]
 fn only_dynamic_bodies_opt_in() {
-    let mut w = world(0.0);
+    let mut w = world_with_gravity(0.0);
     let (fixed, _) = w.insert(RigidBodyBuilder::fixed(), ColliderBuilder::ball(0.1));
     let (b, _) = ball(
         &mut w,
@@ -185,7 +178,7 @@ fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
     let r = 0.028_575;
     let e = 0.9;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let (a, _) = ball(
             &mut w,
             Vector3::zeros(),
@@ -251,7 +244,7 @@ fn one_ball_of_an_impact_pair_carries_the_hook_flags() {
     let e = 0.9;
     let plugin_flags = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let ((a, ca), (b, cb)) = closing_pair(&mut w, e);
         let mut p = plugin(mode);
         p.set_all_dynamic_bodies_impact(true);
@@ -280,7 +273,7 @@ fn one_ball_of_an_impact_pair_carries_the_hook_flags() {
 #[test]
 fn balls_not_opted_in_or_filtered_out_are_rapiers() {
     let run = |opt_in: bool, groups: bool| {
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let ((a, ca), (_, cb)) = closing_pair(&mut w, 0.9);
         if groups {
             for c in [ca, cb] {
@@ -321,7 +314,7 @@ fn a_chain_stops_at_a_link_rapier_would_not_solve() {
     let (r, e) = (0.02, 1.0);
     let apart = InteractionGroups::new(Group::GROUP_1, Group::NONE, InteractionTestMode::And);
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let zero = Vector3::zeros();
         let striker = Vector3::new(-2.0 * r - 0.1, 0.0, 0.0);
         let mut balls = vec![ball(
@@ -371,7 +364,7 @@ fn a_chain_stops_at_a_link_rapier_would_not_solve() {
 fn a_rolling_cue_ball_sends_the_object_ball_off_at_the_closed_form_speed() {
     let (r, m, e, v) = (0.028_575, 0.17, 0.95, 2.0);
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(G);
+        let mut w = world_with_gravity(G);
         let (_, table) = w.insert(
             RigidBodyBuilder::fixed(),
             ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
@@ -445,7 +438,7 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
         (G, 0.9, 0.25),
     ] {
         for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-            let mut w = world(gravity);
+            let mut w = world_with_gravity(gravity);
             let first = Vector3::new(-2.0 * r - 0.1, r, 0.0);
             let mut balls = vec![
                 ball(
@@ -515,7 +508,7 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
 
 #[test]
 fn step_mode_resolves_a_pair_at_the_step_start() {
-    let mut w = world(0.0);
+    let mut w = world_with_gravity(0.0);
     let ((a, _), (b, _)) = closing_pair(&mut w, 1.0);
     let mut p = plugin(MODES[0]);
     p.set_all_dynamic_bodies_impact(true);
@@ -551,7 +544,7 @@ fn step_mode_resolves_a_pair_at_the_step_start() {
 fn a_pile_of_opted_in_balls_comes_to_rest() {
     let r = 0.05;
     for mode in [MODES[1], MODES[2], MODES[0]] {
-        let mut w = world(G);
+        let mut w = world_with_gravity(G);
         let (_, floor) = w.insert(
             RigidBodyBuilder::fixed(),
             ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
@@ -616,7 +609,7 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
     let r = 0.05;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
         // Fast: 100 m/s, 1 m apart.
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let zero = Vector3::zeros();
         let (a, _) = ball(
             &mut w,
@@ -644,7 +637,7 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
         assert!(na(w.bodies[a].center_of_mass()).x < na(w.bodies[b].center_of_mass()).x);
 
         // A 1e6 mass ratio: the light ball bounces off the heavy one at -e v + (1 + e) V.
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let light = w.insert(
             RigidBodyBuilder::dynamic()
                 .linvel(Vector::new(1.0, 0.0, 0.0))
@@ -696,7 +689,7 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
             (Vector3::new(2.0 * r, 0.0, 0.0), Vector3::zeros()),
         ];
         for (at, v) in cases {
-            let mut w = world(0.0);
+            let mut w = world_with_gravity(0.0);
             let (a, _) = ball(&mut w, zero, v, zero, r, 0.8, 0.3);
             let (b, _) = ball(&mut w, at, zero, zero, r, 0.8, 0.3);
             let mut p = plugin(mode);
@@ -738,7 +731,7 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
 fn balls_that_pass_through_each_other_in_the_step_end_path_still_meet() {
     let r = 0.028_575;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world(G);
+        let mut w = world_with_gravity(G);
         let (_, table) = w.insert(
             RigidBodyBuilder::fixed(),
             ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
@@ -792,7 +785,7 @@ fn balls_that_pass_through_each_other_in_the_step_end_path_still_meet() {
 #[test]
 fn a_pair_with_coefficients_out_of_range_is_rapiers_and_reported_once() {
     let run = |with_plugin: bool| {
-        let mut w = world(0.0);
+        let mut w = world_with_gravity(0.0);
         let (a, ca) = ball(
             &mut w,
             Vector3::zeros(),

@@ -8,7 +8,7 @@
 
 mod plugin_support;
 
-use plugin_support::{F64, na, real, up, wide};
+use plugin_support::{F64, na, real, up, wide, world_with_gravity};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
@@ -18,13 +18,6 @@ use rapier_impact::{
 /// Tolerance on velocities after an impact, relative to the speed: rapier's `f32` storage,
 /// or `f64` rounding.
 const V_TOL: f64 = if F64 { 1e-12 } else { 1e-6 };
-
-fn world(gravity: f64) -> PhysicsWorld {
-    PhysicsWorld {
-        gravity: Vector::new(0.0, real(-gravity), 0.0),
-        ..Default::default()
-    }
-}
 
 /// A ball of radius `r` and inertia `k m r^2` (m = 1 kg) at `at`, moving at `v` with spin `w`.
 fn ball(
@@ -113,7 +106,7 @@ fn a_ball_shot_at_the_ground_meets_walton_closed_form() {
     for beta in [-1.0, -0.4, 0.0, 0.5, 1.0] {
         for deg in [10.0f64, 30.0, 55.0, 75.0] {
             for spin in [0.0, -60.0] {
-                let mut w = world(0.0);
+                let mut w = world_with_gravity(0.0);
                 let g = ground(&mut w);
                 let a = deg.to_radians();
                 let v = Vector3::new(3.0 * a.sin(), -3.0 * a.cos(), 0.0);
@@ -179,7 +172,7 @@ fn two_balls_meet_walton_closed_form() {
     let mut worst = 0.0f64;
     for beta in [-0.5, 0.0, 0.6, 1.0] {
         for (offset, spin) in [(0.03, 0.0), (0.07, 0.0), (0.02, 40.0)] {
-            let mut w = world(0.0);
+            let mut w = world_with_gravity(0.0);
             let zero = Vector3::zeros();
             let a = ball(
                 &mut w,
@@ -269,7 +262,7 @@ fn each_bounce_takes_the_curve_at_its_impact_speed() {
     // No bounce below 0.5 m/s, then e falling from 0.9 to 0.6 as impacts get harder.
     let e_of = curve(&[(0.5, 0.0), (0.5, 0.9), (2.0, 0.85), (6.0, 0.6)]);
     let g = 9.81;
-    let mut w = world(g);
+    let mut w = world_with_gravity(g);
     let gr = ground(&mut w);
     let r = 0.05;
     let b = ball(
@@ -337,7 +330,7 @@ fn the_ground_wins_then_the_body_then_the_configuration() {
         ((Some((0.25, ground_curve.clone())), None), (0.25, 0.7)),
     ];
     for ((over, own), (beta, e)) in cases {
-        let mut w = world(9.81);
+        let mut w = world_with_gravity(9.81);
         let gr = ground(&mut w);
         let v = Vector3::new(1.0, -2.0, 0.0);
         let b = ball(
@@ -383,7 +376,7 @@ fn a_constant_material_pays_nothing_and_changes_nothing() {
     // beta0 = 0 and no curve set explicitly at every level: the run is the default run, bit
     // for bit (the golden traces check the default run against its recording).
     let run = |explicit: bool| {
-        let mut w = world(9.81);
+        let mut w = world_with_gravity(9.81);
         let gr = ground(&mut w);
         let b = ball(
             &mut w,

@@ -401,3 +401,34 @@ pub fn random_general(rng: &mut Rng) -> (Body, Matrix3<f64>, BodyVelocity, Conta
     let material = Material::new(rng.unit(), rng.uniform(0.0, 1.5));
     (body, inertia, v, contact, material)
 }
+
+/// An approaching impact where jams live: a thin or flat body (mass log-uniform in
+/// `[1e-2, 1e2]` kg, principal radii of gyration in `[0.025, 1]` m, random axes) hit at a
+/// random point of its lower side (`|r_i| <= 1` m), with `|v_i|, |w_i| <= 5` and an approach
+/// speed in `[1e-3, 5]` m/s.
+pub fn jam_prone_impact(rng: &mut Rng) -> (Body, BodyVelocity, Contact) {
+    let mass = 10f64.powf(rng.uniform(-2.0, 2.0));
+    let moments = Vector3::new(
+        mass * rng.uniform(0.025, 1.0).powi(2),
+        mass * rng.uniform(0.025, 1.0).powi(2),
+        mass * rng.uniform(0.025, 1.0).powi(2),
+    );
+    let axes = rng.rotation();
+    let (body, _) = anisotropic_body(mass, &moments, &axes);
+    let n = rng.unit_vector();
+    let mut r = Vector3::new(
+        rng.uniform(-1.0, 1.0),
+        rng.uniform(-1.0, 1.0),
+        rng.uniform(-1.0, 1.0),
+    );
+    if r.dot(&n) > 0.0 {
+        r -= n * (2.0 * r.dot(&n));
+    }
+    let mut velocity = BodyVelocity {
+        linear: rng.vector(5.0),
+        angular: rng.vector(5.0),
+    };
+    let un = n.dot(&(velocity.linear + velocity.angular.cross(&r)));
+    velocity.linear -= n * (un + rng.uniform(1e-3, 5.0));
+    (body, velocity, Contact::fixed(n, r))
+}

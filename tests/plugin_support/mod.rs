@@ -21,6 +21,7 @@ use std::sync::Mutex;
 
 pub use scene_support::{
     F64, G, jitter, plugin, plugin_on, plugin_with_material, real, up, walled_box, wide,
+    world_with_gravity,
 };
 
 /// The three timing modes.

@@ -51,6 +51,14 @@ pub fn up() -> Unit<Vector> {
     Unit::new_unchecked(Vector::Y)
 }
 
+/// A world with gravity `gravity` (m/s^2) along -y and rapier's other defaults.
+pub fn world_with_gravity(gravity: f64) -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: Vector::new(0.0, real(-gravity), 0.0),
+        ..Default::default()
+    }
+}
+
 pub fn plugin(timing: TimingMode) -> ImpactPlugin {
     ImpactPlugin::new(ImpactConfig {
         timing,
