@@ -144,11 +144,11 @@ fn with_plugin(
     let plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                timing,
-                rolling_resistance: extras.rolling_resistance,
-                ..Default::default()
-            })
+            let mut p = ImpactPlugin::new(
+                ImpactConfig::default()
+                    .with_timing(timing)
+                    .with_rolling_resistance(extras.rolling_resistance),
+            )
             .expect("valid configuration");
             match ground {
                 Some(ground) => p

@@ -395,12 +395,12 @@ fn trace(make: fn() -> Scene, timing: TimingMode, law: Law) -> String {
         rolling_resistance,
         steps,
     } = make();
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        timing,
-        law,
-        rolling_resistance,
-        ..Default::default()
-    })
+    let mut p = ImpactPlugin::new(
+        ImpactConfig::default()
+            .with_timing(timing)
+            .with_law(law)
+            .with_rolling_resistance(rolling_resistance),
+    )
     .unwrap();
     for g in grounds {
         p.add_ground(&world.bodies, &world.colliders, g).unwrap();

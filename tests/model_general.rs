@@ -372,6 +372,7 @@ fn guarded_is_document_unless_the_document_is_unphysical() {
                     Fallback::Jam => false,
                     Fallback::SlipReversal => doc.regime == Regime::Slip && along < 0.0,
                     Fallback::EnergyGain => gain > 0.5 * ENERGY_GAIN_TOLERANCE,
+                    other => panic!("state {k}: a fallback this test does not know: {other:?}"),
                 };
                 assert!(
                     justified,

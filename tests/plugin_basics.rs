@@ -17,7 +17,7 @@ use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
     ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, RestitutionCurve,
-    TimingMode,
+    RollingSettings, TimingMode,
 };
 
 #[test]
@@ -258,46 +258,31 @@ fn hook_flags_follow_the_bodies_near_a_ground() {
 fn invalid_settings_are_refused_where_they_are_set() {
     let bad = |config: ImpactConfig| ImpactPlugin::new(config).err();
     assert!(matches!(
-        bad(ImpactConfig {
-            resting_speed: Some(-1.0),
-            ..Default::default()
-        }),
+        bad(ImpactConfig::default().with_resting_speed(Some(-1.0))),
         Some(ConfigError::InvalidConfig {
             field: "resting_speed",
             ..
         })
     ));
     assert!(matches!(
-        bad(ImpactConfig {
-            flat_tolerance: f64::NAN,
-            ..Default::default()
-        }),
+        bad(ImpactConfig::default().with_flat_tolerance(f64::NAN)),
         Some(ConfigError::InvalidConfig {
             field: "flat_tolerance",
             ..
         })
     ));
     assert!(matches!(
-        bad(ImpactConfig {
-            max_impacts_per_step: 0,
-            ..Default::default()
-        }),
+        bad(ImpactConfig::default().with_max_impacts_per_step(0)),
         Some(ConfigError::InvalidConfig { .. })
     ));
     assert!(matches!(
-        bad(ImpactConfig {
-            resting_gap: Some(f64::INFINITY),
-            ..Default::default()
-        }),
+        bad(ImpactConfig::default().with_resting_gap(Some(f64::INFINITY))),
         Some(ConfigError::InvalidConfig { .. })
     ));
     let mut p = plugin(TimingMode::Exact);
     assert!(
-        p.set_config(ImpactConfig {
-            resting_speed: Some(f64::NAN),
-            ..Default::default()
-        })
-        .is_err()
+        p.set_config(ImpactConfig::default().with_resting_speed(Some(f64::NAN)))
+            .is_err()
     );
     assert_eq!(p.config(), &ImpactConfig::default());
 
@@ -1128,9 +1113,10 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
     let mut p = plugin(TimingMode::Exact);
-    let with = |restitution, friction, rolling| GroundMaterial {
-        rolling_resistance: rolling,
-        ..GroundMaterial::new(restitution, friction)
+    let with = |restitution, friction, rolling: Option<f64>| {
+        let mut material = GroundMaterial::new(restitution, friction);
+        material.rolling_resistance = rolling;
+        material
     };
     for (material, field) in [
         (with(1e38, 0.5, None), "restitution"),
@@ -1180,52 +1166,26 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
     let base = ImpactConfig::default();
     for (config, field) in [
         (
-            ImpactConfig {
-                resting_speed: Some(1e300),
-                ..base.clone()
-            },
+            base.clone().with_resting_speed(Some(1e300)),
             "resting_speed",
         ),
+        (base.clone().with_resting_gap(Some(1e300)), "resting_gap"),
+        (base.clone().with_flat_tolerance(2.0), "flat_tolerance"),
         (
-            ImpactConfig {
-                resting_gap: Some(1e300),
-                ..base.clone()
-            },
-            "resting_gap",
-        ),
-        (
-            ImpactConfig {
-                flat_tolerance: 2.0,
-                ..base.clone()
-            },
-            "flat_tolerance",
-        ),
-        (
-            ImpactConfig {
-                rolling_resistance: 1e300,
-                ..base.clone()
-            },
+            base.clone().with_rolling_resistance(1e300),
             "rolling_resistance",
         ),
         (
-            ImpactConfig {
-                spinning_friction: 101.0,
-                ..base.clone()
-            },
+            base.clone().with_spinning_friction(101.0),
             "spinning_friction",
         ),
         (
-            ImpactConfig {
-                tangential_restitution: -1.01,
-                ..base.clone()
-            },
+            base.clone().with_tangential_restitution(-1.01),
             "tangential_restitution",
         ),
         (
-            ImpactConfig {
-                restitution_curve: Some(curve(&[(1.0, 12.0)])),
-                ..base.clone()
-            },
+            base.clone()
+                .with_restitution_curve(Some(curve(&[(1.0, 12.0)]))),
             "restitution_curve",
         ),
     ] {
@@ -1241,7 +1201,7 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
     }
     let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
     assert!(matches!(
-        p.set_body_rolling(ball, Some((0.1, 1e300))),
+        p.set_body_rolling(ball, Some(RollingSettings::new(0.1, 1e300))),
         Err(ConfigError::InvalidConfig {
             field: "spinning_friction",
             ..
@@ -1442,4 +1402,72 @@ fn a_state_beyond_rapiers_numbers_is_not_written_and_is_reported() {
         }
         assert!(reported, "{timing:?}: no diagnostic");
     }
+}
+
+#[test]
+fn the_event_log_keeps_every_step_s_events_until_taken() {
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.6, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.8),
+    );
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
+    // Off by default: nothing is kept.
+    p.step(&mut world);
+    assert!(p.take_event_log().is_empty());
+    p.set_event_log(true);
+    let (mut seen, mut taken) = (Vec::new(), Vec::new());
+    for k in 0..240 {
+        p.step(&mut world);
+        seen.extend_from_slice(p.events());
+        // Taken now and then, in the middle of a run of steps and right after one.
+        if k % 37 == 36 {
+            taken.extend(p.take_event_log());
+            assert!(p.take_event_log().is_empty(), "taken twice at step {k}");
+        }
+    }
+    taken.extend(p.take_event_log());
+    assert!(seen.len() >= 5, "{} events in 4 s of bouncing", seen.len());
+    assert_eq!(taken, seen, "the log holds every event once, in order");
+    // Off again: its events are dropped and nothing more is kept.
+    p.step(&mut world);
+    p.set_event_log(false);
+    p.step(&mut world);
+    assert!(p.take_event_log().is_empty());
+}
+
+#[test]
+fn builders_and_getters_give_back_what_was_set() {
+    let curve = RestitutionCurve::threshold(0.5, 0.7).unwrap();
+    let config = ImpactConfig::default()
+        .with_timing(TimingMode::TimeOfImpact)
+        .with_rolling_resistance(0.02)
+        .with_tangential_restitution(0.3)
+        .with_restitution_curve(Some(curve.clone()));
+    let mut expected = ImpactConfig::default();
+    expected.timing = TimingMode::TimeOfImpact;
+    expected.rolling_resistance = 0.02;
+    expected.tangential_restitution = 0.3;
+    expected.restitution_curve = Some(curve.clone());
+    assert_eq!(config, expected);
+    let mut p = ImpactPlugin::new(config.clone()).unwrap();
+    assert_eq!(p.config(), &config);
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
+    let material = GroundMaterial::new(0.6, 0.4)
+        .with_rolling_resistance(0.05)
+        .with_spinning_friction(0.01)
+        .with_tangential_restitution(-0.2)
+        .with_restitution_curve(curve);
+    p.add_ground_with_material(&world.bodies, &world.colliders, ground, material.clone())
+        .unwrap();
+    assert_eq!(p.ground_material(ground), Some(material));
+    assert_eq!(p.body_rolling(ball), None);
+    let rolling = RollingSettings::new(0.03, 0.004);
+    p.set_body_rolling(ball, Some(rolling)).unwrap();
+    assert_eq!(p.body_rolling(ball), Some(rolling));
+    p.set_body_rolling(ball, None).unwrap();
+    assert_eq!(p.body_rolling(ball), None);
 }

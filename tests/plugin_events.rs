@@ -115,11 +115,11 @@ fn a_jam_under_the_document_law_falls_back_to_the_consistent_law_and_says_so() {
         // rapier applies additional mass properties at its next step; the plugin needs the
         // mass in this one.
         world.bodies[body].recompute_mass_properties_from_colliders(&world.colliders);
-        let mut plugin = ImpactPlugin::new(ImpactConfig {
-            law: Law::Document,
-            timing,
-            ..Default::default()
-        })
+        let mut plugin = ImpactPlugin::new(
+            ImpactConfig::default()
+                .with_law(Law::Document)
+                .with_timing(timing),
+        )
         .unwrap();
         plugin
             .add_ground(&world.bodies, &world.colliders, ground)

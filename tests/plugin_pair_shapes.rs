@@ -60,11 +60,7 @@ fn cube(h: f64, e: f64, mu: f64) -> ColliderBuilder {
 }
 
 fn plugin(mode: TimingMode) -> ImpactPlugin {
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        timing: mode,
-        ..Default::default()
-    })
-    .unwrap();
+    let mut p = ImpactPlugin::new(ImpactConfig::default().with_timing(mode)).unwrap();
     p.set_all_dynamic_bodies_impact(true);
     p
 }

@@ -52,11 +52,7 @@ fn closing_pair(
 }
 
 fn plugin(mode: TimingMode) -> ImpactPlugin {
-    ImpactPlugin::new(ImpactConfig {
-        timing: mode,
-        ..Default::default()
-    })
-    .unwrap()
+    ImpactPlugin::new(ImpactConfig::default().with_timing(mode)).unwrap()
 }
 
 fn pair_events(plugin: &ImpactPlugin) -> Vec<rapier_impact::ImpactEvent> {
@@ -805,11 +801,9 @@ fn a_pair_with_coefficients_out_of_range_is_rapiers_and_reported_once() {
             0.2,
         );
         w.colliders[ca].set_friction(real(f64::NAN));
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing: TimingMode::TimeOfImpact,
-            ..Default::default()
-        })
-        .unwrap();
+        let mut p =
+            ImpactPlugin::new(ImpactConfig::default().with_timing(TimingMode::TimeOfImpact))
+                .unwrap();
         p.add_impact_body(&w.bodies, a).unwrap();
         p.add_impact_body(&w.bodies, b).unwrap();
         let mut diagnostics = Vec::new();

@@ -27,10 +27,7 @@ fn the_profile_counts_what_the_step_did() {
                 ColliderBuilder::ball(0.1).restitution(0.8),
             );
         }
-        let config = ImpactConfig {
-            timing,
-            ..Default::default()
-        };
+        let config = ImpactConfig::default().with_timing(timing);
         let mut plugin = ImpactPlugin::new(config).unwrap();
         plugin
             .add_ground(&world.bodies, &world.colliders, ground)

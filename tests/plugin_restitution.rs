@@ -188,11 +188,9 @@ fn two_balls_meet_walton_closed_form() {
                 w.colliders[co].set_restitution(real(e));
                 w.colliders[co].set_friction(real(mu));
             }
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                tangential_restitution: beta,
-                ..Default::default()
-            })
-            .unwrap();
+            let mut p =
+                ImpactPlugin::new(ImpactConfig::default().with_tangential_restitution(beta))
+                    .unwrap();
             p.add_impact_body(&w.bodies, a).unwrap();
             p.add_impact_body(&w.bodies, b).unwrap();
             // The closed form on the rounded state: where the centres are 2r apart, the
@@ -341,11 +339,11 @@ fn the_ground_wins_then_the_body_then_the_configuration() {
             0.05,
             0.4,
         );
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            tangential_restitution: 0.9,
-            restitution_curve: Some(config_curve.clone()),
-            ..Default::default()
-        })
+        let mut p = ImpactPlugin::new(
+            ImpactConfig::default()
+                .with_tangential_restitution(0.9)
+                .with_restitution_curve(Some(config_curve.clone())),
+        )
         .unwrap();
         match &over {
             Some((beta, c)) => {
@@ -386,11 +384,9 @@ fn a_constant_material_pays_nothing_and_changes_nothing() {
             0.05,
             0.4,
         );
-        let config = ImpactConfig {
-            tangential_restitution: 0.0,
-            restitution_curve: None,
-            ..Default::default()
-        };
+        let config = ImpactConfig::default()
+            .with_tangential_restitution(0.0)
+            .with_restitution_curve(None);
         let mut p = ImpactPlugin::new(if explicit {
             config
         } else {

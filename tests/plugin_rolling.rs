@@ -9,7 +9,8 @@ use plugin_support::{F64, G, MODES, na, real, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
-    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactPlugin, TimingMode, model::Regime,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactPlugin, RollingSettings,
+    TimingMode, model::Regime,
 };
 
 const R: f64 = 0.05;
@@ -31,12 +32,10 @@ fn tolerance(mode: TimingMode, steps: f64) -> f64 {
 }
 
 fn config(mode: TimingMode, mu_r: f64, mu_sp: f64) -> ImpactConfig {
-    ImpactConfig {
-        timing: mode,
-        rolling_resistance: mu_r,
-        spinning_friction: mu_sp,
-        ..Default::default()
-    }
+    ImpactConfig::default()
+        .with_timing(mode)
+        .with_rolling_resistance(mu_r)
+        .with_spinning_friction(mu_sp)
 }
 
 /// A world with a half-space ground tilted by `slope` degrees about z (downhill +x), and a
@@ -269,13 +268,11 @@ fn the_ground_overrides_the_ball_which_overrides_the_configuration() {
     let run = |ground_mu_r: Option<f64>, body_mu_r: Option<f64>| {
         let (mut w, ground, ball, _) = scene(0.0, v0);
         let mut p = ImpactPlugin::new(config(TimingMode::Exact, 0.05, 0.0)).unwrap();
-        let material = GroundMaterial {
-            rolling_resistance: ground_mu_r,
-            ..GroundMaterial::new(0.0, 0.5)
-        };
+        let mut material = GroundMaterial::new(0.0, 0.5);
+        material.rolling_resistance = ground_mu_r;
         p.add_ground_with_material(&w.bodies, &w.colliders, ground, material)
             .unwrap();
-        p.set_body_rolling(ball, body_mu_r.map(|m| (m, 0.0)))
+        p.set_body_rolling(ball, body_mu_r.map(|m| RollingSettings::new(m, 0.0)))
             .unwrap();
         for _ in 0..300 {
             p.step(&mut w);
@@ -313,16 +310,13 @@ fn bad_rolling_coefficients_are_refused() {
     ));
     let (w, ground, ball, _) = scene(0.0, 0.0);
     let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-    let material = GroundMaterial {
-        spinning_friction: Some(-1.0),
-        ..GroundMaterial::new(0.5, 0.5)
-    };
+    let material = GroundMaterial::new(0.5, 0.5).with_spinning_friction(-1.0);
     assert!(
         p.add_ground_with_material(&w.bodies, &w.colliders, ground, material)
             .is_err()
     );
     assert!(
-        p.set_body_rolling(ball, Some((f64::INFINITY, 0.0)))
+        p.set_body_rolling(ball, Some(RollingSettings::new(f64::INFINITY, 0.0)))
             .is_err()
     );
 }

@@ -50,11 +50,11 @@ fn scene(starts: &[(f64, f64)], v0: f64) -> (PhysicsWorld, ImpactPlugin, Vec<Rig
             .0
         })
         .collect();
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        timing: TimingMode::Exact,
-        rolling_resistance: MU_R,
-        ..Default::default()
-    })
+    let mut p = ImpactPlugin::new(
+        ImpactConfig::default()
+            .with_timing(TimingMode::Exact)
+            .with_rolling_resistance(MU_R),
+    )
     .unwrap();
     p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
     (w, p, balls)

@@ -67,11 +67,11 @@ struct Settling {
 fn run(timing: Option<TimingMode>) -> Settling {
     let (mut w, floor, balls) = crowd();
     let mut plugin = timing.map(|timing| {
-        let mut p = ImpactPlugin::new(ImpactConfig {
-            timing,
-            law: Law::Guarded,
-            ..Default::default()
-        })
+        let mut p = ImpactPlugin::new(
+            ImpactConfig::default()
+                .with_timing(timing)
+                .with_law(Law::Guarded),
+        )
         .unwrap();
         p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
         p.set_all_dynamic_bodies_impact(true);

@@ -306,11 +306,11 @@ fn cube_energy_gain(seed: u64, timing: TimingMode) -> f64 {
             .restitution(0.5)
             .friction(0.5),
     );
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        law: Law::Guarded,
-        timing,
-        ..Default::default()
-    })
+    let mut p = ImpactPlugin::new(
+        ImpactConfig::default()
+            .with_law(Law::Guarded)
+            .with_timing(timing),
+    )
     .unwrap();
     p.add_ground(&world.bodies, &world.colliders, ground)
         .unwrap();

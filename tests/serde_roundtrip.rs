@@ -24,20 +24,19 @@ fn round_trip<T: Serialize + DeserializeOwned + PartialEq + std::fmt::Debug>(val
 
 #[test]
 fn configuration_and_materials_round_trip() {
-    let config = ImpactConfig {
-        law: Law::Consistent,
-        timing: TimingMode::TimeOfImpact,
-        resting_speed: Some(0.0625),
-        resting_gap: None,
-        flat_tolerance: 0.0123,
-        max_impacts_per_step: 7,
-        rolling_resistance: 0.015,
-        spinning_friction: 0.02,
-        tangential_restitution: -0.35,
-        restitution_curve: Some(
+    let config = ImpactConfig::default()
+        .with_law(Law::Consistent)
+        .with_timing(TimingMode::TimeOfImpact)
+        .with_resting_speed(Some(0.0625))
+        .with_resting_gap(None)
+        .with_flat_tolerance(0.0123)
+        .with_max_impacts_per_step(7)
+        .with_rolling_resistance(0.015)
+        .with_spinning_friction(0.02)
+        .with_tangential_restitution(-0.35)
+        .with_restitution_curve(Some(
             RestitutionCurve::new(vec![(0.2, 0.0), (0.2, 0.9), (7.5, 0.55)]).unwrap(),
-        ),
-    };
+        ));
     let json = round_trip(&config);
     assert!(json.contains("TimeOfImpact"), "{json}");
     // A curve is its points; one whose points are refused is refused on the way in too.

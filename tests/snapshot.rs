@@ -11,7 +11,7 @@ mod scene_support;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
     GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactSnapshot, RestitutionCurve,
-    TimingMode,
+    RollingSettings, TimingMode,
 };
 use scene_support::{events_hash, jitter, real, saved_world, state_hash, walled_box};
 
@@ -39,12 +39,10 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .active_hooks(ActiveHooks::FILTER_INTERSECTION_PAIR),
     );
     walled_box(&mut world, 0.6);
-    let config = ImpactConfig {
-        timing,
-        rolling_resistance: 0.02,
-        tangential_restitution: 0.2,
-        ..ImpactConfig::default()
-    };
+    let config = ImpactConfig::default()
+        .with_timing(timing)
+        .with_rolling_resistance(0.02)
+        .with_tangential_restitution(0.2);
     let mut plugin = ImpactPlugin::new(config).unwrap();
     let mut next = jitter(7, 0.05);
     for i in 0..24 {
@@ -89,7 +87,9 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .angvel(Vector::new(0.0, 0.0, -15.0)),
         ColliderBuilder::ball(0.1).restitution(0.8),
     );
-    plugin.set_body_rolling(slow, Some((0.05, 0.01))).unwrap();
+    plugin
+        .set_body_rolling(slow, Some(RollingSettings::new(0.05, 0.01)))
+        .unwrap();
     world.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(-3.0, 0.1, -5.0))
@@ -182,11 +182,7 @@ fn first_difference(records: &[Record], resumed: &[Record], from: usize) -> Opti
 }
 
 fn fresh(timing: TimingMode) -> ImpactPlugin {
-    ImpactPlugin::new(ImpactConfig {
-        timing,
-        ..ImpactConfig::default()
-    })
-    .unwrap()
+    ImpactPlugin::new(ImpactConfig::default().with_timing(timing)).unwrap()
 }
 
 #[test]

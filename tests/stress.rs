@@ -297,18 +297,12 @@ impl Sim {
                     TimingMode::TimeOfImpact,
                     TimingMode::Exact,
                 ][*k as usize];
-                let config = ImpactConfig {
-                    timing,
-                    ..self.plugin.config().clone()
-                };
+                let config = self.plugin.config().clone().with_timing(timing);
                 self.plugin.set_config(config).unwrap();
             }
             Op::Law(k) => {
                 let law = [Law::Document, Law::Consistent, Law::Guarded][*k as usize];
-                let config = ImpactConfig {
-                    law,
-                    ..self.plugin.config().clone()
-                };
+                let config = self.plugin.config().clone().with_law(law);
                 self.plugin.set_config(config).unwrap();
             }
             Op::SaveRestore => {

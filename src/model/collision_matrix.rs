@@ -7,10 +7,10 @@
 //! K = (1/m) E - [r]x I_w^-1 [r]x,        x.K y = x.y/m + (r × x).I_w^-1 (r × y)
 //! ```
 //!
-//! (MODEL-NOTES, "General form"; the document's (4)-(9) substituted into (1)-(3)).
+//! (`docs/model.md`, "The general form"; the document's (4)-(9) substituted into (1)-(3)).
 //! `K` is symmetric positive definite for any `m > 0` and PSD `I_w^-1`. It is never
 //! formed as one 3x3 matrix and inverted: for small `I/m` that loses the `1/m` part
-//! along `r` (MODEL-NOTES erratum 4). Instead every product is the bilinear form above,
+//! along `r` (`docs/model.md`, erratum 4). Instead every product is the bilinear form above,
 //! a sum of non-negative terms on the diagonal, and the sticking solve splits `K`
 //! along `r`, where it is exactly block diagonal.
 
@@ -18,7 +18,7 @@ use super::types::Body;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 /// What an impulse `P` at the contact does to the relative contact velocity, `du = K P`:
-/// the one thing the laws need to know of the bodies (MODEL-NOTES, "General form").
+/// the one thing the laws need to know of the bodies (`docs/model.md`, "The general form").
 pub(crate) trait Compliance {
     /// The bilinear form `x.K y` (1/kg).
     fn k_form(&self, x: &Vector3<f64>, y: &Vector3<f64>) -> f64;
@@ -57,7 +57,7 @@ impl Compliance for OneBody<'_> {
     #[inline(always)]
     fn solve(&self, d: &Vector3<f64>) -> Vector3<f64> {
         match self.iso {
-            // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (MODEL-NOTES erratum 4), I = 1/a,
+            // K^-1 = m (I E + m r r^T) / (I + m |r|^2) (`docs/model.md`, erratum 4), I = 1/a,
             // written with a (numerator and denominator times a): one division.
             Some(a) => {
                 let (m, r) = (self.body.mass, self.r);
@@ -94,7 +94,7 @@ impl Compliance for TwoBodies<'_> {
     /// Cholesky on the formed `K`, then two steps of iterative refinement with the
     /// residual `d - K P` from [`Compliance::apply`], whose terms are each exact to
     /// rounding: formed, `K` loses the digits of its smallest eigenvalue relative to its
-    /// largest (MODEL-NOTES erratum 4), and refinement wins them back as long as that
+    /// largest (`docs/model.md`, erratum 4), and refinement wins them back as long as that
     /// ratio is above the rounding (`cond(K) < 1e15`).
     fn solve(&self, d: &Vector3<f64>) -> Vector3<f64> {
         if self.b.body.is_fixed() {
@@ -165,8 +165,8 @@ pub(crate) fn orthonormal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>
 /// so `K` maps `r` to `r/m` and the plane normal to `r` to itself: along `r`,
 /// `P_r = m (r̂.d) r̂`; in the plane `K` is the 2x2 block `E/m + |r|^2 adj(A)` with
 /// `A = [x_i . I_w^-1 x_j]` on two orthogonal in-plane vectors. For an isotropic body
-/// this is the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` of MODEL-NOTES
-/// erratum 4.
+/// this is the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` of
+/// `docs/model.md`, erratum 4.
 ///
 /// The in-plane vectors are `u = (e × r) / |r|`, with `e = z` when `|r_x| > |r_z|` and
 /// `e = x` otherwise (Hughes and Möller 1999), and `v = r̂ × u`: orthogonal, of equal
@@ -281,7 +281,7 @@ impl ContactK {
     /// sticking is impossible, `|K_tt^-1 K_tn| > mu` (then `|s(lambda)|` falls from
     /// above 1 at `lambda = 0` to 0 as `lambda -> inf`). Found by bracketing and
     /// bisection on `lambda`; for an isotropic body it is the sticking impulse's
-    /// tangential direction (MODEL-NOTES erratum 2).
+    /// tangential direction (`docs/model.md`, erratum 2).
     pub(crate) fn invariant_slip_direction(&self, mu: f64) -> Vector2<f64> {
         let s_of = |lambda: f64| {
             solve_spd2(

@@ -1,5 +1,5 @@
 //! The document's law in the general form: any inertia tensor, any ground normal,
-//! a moving ground (MODEL-NOTES, "General form").
+//! a moving ground (`docs/model.md`, "The general form").
 //!
 //! With the relative contact velocity `u1 = v + w × r - u_ground` and `u_n = n.u1 < 0`:
 //!

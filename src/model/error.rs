@@ -11,6 +11,7 @@ use core::fmt;
 // Serialize only: the field names it carries are `&'static str`, which no deserializer can
 // give back.
 #[cfg_attr(feature = "serde-serialize", derive(serde::Serialize))]
+#[non_exhaustive]
 pub enum ModelError {
     /// A value that must be finite is NaN or infinite. `what` names the field.
     NotFinite {
@@ -48,8 +49,9 @@ pub enum ModelError {
     NonUnitNormal(f64),
     /// The document's slip law has no solution: its denominator (eq. 19, corrected)
     /// `D = n.K(n - mu s)` is zero or negative, so the normal impulse would pull or be
-    /// infinite. This is the Painleve-like jam of MODEL-NOTES; the `Consistent` and
-    /// `Guarded` laws resolve it, the `Document` law reports it.
+    /// infinite. This is the Painleve-like jam (`docs/model.md`, "Where the document's law is not
+    /// physical"); the `Consistent` and `Guarded` laws resolve it, the `Document` law
+    /// reports it.
     Jam {
         /// The slip denominator in the model's units (1/kg).
         denominator: f64,

@@ -9,6 +9,7 @@
 //! The derivation, the errata and the laws are in the crate's `docs/model.md`, shown
 //! in [`crate::docs::model`].
 
+mod approx_eq;
 mod collision_matrix;
 mod consistent;
 mod document;
@@ -49,7 +50,7 @@ pub const ENERGY_GAIN_TOLERANCE: f64 = 1e-12;
 /// let material = Material::new(0.8, 0.5);
 /// let impact = resolve(Law::Guarded, &body, &velocity, &contact, &material).unwrap();
 /// assert_eq!(impact.regime, Regime::Stick);
-/// // Rolling after the bounce: vx' = vx / (1 + 2/5) (MODEL-NOTES, closed forms).
+/// // Rolling after the bounce: vx' = vx / (1 + 2/5) (`docs/model.md`, closed forms).
 /// assert!((impact.velocity.linear.x - 5.0 / 1.4).abs() < 1e-12);
 /// assert!((impact.velocity.linear.z - 4.0).abs() < 1e-12);
 /// ```

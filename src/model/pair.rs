@@ -1,5 +1,5 @@
-//! Impacts between two bodies under the same laws as on ground (MODEL-NOTES, "General
-//! form"): an impulse `P` on body `a` at the contact, `-P` on body `b`, changes the
+//! Impacts between two bodies under the same laws as on ground (`docs/model.md`, "Two
+//! bodies"): an impulse `P` on body `a` at the contact, `-P` on body `b`, changes the
 //! relative contact velocity `u = u_a - u_b` (each body's material point at the contact)
 //! by `du = (K_a + K_b) P`, with each body's `K` as in eqs. (4)-(9) at its own offset. The
 //! laws see nothing but `K` and `u`, so the document's law (eqs. 10-19, errata fixed), the

@@ -1,5 +1,5 @@
 //! The document's law in the document's own notation (Cloete 2020, eqs. 1-19), with the
-//! errata of MODEL-NOTES fixed and nothing else changed.
+//! errata of `docs/model.md` fixed and nothing else changed.
 //!
 //! Notation (figure 1 of the document): z up; `B` the centre of mass, `A` the contact
 //! point, `r = A - B = (l_x, l_y, -h)`; isotropic inertia `I`; `J_x`, `J_y` the friction
@@ -154,7 +154,7 @@ pub fn apply_impulse(input: &SeedInput, j: &Vector3<f64>) -> (Vector3<f64>, Vect
 ///
 /// The system is `K P = -(u_x1T, u_y1T, (1+e) u_z1T)` with `P = (-J_x, -J_y, J_z)` and
 /// `K = E/m + (|r|^2 E - r r^T)/I`; (10)-(12) are its rows multiplied by `I`. It is solved
-/// by the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` (MODEL-NOTES erratum 4),
+/// by the closed form `K^-1 = m (I E + m r r^T) / (I + m |r|^2)` (`docs/model.md`, erratum 4),
 /// accurate to rounding at every `I/m`, where a general 3x3 solve loses digits.
 pub fn sticking_impulse(input: &SeedInput, u1t: &Vector3<f64>) -> Vector3<f64> {
     let (m, i) = (input.mass, input.inertia);
@@ -167,7 +167,7 @@ pub fn sticking_impulse(input: &SeedInput, u1t: &Vector3<f64>) -> Vector3<f64> {
 /// Eqs. (13)-(15): the direction `theta` of the friction impulse, which opposes the
 /// initial slip `(u_x1T, u_y1T)`. The document's three cases are `atan2` written by hand
 /// and miss its edge cases (`u_y1T = 0` with `u_x1T < 0`, `u_x1T = -0.0`); this is
-/// `atan2(u_y1T, u_x1T)` (MODEL-NOTES erratum 2). `None` when there is no slip.
+/// `atan2(u_y1T, u_x1T)` (`docs/model.md`, erratum 2). `None` when there is no slip.
 pub fn slip_angle(u1t: &Vector3<f64>) -> Option<f64> {
     if u1t.x == 0.0 && u1t.y == 0.0 {
         None
@@ -179,7 +179,7 @@ pub fn slip_angle(u1t: &Vector3<f64>) -> Option<f64> {
 /// Eqs. (16)-(19): the slipping impulse `J_x = mu J_z cos(theta)`,
 /// `J_y = mu J_z sin(theta)` with, from (18),
 /// `J_z = -(1+e) u_z1T I / (l_x^2 + l_y^2 + I/m - mu h (l_x cos theta + l_y sin theta))`.
-/// The document's (19) has a stray `J_z` in the denominator (MODEL-NOTES erratum 1).
+/// The document's (19) has a stray `J_z` in the denominator (`docs/model.md`, erratum 1).
 ///
 /// Returns [`ModelError::Jam`] when the denominator is `<= 0`.
 pub fn slip_impulse(

@@ -322,8 +322,9 @@ impl Material {
 pub enum Law {
     /// The document's law, corrected and generalised: Newton restitution, stick if the
     /// sticking impulse is inside the friction cone, else slip along the initial slip
-    /// direction (eqs. 10-19). Closed form, fastest. Can gain energy (MODEL-NOTES) and
-    /// reports it in [`Impact::ke_after`]; a jam is [`ModelError::Jam`].
+    /// direction (eqs. 10-19). Closed form, fastest. Can gain energy (`docs/model.md`, "Where the
+    /// document's law is not physical") and reports it in [`Impact::ke_after`]; a jam is
+    /// [`ModelError::Jam`].
     Document,
     /// Impulse-space integration (Routh) with Stronge's energetic restitution: slip may
     /// stop, stick, reverse and swerve. Never gains energy for `e <= 1`.
@@ -357,6 +358,7 @@ pub enum Regime {
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub enum Fallback {
     /// The document's normal impulse would pull the body into the ground.
     PullingNormalImpulse,

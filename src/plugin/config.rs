@@ -89,12 +89,14 @@ pub(crate) fn coefficients_in_range(restitution: f64, friction: f64) -> bool {
 }
 
 /// A material that replaces, for one ground, the coefficients rapier would combine from the
-/// two colliders.
+/// two colliders. Build it with [`GroundMaterial::new`] and the `with_` methods (it is
+/// `#[non_exhaustive]`, so that a coefficient added later breaks no caller).
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub struct GroundMaterial {
     /// Coefficient of restitution `e`, in `[0, 10]` (1 = elastic; above 1 the contact adds
     /// energy).
@@ -128,6 +130,22 @@ impl GroundMaterial {
             spinning_friction: None,
             tangential_restitution: None,
             restitution_curve: None,
+        }
+    }
+
+    /// The same material with this ground's own rolling resistance `mu_r`.
+    pub fn with_rolling_resistance(self, rolling_resistance: f64) -> Self {
+        Self {
+            rolling_resistance: Some(rolling_resistance),
+            ..self
+        }
+    }
+
+    /// The same material with this ground's own spinning friction `mu_sp`.
+    pub fn with_spinning_friction(self, spinning_friction: f64) -> Self {
+        Self {
+            spinning_friction: Some(spinning_friction),
+            ..self
         }
     }
 
@@ -181,14 +199,25 @@ impl GroundMaterial {
     }
 }
 
-/// How the plugin resolves ground impacts. Build it with [`Default`] and change the fields
-/// you need; [`ImpactConfig::validate`] (called by the plugin whenever a config is set)
-/// rejects values out of range.
+/// How the plugin resolves ground impacts. Build it with [`Default`] and the `with_` methods
+/// (or change the fields of a default one: it is `#[non_exhaustive]`, so that a setting added
+/// later breaks no caller); [`ImpactConfig::validate`] (called by the plugin whenever a config
+/// is set) rejects values out of range.
+///
+/// ```
+/// use rapier_impact::{ImpactConfig, TimingMode};
+///
+/// let config = ImpactConfig::default()
+///     .with_timing(TimingMode::TimeOfImpact)
+///     .with_rolling_resistance(0.01);
+/// assert!(config.validate().is_ok());
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub struct ImpactConfig {
     /// The impact law (default [`Law::Guarded`]: the document's closed form, falling back to
     /// the consistent law where the closed form is unphysical).
@@ -214,8 +243,8 @@ pub struct ImpactConfig {
     ///
     /// When a polyhedral face or edge lands, its vertices whose height above the contact plane
     /// is within this tolerance and that approach the ground are one simultaneous impact at
-    /// their centroid (see the integration guide); otherwise the impact is at the single
-    /// deepest point.
+    /// their centroid (`docs/guide.md`, "Contact geometry"); otherwise the impact is at
+    /// the single deepest point.
     pub flat_tolerance: f64,
     /// Most impacts resolved for one body in one step (`>= 1`, default 8). The last one allowed
     /// is resolved with `e = 0`, so a body caught in a rapid sequence of impacts comes to rest
@@ -250,6 +279,38 @@ pub struct ImpactConfig {
     pub restitution_curve: Option<RestitutionCurve>,
 }
 
+/// A ball's own rolling coefficients ([`crate::ImpactPlugin::set_body_rolling`]), each
+/// dimensionless in `[0, 100]`: used on every ground without its own (see
+/// [`ImpactConfig::rolling_resistance`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+#[non_exhaustive]
+pub struct RollingSettings {
+    /// Rolling resistance `mu_r`: while the ball rolls, a torque `mu_r R N` opposes it.
+    pub rolling_resistance: f64,
+    /// Spinning friction `mu_sp`: a torque `mu_sp R N` opposes its spin about the normal.
+    pub spinning_friction: f64,
+}
+
+impl RollingSettings {
+    /// Rolling resistance `mu_r` and spinning friction `mu_sp`.
+    pub fn new(rolling_resistance: f64, spinning_friction: f64) -> Self {
+        Self {
+            rolling_resistance,
+            spinning_friction,
+        }
+    }
+
+    /// Checks both coefficients: in `[0, 100]`.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
+        rolling_coefficient("spinning_friction", self.spinning_friction)
+    }
+}
+
 /// Checks a body's or the configuration's rolling coefficient: in `[0, 100]`.
 pub(crate) fn rolling_coefficient(field: &'static str, value: f64) -> Result<(), ConfigError> {
     if in_range(value, MAX_FRICTION) {
@@ -276,7 +337,44 @@ impl Default for ImpactConfig {
     }
 }
 
+/// One builder method per field of [`ImpactConfig`]: `with_<field>(value)` returns the
+/// configuration with that field set.
+macro_rules! with_fields {
+    ($($(#[$doc:meta])* $name:ident: $field:ident: $ty:ty;)*) => {
+        $(
+            $(#[$doc])*
+            pub fn $name(self, $field: $ty) -> Self {
+                Self { $field, ..self }
+            }
+        )*
+    };
+}
+
 impl ImpactConfig {
+    with_fields! {
+        /// With the impact law [`ImpactConfig::law`].
+        with_law: law: Law;
+        /// With the timing mode [`ImpactConfig::timing`].
+        with_timing: timing: TimingMode;
+        /// With the resting speed [`ImpactConfig::resting_speed`] (m/s; `None`: automatic).
+        with_resting_speed: resting_speed: Option<f64>;
+        /// With the resting gap [`ImpactConfig::resting_gap`] (m; `None`: rapier's).
+        with_resting_gap: resting_gap: Option<f64>;
+        /// With the flat-landing tolerance [`ImpactConfig::flat_tolerance`].
+        with_flat_tolerance: flat_tolerance: f64;
+        /// With [`ImpactConfig::max_impacts_per_step`].
+        with_max_impacts_per_step: max_impacts_per_step: usize;
+        /// With the rolling resistance [`ImpactConfig::rolling_resistance`].
+        with_rolling_resistance: rolling_resistance: f64;
+        /// With the spinning friction [`ImpactConfig::spinning_friction`].
+        with_spinning_friction: spinning_friction: f64;
+        /// With Walton's tangential restitution [`ImpactConfig::tangential_restitution`].
+        with_tangential_restitution: tangential_restitution: f64;
+        /// With the restitution curve [`ImpactConfig::restitution_curve`] (`None`: the
+        /// constant `e`).
+        with_restitution_curve: restitution_curve: Option<RestitutionCurve>;
+    }
+
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let check = |field: &'static str, value: f64, max: f64| {
@@ -312,6 +410,7 @@ impl ImpactConfig {
 /// A configuration value or a registration the plugin refuses, returned by the call that
 /// set it. Nothing is validated inside a step, and nothing there panics.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ConfigError {
     /// A config field (or a body's rolling coefficient) is outside its documented range
     /// (NaN, infinite, negative, too large, or zero where `>= 1`).

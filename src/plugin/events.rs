@@ -11,6 +11,7 @@ use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub enum ImpactTiming {
     /// At its exact time inside the step (`TimeOfImpact` and `Exact` modes).
     InStep,
@@ -30,6 +31,7 @@ pub enum ImpactTiming {
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub enum EventKind {
     /// A ground impact resolved by the model: an impulse at the contact point.
     Impact,
@@ -70,6 +72,7 @@ pub enum EventKind {
     feature = "serde-serialize",
     derive(serde::Serialize, serde::Deserialize)
 )]
+#[non_exhaustive]
 pub struct ImpactEvent {
     /// What changed the body.
     pub kind: EventKind,
@@ -180,17 +183,51 @@ pub enum Diagnostic {
     },
 }
 
-/// What a step reports: its events and its diagnostics, cleared when the next step starts.
+/// What a step reports: its events and its diagnostics, cleared when the next step starts;
+/// and, while the event log is on, the events of earlier steps not yet taken.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Reports {
     pub events: Vec<ImpactEvent>,
     pub diagnostics: Vec<Diagnostic>,
+    /// The event log ([`crate::ImpactPlugin::set_event_log`]): the events of the steps before
+    /// the current one that were not taken yet; `None` while it is off.
+    log: Option<Vec<ImpactEvent>>,
+    /// How many of `events` were taken with the log already (they are not logged again).
+    taken: usize,
 }
 
 impl Reports {
-    /// A new step reports afresh.
+    /// A new step reports afresh; the last step's events not taken go to the log, if on.
     pub fn clear(&mut self) {
+        if let Some(log) = &mut self.log {
+            log.extend_from_slice(&self.events[self.taken.min(self.events.len())..]);
+        }
+        self.taken = 0;
         self.events.clear();
         self.diagnostics.clear();
+    }
+
+    /// Turns the event log on (kept if it already is) or off (its events dropped).
+    pub fn set_log(&mut self, on: bool) {
+        match (on, &self.log) {
+            (true, None) => {
+                self.log = Some(Vec::new());
+                self.taken = self.events.len();
+            }
+            (false, _) => self.log = None,
+            (true, Some(_)) => {}
+        }
+    }
+
+    /// The logged events and the current step's not taken yet, in order; the log is left
+    /// empty. Nothing while the log is off.
+    pub fn take_log(&mut self) -> Vec<ImpactEvent> {
+        let Some(log) = &mut self.log else {
+            return Vec::new();
+        };
+        let mut all = std::mem::take(log);
+        all.extend_from_slice(&self.events[self.taken.min(self.events.len())..]);
+        self.taken = self.events.len();
+        all
     }
 }

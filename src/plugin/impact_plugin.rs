@@ -5,7 +5,7 @@
 //! the hook calls rapier makes during its step in `hooks/`.
 
 use crate::model::RestitutionCurve;
-use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig, rolling_coefficient};
+use crate::plugin::config::{ConfigError, GroundMaterial, ImpactConfig, RollingSettings};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
@@ -205,9 +205,25 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Every change the plugin made to a body in the last step: the impacts and the
-    /// corrections (see [`crate::EventKind`]), cleared by the next [`Self::before_step`].
+    /// corrections (see [`crate::EventKind`]), cleared by the next [`Self::before_step`]. To
+    /// read the events of several steps at once, turn the event log on
+    /// ([`Self::set_event_log`]).
     pub fn events(&self) -> &[ImpactEvent] {
         &self.reports.events
+    }
+
+    /// Turns the event log on or off (default off). While it is on, every event is kept until
+    /// [`Self::take_event_log`] takes it, however many steps run in between (a game stepping
+    /// several times per frame reads them once per frame); turned off, the log's events are
+    /// dropped. The log is not part of a snapshot.
+    pub fn set_event_log(&mut self, on: bool) {
+        self.reports.set_log(on);
+    }
+
+    /// The events since the log was turned on or last taken, oldest first, the last step's
+    /// included; the log is then empty. Empty while the log is off.
+    pub fn take_event_log(&mut self) -> Vec<ImpactEvent> {
+        self.reports.take_log()
     }
 
     /// What the plugin left to rapier in the last step instead of resolving it (a collider
@@ -227,19 +243,19 @@ impl<H> ImpactPlugin<H> {
         self.registry.excluded.remove(&body);
     }
 
-    /// A ball's own rolling resistance and spinning friction (dimensionless, each in
-    /// `[0, 100]`; `None` for the configuration's): used on every ground without an override of
-    /// its own (see [`ImpactConfig::rolling_resistance`]).
+    /// A ball's own rolling resistance and spinning friction (`None` for the configuration's):
+    /// used on every ground without its own (see [`ImpactConfig::rolling_resistance`]). Each
+    /// coefficient in `[0, 100]`, else [`ConfigError::InvalidConfig`] and nothing changes.
     pub fn set_body_rolling(
         &mut self,
         body: RigidBodyHandle,
-        coefficients: Option<(f64, f64)>,
+        settings: Option<RollingSettings>,
     ) -> Result<(), ConfigError> {
-        match coefficients {
-            Some((rr, sp)) => {
-                rolling_coefficient("rolling_resistance", rr)?;
-                rolling_coefficient("spinning_friction", sp)?;
-                self.registry.body_rolling.insert(body, (rr, sp));
+        match settings {
+            Some(rolling) => {
+                rolling.validate()?;
+                let pair = (rolling.rolling_resistance, rolling.spinning_friction);
+                self.registry.body_rolling.insert(body, pair);
             }
             None => {
                 self.registry.body_rolling.remove(&body);
@@ -256,8 +272,9 @@ impl<H> ImpactPlugin<H> {
 
     /// The rolling resistance and spinning friction `body` has of its own
     /// ([`Self::set_body_rolling`]), if any.
-    pub fn body_rolling(&self, body: RigidBodyHandle) -> Option<(f64, f64)> {
-        self.registry.body_rolling.get(&body).copied()
+    pub fn body_rolling(&self, body: RigidBodyHandle) -> Option<RollingSettings> {
+        let &(rr, sp) = self.registry.body_rolling.get(&body)?;
+        Some(RollingSettings::new(rr, sp))
     }
 
     /// A body's own tangential restitution `beta0` (Walton's, in `[-1, 1]`; `None` for the
@@ -304,7 +321,7 @@ impl<H> ImpactPlugin<H> {
     /// Opts `body` in to impacts between bodies: its impacts with another opted-in body are
     /// resolved by the model ([`crate::model::resolve_pair`]) at their time in the step,
     /// like ground impacts. The body must be dynamic (else [`ConfigError::NotDynamic`]).
-    /// Which pairs and how: `docs/integration.md`, "Impacts between bodies".
+    /// Which pairs and how: `docs/guide.md`, "Impacts between bodies".
     pub fn add_impact_body(
         &mut self,
         bodies: &RigidBodySet,

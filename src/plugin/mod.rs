@@ -1,7 +1,6 @@
 //! The rapier adapter: everything that touches rapier types. The impulses come from
 //! [`crate::model`]; the motions between impacts from `crate::motion`. See
-//! `docs/architecture.md` for the stage list and [`crate::docs::integration`] for what a step
-//! does.
+//! `docs/architecture.md` for the stage list and [`crate::docs::guide`] for what a step does.
 //!
 //! - [`ImpactPlugin`] (`impact_plugin.rs`), its configuration (`config.rs`) and its events
 //!   (`events.rs`): the public face.
@@ -30,7 +29,7 @@ mod snapshot;
 mod stages;
 mod state;
 
-pub use config::{ConfigError, GroundMaterial, ImpactConfig, TimingMode};
+pub use config::{ConfigError, GroundMaterial, ImpactConfig, RollingSettings, TimingMode};
 pub use events::{Diagnostic, EventKind, ImpactEvent, ImpactTiming};
 pub use impact_plugin::ImpactPlugin;
 pub use profile::{Stage, StepCounts, StepProfile};

@@ -108,8 +108,9 @@ pub struct StepCounts {
     /// Pairs between opted-in bodies with a role this step.
     pub body_pairs: usize,
     /// Bodies with the plugin's hook flags on their colliders at rapier's step. While every
-    /// dynamic body is managed the flags are on the grounds instead (`docs/integration.md`),
-    /// and this counts only the balls flagged for pairs between bodies.
+    /// dynamic body is managed the flags are on the grounds instead (`docs/guide.md`,
+    /// "Filtering and hooks"), and this counts only the balls flagged for pairs between
+    /// bodies.
     pub hooked_bodies: usize,
     /// Writes into rapier's bodies (a state, a flight's end, a wake-up): each costs rapier
     /// an update of the body in its next step.

@@ -60,11 +60,7 @@ pub fn world_with_gravity(gravity: f64) -> PhysicsWorld {
 }
 
 pub fn plugin(timing: TimingMode) -> ImpactPlugin {
-    ImpactPlugin::new(ImpactConfig {
-        timing,
-        ..Default::default()
-    })
-    .unwrap()
+    ImpactPlugin::new(ImpactConfig::default().with_timing(timing)).unwrap()
 }
 
 /// [`plugin`] with `ground` registered at its collider's own restitution and friction.

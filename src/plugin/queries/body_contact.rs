@@ -278,7 +278,7 @@ fn polish(
 }
 
 /// The contact point of an impact between two bodies at a touch, resolved as one impact (as a
-/// flat landing on a ground is, see the integration guide): the points of parry's contact
+/// flat landing on a ground is, see `docs/guide.md`): the points of parry's contact
 /// manifold of the two touching parts (for two faces, the corners of their overlap) that lie
 /// within `flat_tolerance x` the body's size of the closest one and approach there. Two or
 /// more give one impact at their centroid, moved onto the contact plane; otherwise the touch

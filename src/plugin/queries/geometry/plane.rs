@@ -331,7 +331,7 @@ fn stretch_over_triangle(
     (lo <= hi).then_some((lo, hi))
 }
 
-/// The contact points of a landing, resolved as one impact (see the integration guide):
+/// The contact points of a landing, resolved as one impact (see `docs/guide.md`):
 /// the vertices of the body's support face towards the ground (parry's polygonal feature)
 /// that lie within `flat_tolerance x face size` of the contact plane and approach the
 /// ground. Two or more give one impact at their centroid, projected on the contact plane;
