@@ -61,11 +61,11 @@ fn configuration_and_materials_round_trip() {
     );
     round_trip(&ImpactConfig::default());
     round_trip(&GroundMaterial::new(0.35, 1.0 / 3.0));
-    round_trip(&GroundMaterial {
-        rolling_resistance: Some(0.012),
-        spinning_friction: Some(0.3),
-        ..GroundMaterial::new(0.35, 1.0 / 3.0)
-    });
+    round_trip(
+        &GroundMaterial::new(0.35, 1.0 / 3.0)
+            .with_rolling_resistance(0.012)
+            .with_spinning_friction(0.3),
+    );
     round_trip(
         &GroundMaterial::new(0.35, 1.0 / 3.0)
             .with_tangential_restitution(0.5)
