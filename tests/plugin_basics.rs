@@ -1470,4 +1470,20 @@ fn builders_and_getters_give_back_what_was_set() {
     assert_eq!(p.body_rolling(ball), Some(rolling));
     p.set_body_rolling(ball, None).unwrap();
     assert_eq!(p.body_rolling(ball), None);
+    assert!(!p.is_excluded(ball));
+    p.exclude_body(ball);
+    assert!(p.is_excluded(ball));
+    p.include_body(ball);
+    assert!(!p.is_excluded(ball));
+    for on in [true, false] {
+        p.set_all_fixed_colliders_ground(on);
+        p.set_all_dynamic_bodies_impact(on);
+        assert_eq!(
+            (
+                p.all_fixed_colliders_ground(),
+                p.all_dynamic_bodies_impact()
+            ),
+            (on, on)
+        );
+    }
 }

@@ -243,6 +243,11 @@ impl<H> ImpactPlugin<H> {
         self.registry.excluded.remove(&body);
     }
 
+    /// Was `body` left to rapier with [`Self::exclude_body`]?
+    pub fn is_excluded(&self, body: RigidBodyHandle) -> bool {
+        self.registry.excluded.contains(&body)
+    }
+
     /// A ball's own rolling resistance and spinning friction (`None` for the configuration's):
     /// used on every ground without its own (see [`ImpactConfig::rolling_resistance`]). Each
     /// coefficient in `[0, 100]`, else [`ConfigError::InvalidConfig`] and nothing changes.
@@ -346,6 +351,11 @@ impl<H> ImpactPlugin<H> {
         self.registry.all_impact = enabled;
     }
 
+    /// Is [`Self::set_all_dynamic_bodies_impact`] on?
+    pub fn all_dynamic_bodies_impact(&self) -> bool {
+        self.registry.all_impact
+    }
+
     /// Does `body` take part in impacts between bodies (opted in, and managed)?
     pub fn is_impact_body(&self, bodies: &RigidBodySet, body: RigidBodyHandle) -> bool {
         bodies
@@ -416,6 +426,11 @@ impl<H> ImpactPlugin<H> {
     /// colliders it marked.
     pub fn set_all_fixed_colliders_ground(&mut self, enabled: bool) {
         self.registry.set_all_fixed_colliders_ground(enabled);
+    }
+
+    /// Is [`Self::set_all_fixed_colliders_ground`] on?
+    pub fn all_fixed_colliders_ground(&self) -> bool {
+        self.registry.all_fixed
     }
 
     /// Is this collider a ground?
