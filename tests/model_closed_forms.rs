@@ -4,6 +4,7 @@
 
 mod model_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use model_support::*;
 use rapier_impact::model::seed::{self, SeedInput};
 use rapier_impact::model::{Body, BodyVelocity, Contact, Impact, Law, Material, Regime, resolve};
@@ -126,14 +127,22 @@ fn check_ball(
     };
     let out = seed::solve(&s).expect("valid");
     assert_eq!(out.regime, expected_regime, "seed: {tag}");
-    assert_close(&format!("seed vx': {tag}"), out.u2.x, vx2, 1e-12, vscale);
-    assert_close(&format!("seed vz': {tag}"), out.u2.z, vz2, 1e-12, vscale);
-    assert_close(
-        &format!("seed w_y' R: {tag}"),
+    let tol = 1e-12 * vscale;
+    assert!(
+        abs_diff_eq!(out.u2.x, vx2, epsilon = tol),
+        "seed vx': {:?} vs {vx2:?}; {tag}",
+        out.u2.x
+    );
+    assert!(
+        abs_diff_eq!(out.u2.z, vz2, epsilon = tol),
+        "seed vz': {:?} vs {vz2:?}; {tag}",
+        out.u2.z
+    );
+    assert!(
+        abs_diff_eq!(out.w2.y * radius, wy2 * radius, epsilon = tol),
+        "seed w_y' R: {:?} vs {:?}; {tag}",
         out.w2.y * radius,
-        wy2 * radius,
-        1e-12,
-        vscale,
+        wy2 * radius
     );
     // The general form with the body's own tensor (anisotropic for the disc and ring).
     let mr2 = mass * radius * radius;
@@ -156,36 +165,24 @@ fn check_ball(
             "{law}: regime {:?}: {tag}",
             i.regime
         );
-        assert_close(
-            &format!("{law} vx': {tag}"),
-            i.velocity.linear.x,
-            vx2,
-            1e-12,
-            vscale,
+        // Component by component, each to the same absolute tolerance.
+        let v_expected = Vector3::new(vx2, 0.0, vz2);
+        assert!(
+            abs_diff_eq!(i.velocity.linear, v_expected, epsilon = tol),
+            "{law} v': {:?} vs {v_expected:?}; {tag}",
+            i.velocity.linear
         );
-        assert_close(
-            &format!("{law} vy': {tag}"),
-            i.velocity.linear.y,
-            0.0,
-            1e-12,
-            vscale,
-        );
-        assert_close(
-            &format!("{law} vz': {tag}"),
-            i.velocity.linear.z,
-            vz2,
-            1e-12,
-            vscale,
-        );
-        assert_close(
-            &format!("{law} w_y' R: {tag}"),
+        assert!(
+            abs_diff_eq!(i.velocity.angular.y * radius, wy2 * radius, epsilon = tol),
+            "{law} w_y' R: {:?} vs {:?}; {tag}",
             i.velocity.angular.y * radius,
-            wy2 * radius,
-            1e-12,
-            vscale,
+            wy2 * radius
         );
         let w_off = i.velocity.angular.x.hypot(i.velocity.angular.z) * radius;
-        assert_close(&format!("{law} w_x, w_z: {tag}"), w_off, 0.0, 1e-12, vscale);
+        assert!(
+            abs_diff_eq!(w_off, 0.0, epsilon = tol),
+            "{law} |(w_x, w_z)| R: {w_off:?} vs 0; {tag}"
+        );
     }
     stick
 }
@@ -213,11 +210,16 @@ fn solid_sphere_rolls_off_at_five_sevenths_and_slides_off_at_4_1() {
             "mu = {mu}: vx' = {:.7}, MODEL-NOTES gives {vx2}",
             out.u2.x
         );
-        assert_close(&format!("mu = {mu}: u_z2"), out.u2.z, 4.0, 1e-15, 4.0);
+        assert!(
+            abs_diff_eq!(out.u2.z, 4.0, epsilon = 1e-15 * 4.0),
+            "mu = {mu}: u_z2 = {:?}, expected 4",
+            out.u2.z
+        );
         let got = check_ball(&BALLS[0], 1.0, 0.1, 5.0, -5.0, 0.0, 0.8, mu, &id);
         assert_eq!(got, stick, "mu = {mu}");
     }
-    assert_close("5/7 of 5 m/s", 5.0 / 1.4, 25.0 / 7.0, 1e-15, 1.0);
+    // 5/7 of 5 m/s.
+    assert_abs_diff_eq!(5.0 / 1.4, 25.0 / 7.0, epsilon = 1e-15);
 }
 
 #[test]
@@ -295,8 +297,16 @@ fn frictionless_rod_bounces_by_the_closed_form_at_every_angle() {
             w1: Vector3::zeros(),
         };
         let out = seed::solve(&s).expect("valid");
-        assert_close(&format!("seed J_z: {tag}"), out.impulse.z, p, 1e-12, p);
-        assert_close(&format!("seed w_y': {tag}"), out.w2.y, w, 1e-12, w);
+        assert!(
+            abs_diff_eq!(out.impulse.z, p, epsilon = 1e-12 * p),
+            "seed J_z: {:?} vs {p:?}; {tag}",
+            out.impulse.z
+        );
+        assert!(
+            abs_diff_eq!(out.w2.y, w, epsilon = 1e-12 * w),
+            "seed w_y': {:?} vs {w:?}; {tag}",
+            out.w2.y
+        );
         let (body, r) = rod(mass, len, phi);
         let vel = BodyVelocity {
             linear: Vector3::new(0.0, 0.0, -speed),
@@ -305,33 +315,26 @@ fn frictionless_rod_bounces_by_the_closed_form_at_every_angle() {
         let c = Contact::fixed(Vector3::z(), r);
         let m = Material::new(e, 0.0);
         for (law, i) in all_laws(&body, &vel, &c, &m, &rng.rotation()) {
-            assert_close(
-                &format!("{law} normal impulse: {tag}"),
-                i.impulse.z,
-                p,
-                1e-12,
-                p,
+            assert!(
+                abs_diff_eq!(i.impulse.z, p, epsilon = 1e-12 * p),
+                "{law} normal impulse: {:?} vs {p:?}; {tag}",
+                i.impulse.z
             );
-            assert_close(
-                &format!("{law} |P_t|: {tag}"),
-                i.impulse.xy().norm(),
-                0.0,
-                1e-12,
-                p,
+            assert!(
+                abs_diff_eq!(i.impulse.xy().norm(), 0.0, epsilon = 1e-12 * p),
+                "{law} |P_t|: {:?} vs 0; {tag}",
+                i.impulse.xy().norm()
             );
-            assert_close(
-                &format!("{law} w_y': {tag}"),
-                i.velocity.angular.y,
-                w,
-                1e-12,
-                w,
+            assert!(
+                abs_diff_eq!(i.velocity.angular.y, w, epsilon = 1e-12 * w),
+                "{law} w_y': {:?} vs {w:?}; {tag}",
+                i.velocity.angular.y
             );
-            assert_close(
-                &format!("{law} v_z': {tag}"),
-                i.velocity.linear.z,
-                -speed + p / mass,
-                1e-12,
-                speed,
+            let vz2 = -speed + p / mass;
+            assert!(
+                abs_diff_eq!(i.velocity.linear.z, vz2, epsilon = 1e-12 * speed),
+                "{law} v_z': {:?} vs {vz2:?}; {tag}",
+                i.velocity.linear.z
             );
         }
     }
@@ -480,7 +483,8 @@ fn cube_balanced_on_its_diagonal_bounces_like_a_point_mass() {
     let rot = Rotation3::rotation_between(&Vector3::new(-1.0, -1.0, -1.0), &-Vector3::z())
         .expect("rotation");
     let r = lowest_corner(2.0, rot.matrix());
-    assert_close("corner under the centre", r.xy().norm(), 0.0, 1e-15, 1.0);
+    // The corner under the centre.
+    assert_abs_diff_eq!(r.xy().norm(), 0.0, epsilon = 1e-15);
     for mu in [0.0, 0.3, 1e6] {
         let s = SeedInput {
             mass: 3.0,
@@ -494,15 +498,21 @@ fn cube_balanced_on_its_diagonal_bounces_like_a_point_mass() {
             w1: Vector3::zeros(),
         };
         let out = seed::solve(&s).expect("valid");
-        assert_close(
-            &format!("mu = {mu}: J_z"),
-            out.impulse.z,
-            1.6 * 2.0 * 3.0,
-            1e-14,
-            9.6,
+        assert!(
+            abs_diff_eq!(out.impulse.z, 1.6 * 2.0 * 3.0, epsilon = 1e-14 * 9.6),
+            "mu = {mu}: J_z = {:?}, expected 9.6",
+            out.impulse.z
         );
-        assert_close(&format!("mu = {mu}: u_z2"), out.u2.z, 1.2, 1e-14, 1.2);
-        assert_close(&format!("mu = {mu}: |w2|"), out.w2.norm(), 0.0, 1e-14, 1.0);
+        assert!(
+            abs_diff_eq!(out.u2.z, 1.2, epsilon = 1e-14 * 1.2),
+            "mu = {mu}: u_z2 = {:?}, expected 1.2",
+            out.u2.z
+        );
+        assert!(
+            abs_diff_eq!(out.w2.norm(), 0.0, epsilon = 1e-14),
+            "mu = {mu}: |w2| = {:?}, expected 0",
+            out.w2.norm()
+        );
     }
 }
 
@@ -567,14 +577,21 @@ fn non_rotating_body_is_a_point_mass_at_the_contact() {
             let dv = rel_to(&i.velocity.linear, &v2, vscale);
             assert!(dv <= 1e-12, "{tag}: v2 relative error {dv:e}");
             assert_eq!(i.velocity.angular, vel.angular, "{tag}: w2");
-            assert_close(&format!("{tag}: KE before"), i.ke_before, ke1, 1e-14, ke1);
-            assert_close(&format!("{tag}: KE after"), i.ke_after, ke2, 1e-12, ke1);
-            assert_close(
-                &format!("{tag}: KE after vs Consistent"),
+            assert!(
+                abs_diff_eq!(i.ke_before, ke1, epsilon = 1e-14 * ke1),
+                "{tag}: KE before {:?} vs {ke1:?}",
+                i.ke_before
+            );
+            assert!(
+                abs_diff_eq!(i.ke_after, ke2, epsilon = 1e-12 * ke1),
+                "{tag}: KE after {:?} vs {ke2:?}",
+                i.ke_after
+            );
+            assert!(
+                abs_diff_eq!(i.ke_after, consistent.ke_after, epsilon = 1e-12 * ke1),
+                "{tag}: KE after {:?} vs Consistent's {:?}",
                 i.ke_after,
-                consistent.ke_after,
-                1e-12,
-                ke1,
+                consistent.ke_after
             );
             if law == Law::Document {
                 let regime = if stick { Regime::Stick } else { Regime::Slip };

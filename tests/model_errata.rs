@@ -3,6 +3,7 @@
 
 mod model_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use model_support::*;
 use rapier_impact::model::seed::{
     SeedInput, apply_impulse, contact_velocity, slip_angle, slip_impulse, solve, sticking_impulse,
@@ -73,16 +74,10 @@ fn erratum1_eq19_as_printed_is_not_the_solution_of_eq18() {
     // (18) holds for the crate's J_z ...
     let lhs18 = jz * (lx * lx + ly * ly + i / m);
     let rhs18 = mu * h * jz * c - (1.0 + e) * u1t.z * i;
-    assert_close(
-        "eq (18) with the crate's J_z",
-        lhs18,
-        rhs18,
-        1e-15,
-        lhs18.abs(),
-    );
+    assert_abs_diff_eq!(lhs18, rhs18, epsilon = 1e-15 * lhs18.abs());
     // ... and equals the corrected (19) ...
     let corrected = -(1.0 + e) * u1t.z * i / (lx * lx + ly * ly + i / m - mu * h * c);
-    assert_close("corrected eq (19)", jz, corrected, 1e-15, corrected.abs());
+    assert_abs_diff_eq!(jz, corrected, epsilon = 1e-15 * corrected.abs());
     // ... while (19) as printed, with J_z inside its denominator, does not return it.
     let printed = -(1.0 + e) * u1t.z * i / (lx * lx + ly * ly + i / m - mu * h * jz * c);
     assert!(
@@ -100,32 +95,25 @@ fn erratum2_slip_along_minus_x_loses_3_25_j_instead_of_gaining_6_75() {
     let theta_printed = printed_theta(u1t.x, u1t.y);
     assert_eq!(theta_printed, 0.0, "printed theta for u_1T = {u1t:?}");
     let j_printed = slip_impulse(&s, &u1t, theta_printed).expect("sphere does not jam");
-    assert_close(
-        "printed law's energy change (J)",
-        energy_change(&s, &j_printed),
-        6.75,
-        1e-14,
-        6.75,
-    );
+    // The printed law's energy change (J).
+    assert_abs_diff_eq!(energy_change(&s, &j_printed), 6.75, epsilon = 1e-14 * 6.75);
 
     let out = solve(&s).expect("valid input");
     assert_eq!(out.regime, Regime::Slip);
     assert_eq!(out.theta, Some(PI), "theta for slip along -x");
-    assert_close("energy change (J)", out.energy_change(), -3.25, 1e-14, 3.25);
+    assert_abs_diff_eq!(out.energy_change(), -3.25, epsilon = 1e-14 * 3.25);
     // Friction pushes towards +x, against the slip: u_x2 = -5 + mu (1+e) 5 = -4.
-    assert_close("u_x2 (m/s)", out.u2.x, -4.0, 1e-15, 4.0);
-    assert_close("u_z2 (m/s)", out.u2.z, 5.0, 1e-15, 5.0);
+    assert_abs_diff_eq!(out.u2.x, -4.0, epsilon = 1e-15 * 4.0);
+    assert_abs_diff_eq!(out.u2.z, 5.0, epsilon = 1e-15 * 5.0);
 
     // The general form, every law: a sphere is where they all agree.
     let (body, v, c, mat) = general_from_seed(&s);
     for law in [Law::Document, Law::Guarded, Law::Consistent] {
         let imp = resolve(law, &body, &v, &c, &mat).expect("valid input");
-        assert_close(
-            &format!("{law:?} energy change (J)"),
-            imp.energy_change(),
-            -3.25,
-            1e-13,
-            3.25,
+        assert!(
+            abs_diff_eq!(imp.energy_change(), -3.25, epsilon = 1e-13 * 3.25),
+            "{law:?}: energy change {:?} J, expected -3.25",
+            imp.energy_change()
         );
     }
 }
@@ -193,7 +181,10 @@ fn erratum2_zero_slip_outside_the_cone_slides_along_the_sticking_impulse_without
         // The sticking impulse leaves the cone: |J_t|/J_z = m |l| h / (I + m h^2) = 0.385 > mu.
         let stick = sticking_impulse(&s, &u1t);
         let ratio = stick.x.hypot(stick.y) / stick.z;
-        assert_close("sticking |J_t|/J_z", ratio, 0.25 / 0.65, 1e-15, 1.0);
+        assert!(
+            abs_diff_eq!(ratio, 0.25 / 0.65, epsilon = 1e-15),
+            "mu = {mu}: sticking |J_t|/J_z = {ratio:?}, expected 0.25/0.65"
+        );
 
         let out = solve(&s).expect("valid input");
         assert_eq!(out.regime, Regime::Slip, "mu = {mu}");
@@ -203,41 +194,37 @@ fn erratum2_zero_slip_outside_the_cone_slides_along_the_sticking_impulse_without
             "mu = {mu}: {out:?}"
         );
         let theta = out.theta.expect("case B has a direction");
-        assert_close(
-            &format!("mu = {mu}: theta along the sticking impulse"),
-            theta,
-            stick.y.atan2(stick.x),
-            1e-15,
-            PI,
+        assert!(
+            abs_diff_eq!(theta, stick.y.atan2(stick.x), epsilon = 1e-15 * PI),
+            "mu = {mu}: theta {theta:?} vs the sticking impulse's {:?}",
+            stick.y.atan2(stick.x)
         );
-        assert_close(
-            &format!("mu = {mu}: theta along l"),
-            theta,
-            0.4f64.atan2(0.3),
-            1e-15,
-            PI,
+        assert!(
+            abs_diff_eq!(theta, 0.4f64.atan2(0.3), epsilon = 1e-15 * PI),
+            "mu = {mu}: theta {theta:?} vs l's {:?}",
+            0.4f64.atan2(0.3)
         );
         // J_z: eq (19) corrected, with l_x cos + l_y sin = |l| = 0.5.
         let jz = 1.5 * 0.4 / (0.25 + 0.4 - mu * 0.5 * 0.5);
-        assert_close(&format!("mu = {mu}: J_z"), out.impulse.z, jz, 1e-15, jz);
-        assert_close(
-            &format!("mu = {mu}: |J_t|"),
-            out.impulse.x.hypot(out.impulse.y),
-            mu * jz,
-            1e-15,
-            jz,
+        assert!(
+            abs_diff_eq!(out.impulse.z, jz, epsilon = 1e-15 * jz),
+            "mu = {mu}: J_z = {:?}, expected {jz:?}",
+            out.impulse.z
+        );
+        let jt = out.impulse.x.hypot(out.impulse.y);
+        assert!(
+            abs_diff_eq!(jt, mu * jz, epsilon = 1e-15 * jz),
+            "mu = {mu}: |J_t| = {jt:?}, expected {:?}",
+            mu * jz
         );
         // The slip that friction opposes is the one the impact starts (isotropic body).
         let u2t = out.contact_velocity_after;
         let along = u2t.x * theta.cos() + u2t.y * theta.sin();
         let across = -u2t.x * theta.sin() + u2t.y * theta.cos();
         assert!(along > 0.0, "mu = {mu}: slip after along theta {along}");
-        assert_close(
-            &format!("mu = {mu}: slip after across theta"),
-            across,
-            0.0,
-            1e-15,
-            along,
+        assert!(
+            abs_diff_eq!(across, 0.0, epsilon = 1e-15 * along),
+            "mu = {mu}: slip after across theta {across:?}, along {along:?}"
         );
     }
 }
@@ -259,7 +246,7 @@ fn erratum3_cone_test_rejects_a_pulling_sticking_impulse() {
     // Slip along -x: D = l_x^2 + I/m + mu h l_x.
     let d = s.lx * s.lx + s.inertia / s.mass + s.friction * s.h * s.lx;
     let jz = 1.5 * 0.1 * s.inertia / d;
-    assert_close("J_z (N s)", out.impulse.z, jz, 1e-15, jz);
+    assert_abs_diff_eq!(out.impulse.z, jz, epsilon = 1e-15 * jz);
 }
 
 #[test]
@@ -335,12 +322,9 @@ fn erratum3_grazing_impulse_goes_continuously_to_zero() {
         // Slip along -x: |J| = sqrt(1 + mu^2) J_z with J_z linear in u_z1T.
         let d = s.lx * s.lx + s.inertia / s.mass + s.friction * s.h * s.lx;
         let expected = (1.0 + 4.0f64).sqrt() * 1.5 * eps * s.inertia / d;
-        assert_close(
-            &format!("u_z = -{eps:e}: |J|"),
-            size,
-            expected,
-            1e-14,
-            expected,
+        assert!(
+            abs_diff_eq!(size, expected, epsilon = 1e-14 * expected),
+            "u_z = -{eps:e}: |J| = {size:?}, expected {expected:?}"
         );
         assert!(
             size < previous,

@@ -4,6 +4,7 @@
 
 mod model_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use model_support::*;
 use rapier_impact::model::seed::{self, SeedInput};
 use rapier_impact::model::{
@@ -81,7 +82,11 @@ fn zero_slip_outside_the_cone_slides_along_the_invariant_direction_of_an_anisotr
             // Friction -mu p s with s the invariant direction: K(n - mu s) has its
             // tangential part along +s (the slip grows along s, never turns).
             let s = -doc.tangent_impulse / (mu * doc.normal_impulse);
-            assert_close("|s|", s.norm(), 1.0, 1e-12, 1.0);
+            assert!(
+                abs_diff_eq!(s.norm(), 1.0, epsilon = 1e-12),
+                "mu = {mu}: |s| = {:?}, expected 1",
+                s.norm()
+            );
             let rate = k_apply(&body, &r, &(n - s * mu));
             let rate_t = rate - n * n.dot(&rate);
             let lambda = rate_t.dot(&s);
@@ -125,7 +130,12 @@ fn slip_exactly_along_minus_x_is_opposed_by_friction_along_plus_x() {
             "J_x = {} must push towards +x",
             out.impulse.x
         );
-        assert_close("J_y", out.impulse.y, 0.0, 1e-15, out.impulse.x.abs());
+        assert!(
+            abs_diff_eq!(out.impulse.y, 0.0, epsilon = 1e-15 * out.impulse.x.abs()),
+            "l_x = {lx}: J_y = {:?}, J_x = {:?}",
+            out.impulse.y,
+            out.impulse.x
+        );
         assert!(
             out.energy_change() < 0.0,
             "energy change {}",
@@ -138,12 +148,11 @@ fn slip_exactly_along_minus_x_is_opposed_by_friction_along_plus_x() {
                 i.impulse.x > 0.0 && i.energy_change() < 0.0,
                 "{law:?}: {i:?}"
             );
-            assert_close(
-                &format!("{law:?} P_y"),
+            assert!(
+                abs_diff_eq!(i.impulse.y, 0.0, epsilon = 1e-15 * i.impulse.x),
+                "l_x = {lx}, {law:?}: P_y = {:?}, P_x = {:?}",
                 i.impulse.y,
-                0.0,
-                1e-15,
-                i.impulse.x,
+                i.impulse.x
             );
         }
     }
@@ -213,12 +222,11 @@ fn grazing_impulse_goes_continuously_to_zero_under_every_law() {
         }
         // |P| proportional to the approach speed: |P|/eps constant to rounding.
         for (k, q) in ratios.iter().enumerate() {
-            assert_close(
-                &format!("{law:?}: |P|/u_n at u_n = -1e-{}", k + 1),
-                *q,
-                ratios[0],
-                1e-6,
-                ratios[0],
+            assert!(
+                abs_diff_eq!(*q, ratios[0], epsilon = 1e-6 * ratios[0]),
+                "{law:?}: |P|/u_n at u_n = -1e-{} is {q:?}, at -1e-1 {:?}",
+                k + 1,
+                ratios[0]
             );
         }
     }
@@ -251,22 +259,16 @@ fn plastic_and_elastic_limits_end_at_zero_and_full_normal_rebound() {
             for law in LAWS {
                 let i = resolve(law, &body, &vel, &c, &mat(e, 0.0)).expect("valid");
                 let un2 = c.normal.dot(&contact_velocity(&i.velocity, &c));
-                assert_close(
-                    &format!("state {k} {law:?} e = {e}: u_n after"),
-                    un2,
-                    -e * un1,
-                    1e-12,
-                    un1.abs(),
+                assert!(
+                    abs_diff_eq!(un2, -e * un1, epsilon = 1e-12 * un1.abs()),
+                    "state {k} {law:?} e = {e}: u_n after {un2:?}, before {un1:?}"
                 );
                 let ke1 = kinetic_energy(body.mass, &inertia, &vel);
                 let dke = kinetic_energy(body.mass, &inertia, &i.velocity) - ke1;
                 if e == 1.0 {
-                    assert_close(
-                        &format!("state {k} {law:?}: energy change"),
-                        dke,
-                        0.0,
-                        1e-12,
-                        ke1,
+                    assert!(
+                        abs_diff_eq!(dke, 0.0, epsilon = 1e-12 * ke1),
+                        "state {k} {law:?}: energy change {dke:?} of {ke1:?}"
                     );
                 } else {
                     assert!(dke < 0.0, "state {k} {law:?} e = 0: energy change {dke}");
@@ -463,13 +465,8 @@ fn jam_of_an_anisotropic_body_is_an_error_for_document_and_resolved_by_the_other
         let s = (u1 - n * n.dot(&u1)).normalize();
         let d = n.dot(&k_apply(&body, &c.offset, &(n - s * m.friction)));
         assert!(d <= 0.0, "jam reported but n.K(n - mu s) = {d:e}");
-        assert_close(
-            "reported denominator",
-            denominator,
-            d,
-            1e-9,
-            1.0 / body.mass + d.abs(),
-        );
+        // The reported denominator.
+        assert_abs_diff_eq!(denominator, d, epsilon = 1e-9 * (1.0 / body.mass + d.abs()));
         assert!(
             body.inv_inertia
                 .symmetric_eigenvalues()
@@ -635,27 +632,13 @@ fn document_energy_gain_of_a_sticking_rod_is_reported_and_guarded_falls_back() {
     let m = mat(1.0, 1.0);
     let doc = resolve(Law::Document, &body, &vel, &c, &m).expect("valid");
     assert_eq!(doc.regime, Regime::Stick);
-    assert_close(
-        "KE before (J)",
-        kinetic_energy(1.0, &inertia, &vel),
-        0.68,
-        1e-15,
-        1.0,
-    );
-    assert_close(
-        "Document KE after (J)",
+    assert_abs_diff_eq!(kinetic_energy(1.0, &inertia, &vel), 0.68, epsilon = 1e-15);
+    assert_abs_diff_eq!(
         kinetic_energy(1.0, &inertia, &doc.velocity),
         0.7925,
-        1e-12,
-        1.0,
+        epsilon = 1e-12
     );
-    assert_close(
-        "Document reported KE after (J)",
-        doc.ke_after,
-        0.7925,
-        1e-12,
-        1.0,
-    );
+    assert_abs_diff_eq!(doc.ke_after, 0.7925, epsilon = 1e-12);
     let g = resolve(Law::Guarded, &body, &vel, &c, &m).expect("valid");
     assert_eq!(g.fallback, Some(Fallback::EnergyGain));
     assert!(

@@ -7,6 +7,7 @@
 
 mod model_support;
 
+use approx::abs_diff_eq;
 use model_support::kinetic_energy;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, RngSeed};
@@ -158,7 +159,7 @@ proptest! {
         for law in LAWS {
             let i = run(law, &c)?;
             let g = gain(&c, &i);
-            prop_assert!(g.abs() <= 1e-12, "{law:?}: relative energy change {g:e}, expected 0 to 1e-12");
+            prop_assert!(abs_diff_eq!(g, 0.0, epsilon = 1e-12), "{law:?}: relative energy change {g:e}, expected 0 to 1e-12");
         }
     }
 

@@ -5,6 +5,7 @@
 
 mod model_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use model_support::{Rng, anisotropic_body, jam_prone_impact};
 use rapier_impact::model::{
     Body, BodyVelocity, Contact, Fallback, Law, Material, PairContact, Regime, resolve,
@@ -183,11 +184,7 @@ fn a_superball_comes_back_with_its_contact_velocity_reversed() {
     // Elastic both ways (e = 1, beta0 = 1): the sphere keeps all its energy.
     let elastic = Material::new(1.0, 1.0).with_tangential_restitution(1.0);
     let k = resolve(Law::Guarded, &body, &velocity, &contact, &elastic).unwrap();
-    assert!(
-        k.energy_change().abs() <= 1e-12 * k.ke_before,
-        "{}",
-        k.energy_change()
-    );
+    assert_abs_diff_eq!(k.energy_change(), 0.0, epsilon = 1e-12 * k.ke_before);
 }
 
 #[test]
@@ -207,9 +204,22 @@ fn beta_minus_one_leaves_the_tangential_velocity_alone() {
                 "{law:?}: {:?}",
                 i.tangent_impulse
             );
-            assert!((i.velocity.linear.x - vx).abs() <= 1e-15);
-            assert!((i.velocity.angular.z - wz).abs() <= 1e-13);
-            assert!((i.velocity.linear.y - 1.0).abs() <= 1e-15);
+            let tag = format!("{law:?}, v_x = {vx}, w_z = {wz}");
+            assert!(
+                abs_diff_eq!(i.velocity.linear.x, vx, epsilon = 1e-15),
+                "{tag}: v_x after {:?}",
+                i.velocity.linear.x
+            );
+            assert!(
+                abs_diff_eq!(i.velocity.angular.z, wz, epsilon = 1e-13),
+                "{tag}: w_z after {:?}",
+                i.velocity.angular.z
+            );
+            assert!(
+                abs_diff_eq!(i.velocity.linear.y, 1.0, epsilon = 1e-15),
+                "{tag}: v_y after {:?}, expected 1",
+                i.velocity.linear.y
+            );
         }
     }
 }
