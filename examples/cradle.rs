@@ -6,50 +6,52 @@
 //! cargo run --release --example cradle -- --balls 5 --speed 1 --restitution 1
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--balls N` (5, at least 2: the arriving
-//! ball and the row), `--speed V` (m/s, 1), `--restitution E` (between the balls, 1), `--dt DT`
-//! (s, 1/60), `--mode rapier|step|toi|exact` (exact).
+//! Every flag has a default; `--help` lists them with their units.
 //!
 //! The balls (R = 25 mm, 0.1 kg) lie on a half-space ground with no friction; the first is
 //! 1 mm from the row, moving along +x. With the plugin the impact passes along the row inside
-//! one step, one pair after the other (`docs/integration.md`, "Impacts between bodies"): at
+//! one step, one pair after the other (`docs/guide.md`, "Impacts between bodies"): at
 //! `e = 1` the last ball leaves at `V` and the others stop; with `e < 1` each impact keeps
 //! `(1 - e)/2` of the speed in the ball behind. The closed form printed is that sequence of
 //! two-ball impacts.
 
 mod common;
 
-use common::{Args, MODE, Mode, flag, real, wide};
+use clap::Parser;
+use common::{Mode, real, wide};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
 
-const ABOUT: &str = "Newton's cradle on a frictionless ground: every ball's velocity after \
-the chain of impacts, beside the sequence of two-ball impacts.";
+/// Newton's cradle on a frictionless ground: a ball arrives at a row of touching balls, and
+/// every ball's velocity after the chain of impacts is printed beside the sequence of two-ball
+/// impacts along the row (R = 25 mm, 0.1 kg each).
+#[derive(Parser, Debug)]
+#[command(
+    name = "cradle",
+    after_help = "Example: cargo run --release --example cradle -- --balls 5 --restitution 0.9"
+)]
+struct Args {
+    /// Number of balls, the arriving one included (at least 2)
+    #[arg(long, value_name = "N", default_value = "5", value_parser = |s: &str| common::whole(s, 2))]
+    balls: u64,
+    /// Speed of the arriving ball (m/s)
+    #[arg(long, value_name = "V", default_value = "1", value_parser = common::positive)]
+    speed: f64,
+    /// Coefficient of restitution between the balls
+    #[arg(long, value_name = "E", default_value = "1", value_parser = common::non_negative)]
+    restitution: f64,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+}
 
 fn main() {
-    let spec = [
-        flag(
-            "--balls",
-            "N",
-            "5",
-            "number of balls, the arriving one included",
-        ),
-        flag("--speed", "V", "1", "speed of the arriving ball (m/s)"),
-        flag(
-            "--restitution",
-            "E",
-            "1",
-            "coefficient of restitution between the balls",
-        ),
-        flag("--dt", "DT", "0.016666666666666666", "time step (s)"),
-        MODE,
-    ];
-    let args = Args::parse("cradle", ABOUT, &spec);
-    let n = args.count("--balls", 2) as usize;
-    let speed = args.positive("--speed");
-    let e = args.non_negative("--restitution");
-    let dt = args.positive("--dt");
-    let mode = args.mode();
+    let args: Args = common::parse();
+    let n = args.balls as usize;
+    let (speed, e, dt, mode) = (args.speed, args.restitution, args.dt, args.mode);
     let (r, m) = (0.025, 0.1);
     let density = m / (4.0 / 3.0 * std::f64::consts::PI * r * r * r);
     let mut world = common::world(dt);
@@ -79,11 +81,9 @@ fn main() {
     let mut plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                timing,
-                ..Default::default()
-            })
-            .expect("the default configuration is valid");
+            let mut config = ImpactConfig::default();
+            config.timing = timing;
+            let mut p = ImpactPlugin::new(config).expect("the default configuration is valid");
             p.add_ground(&world.bodies, &world.colliders, ground)
                 .expect("the ground exists");
             p.set_all_dynamic_bodies_impact(true);

@@ -5,23 +5,67 @@
 //! cargo run --release --example dice -- --seed 7 --law consistent --events dice_events.csv
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--seed N` (the throw: height, velocity,
-//! spin and orientation, 1), `--restitution E` (0.5), `--friction MU` (0.5),
-//! `--law document|consistent|guarded` (guarded), `--mode rapier|step|toi|exact` (exact;
-//! `rapier` is rapier alone, which has no impact events), `--size S` (edge length, m, 0.1),
-//! `--dt DT` (s, 1/60), `--duration T` (s, 4), `--f64` (needs `--features f64`), `--csv PATH`
-//! (trace `t,x,y,z,vx,vy,vz,wx,wy,wz` of the cube's centre of mass), `--events PATH` (the
-//! impacts, `t,body,px,py,pz,nx,ny,nz,jn,jt,regime,ke_before,ke_after`).
+//! Every flag has a default; `--help` lists them with their units. `--csv PATH` writes the
+//! trace `t,x,y,z,vx,vy,vz,wx,wy,wz` of the cube's centre of mass, `--events PATH` the impacts,
+//! `t,body,px,py,pz,nx,ny,nz,jn,jt,regime,ke_before,ke_after`.
 //!
 //! The faces are numbered as on a die, opposite faces summing to 7: local +x = 1, +y = 2,
 //! +z = 3, -z = 4, -y = 5, -x = 6.
 
 mod common;
 
-use common::{Args, CSV, DiceThrow, EventsCsv, F64, LAW, MODE, Mode, TraceCsv, flag, real, wide};
+use clap::Parser;
+use common::{DiceThrow, EventsCsv, LawChoice, Mode, TraceCsv, real, wide};
+use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 
-const ABOUT: &str = "A cube thrown onto the ground, tumbling: its impacts and the face on top.";
+/// A cube thrown onto the ground, tumbling: the table of its impacts (time, contact points,
+/// regime, normal impulse, kinetic energy before and after) and the face on top at the end,
+/// its tilt and whether it sleeps. The throw (height, velocity, spin, orientation) is drawn
+/// from the seed.
+#[derive(Parser, Debug)]
+#[command(
+    name = "dice",
+    after_help = "Example: cargo run --release --example dice -- --seed 7 --law consistent --events dice_events.csv"
+)]
+struct Args {
+    /// Seed of the random throw: height, velocity, spin, orientation
+    #[arg(long, value_name = "N", default_value = "1", value_parser = |s: &str| common::whole(s, 0))]
+    seed: u64,
+    /// Coefficient of restitution of cube and ground
+    #[arg(long, value_name = "E", default_value = "0.5", value_parser = common::non_negative)]
+    restitution: f64,
+    /// Coefficient of friction of cube and ground
+    #[arg(long, value_name = "MU", default_value = "0.5", value_parser = common::non_negative)]
+    friction: f64,
+    /// The impact law
+    #[arg(long, value_enum, value_name = "LAW", default_value_t = LawChoice::Guarded)]
+    law: LawChoice,
+    /// Rapier alone (which has no impact events), or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+    /// Edge length of the cube (m)
+    #[arg(long, value_name = "S", default_value = "0.1", value_parser = common::positive)]
+    size: f64,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Simulated time (s)
+    #[arg(long, value_name = "T", default_value = "4", value_parser = common::positive)]
+    duration: f64,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    f64: bool,
+    /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the cube's centre of mass (m, m/s, rad/s)
+    /// [default: none]
+    #[arg(long, value_name = "PATH")]
+    csv: Option<String>,
+    /// Write the impacts t,body,px,py,pz,nx,ny,nz,jn,jt,regime,ke_before,ke_after (s, m, N s,
+    /// J) [default: none]
+    #[arg(long, value_name = "PATH")]
+    events: Option<String>,
+}
 
 /// The die faces: local outward normal and pips.
 const FACES: [([f64; 3], u32); 6] = [
@@ -34,44 +78,11 @@ const FACES: [([f64; 3], u32); 6] = [
 ];
 
 fn main() {
-    let spec = [
-        flag(
-            "--seed",
-            "N",
-            "1",
-            "random throw: height, velocity, spin, orientation",
-        ),
-        flag(
-            "--restitution",
-            "E",
-            "0.5",
-            "restitution of cube and ground",
-        ),
-        flag("--friction", "MU", "0.5", "friction of cube and ground"),
-        LAW,
-        MODE,
-        flag("--size", "S", "0.1", "edge length of the cube (m)"),
-        flag("--dt", "DT", "1/60", "time step (s)"),
-        flag("--duration", "T", "4", "simulated time (s)"),
-        F64,
-        CSV,
-        flag(
-            "--events",
-            "PATH",
-            "",
-            "write the impacts t,body,px,py,pz,nx,ny,nz,jn,jt,regime,ke_before,ke_after",
-        ),
-    ];
-    let args = Args::parse("dice", ABOUT, &spec);
-    args.check_precision();
-    let seed = args.count("--seed", 0);
-    let e = args.non_negative("--restitution");
-    let mu = args.non_negative("--friction");
-    let law = args.law();
-    let mode = args.mode();
-    let size = args.positive("--size");
-    let dt = args.positive("--dt");
-    let duration = args.positive("--duration");
+    let args: Args = common::parse();
+    common::check_precision::<Args>(args.f64);
+    let (seed, e, mu, size) = (args.seed, args.restitution, args.friction, args.size);
+    let (law, mode): (Law, Mode) = (args.law.into(), args.mode);
+    let (dt, duration) = (args.dt, args.duration);
 
     // The throw: 0.5 to 1 m up, 1 to 3 m/s sideways in a random direction, a random spin of
     // up to 10 rad/s per axis, a random orientation (uniform unit quaternion).
@@ -82,13 +93,13 @@ fn main() {
     let ground = common::ground(&mut world, e, mu);
     let cube = throw.insert_cube(&mut world, 0.5 * size, e, mu);
     let mut plugin = common::plugin(mode, law, &mut world, ground);
-    let mut csv = args.path("--csv").map(|p| TraceCsv::create(&p, cube));
-    let mut events_csv = args.path("--events").map(|p| EventsCsv::create(&p));
+    let mut csv = args.csv.as_deref().map(|p| TraceCsv::create(p, cube));
+    let mut events_csv = args.events.as_deref().map(EventsCsv::create);
 
     let dt = wide(world.integration_parameters.dt);
     let steps = (duration / dt).ceil() as usize;
     // (t, points, regime, jn, ke_before, ke_after)
-    let mut impacts: Vec<(f64, usize, String, f64, f64, f64)> = Vec::new();
+    let mut impacts: Vec<Impact> = Vec::new();
     let mut asleep_at = None;
     if let Some(c) = csv.as_mut() {
         c.row(0.0, &world.bodies);
@@ -136,23 +147,35 @@ fn main() {
     if mode == Mode::Rapier {
         println!("rapier alone: no impact events (rapier's own contacts and restitution)");
     } else {
-        println!(
-            "{:>3} {:>10} {:>6} {:<28} {:>10} {:>11} {:>11} {:>7}",
-            "n", "t (s)", "points", "regime", "jn (N s)", "KE before", "KE after", "after %"
-        );
-        const SHOWN: usize = 40;
-        for (i, (t, points, regime, jn, kb, ka)) in impacts.iter().enumerate().take(SHOWN) {
-            let kept = if *kb > 0.0 { 100.0 * ka / kb } else { 100.0 };
-            println!(
-                "{:>3} {t:>10.5} {points:>6} {regime:<28} {jn:>10.5} {kb:>11.6} {ka:>11.6} {kept:>7.1}",
-                i + 1
-            );
-        }
-        if impacts.len() > SHOWN {
-            println!("... {} impacts in all", impacts.len());
-        }
+        print_impacts(&impacts);
     }
-    let rb = &world.bodies[cube];
+    print_top(&world.bodies[cube], asleep_at);
+}
+
+/// One impact of the table: (t, points, regime, jn, ke_before, ke_after).
+type Impact = (f64, usize, String, f64, f64, f64);
+
+/// The table of the first impacts.
+fn print_impacts(impacts: &[Impact]) {
+    println!(
+        "{:>3} {:>10} {:>6} {:<28} {:>10} {:>11} {:>11} {:>7}",
+        "n", "t (s)", "points", "regime", "jn (N s)", "KE before", "KE after", "after %"
+    );
+    const SHOWN: usize = 40;
+    for (i, (t, points, regime, jn, kb, ka)) in impacts.iter().enumerate().take(SHOWN) {
+        let kept = if *kb > 0.0 { 100.0 * ka / kb } else { 100.0 };
+        println!(
+            "{:>3} {t:>10.5} {points:>6} {regime:<28} {jn:>10.5} {kb:>11.6} {ka:>11.6} {kept:>7.1}",
+            i + 1
+        );
+    }
+    if impacts.len() > SHOWN {
+        println!("... {} impacts in all", impacts.len());
+    }
+}
+
+/// The face on top, its tilt, and the cube's rest.
+fn print_top(rb: &RigidBody, asleep_at: Option<f64>) {
     let rot = *rb.rotation();
     let (face, up) = FACES
         .iter()

@@ -7,99 +7,60 @@
 //! cargo run --release --example drop -- --mode exact --dt 0.0166667 --csv drop.csv
 //! ```
 //!
-//! Flags (each has a default): `--height H` (gap from the ball's bottom to the ground, m,
-//! 1), `--radius R` (m, 0.1), `--restitution E` (0.8), `--friction MU` (0.5), `--dt DT` (s,
-//! 1/60), `--duration T` (s, 5), `--mode rapier|step|toi|exact` (exact; `rapier` is rapier
-//! alone), `--f64` (needs a build with `--features f64`), `--csv PATH` (trace
-//! `t,x,y,z,vx,vy,vz,wx,wy,wz` of the ball's centre of mass, one row per step and one at
-//! t = 0; ground surface at y = 0, y up).
+//! Every flag has a default; `--help` lists them with their units. The CSV trace
+//! (`--csv PATH`) is `t,x,y,z,vx,vy,vz,wx,wy,wz` of the ball's centre of mass, one row per
+//! step and one at t = 0; ground surface at y = 0, y up.
 
 // Precision-generic: `Real` is f32 or f64 (feature `f64`), so conversions that are
 // widening in one build are identities in the other.
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
+mod common;
+
+use clap::Parser;
+use common::Mode;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
+use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
 use std::io::Write;
 
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Mode {
-    Rapier,
-    Plugin(TimingMode),
-}
-
+/// A ball dropped on a ground: its impact times and bounce apexes beside the closed forms
+/// `t_(k+1) = t1 + 2 t1 e (1 - e^k)/(1 - e)` and `apex_n = e^(2n) h0`, and, in a plugin mode,
+/// the same drop in rapier alone beside them.
+#[derive(Parser, Debug)]
+#[command(
+    name = "drop",
+    after_help = "Example: cargo run --release --example drop -- --mode toi --dt 1/120 --csv drop.csv"
+)]
 struct Args {
+    /// Gap from the ball's bottom to the ground at release (m)
+    #[arg(long, value_name = "H", default_value = "1", value_parser = common::positive)]
     height: f64,
+    /// Ball radius (m)
+    #[arg(long, value_name = "R", default_value = "0.1", value_parser = common::positive)]
     radius: f64,
+    /// Coefficient of restitution of ball and ground
+    #[arg(long, value_name = "E", default_value = "0.8", value_parser = common::non_negative)]
     restitution: f64,
+    /// Coefficient of friction of ball and ground
+    #[arg(long, value_name = "MU", default_value = "0.5", value_parser = common::non_negative)]
     friction: f64,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
     dt: f64,
+    /// Simulated time (s)
+    #[arg(long, value_name = "T", default_value = "5", value_parser = common::positive)]
     duration: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
     mode: Mode,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
     f64: bool,
+    /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball's centre of mass (m, m/s,
+    /// rad/s), one row per step and one at t = 0 [default: none]
+    #[arg(long, value_name = "PATH")]
     csv: Option<String>,
-}
-
-const USAGE: &str = "usage: drop [--height H] [--radius R] [--restitution E] [--friction MU] \
-[--dt DT] [--duration T] [--mode rapier|step|toi|exact] [--f64] [--csv PATH]";
-
-fn parse() -> Result<Args, String> {
-    let mut a = Args {
-        height: 1.0,
-        radius: 0.1,
-        restitution: 0.8,
-        friction: 0.5,
-        dt: 1.0 / 60.0,
-        duration: 5.0,
-        mode: Mode::Plugin(TimingMode::Exact),
-        f64: false,
-        csv: None,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        let mut value = |name: &str| it.next().ok_or(format!("{name} needs a value\n{USAGE}"));
-        let mut number = |name: &str| -> Result<f64, String> {
-            let v = value(name)?;
-            v.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or(format!("{name}: not a number: {v}"))
-        };
-        match flag.as_str() {
-            "--height" => a.height = number("--height")?,
-            "--radius" => a.radius = number("--radius")?,
-            "--restitution" => a.restitution = number("--restitution")?,
-            "--friction" => a.friction = number("--friction")?,
-            "--dt" => a.dt = number("--dt")?,
-            "--duration" => a.duration = number("--duration")?,
-            "--mode" => {
-                a.mode = match value("--mode")?.as_str() {
-                    "rapier" => Mode::Rapier,
-                    "step" => Mode::Plugin(TimingMode::Step),
-                    "toi" => Mode::Plugin(TimingMode::TimeOfImpact),
-                    "exact" => Mode::Plugin(TimingMode::Exact),
-                    m => return Err(format!("--mode: unknown mode {m} (rapier|step|toi|exact)")),
-                }
-            }
-            "--f64" => a.f64 = true,
-            "--csv" => a.csv = Some(value("--csv")?),
-            "-h" | "--help" => return Err(USAGE.to_string()),
-            f => return Err(format!("unknown flag {f}\n{USAGE}")),
-        }
-    }
-    if a.f64 && !cfg!(feature = "f64") {
-        return Err(
-            "--f64 needs the f64 build: cargo run --release --features f64 --example drop -- --f64"
-                .into(),
-        );
-    }
-    if !(a.height > 0.0 && a.radius > 0.0 && a.dt > 0.0 && a.duration > 0.0) {
-        return Err("--height, --radius, --dt and --duration must be > 0".into());
-    }
-    if !(a.restitution >= 0.0 && a.friction >= 0.0) {
-        return Err("--restitution and --friction must be >= 0".into());
-    }
-    Ok(a)
 }
 
 /// What a drop gave: the impact times and the apex heights of the ball's bottom, and the
@@ -135,10 +96,8 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
     let mut plugin = match mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
-            let config = ImpactConfig {
-                timing,
-                ..Default::default()
-            };
+            let mut config = ImpactConfig::default();
+            config.timing = timing;
             let mut p = ImpactPlugin::new(config).expect("valid config");
             p.add_ground(&world.bodies, &world.colliders, ground)
                 .expect("the ground collider exists");
@@ -210,13 +169,8 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
 }
 
 fn main() {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(2);
-        }
-    };
+    let args: Args = common::parse();
+    common::check_precision::<Args>(args.f64);
     let g = 9.81;
     let run = drop_ball(&args, args.mode, args.csv.as_deref());
     // Rapier alone on the same drop, beside a plugin mode.

@@ -6,14 +6,10 @@
 //! cargo run --release --example many_balls -- --count 1000 --steps 600 --mode rapier
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--count N` (balls, 500), `--steps S`
-//! (600), `--mode rapier|step|toi|exact` (exact), `--scene bouncing|idle|pile|rolling`
-//! (bouncing), `--tiles N` (0), `--restitution E` (0.7), `--friction MU` (0.5),
-//! `--rolling-resistance MU_R` (0), `--dt DT` (s, 1/60),
-//! `--seed N` (the layout's jitter, 1), `--pairs` (the balls' impacts with each other by the
-//! plugin too, `set_all_dynamic_bodies_impact`), `--profile` (the time of each stage of the
-//! step, the bodies and pairs each took, and the writes into rapier: `ImpactPlugin::profile`),
-//! `--f64` (needs `--features f64`), `--csv PATH` (trace of the first ball).
+//! Every flag has a default; `--help` lists them. `--pairs` hands the balls' impacts with each
+//! other to the plugin too (`set_all_dynamic_bodies_impact`); `--profile` prints the time of
+//! each stage of the step, the bodies and pairs each took, and the writes into rapier
+//! (`ImpactPlugin::profile`); `--csv PATH` writes the trace of the first ball.
 //!
 //! Scenes (balls of radius 5 cm, each start position jittered by up to 2 cm):
 //! - `bouncing`: a grid of 20 x 20 balls per layer, 15 cm apart, layers 15 cm apart from 1 m
@@ -36,90 +32,124 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, Rng, TraceCsv, flag, real, switch, wide};
+use clap::{Parser, ValueEnum};
+use common::{Mode, Rng, TraceCsv, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, Stage, StepProfile};
 use std::time::Instant;
 
-const ABOUT: &str = "N balls raining on a ground: milliseconds per step, with the plugin or \
-rapier alone.";
+/// N balls raining on a ground: milliseconds per step (mean, median, max), the impacts, how
+/// many balls sleep or fell through the ground, with the plugin in a timing mode or rapier
+/// alone. The scenes: `bouncing` (layers of balls falling from 1 m), `idle` (balls in flight
+/// far above the ground for the whole run), `pile` (balls settling in a walled box),
+/// `rolling` (one layer rolling at 1 m/s).
+#[derive(Parser, Debug)]
+#[command(
+    name = "many_balls",
+    after_help = "Example: cargo run --release --example many_balls -- --count 1000 --steps 600 --mode rapier"
+)]
+struct Args {
+    /// Number of balls (at least 1)
+    #[arg(long, value_name = "N", default_value = "500", value_parser = |s: &str| common::whole(s, 1))]
+    count: u64,
+    /// Number of steps (at least 1)
+    #[arg(long, value_name = "S", default_value = "600", value_parser = |s: &str| common::whole(s, 1))]
+    steps: u64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+    /// The scene
+    #[arg(long, value_enum, value_name = "SCENE", default_value_t = Scene::Bouncing)]
+    scene: Scene,
+    /// 0: a half-space ground; N > 0: an N x N floor of fixed cuboid tiles, 8 m x 8 m
+    #[arg(long, value_name = "N", default_value = "0", value_parser = |s: &str| common::whole(s, 0))]
+    tiles: u64,
+    /// Coefficient of restitution of balls and ground
+    #[arg(long, value_name = "E", default_value = "0.7", value_parser = common::non_negative)]
+    restitution: f64,
+    /// Coefficient of friction of balls and ground
+    #[arg(long, value_name = "MU", default_value = "0.5", value_parser = common::non_negative)]
+    friction: f64,
+    /// Rolling resistance of the balls the plugin rolls (ImpactConfig::rolling_resistance,
+    /// dimensionless)
+    #[arg(long, value_name = "MU_R", default_value = "0", value_parser = common::non_negative)]
+    rolling_resistance: f64,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Seed of the layout's jitter
+    #[arg(long, value_name = "N", default_value = "1", value_parser = |s: &str| common::whole(s, 0))]
+    seed: u64,
+    /// The balls' impacts with each other by the plugin too (set_all_dynamic_bodies_impact)
+    #[arg(long)]
+    pairs: bool,
+    /// Print the time of each stage of the step and the bodies each took (plugin modes;
+    /// reading the clock adds to the ms per step)
+    #[arg(long)]
+    profile: bool,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    f64: bool,
+    /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the first ball (m, m/s, rad/s)
+    /// [default: none]
+    #[arg(long, value_name = "PATH")]
+    csv: Option<String>,
+}
 
-fn main() {
-    let spec = [
-        flag("--count", "N", "500", "number of balls"),
-        flag("--steps", "S", "600", "number of steps"),
-        MODE,
-        flag(
-            "--scene",
-            "bouncing|idle|pile|rolling",
-            "bouncing",
-            "the scene (see the docs)",
-        ),
-        flag(
-            "--tiles",
-            "N",
-            "0",
-            "0: a half-space ground; N > 0: an N x N floor of fixed cuboid tiles",
-        ),
-        flag(
-            "--restitution",
-            "E",
-            "0.7",
-            "restitution of balls and ground",
-        ),
-        flag("--friction", "MU", "0.5", "friction of balls and ground"),
-        flag(
-            "--rolling-resistance",
-            "MU_R",
-            "0",
-            "rolling resistance of the balls the plugin rolls (ImpactConfig::rolling_resistance)",
-        ),
-        flag("--dt", "DT", "1/60", "time step (s)"),
-        flag("--seed", "N", "1", "seed of the layout's jitter"),
-        switch(
-            "--pairs",
-            "the balls' impacts with each other by the plugin too (set_all_dynamic_bodies_impact)",
-        ),
-        switch(
-            "--profile",
-            "print the time of each stage of the step and the bodies each took (plugin modes; reading the clock adds to the ms per step)",
-        ),
-        F64,
-        CSV,
-    ];
-    let args = Args::parse("many_balls", ABOUT, &spec);
-    args.check_precision();
-    let count = args.count("--count", 1);
-    let steps = args.count("--steps", 1);
-    let mode = args.mode();
-    let e = args.non_negative("--restitution");
-    let mu = args.non_negative("--friction");
-    let mu_r = args.non_negative("--rolling-resistance");
-    let dt = args.positive("--dt");
-    let mut rng = Rng::new(args.count("--seed", 0));
+/// `--scene`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Scene {
+    /// Layers of 20 x 20 balls from 1 m up: they fall, bounce and collide
+    Bouncing,
+    /// The same grid 50 m up, launched to rise and fall back by the run's end: nothing touches
+    Idle,
+    /// Layers of 10 x 10 balls dropped into a walled box, coming to rest on each other
+    Pile,
+    /// One layer on the ground, each ball rolling at 1 m/s along x without slip
+    Rolling,
+}
 
-    let scene = args.choice("--scene");
-    let tiles = args.count("--tiles", 0);
+impl Scene {
+    /// The name used on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            Scene::Bouncing => "bouncing",
+            Scene::Idle => "idle",
+            Scene::Pile => "pile",
+            Scene::Rolling => "rolling",
+        }
+    }
+}
 
-    let mut world = common::world(dt);
-    let ground = floor(&mut world, tiles, e, mu);
-    let (radius, spacing, per_row, bottom) = match scene.as_str() {
-        "pile" => {
-            walls(&mut world, 0.6, 2.0, e, mu);
+/// Inserts the balls of `args.scene` (and the pile's walls); returns the first ball.
+fn insert_balls(world: &mut PhysicsWorld, args: &Args) -> RigidBodyHandle {
+    let (count, steps, e, mu, dt) = (
+        args.count,
+        args.steps,
+        args.restitution,
+        args.friction,
+        args.dt,
+    );
+    let mut rng = Rng::new(args.seed);
+    let scene = args.scene;
+    let (radius, spacing, per_row, bottom) = match scene {
+        Scene::Pile => {
+            walls(world, 0.6, 2.0, e, mu);
             (0.05, 0.11, 10u64, 0.3)
         }
-        "idle" => (0.05, 0.15, 20u64, 50.0),
-        "rolling" => (0.05, 0.15, (count as f64).sqrt().ceil() as u64, 0.05),
-        _ => (0.05, 0.15, 20u64, 1.0),
+        Scene::Idle => (0.05, 0.15, 20u64, 50.0),
+        Scene::Rolling => (0.05, 0.15, (count as f64).sqrt().ceil() as u64, 0.05),
+        Scene::Bouncing => (0.05, 0.15, 20u64, 1.0),
     };
     // Idle: up at g T / 2, back at the start height when the run ends.
-    let launch = if scene == "idle" {
+    let launch = if scene == Scene::Idle {
         0.5 * wide(-world.gravity.y) * steps as f64 * dt
     } else {
         0.0
     };
-    let rolling = scene == "rolling";
+    let rolling = scene == Scene::Rolling;
     let (roll_v, roll_w) = if rolling {
         (1.0, -1.0 / radius)
     } else {
@@ -150,38 +180,61 @@ fn main() {
         );
         first.get_or_insert(h);
     }
-    let mut plugin = match (mode, ground) {
+    first.expect("--count >= 1")
+}
+
+/// The plugin of `args.mode` (none for rapier alone): `ground` marked, or every fixed
+/// collider when the floor is tiles.
+fn make_plugin(
+    world: &mut PhysicsWorld,
+    ground: Option<ColliderHandle>,
+    args: &Args,
+) -> Option<ImpactPlugin> {
+    let mut plugin = match (args.mode, ground) {
         (Mode::Plugin(timing), None) => {
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                law: Law::Guarded,
-                timing,
-                ..Default::default()
-            })
-            .expect("the default configuration is valid");
+            let mut config = ImpactConfig::default();
+            config.law = Law::Guarded;
+            config.timing = timing;
+            let mut p = ImpactPlugin::new(config).expect("the default configuration is valid");
             p.set_all_fixed_colliders_ground(true);
             Some(p)
         }
-        (_, Some(ground)) => common::plugin(mode, Law::Guarded, &mut world, ground),
+        (_, Some(ground)) => common::plugin(args.mode, Law::Guarded, world, ground),
         (Mode::Rapier, None) => None,
     };
-    let profiling = args.on("--profile");
     if let Some(p) = plugin.as_mut() {
-        p.set_profiling(profiling);
-        p.set_all_dynamic_bodies_impact(args.on("--pairs"));
-        p.set_config(ImpactConfig {
-            rolling_resistance: mu_r,
-            ..p.config().clone()
-        })
-        .unwrap_or_else(|e| args.fail(&e.to_string()));
+        p.set_profiling(args.profile);
+        p.set_all_dynamic_bodies_impact(args.pairs);
+        let mut config = p.config().clone();
+        config.rolling_resistance = args.rolling_resistance;
+        p.set_config(config)
+            .unwrap_or_else(|e| common::fail::<Args>(e));
     }
-    let mut csv = args
-        .path("--csv")
-        .map(|p| TraceCsv::create(&p, first.expect("--count >= 1")));
+    plugin
+}
+
+/// What a run measured.
+struct Run {
+    /// Wall time of each step (ms).
+    times: Vec<f64>,
+    profile: StepProfile,
+    impacts: usize,
+    /// Steps after which some ball was still awake.
+    awake_steps: usize,
+}
+
+/// Steps the scene `args.steps` times, timing each step.
+fn run(
+    world: &mut PhysicsWorld,
+    plugin: &mut Option<ImpactPlugin>,
+    csv: &mut Option<TraceCsv>,
+    args: &Args,
+) -> Run {
+    let steps = args.steps;
     let dt = wide(world.integration_parameters.dt);
     if let Some(c) = csv.as_mut() {
         c.row(0.0, &world.bodies);
     }
-
     let mut times = Vec::with_capacity(steps as usize);
     let mut profile = StepProfile::default();
     let mut impacts = 0usize;
@@ -191,7 +244,7 @@ fn main() {
     let mut awake_steps = 0usize;
     for n in 1..=steps {
         let start = Instant::now();
-        impacts += common::step(&mut world, &mut plugin)
+        impacts += common::step(world, plugin)
             .iter()
             .filter(|e| e.kind == EventKind::Impact)
             .count();
@@ -210,10 +263,34 @@ fn main() {
             c.row(n as f64 * dt, &world.bodies);
         }
     }
+    Run {
+        times,
+        profile,
+        impacts,
+        awake_steps,
+    }
+}
+
+fn main() {
+    let args: Args = common::parse();
+    common::check_precision::<Args>(args.f64);
+    let mut world = common::world(args.dt);
+    let ground = floor(&mut world, args.tiles, args.restitution, args.friction);
+    let first = insert_balls(&mut world, &args);
+    let mut plugin = make_plugin(&mut world, ground, &args);
+    let mut csv = args.csv.as_deref().map(|p| TraceCsv::create(p, first));
+    let Run {
+        times,
+        profile,
+        impacts,
+        awake_steps,
+    } = run(&mut world, &mut plugin, &mut csv, &args);
     if let Some(c) = csv {
         c.finish();
     }
 
+    let (count, steps) = (args.count, args.steps);
+    let dt = wide(world.integration_parameters.dt);
     let total: f64 = times.iter().sum();
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
@@ -230,8 +307,10 @@ fn main() {
         .filter(|(_, rb)| rb.is_dynamic() && wide(rb.translation().y) < 0.0)
         .count();
     println!(
-        "many_balls: {count} balls, {steps} steps of {dt:.7} s, scene {scene}, tiles {tiles}, mode {}, precision {}",
-        mode.name(),
+        "many_balls: {count} balls, {steps} steps of {dt:.7} s, scene {}, tiles {}, mode {}, precision {}",
+        args.scene.name(),
+        args.tiles,
+        args.mode.name(),
         common::PRECISION
     );
     println!(
@@ -242,7 +321,7 @@ fn main() {
         "{:>12.4} {median:>12.4} {max:>12.4} {impacts:>10} {asleep:>8} {below:>14} {awake_steps:>12}",
         total / steps as f64
     );
-    if profiling && plugin.is_some() {
+    if args.profile && plugin.is_some() {
         print_profile(&profile, steps);
     }
 }

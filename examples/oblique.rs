@@ -9,14 +9,7 @@
 //! cargo run --release --example oblique -- --mode rapier --csv oblique.csv
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--speed V` (m/s, 3.9), `--angles
-//! FROM:TO:STEP` (incidence from the normal, degrees, 5:85:5), `--radius R` (m, 0.0025),
-//! `--shell solid|hollow` (solid), `--restitution E` (0.98), `--restitution-curve
-//! V:E,V:E,...` (e against the normal approach speed, replaces `--restitution`), `--friction
-//! MU` (0.092), `--tangential-restitution BETA0` (Walton's `beta0`, 0), `--spin W` (initial
-//! spin about +z, rad/s, 0), `--gravity G` (downwards, m/s^2, 0), `--mode
-//! rapier|step|toi|exact` (exact; `rapier` is rapier alone), `--dt DT` (s, 1/60), `--f64`
-//! (needs `--features f64`), `--csv PATH`, `--svg PATH`.
+//! Every flag has a default; `--help` lists them with their units.
 //!
 //! The scene: y up, ground a fixed half-space with normal +y and surface y = 0. Each angle
 //! gets a fresh world; the ball starts 1.5 steps of normal travel above the ground with
@@ -44,7 +37,8 @@
 
 mod common;
 
-use common::{Args, F64, MODE, Mode, SHELL, flag, or_exit, real, regime_label, wide};
+use clap::Parser;
+use common::{Mode, Shell, or_exit, real, regime_label, wide};
 use plotters::prelude::*;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
@@ -52,8 +46,70 @@ use rapier_impact::{
 };
 use std::io::Write;
 
-const ABOUT: &str = "A sphere shot at a plane ground once per incidence angle: rebound angle, \
-tangential coefficient of restitution and spin after the impact against Walton's closed form.";
+/// A small sphere shot at a plane ground once per incidence angle: the rebound angle, the
+/// tangential coefficient of restitution and the spin after the impact beside Walton's closed
+/// form, and the angle where stick turns to slip. The defaults are Kharaz, Gorham & Salman's
+/// experiment (2001): 5 mm alumina spheres at 3.9 m/s on glass.
+#[derive(Parser, Debug)]
+#[command(
+    name = "oblique",
+    after_help = "Example: cargo run --release --example oblique -- --tangential-restitution 0.4 --svg oblique.svg"
+)]
+struct Args {
+    /// Launch speed: the impact speed without gravity (m/s)
+    #[arg(long, value_name = "V", default_value = "3.9", value_parser = common::positive)]
+    speed: f64,
+    /// Incidence angles from the normal, 0 <= FROM <= TO < 90, STEP > 0 (deg)
+    #[arg(long, value_name = "FROM:TO:STEP", default_value = "5:85:5", value_parser = parse_angles)]
+    angles: Angles,
+    /// Ball radius (m)
+    #[arg(long, value_name = "R", default_value = "0.0025", value_parser = common::positive)]
+    radius: f64,
+    /// Solid ball or thin shell
+    #[arg(long, value_enum, value_name = "SHELL", default_value_t = Shell::Solid)]
+    shell: Shell,
+    /// Coefficient of restitution
+    #[arg(long, value_name = "E", default_value = "0.98", value_parser = common::non_negative)]
+    restitution: f64,
+    /// Restitution against the normal approach speed (m/s : e), piecewise linear; replaces
+    /// --restitution [default: none]
+    #[arg(long, value_name = "V:E,V:E,...", value_parser = parse_curve)]
+    restitution_curve: Option<RestitutionCurve>,
+    /// Coefficient of friction
+    #[arg(long, value_name = "MU", default_value = "0.092", value_parser = common::non_negative)]
+    friction: f64,
+    /// Walton's tangential restitution beta0, in [-1, 1] (0 is Coulomb's stick)
+    #[arg(long, value_name = "BETA0", default_value = "0", value_parser = common::number)]
+    tangential_restitution: f64,
+    /// Initial spin about +z (rad/s)
+    #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
+    spin: f64,
+    /// Gravity, downwards (m/s^2)
+    #[arg(long, value_name = "G", default_value = "0", value_parser = common::non_negative)]
+    gravity: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    f64: bool,
+    /// Write incidence_deg,vx_in,vy_in,wz_in,vx_out,vy_out,wz_out,... per angle (m/s, rad/s,
+    /// deg) [default: none]
+    #[arg(long, value_name = "PATH")]
+    csv: Option<String>,
+    /// Plot beta0 = 0, the given beta0 (the plugin) and rapier alone against incidence (SVG)
+    /// [default: none]
+    #[arg(long, value_name = "PATH")]
+    svg: Option<String>,
+}
+
+/// The incidence angles of `--angles` (deg), in order.
+#[derive(Clone, Debug)]
+struct Angles(Vec<f64>);
 
 /// The ball's mass (kg). The closed form is per unit mass and neither the plugin nor rapier
 /// depends on it: an alumina ball's 0.26 g gives the same velocities, to `f32` rounding.
@@ -72,6 +128,7 @@ struct Setup {
     speed: f64,
     angles: Vec<f64>,
     radius: f64,
+    shell: Shell,
     /// `I / (m R^2)`.
     k: f64,
     restitution: f64,
@@ -269,11 +326,9 @@ fn shoot_plugin(
     incidence: f64,
 ) -> Result<Shot, String> {
     let (mut world, ball, ground) = scene(setup, incidence, setup.restitution);
-    let mut plugin = ImpactPlugin::new(ImpactConfig {
-        timing,
-        ..Default::default()
-    })
-    .map_err(|e| e.to_string())?;
+    let mut config = ImpactConfig::default();
+    config.timing = timing;
+    let mut plugin = ImpactPlugin::new(config).map_err(|e| e.to_string())?;
     plugin
         .add_ground_with_material(
             &world.bodies,
@@ -417,36 +472,30 @@ fn regime_changes(setup: &Setup, beta0: f64) -> Vec<(f64, bool)> {
 }
 
 /// Parses `--angles FROM:TO:STEP`: `0 <= FROM <= TO < 90`, `STEP > 0`.
-fn parse_angles(args: &Args) -> Vec<f64> {
-    let text = args.text("--angles");
+fn parse_angles(text: &str) -> Result<Angles, String> {
     let parts: Vec<Option<f64>> = text
         .split(':')
         .map(|p| p.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
         .collect();
     let [Some(from), Some(to), Some(step)] = parts[..] else {
-        args.fail(&format!(
-            "`--angles`: `{text}` is not FROM:TO:STEP (degrees)"
-        ));
+        return Err("not FROM:TO:STEP (degrees)".into());
     };
     if !(0.0..90.0).contains(&from) || !(from..90.0).contains(&to) || step <= 0.0 {
-        args.fail(&format!(
-            "`--angles`: `{text}` needs 0 <= FROM <= TO < 90 and STEP > 0"
-        ));
+        return Err("needs 0 <= FROM <= TO < 90 and STEP > 0".into());
     }
     let count = ((to - from) / step + 1e-9).floor() + 1.0;
     if count > 10_000.0 {
-        args.fail(&format!(
-            "`--angles`: `{text}` gives {count} angles (at most 10000)"
-        ));
+        return Err(format!("gives {count} angles (at most 10000)"));
     }
-    (0..count as usize)
-        .map(|i| from + step * i as f64)
-        .collect()
+    Ok(Angles(
+        (0..count as usize)
+            .map(|i| from + step * i as f64)
+            .collect(),
+    ))
 }
 
-/// Parses `--restitution-curve V:E,V:E,...` (none when the flag is absent).
-fn parse_curve(args: &Args) -> Option<RestitutionCurve> {
-    let text = args.path("--restitution-curve")?;
+/// Parses `--restitution-curve V:E,V:E,...`.
+fn parse_curve(text: &str) -> Result<RestitutionCurve, String> {
     let points: Option<Vec<(f64, f64)>> = text
         .split(',')
         .map(|p| {
@@ -454,38 +503,31 @@ fn parse_curve(args: &Args) -> Option<RestitutionCurve> {
             Some((v.trim().parse().ok()?, e.trim().parse().ok()?))
         })
         .collect();
-    let Some(points) = points else {
-        args.fail(&format!(
-            "`--restitution-curve`: `{text}` is not V:E,V:E,... (m/s : restitution)"
-        ));
-    };
-    match RestitutionCurve::new(points) {
-        Ok(c) => Some(c),
-        Err(e) => args.fail(&format!("`--restitution-curve`: {e}")),
-    }
+    let points = points.ok_or("not V:E,V:E,... (m/s : restitution)")?;
+    RestitutionCurve::new(points).map_err(|e| e.to_string())
 }
 
-fn parse_setup(args: &Args) -> Setup {
-    args.check_precision();
-    // `inertia_ratio` takes anything but `hollow` for solid: refuse a misspelt shell first.
-    args.choice("--shell");
+/// The run the flags ask for; exits with the plugin's message when its ranges (e, mu, beta0,
+/// the curve's e) refuse a value.
+fn setup(args: &Args) -> Setup {
+    common::check_precision::<Args>(args.f64);
     let setup = Setup {
-        speed: args.positive("--speed"),
-        angles: parse_angles(args),
-        radius: args.positive("--radius"),
-        k: args.inertia_ratio(),
-        restitution: args.non_negative("--restitution"),
-        curve: parse_curve(args),
-        friction: args.non_negative("--friction"),
-        beta0: args.number("--tangential-restitution"),
-        spin: args.number("--spin"),
-        gravity: args.non_negative("--gravity"),
-        dt: args.positive("--dt"),
-        mode: args.mode(),
+        speed: args.speed,
+        angles: args.angles.0.clone(),
+        radius: args.radius,
+        shell: args.shell,
+        k: args.shell.inertia_ratio(),
+        restitution: args.restitution,
+        curve: args.restitution_curve.clone(),
+        friction: args.friction,
+        beta0: args.tangential_restitution,
+        spin: args.spin,
+        gravity: args.gravity,
+        dt: args.dt,
+        mode: args.mode,
     };
-    // The plugin's own ranges (e, mu, beta0, the curve's e), with its message.
     if let Err(e) = setup.material(setup.beta0).validate() {
-        args.fail(&e.to_string());
+        common::fail::<Args>(e);
     }
     setup
 }
@@ -802,7 +844,7 @@ fn plot_panel(
 // ---------------------------------------------------------------------------------------------
 
 /// The parameters of the run, for the printed header and the plot's title.
-fn describe(args: &Args, setup: &Setup) -> String {
+fn describe(setup: &Setup) -> String {
     let e = match &setup.curve {
         Some(c) => format!("e = curve {:?}", c.points()),
         None => format!("e = {}", setup.restitution),
@@ -812,7 +854,7 @@ fn describe(args: &Args, setup: &Setup) -> String {
          g = {} m/s^2, dt = {:.7} s",
         setup.speed,
         setup.radius,
-        args.choice("--shell"),
+        setup.shell.name(),
         setup.k,
         setup.friction,
         setup.beta0,
@@ -823,57 +865,10 @@ fn describe(args: &Args, setup: &Setup) -> String {
 }
 
 fn main() {
-    let spec = [
-        flag(
-            "--speed",
-            "V",
-            "3.9",
-            "launch speed (m/s): the impact speed without gravity",
-        ),
-        flag(
-            "--angles",
-            "FROM:TO:STEP",
-            "5:85:5",
-            "incidence angles from the normal (deg), 0 <= FROM <= TO < 90",
-        ),
-        flag("--radius", "R", "0.0025", "ball radius (m)"),
-        SHELL,
-        flag("--restitution", "E", "0.98", "coefficient of restitution"),
-        flag(
-            "--restitution-curve",
-            "V:E,V:E,...",
-            "",
-            "restitution against the normal approach speed (m/s), piecewise linear; replaces --restitution",
-        ),
-        flag("--friction", "MU", "0.092", "coefficient of friction"),
-        flag(
-            "--tangential-restitution",
-            "BETA0",
-            "0",
-            "Walton's tangential restitution beta0 in [-1, 1] (0 is Coulomb's stick)",
-        ),
-        flag("--spin", "W", "0", "initial spin about +z (rad/s)"),
-        flag("--gravity", "G", "0", "gravity, downwards (m/s^2)"),
-        MODE,
-        flag("--dt", "DT", "1/60", "time step (s)"),
-        F64,
-        flag(
-            "--csv",
-            "PATH",
-            "",
-            "write incidence_deg,vx_in,vy_in,wz_in,vx_out,vy_out,wz_out,... per angle",
-        ),
-        flag(
-            "--svg",
-            "PATH",
-            "",
-            "plot beta0 = 0, the given beta0 (the plugin) and rapier alone against incidence",
-        ),
-    ];
-    let args = Args::parse("oblique", ABOUT, &spec);
-    let setup = parse_setup(&args);
+    let args: Args = common::parse();
+    let setup = setup(&args);
     let shots = or_exit(run(&setup, setup.mode, setup.beta0), "oblique");
-    let about = describe(&args, &setup);
+    let about = describe(&setup);
     println!(
         "oblique: {about}, mode = {}, precision = {}",
         setup.mode.name(),
@@ -881,11 +876,11 @@ fn main() {
     );
     print_table(&setup, &shots);
     print_summary(&setup, &shots);
-    if let Some(path) = args.path("--csv") {
-        write_csv(&path, &setup, &shots);
+    if let Some(path) = &args.csv {
+        write_csv(path, &setup, &shots);
     }
-    if let Some(path) = args.path("--svg") {
+    if let Some(path) = &args.svg {
         let title = format!("oblique impacts: {about} ({})", common::PRECISION);
-        or_exit(plot(&path, &setup, &title), &format!("cannot plot {path}"));
+        or_exit(plot(path, &setup, &title), &format!("cannot plot {path}"));
     }
 }

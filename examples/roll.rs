@@ -7,15 +7,8 @@
 //! cargo run --release --example roll -- --speed 1 --backspin 60 --rolling-resistance 0.01
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--speed V` (initial centre speed along
-//! the ground, m/s, +x of the ground's frame, downhill on a slope, 2), `--backspin W` (rad/s,
-//! 0: no spin; negative: topspin), `--rolling` (start rolling without slip instead),
-//! `--normal-spin W` (rad/s about the ground normal, 0), `--friction MU` (0.2),
-//! `--rolling-resistance MU_R` (0.01), `--spinning-friction MU_SP` (0.01), `--slope DEG` (the
-//! ground tilted about world z, downhill +x and down, 0), `--radius R` (m, 0.021335, a golf
-//! ball), `--shell solid|hollow` (solid), `--dt DT` (s, 1/60), `--duration T` (s, 20),
-//! `--mode rapier|step|toi|exact` (exact), `--f64` (needs `--features f64`), `--csv PATH`
-//! (trace `t,x,y,z,vx,vy,vz,wx,wy,wz`, world frame, y up, one row per step and one at t = 0).
+//! Every flag has a default; `--help` lists them with their units. `--csv PATH` writes the
+//! trace `t,x,y,z,vx,vy,vz,wx,wy,wz`, world frame, y up, one row per step and one at t = 0.
 //!
 //! Measured: the first step end at which the contact point's slip is below 1e-6 m/s (rolls),
 //! the first at which the ball is at rest (its speed below 1e-6 m/s), and the distance along
@@ -23,13 +16,69 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, SHELL, TraceCsv, flag, real, switch, wide};
+use clap::Parser;
+use common::{Mode, Shell, TraceCsv, real, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactPlugin};
 
-const ABOUT: &str = "A ball on a plane ground: when it rolls, when it stops and how far it \
-went, beside the closed form.";
+/// A ball on a plane ground, level or sloped, launched sliding, spinning or rolling: when it
+/// starts rolling, when it stops (and its spin about the normal) and how far it went, measured
+/// beside the closed form with rolling resistance and spinning friction.
+#[derive(Parser, Debug)]
+#[command(
+    name = "roll",
+    after_help = "Example: cargo run --release --example roll -- --rolling --speed 1.8 --rolling-resistance 0.078"
+)]
+struct Args {
+    /// Initial centre speed along the ground, +x of the ground's frame, downhill (m/s)
+    #[arg(long, value_name = "V", default_value = "2", value_parser = common::non_negative)]
+    speed: f64,
+    /// Backspin (rad/s; 0: no spin, negative: topspin)
+    #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
+    backspin: f64,
+    /// Start rolling without slip (instead of --backspin)
+    #[arg(long)]
+    rolling: bool,
+    /// Spin about the ground normal (rad/s)
+    #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
+    normal_spin: f64,
+    /// Ball-ground coefficient of friction
+    #[arg(long, value_name = "MU", default_value = "0.2", value_parser = common::non_negative)]
+    friction: f64,
+    /// Rolling resistance coefficient (dimensionless)
+    #[arg(long, value_name = "MU_R", default_value = "0.01", value_parser = common::non_negative)]
+    rolling_resistance: f64,
+    /// Spinning friction coefficient (dimensionless)
+    #[arg(long, value_name = "MU_SP", default_value = "0.01", value_parser = common::non_negative)]
+    spinning_friction: f64,
+    /// Ground tilt about world z, downhill +x, in [0, 80) (deg)
+    #[arg(long, value_name = "DEG", default_value = "0", value_parser = |s: &str| common::degrees_below(s, 80.0))]
+    slope: f64,
+    /// Ball radius (m; the default is a golf ball)
+    #[arg(long, value_name = "R", default_value = "0.021335", value_parser = common::positive)]
+    radius: f64,
+    /// Solid ball or thin shell
+    #[arg(long, value_enum, value_name = "SHELL", default_value_t = Shell::Solid)]
+    shell: Shell,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Simulated time (s)
+    #[arg(long, value_name = "T", default_value = "20", value_parser = common::positive)]
+    duration: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    f64: bool,
+    /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball (m, m/s, rad/s), one row per step
+    /// and one at t = 0 [default: none]
+    #[arg(long, value_name = "PATH")]
+    csv: Option<String>,
+}
 
 /// The closed form along the fall line (or on level ground): when the slip ends, when the
 /// ball stops (`None`: not within the run), and how far it went along +x of the ground by
@@ -118,92 +167,24 @@ fn closed_form(
     }
 }
 
-fn main() {
-    let spec = [
-        flag(
-            "--speed",
-            "V",
-            "2",
-            "initial centre speed along the ground, +x, downhill (m/s)",
-        ),
-        flag(
-            "--backspin",
-            "W",
-            "0",
-            "backspin (rad/s; negative: topspin)",
-        ),
-        switch(
-            "--rolling",
-            "start rolling without slip (instead of --backspin)",
-        ),
-        flag(
-            "--normal-spin",
-            "W",
-            "0",
-            "spin about the ground normal (rad/s)",
-        ),
-        flag(
-            "--friction",
-            "MU",
-            "0.2",
-            "ball-ground coefficient of friction",
-        ),
-        flag(
-            "--rolling-resistance",
-            "MU_R",
-            "0.01",
-            "rolling resistance coefficient",
-        ),
-        flag(
-            "--spinning-friction",
-            "MU_SP",
-            "0.01",
-            "spinning friction coefficient",
-        ),
-        flag(
-            "--slope",
-            "DEG",
-            "0",
-            "ground tilt about world z, downhill +x (deg)",
-        ),
-        flag("--radius", "R", "0.021335", "ball radius (m)"),
-        SHELL,
-        flag("--dt", "DT", "0.016666666666666666", "time step (s)"),
-        flag("--duration", "T", "20", "simulated time (s)"),
-        MODE,
-        F64,
-        CSV,
-    ];
-    let args = Args::parse("roll", ABOUT, &spec);
-    args.check_precision();
-    let v0 = args.non_negative("--speed");
-    let r = args.positive("--radius");
-    let mu = args.non_negative("--friction");
-    let mu_r = args.non_negative("--rolling-resistance");
-    let mu_sp = args.non_negative("--spinning-friction");
-    let slope_deg = args.number("--slope");
-    if !(0.0..80.0).contains(&slope_deg) {
-        args.fail("--slope must be in [0, 80) degrees");
-    }
-    let slope = slope_deg.to_radians();
-    let k = args.inertia_ratio();
-    let hollow = k != 0.4;
-    let (dt, duration) = (args.positive("--dt"), args.positive("--duration"));
-    let mode = args.mode();
-    let normal_spin = args.number("--normal-spin");
-    // The ground's frame: normal n, downhill d. Rolling forward along d spins at v / R about
-    // n x d; backspin is the opposite sense.
-    let n = Vector3::new(slope.sin(), slope.cos(), 0.0);
-    let d = Vector3::new(slope.cos(), -slope.sin(), 0.0);
-    let roll_axis = n.cross(&d);
-    let spin_along = if args.on("--rolling") {
-        v0 / r
-    } else {
-        -args.number("--backspin")
-    };
-    let slip0 = v0 - r * spin_along;
-    let w = roll_axis * spin_along + n * normal_spin;
-    let mut world = common::world(dt);
+/// The ground's frame: its normal `n` and downhill direction `d` (+x on level ground).
+fn frame(slope: f64) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        Vector3::new(slope.sin(), slope.cos(), 0.0),
+        Vector3::new(slope.cos(), -slope.sin(), 0.0),
+    )
+}
+
+/// The ground tilted by `args.slope`, the ball on it with velocity `v` and spin `w`, and the
+/// plugin of `args.mode` (none for rapier alone).
+fn build(
+    args: &Args,
+    v: Vector3<f64>,
+    w: Vector3<f64>,
+) -> (PhysicsWorld, RigidBodyHandle, Option<ImpactPlugin>) {
+    let (r, mu) = (args.radius, args.friction);
+    let (n, _) = frame(args.slope.to_radians());
+    let mut world = common::world(args.dt);
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
         ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(
@@ -213,8 +194,7 @@ fn main() {
         .friction(real(mu)),
     );
     let at = n * r;
-    let v = d * v0;
-    let mass_props = if hollow {
+    let mass_props = if args.shell == Shell::Hollow {
         // A thin shell: I = 2/3 m R^2, from a ball of density 1 with its inertia replaced.
         let m = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
         Some(MassProperties::new(
@@ -239,22 +219,41 @@ fn main() {
             .allow_fast_rotation(true),
         collider,
     );
-    let mut plugin = match mode {
+    let plugin = match args.mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
-            let mut p = ImpactPlugin::new(ImpactConfig {
-                timing,
-                rolling_resistance: mu_r,
-                spinning_friction: mu_sp,
-                ..Default::default()
-            })
-            .unwrap_or_else(|e| args.fail(&e.to_string()));
+            let mut config = ImpactConfig::default();
+            config.timing = timing;
+            config.rolling_resistance = args.rolling_resistance;
+            config.spinning_friction = args.spinning_friction;
+            let mut p = ImpactPlugin::new(config).unwrap_or_else(|e| common::fail::<Args>(e));
             p.add_ground(&world.bodies, &world.colliders, ground)
                 .expect("the ground exists");
             Some(p)
         }
     };
-    let mut csv = args.path("--csv").map(|p| TraceCsv::create(&p, ball));
+    (world, ball, plugin)
+}
+
+/// What the run measured: the first step ends at which the ball rolls, stops, and stops
+/// spinning about the normal, and the distance along the ground at the end.
+struct Measured {
+    rolls: Option<f64>,
+    stops: Option<f64>,
+    spin_stops: Option<f64>,
+    distance: f64,
+}
+
+/// Steps for `args.duration`, writing the trace if asked.
+fn run(
+    args: &Args,
+    world: &mut PhysicsWorld,
+    ball: RigidBodyHandle,
+    plugin: &mut Option<ImpactPlugin>,
+) -> Measured {
+    let (r, dt, normal_spin) = (args.radius, args.dt, args.normal_spin);
+    let (n, d) = frame(args.slope.to_radians());
+    let mut csv = args.csv.as_deref().map(|p| TraceCsv::create(p, ball));
     if let Some(c) = csv.as_mut() {
         c.row(0.0, &world.bodies);
     }
@@ -264,11 +263,11 @@ fn main() {
         (na(rb.center_of_mass()), na(rb.linvel()), na(rb.angvel()))
     };
     let (start, _, _) = state(&world.bodies);
-    let steps = (duration / dt).round() as usize;
+    let steps = (args.duration / dt).round() as usize;
     let (mut rolls, mut stops, mut spin_stops) = (None, None, None);
     let mut distance = 0.0;
     for step in 1..=steps {
-        common::step(&mut world, &mut plugin);
+        common::step(world, plugin);
         let t = step as f64 * dt;
         if let Some(c) = csv.as_mut() {
             c.row(t, &world.bodies);
@@ -289,6 +288,37 @@ fn main() {
     if let Some(c) = csv {
         c.finish();
     }
+    Measured {
+        rolls,
+        stops,
+        spin_stops,
+        distance,
+    }
+}
+
+fn main() {
+    let args: Args = common::parse();
+    common::check_precision::<Args>(args.f64);
+    let (v0, r, mu, mu_r, mu_sp) = (
+        args.speed,
+        args.radius,
+        args.friction,
+        args.rolling_resistance,
+        args.spinning_friction,
+    );
+    let slope_deg = args.slope;
+    let slope = slope_deg.to_radians();
+    let k = args.shell.inertia_ratio();
+    let (dt, duration, mode, normal_spin) = (args.dt, args.duration, args.mode, args.normal_spin);
+    // The ground's frame: normal n, downhill d. Rolling forward along d spins at v / R about
+    // n x d; backspin is the opposite sense.
+    let (n, d) = frame(slope);
+    let roll_axis = n.cross(&d);
+    let spin_along = if args.rolling { v0 / r } else { -args.backspin };
+    let slip0 = v0 - r * spin_along;
+    let w = roll_axis * spin_along + n * normal_spin;
+    let (mut world, ball, mut plugin) = build(&args, d * v0, w);
+    let measured = run(&args, &mut world, ball, &mut plugin);
     let expected = closed_form(
         v0,
         slip0,
@@ -309,28 +339,34 @@ mode = {}, precision = {}",
         mode.name(),
         common::PRECISION
     );
+    print_comparison(&measured, &expected, normal_spin);
+}
+
+/// The measured times and distance beside the closed form's.
+fn print_comparison(measured: &Measured, expected: &ClosedForm, normal_spin: f64) {
     let time = |t: Option<f64>| t.map_or("never".to_string(), |t| format!("{t:.4} s"));
     println!("{:>22} {:>14} {:>14}", "", "measured", "closed form");
     println!(
         "{:>22} {:>14} {:>14}",
         "rolls from",
-        time(rolls),
+        time(measured.rolls),
         time(expected.rolls_at)
     );
     println!(
         "{:>22} {:>14} {:>14}",
         "stops at",
-        time(stops),
+        time(measured.stops),
         time(expected.stops_at)
     );
     if normal_spin != 0.0 {
         println!(
             "{:>22} {:>14} {:>14}",
             "normal spin stops at",
-            time(spin_stops),
+            time(measured.spin_stops),
             time(expected.spin_stops_at)
         );
     }
+    let distance = measured.distance;
     println!(
         "{:>22} {:>14} {:>14}",
         "distance",

@@ -5,14 +5,9 @@
 //! cargo run --release --example spin -- --vx 5 --vy 5 --spin 30 --friction 0.1 --shell hollow
 //! ```
 //!
-//! Flags (each has a default; `--help` lists them): `--height H` (gap from the ball's bottom to
-//! the ground at release, m, 0.5), `--radius R` (m, 0.1), `--restitution E` (0.6),
-//! `--friction MU` (0.4), `--vx VX` (horizontal speed along +x, m/s, 5), `--vy VY` (downward
-//! speed at first contact, a positive number, m/s, 5; the release velocity is chosen for it),
-//! `--spin W` (angular velocity about world z, rad/s, 0), `--shell solid|hollow` (solid),
-//! `--dt DT` (s, 1/60), `--duration T` (s, 1.5), `--mode rapier|step|toi|exact` (exact;
-//! `rapier` is rapier alone), `--f64` (needs `--features f64`), `--csv PATH` (trace
-//! `t,x,y,z,vx,vy,vz,wx,wy,wz`).
+//! Every flag has a default; `--help` lists them with their units. `--vy` is the downward
+//! speed at first contact (the release velocity is chosen for it); `--csv PATH` writes the
+//! trace `t,x,y,z,vx,vy,vz,wx,wy,wz`.
 //!
 //! Axes. rapier is y up; the closed forms are written z up with a spin `w_y` about the
 //! horizontal axis. The right-handed map from z-up `(x, y, z)` to y-up is `(x, -z, y)`, so
@@ -34,12 +29,62 @@
 
 mod common;
 
-use common::{Args, CSV, F64, MODE, Mode, SHELL, TraceCsv, flag, real, wide};
+use clap::Parser;
+use common::{Mode, Shell, TraceCsv, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 
-const ABOUT: &str = "A ball landing with horizontal speed and spin: post-bounce vx, spin and vy \
-against the closed forms (stick or slip).";
+/// A ball landing with horizontal speed and spin: after each bounce, its horizontal velocity,
+/// spin and take-off speed measured beside the closed forms (stick or slip), chained from the
+/// release state. A positive `--spin` is backspin.
+#[derive(Parser, Debug)]
+#[command(
+    name = "spin",
+    after_help = "Example: cargo run --release --example spin -- --vx 5 --vy 5 --spin 30 --friction 0.1 --shell hollow"
+)]
+struct Args {
+    /// Gap from the ball's bottom to the ground at release (m)
+    #[arg(long, value_name = "H", default_value = "0.5", value_parser = common::positive)]
+    height: f64,
+    /// Ball radius (m)
+    #[arg(long, value_name = "R", default_value = "0.1", value_parser = common::positive)]
+    radius: f64,
+    /// Coefficient of restitution of ball and ground
+    #[arg(long, value_name = "E", default_value = "0.6", value_parser = common::non_negative)]
+    restitution: f64,
+    /// Coefficient of friction of ball and ground
+    #[arg(long, value_name = "MU", default_value = "0.4", value_parser = common::non_negative)]
+    friction: f64,
+    /// Horizontal speed along +x (m/s)
+    #[arg(long, value_name = "VX", default_value = "5", value_parser = common::number)]
+    vx: f64,
+    /// Downward speed at first contact, > 0 (m/s)
+    #[arg(long, value_name = "VY", default_value = "5", value_parser = common::positive)]
+    vy: f64,
+    /// Angular velocity about world z (rad/s); > 0 is backspin
+    #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
+    spin: f64,
+    /// Solid ball or thin shell
+    #[arg(long, value_enum, value_name = "SHELL", default_value_t = Shell::Solid)]
+    shell: Shell,
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
+    dt: f64,
+    /// Simulated time (s)
+    #[arg(long, value_name = "T", default_value = "1.5", value_parser = common::positive)]
+    duration: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    mode: Mode,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    f64: bool,
+    /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball (m, m/s, rad/s), one row per step
+    /// and one at t = 0 [default: none]
+    #[arg(long, value_name = "PATH")]
+    csv: Option<String>,
+}
 
 /// The closed-form bounce of a ball with `k = I/(m R^2)`: returns `(vx', w_z', vy', stick)`
 /// from `(vx, w_z, vy)`, `vy` the downward speed (y up, see the module docs).
@@ -70,75 +115,31 @@ struct Flight {
     /// Take-off speed, `sqrt(vy^2 + 2 g (y - R))`.
     vy: f64,
 }
-
-fn main() {
-    let spec = [
-        flag(
-            "--height",
-            "H",
-            "0.5",
-            "gap from the ball's bottom to the ground at release (m)",
-        ),
-        flag("--radius", "R", "0.1", "ball radius (m)"),
-        flag(
-            "--restitution",
-            "E",
-            "0.6",
-            "restitution of ball and ground",
-        ),
-        flag("--friction", "MU", "0.4", "friction of ball and ground"),
-        flag("--vx", "VX", "5", "horizontal speed along +x (m/s)"),
-        flag(
-            "--vy",
-            "VY",
-            "5",
-            "downward speed at first contact, > 0 (m/s)",
-        ),
-        flag(
-            "--spin",
-            "W",
-            "0",
-            "angular velocity about world z (rad/s); > 0 is backspin",
-        ),
-        SHELL,
-        flag("--dt", "DT", "1/60", "time step (s)"),
-        flag("--duration", "T", "1.5", "simulated time (s)"),
-        MODE,
-        F64,
-        CSV,
-    ];
-    let args = Args::parse("spin", ABOUT, &spec);
-    args.check_precision();
-    let height = args.positive("--height");
-    let radius = args.positive("--radius");
-    let e = args.non_negative("--restitution");
-    let mu = args.non_negative("--friction");
-    let vx0 = args.number("--vx");
-    let vy_contact = args.positive("--vy");
-    let spin0 = args.number("--spin");
-    let k = args.inertia_ratio();
-    let dt = args.positive("--dt");
-    let duration = args.positive("--duration");
-    let mode = args.mode();
-
-    let mut world = common::world(dt);
-    let g = -wide(world.gravity.y);
-    // Released at gap `height`, moving down so as to reach the ground at `vy_contact`.
-    let vy0_sq = vy_contact * vy_contact - 2.0 * g * height;
+/// The ground, and the ball released `args.height` above it so as to reach it at `args.vy`;
+/// exits with a message when no release speed does (`g` downwards, `k = I/(m R^2)`).
+fn insert_ball(
+    args: &Args,
+    world: &mut PhysicsWorld,
+    g: f64,
+    k: f64,
+) -> (ColliderHandle, RigidBodyHandle) {
+    let (height, radius, e, mu) = (args.height, args.radius, args.restitution, args.friction);
+    // Released at gap `height`, moving down so as to reach the ground at `--vy`.
+    let vy0_sq = args.vy * args.vy - 2.0 * g * height;
     if vy0_sq < 0.0 {
-        args.fail(&format!(
+        common::fail::<Args>(format!(
             "a ball released {height} m above the ground reaches it at >= {:.4} m/s: \
              raise --vy or lower --height",
             (2.0 * g * height).sqrt()
         ));
     }
-    let ground = common::ground(&mut world, e, mu);
+    let ground = common::ground(world, e, mu);
     let mass = 1.0;
     let (ball, _) = world.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(0.0, real(radius + height), 0.0))
-            .linvel(Vector::new(real(vx0), real(-vy0_sq.sqrt()), 0.0))
-            .angvel(Vector::new(0.0, 0.0, real(spin0)))
+            .linvel(Vector::new(real(args.vx), real(-vy0_sq.sqrt()), 0.0))
+            .angvel(Vector::new(0.0, 0.0, real(args.spin)))
             .allow_fast_rotation(true),
         ColliderBuilder::ball(real(radius))
             .mass_properties(MassProperties::new(
@@ -149,18 +150,29 @@ fn main() {
             .restitution(real(e))
             .friction(real(mu)),
     );
-    let mut plugin = common::plugin(mode, Law::Guarded, &mut world, ground);
-    let mut csv = args.path("--csv").map(|p| TraceCsv::create(&p, ball));
+    (ground, ball)
+}
 
+/// Steps for `args.duration` (writing the trace if asked) and returns each flight after a
+/// bounce, as seen at its highest sample.
+fn fly(
+    args: &Args,
+    world: &mut PhysicsWorld,
+    ball: RigidBodyHandle,
+    plugin: &mut Option<rapier_impact::ImpactPlugin>,
+    g: f64,
+) -> Vec<Flight> {
+    let radius = args.radius;
+    let mut csv = args.csv.as_deref().map(|p| TraceCsv::create(p, ball));
     let dt = wide(world.integration_parameters.dt);
-    let steps = (duration / dt).ceil() as usize;
+    let steps = (args.duration / dt).ceil() as usize;
     let mut flights: Vec<Flight> = Vec::new();
     let mut top: Option<(f64, Flight)> = None; // highest sample of the current flight
     let mut prev_vy = -1.0;
     let mut bounced = false;
     for n in 0..=steps {
         if n > 0 {
-            common::step(&mut world, &mut plugin);
+            common::step(world, plugin);
         }
         let t = n as f64 * dt;
         if let Some(c) = csv.as_mut() {
@@ -201,17 +213,35 @@ fn main() {
     if let Some(c) = csv {
         c.finish();
     }
+    flights
+}
 
+fn main() {
+    let args: Args = common::parse();
+    common::check_precision::<Args>(args.f64);
+    let (radius, e, mu, k) = (
+        args.radius,
+        args.restitution,
+        args.friction,
+        args.shell.inertia_ratio(),
+    );
+    let (vx0, vy_contact, spin0, mode) = (args.vx, args.vy, args.spin, args.mode);
+    let mut world = common::world(args.dt);
+    let g = -wide(world.gravity.y);
+    let (ground, ball) = insert_ball(&args, &mut world, g, k);
+    let mut plugin = common::plugin(mode, Law::Guarded, &mut world, ground);
+    let flights = fly(&args, &mut world, ball, &mut plugin, g);
+    let dt = wide(world.integration_parameters.dt);
     println!(
         "spin: R = {radius} m, {} sphere (k = {k:.4}), e = {e}, mu = {mu}, vx = {vx0} m/s, \
          vy = {vy_contact} m/s down, spin w_z = {spin0} rad/s, dt = {dt:.7} s, mode = {}, \
          precision = {}",
-        args.choice("--shell"),
+        args.shell.name(),
         mode.name(),
         common::PRECISION
     );
     if flights.is_empty() {
-        println!("no complete bounce within --duration {duration} s");
+        println!("no complete bounce within --duration {} s", args.duration);
         return;
     }
     println!(

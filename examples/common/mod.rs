@@ -1,15 +1,17 @@
-//! Code shared by the example scenes (`mod common;` in each): a small flag parser where every
-//! flag has a default, the `--mode` and `--law` choices, the `--f64` check, the scene's ground,
-//! one step with or without the plugin, the dice throw, the CSV trace and events writers, and a
-//! seeded random number generator.
+//! Code shared by the example scenes (`mod common;` in each): the command-line values they
+//! share (numbers such as `1/60`, the `--mode`, `--law` and `--shell` choices, the `--f64`
+//! check), the scene's ground, the plugin, one step with or without it, the dice throw, the
+//! CSV trace and events writers, and a seeded random number generator.
 //!
 //! Conventions of every scene: y up, ground surface at y = 0, rapier's default gravity.
 #![allow(dead_code)] // each example uses a part of this module
 
+use clap::builder::PossibleValue;
+use clap::error::ErrorKind;
+use clap::{CommandFactory, Parser, ValueEnum};
 use rapier_impact::model::{Fallback, Law, Regime};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
-use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 
@@ -29,307 +31,98 @@ pub fn wide(x: Real) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Flags
+// Command-line values (parsers for clap's `value_parser`, value enums, checks)
 
-/// One command-line flag: `--name VALUE`, or a switch when `value` is empty.
-#[derive(Clone, Copy, Debug)]
-pub struct Flag {
-    /// With the dashes: `"--height"`.
-    pub name: &'static str,
-    /// Placeholder shown in the usage (`"H"`); empty for a switch.
-    pub value: &'static str,
-    /// The value used when the flag is absent; empty means "off" (no file written, switch
-    /// not set).
-    pub default: &'static str,
-    /// One line of help, units included.
-    pub help: &'static str,
+/// A finite number. `1/60` style fractions are accepted too, so that a time step can be
+/// given exactly as users think of it.
+pub fn number(text: &str) -> Result<f64, String> {
+    let parsed = match text.split_once('/') {
+        Some((a, b)) => match (a.trim().parse::<f64>(), b.trim().parse::<f64>()) {
+            (Ok(a), Ok(b)) => Some(a / b),
+            _ => None,
+        },
+        None => text.parse::<f64>().ok(),
+    };
+    parsed
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| "not a finite number (a fraction such as 1/60 is accepted)".to_string())
 }
 
-/// A flag taking a value.
-pub const fn flag(
-    name: &'static str,
-    value: &'static str,
-    default: &'static str,
-    help: &'static str,
-) -> Flag {
-    Flag {
-        name,
-        value,
-        default,
-        help,
+/// A finite number `> 0`.
+pub fn positive(text: &str) -> Result<f64, String> {
+    let x = number(text)?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("must be > 0, got {x}"))
     }
 }
 
-/// A switch (no value; off by default).
-pub const fn switch(name: &'static str, help: &'static str) -> Flag {
-    Flag {
-        name,
-        value: "",
-        default: "",
-        help,
+/// A finite number `>= 0`.
+pub fn non_negative(text: &str) -> Result<f64, String> {
+    let x = number(text)?;
+    if x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("must be >= 0, got {x}"))
     }
 }
 
-/// `--mode rapier|step|toi|exact`, default `exact`.
-pub const MODE: Flag = flag(
-    "--mode",
-    "rapier|step|toi|exact",
-    "exact",
-    "rapier = rapier alone (no plugin); step, toi, exact = the plugin's timing modes",
-);
-/// `--f64`.
-pub const F64: Flag = switch(
-    "--f64",
-    "double precision: needs a build with `--features f64` (the precision is chosen at build time)",
-);
-/// `--shell solid|hollow`, default `solid`: see [`Args::inertia_ratio`].
-pub const SHELL: Flag = flag(
-    "--shell",
-    "solid|hollow",
-    "solid",
-    "solid ball (I = 2/5 m R^2) or thin shell (2/3 m R^2)",
-);
-/// `--csv PATH`.
-pub const CSV: Flag = flag(
-    "--csv",
-    "PATH",
-    "",
-    "write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the first dynamic body (centre of mass)",
-);
-/// `--law document|consistent|guarded`, default `guarded`.
-pub const LAW: Flag = flag(
-    "--law",
-    "document|consistent|guarded",
-    "guarded",
-    "the impact law (see rapier_impact::model::Law)",
-);
-
-/// Parsed flags. The getters exit with a message and the usage when a value is bad.
-pub struct Args {
-    program: &'static str,
-    about: &'static str,
-    spec: Vec<Flag>,
-    given: HashMap<&'static str, String>,
+/// A whole number `>= min`.
+pub fn whole(text: &str, min: u64) -> Result<u64, String> {
+    match text.parse::<u64>() {
+        Ok(n) if n >= min => Ok(n),
+        _ => Err(format!("not a whole number >= {min}")),
+    }
 }
 
-impl Args {
-    /// Parses the process arguments against `spec`; exits with the usage on `--help` (status
-    /// 0) or on a bad command line (status 2).
-    pub fn parse(program: &'static str, about: &'static str, spec: &[Flag]) -> Self {
-        match Self::parse_from(program, about, spec, std::env::args().skip(1)) {
-            Ok(a) => a,
-            Err(None) => {
-                println!("{}", usage(program, about, spec));
-                std::process::exit(0);
-            }
-            Err(Some(msg)) => {
-                eprintln!("{program}: {msg}\n\n{}", usage(program, about, spec));
-                std::process::exit(2);
-            }
+/// An angle in degrees, in `[0, max)`.
+pub fn degrees_below(text: &str, max: f64) -> Result<f64, String> {
+    let x = number(text)?;
+    if (0.0..max).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("must be in [0, {max}) degrees, got {x}"))
+    }
+}
+
+/// The scene's flags from the process arguments; exits on `--help` (status 0) or on a bad
+/// command line (status 2). Every option takes the next word as its value even when it starts
+/// with `-`, so that negative numbers (`--spin -30`, `--spin -1/2`) read as they always did.
+pub fn parse<P: Parser>() -> P {
+    let command = P::command().mut_args(|arg| {
+        if arg.get_action().takes_values() {
+            arg.allow_hyphen_values(true)
+        } else {
+            arg
         }
-    }
+    });
+    let mut matches = command.get_matches();
+    P::from_arg_matches_mut(&mut matches).unwrap_or_else(|e| e.exit())
+}
 
-    /// Parses `argv` (without the program name). `Err(None)` is a request for help.
-    pub fn parse_from(
-        program: &'static str,
-        about: &'static str,
-        spec: &[Flag],
-        argv: impl IntoIterator<Item = String>,
-    ) -> Result<Self, Option<String>> {
-        let mut given = HashMap::new();
-        let mut it = argv.into_iter();
-        while let Some(arg) = it.next() {
-            if arg == "-h" || arg == "--help" {
-                return Err(None);
-            }
-            let (name, inline) = match arg.split_once('=') {
-                Some((n, v)) if n.starts_with("--") => (n.to_string(), Some(v.to_string())),
-                _ => (arg.clone(), None),
-            };
-            let Some(f) = spec.iter().find(|f| f.name == name) else {
-                return Err(Some(format!("unknown flag `{arg}`")));
-            };
-            let value = if f.value.is_empty() {
-                if inline.is_some() {
-                    return Err(Some(format!("`{}` takes no value", f.name)));
-                }
-                "on".to_string()
-            } else {
-                match inline.or_else(|| it.next()) {
-                    Some(v) => v,
-                    None => return Err(Some(format!("`{}` needs a value {}", f.name, f.value))),
-                }
-            };
-            if given.insert(f.name, value).is_some() {
-                return Err(Some(format!("`{}` given twice", f.name)));
-            }
-        }
-        Ok(Self {
-            program,
-            about,
-            spec: spec.to_vec(),
-            given,
-        })
-    }
+/// Exits as clap does on a bad command line (the message, the usage, status 2), for what one
+/// value's parser cannot see: a value against another, or the plugin's own ranges.
+pub fn fail<C: CommandFactory>(message: impl std::fmt::Display) -> ! {
+    C::command()
+        .error(ErrorKind::ValueValidation, message)
+        .exit()
+}
 
-    /// Prints `msg` and the usage, exits with status 2.
-    pub fn fail(&self, msg: &str) -> ! {
-        eprintln!(
-            "{}: {msg}\n\n{}",
-            self.program,
-            usage(self.program, self.about, &self.spec)
+/// `--f64`: the precision is chosen at build time, so in an `f32` build the switch is refused
+/// with the command that works (status 2).
+pub fn check_precision<C: CommandFactory>(f64: bool) {
+    if f64 && !cfg!(feature = "f64") {
+        let mut command = C::command();
+        let message = format!(
+            "`--f64` needs the f64 build: cargo run --release --features f64 --example {} -- --f64 ...",
+            command.get_name()
         );
-        std::process::exit(2);
-    }
-
-    fn raw(&self, name: &str) -> &str {
-        let f = self
-            .spec
-            .iter()
-            .find(|f| f.name == name)
-            .unwrap_or_else(|| panic!("{name} is not a flag of {}", self.program));
-        self.given.get(f.name).map_or(f.default, String::as_str)
-    }
-
-    /// Was the flag given?
-    pub fn given(&self, name: &str) -> bool {
-        self.given.contains_key(name)
-    }
-
-    /// `I / (m R^2)` of the `--shell` chosen: 2/5 solid, 2/3 hollow.
-    pub fn inertia_ratio(&self) -> f64 {
-        if self.choice("--shell") == "hollow" {
-            2.0 / 3.0
-        } else {
-            0.4
-        }
-    }
-
-    /// A switch.
-    pub fn on(&self, name: &str) -> bool {
-        !self.raw(name).is_empty()
-    }
-
-    /// The text of a flag.
-    pub fn text(&self, name: &str) -> String {
-        self.raw(name).to_string()
-    }
-
-    /// A path, or `None` when the flag is off.
-    pub fn path(&self, name: &str) -> Option<String> {
-        let p = self.raw(name);
-        (!p.is_empty()).then(|| p.to_string())
-    }
-
-    /// A finite number. `1/60` style fractions are accepted too.
-    pub fn number(&self, name: &str) -> f64 {
-        let v = self.raw(name);
-        let parsed = match v.split_once('/') {
-            Some((a, b)) => match (a.trim().parse::<f64>(), b.trim().parse::<f64>()) {
-                (Ok(a), Ok(b)) => Some(a / b),
-                _ => None,
-            },
-            None => v.parse::<f64>().ok(),
-        };
-        match parsed.filter(|x| x.is_finite()) {
-            Some(x) => x,
-            None => self.fail(&format!("`{name}`: `{v}` is not a finite number")),
-        }
-    }
-
-    /// A number `> 0`.
-    pub fn positive(&self, name: &str) -> f64 {
-        let x = self.number(name);
-        if x <= 0.0 {
-            self.fail(&format!("`{name}` must be > 0, got {x}"));
-        }
-        x
-    }
-
-    /// A number `>= 0`.
-    pub fn non_negative(&self, name: &str) -> f64 {
-        let x = self.number(name);
-        if x < 0.0 {
-            self.fail(&format!("`{name}` must be >= 0, got {x}"));
-        }
-        x
-    }
-
-    /// A whole number `>= min`.
-    pub fn count(&self, name: &str, min: u64) -> u64 {
-        let v = self.raw(name);
-        match v.parse::<u64>() {
-            Ok(n) if n >= min => n,
-            _ => self.fail(&format!("`{name}`: `{v}` is not a whole number >= {min}")),
-        }
-    }
-
-    /// One of `options` (the text after the flag's name in its placeholder, `a|b|c`).
-    pub fn choice(&self, name: &str) -> String {
-        let v = self.raw(name);
-        let f = self.spec.iter().find(|f| f.name == name).unwrap();
-        if f.value.split('|').any(|o| o == v) {
-            v.to_string()
-        } else {
-            self.fail(&format!("`{name}`: `{v}` is not one of {}", f.value))
-        }
-    }
-
-    /// `--mode`.
-    pub fn mode(&self) -> Mode {
-        match self.choice(MODE.name).as_str() {
-            "rapier" => Mode::Rapier,
-            "step" => Mode::Plugin(TimingMode::Step),
-            "toi" => Mode::Plugin(TimingMode::TimeOfImpact),
-            _ => Mode::Plugin(TimingMode::Exact),
-        }
-    }
-
-    /// `--law`.
-    pub fn law(&self) -> Law {
-        match self.choice(LAW.name).as_str() {
-            "document" => Law::Document,
-            "consistent" => Law::Consistent,
-            _ => Law::Guarded,
-        }
-    }
-
-    /// `--f64`: refused, with the command that works, in an `f32` build.
-    pub fn check_precision(&self) {
-        if self.on(F64.name) && !cfg!(feature = "f64") {
-            self.fail(&format!(
-                "`--f64` needs the f64 build: cargo run --release --features f64 --example {} -- --f64 ...",
-                self.program
-            ));
-        }
+        command.error(ErrorKind::ArgumentConflict, message).exit();
     }
 }
 
-/// The usage text: one line per flag with its default.
-pub fn usage(program: &str, about: &str, spec: &[Flag]) -> String {
-    let mut s = format!("{about}\n\nusage: cargo run --release --example {program} -- [FLAGS]\n");
-    for f in spec {
-        let head = if f.value.is_empty() {
-            f.name.to_string()
-        } else {
-            format!("{} {}", f.name, f.value)
-        };
-        let default = if f.value.is_empty() {
-            "off".to_string()
-        } else if f.default.is_empty() {
-            "none".to_string()
-        } else {
-            f.default.to_string()
-        };
-        s += &format!("  {head:<36} {} (default: {default})\n", f.help);
-    }
-    s
-}
-
-// ---------------------------------------------------------------------------------------------
-// Modes and the scene
-
-/// Rapier alone, or the plugin with a timing mode.
+/// `--mode`: rapier alone, or the plugin with a timing mode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
     /// No plugin: rapier's own contacts and restitution.
@@ -339,6 +132,17 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// The command line's order.
+    pub const ALL: [Mode; 4] = [
+        Mode::Rapier,
+        Mode::Plugin(TimingMode::Step),
+        Mode::Plugin(TimingMode::TimeOfImpact),
+        Mode::Plugin(TimingMode::Exact),
+    ];
+
+    /// The default of every scene.
+    pub const EXACT: Mode = Mode::Plugin(TimingMode::Exact);
+
     /// The name used on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -349,6 +153,75 @@ impl Mode {
         }
     }
 }
+
+// Written by hand, not derived: `Mode` wraps the library's `TimingMode`, which the scenes use
+// as it is, and the command-line names (`toi`) are not the variants' names.
+impl ValueEnum for Mode {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        let help = match self {
+            Mode::Rapier => "Rapier alone, no plugin",
+            Mode::Plugin(TimingMode::Step) => "The plugin, impulses at the step's end",
+            Mode::Plugin(TimingMode::TimeOfImpact) => "The plugin, impulses at the impact's time",
+            Mode::Plugin(TimingMode::Exact) => "The plugin, with exact flight too",
+        };
+        Some(PossibleValue::new(self.name()).help(help))
+    }
+}
+
+/// `--law`: the impact law (`rapier_impact::model::Law`, which this names on the command line).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LawChoice {
+    /// The source document's closed form
+    Document,
+    /// Integration in impulse space: never gains energy
+    Consistent,
+    /// The closed form, falling back to the consistent law where it is unphysical
+    Guarded,
+}
+
+impl From<LawChoice> for Law {
+    fn from(choice: LawChoice) -> Law {
+        match choice {
+            LawChoice::Document => Law::Document,
+            LawChoice::Consistent => Law::Consistent,
+            LawChoice::Guarded => Law::Guarded,
+        }
+    }
+}
+
+/// `--shell`: a solid ball or a thin shell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Shell {
+    /// A solid ball, I = 2/5 m R^2
+    Solid,
+    /// A thin shell, I = 2/3 m R^2
+    Hollow,
+}
+
+impl Shell {
+    /// `I / (m R^2)`: 2/5 solid, 2/3 hollow.
+    pub fn inertia_ratio(self) -> f64 {
+        match self {
+            Shell::Solid => 0.4,
+            Shell::Hollow => 2.0 / 3.0,
+        }
+    }
+
+    /// The name used on the command line (and in the scenes' headers).
+    pub fn name(self) -> &'static str {
+        match self {
+            Shell::Solid => "solid",
+            Shell::Hollow => "hollow",
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The scene
 
 /// A world stepping at `dt` with rapier's default gravity.
 pub fn world(dt: f64) -> PhysicsWorld {
@@ -380,12 +253,10 @@ pub fn plugin(
     let Mode::Plugin(timing) = mode else {
         return None;
     };
-    let mut p = ImpactPlugin::new(ImpactConfig {
-        law,
-        timing,
-        ..Default::default()
-    })
-    .expect("the default configuration is valid");
+    let mut config = ImpactConfig::default();
+    config.law = law;
+    config.timing = timing;
+    let mut p = ImpactPlugin::new(config).expect("the default configuration is valid");
     p.add_ground(&world.bodies, &world.colliders, ground)
         .expect("the ground collider exists");
     Some(p)
@@ -489,15 +360,6 @@ pub fn or_exit<T, E: std::fmt::Display>(r: Result<T, E>, what: &str) -> T {
     })
 }
 
-/// The first dynamic body of the set (in insertion order).
-pub fn first_dynamic(bodies: &RigidBodySet) -> Option<RigidBodyHandle> {
-    bodies
-        .iter()
-        .filter(|(_, rb)| rb.is_dynamic())
-        .min_by_key(|(h, _)| h.into_raw_parts())
-        .map(|(h, _)| h)
-}
-
 /// The trace: header `t,x,y,z,vx,vy,vz,wx,wy,wz`, one row per call, of one body's centre of
 /// mass (m), linear (m/s) and angular (rad/s) velocity, world frame, y up.
 pub struct TraceCsv {
@@ -562,6 +424,7 @@ pub fn regime_label(e: &ImpactEvent) -> String {
             Fallback::Jam => "+fallback_jam",
             Fallback::SlipReversal => "+fallback_slip_reversal",
             Fallback::EnergyGain => "+fallback_energy_gain",
+            _ => "+fallback_other",
         };
     }
     if e.settled {
