@@ -5,7 +5,7 @@
 //! Groups of N balls (radius 5 cm, e = 0.8, mu = 0.5, dt = 1/60, rapier's default parameters)
 //! on a fixed cuboid ground, with the benchmark named `GROUP/N/MODE`, `MODE` = `rapier`
 //! (rapier alone, no plugin), `step`, `toi` or `exact`. The `many_balls` scenes of the
-//! cost model in `docs/integration.md` (`--scene bouncing|idle|pile|rolling`, the pile with
+//! cost model in `docs/guide.md` ("Cost") (`--scene bouncing|idle|pile|rolling`, the pile with
 //! `--pairs`, `--tiles`) each have a group here; the bouncing scene with `--pairs` has none. `bouncing`, `idle` and `pile` run at N = 100, 1 000 and 10 000 in every mode;
 //! the others at one size, in the modes named:
 //!

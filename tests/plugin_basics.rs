@@ -700,7 +700,7 @@ fn slow_landings_rest_and_sleep_like_rapier_bodies_without_sinking() {
 
 #[test]
 fn a_rolling_ball_rolls_at_the_model_speed_without_jitter() {
-    // Landing with 1 m/s sideways and sticking: vx' = vx / (1 + 2/5) (MODEL-NOTES), then
+    // Landing with 1 m/s sideways and sticking: vx' = vx / (1 + 2/5) (docs/model.md, "Closed forms used in the tests"), then
     // rolling in rapier's resting contact (rapier has no rolling resistance: it rolls on).
     let (with, _, impacts) = settle(
         true,
@@ -732,7 +732,7 @@ fn a_rolling_ball_rolls_at_the_model_speed_without_jitter() {
 
 #[test]
 fn a_falling_rod_gets_the_closed_form_impulse_and_spin() {
-    // MODEL-NOTES: rod of length L at angle phi, falling at v, frictionless:
+    // docs/model.md, "Closed forms used in the tests": rod of length L at angle phi, falling at v, frictionless:
     // J = (1 + e) v m / (1 + 3 cos^2 phi), w' = 6 (1 + e) v cos phi / (L (1 + 3 cos^2 phi)).
     // A thin cuboid (cross-section 2 mm) lands on its lower end's edge: two simultaneous
     // points, whose centroid is the rod's end.

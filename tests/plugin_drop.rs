@@ -1,9 +1,9 @@
-//! A ball dropped on a half-space ground, against the closed forms (MODEL-NOTES):
+//! A ball dropped on a half-space ground, against the closed forms (docs/model.md, "Closed forms used in the tests"):
 //! apexes `e^(2n) h0`, impact times `t_(k+1) = t1 + 2 t1 e (1 - e^k)/(1 - e)`, time to rest
 //! `t1 (1 + e)/(1 - e)`; h0 = 1 m, g = 9.81, e = 0.8, dt = 1/60 unless stated.
 //!
 //! What went wrong without the plugin: rapier alone loses 2 % of the first apex and 18 % of
-//! the fifth at 60 Hz (DESIGN). Each test prints the measured values, the expected ones and
+//! the fifth at 60 Hz (docs/accuracy.md). Each test prints the measured values, the expected ones and
 //! rapier's own error on the same scene beside them; the assertions are the tolerances each
 //! mode reaches, per precision.
 
@@ -21,7 +21,7 @@ const H0: f64 = 1.0;
 const E: f64 = 0.8;
 const RADIUS: f64 = 0.1;
 
-/// MODEL-NOTES: the first five impact times for h0 = 1, g = 9.81, e = 0.8.
+/// The closed form's first five impact times for h0 = 1, g = 9.81, e = 0.8.
 const NOTES_TIMES: [f64; 5] = [0.451524, 1.173961, 1.751912, 2.214272, 2.584160];
 
 fn t1() -> f64 {
@@ -202,7 +202,7 @@ fn exact_mode_apexes_follow_e_squared_over_ten_bounces() {
         let m = trace.impacts[k];
         assert!(
             (m - t).abs() < 1e-6,
-            "impact {k}: measured {m:.7} s, MODEL-NOTES {t} s"
+            "impact {k}: measured {m:.7} s, closed form {t} s"
         );
     }
 }

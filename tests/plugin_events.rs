@@ -1,6 +1,6 @@
 //! A hard case never freezes a body: under `Law::Document`, an impact where the document's
 //! slip law has no solution (its eq. 19 denominator `<= 0`, the Painleve-like jam of
-//! MODEL-NOTES) is resolved by the consistent law, and the event says so.
+//! docs/model.md) is resolved by the consistent law, and the event says so.
 //!
 //! What went wrong: the adapter dropped the model's `Jam` error and wrote the body at the
 //! contact with its approach velocity, step after step, with no event.

@@ -1,9 +1,9 @@
 //! A ball landing with horizontal speed and spin on a half-space, against the closed forms
-//! (MODEL-NOTES, "Closed forms for tests"), in the stick and the slip regime, for a solid and a
+//! (docs/model.md, "Closed forms used in the tests"), in the stick and the slip regime, for a solid and a
 //! hollow sphere, at dt = 1/60, 1/240 and 1/1000, in each timing mode.
 //!
 //! What goes wrong without the plugin: rapier alone at 60 Hz gives an oblique bounce's exit
-//! speed and spin several per cent off (DESIGN: +5.1 % and -4.3 % for e = 0.6, mu = 0.4).
+//! speed and spin several per cent off (+5.1 % and -4.3 % for e = 0.6, mu = 0.4, as each test prints beside the plugin's).
 //! Each test prints, per case and dt, the plugin's relative errors and rapier's own on the same
 //! scene; the assertions are the tolerances the mode reaches, per precision.
 //!
@@ -54,10 +54,10 @@ const HOLLOW: f64 = 2.0 / 3.0;
 
 /// Each case's regime is checked against the closed form before running it.
 const CASES: [Case; 7] = [
-    // MODEL-NOTES: vx' = 3.571429.
+    // Closed form: vx' = 3.571429.
     case("solid, stick, no spin", SOLID, 0.5, 0.0, true),
     case("solid, stick, backspin 20", SOLID, 0.5, 20.0, true),
-    // MODEL-NOTES: vx' = 4.1.
+    // Closed form: vx' = 4.1.
     case("solid, slip, no spin", SOLID, 0.1, 0.0, false),
     case("solid, slip, topspin 100", SOLID, 0.1, -100.0, false),
     case("hollow, stick, topspin 20", HOLLOW, 0.5, -20.0, true),

@@ -119,7 +119,7 @@ fn bodies_colliders_and_grounds_change_while_the_plugin_runs() {
             stats.summary()
         );
         assert!(stats.bounces > 10, "{label}: too few bounces");
-        // Not asserted: rapier's own depth (see docs/guarantees.md); printed.
+        // Not asserted: rapier's own depth (see docs/guide.md, "Not guaranteed"); printed.
     }
 }
 

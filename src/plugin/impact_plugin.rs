@@ -60,7 +60,7 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 /// let ball = bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 1.1, 0.0)));
 /// colliders.insert_with_parent(ColliderBuilder::ball(0.1).restitution(0.8), ball, &mut bodies);
 ///
-/// let config = ImpactConfig { timing: TimingMode::TimeOfImpact, ..Default::default() };
+/// let config = ImpactConfig::default().with_timing(TimingMode::TimeOfImpact);
 /// // `()` stands for the hook the simulation already had.
 /// let mut plugin = ImpactPlugin::with_hooks(config, ()).unwrap();
 /// plugin.add_ground(&bodies, &colliders, ground).unwrap();
