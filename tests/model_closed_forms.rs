@@ -1,4 +1,4 @@
-//! Closed forms of MODEL-NOTES ("Closed forms for tests") and a cube-corner impact
+//! Closed forms of docs/model.md ("Closed forms used in the tests") and a cube-corner impact
 //! derived by hand, to 1e-12, through `seed::solve` and every law of the general form,
 //! upright and with the whole problem rotated (any ground normal).
 
@@ -69,7 +69,7 @@ const BALLS: [Ball; 4] = [
     },
 ];
 
-/// MODEL-NOTES: sticks iff |u| <= mu (1+e) |vz| (1+k)/k with u = vx - R w_y; then
+/// docs/model.md: sticks iff |u| <= mu (1+e) |vz| (1+k)/k with u = vx - R w_y; then
 /// vx' = (vx + k R w_y)/(1+k), w_y' = vx'/R; else vx' = vx - mu (1+e)|vz| sgn(u),
 /// w_y' = w_y + mu (1+e)|vz| sgn(u)/(k R); vz' = -e vz.
 fn ball_closed_form(
@@ -92,7 +92,7 @@ fn ball_closed_form(
     }
 }
 
-// One argument per quantity of the closed form, as MODEL-NOTES writes it.
+// One argument per quantity of the closed form, as docs/model.md writes it.
 #[allow(clippy::too_many_arguments)]
 fn check_ball(
     ball: &Ball,
@@ -189,7 +189,7 @@ fn check_ball(
 
 #[test]
 fn solid_sphere_rolls_off_at_five_sevenths_and_slides_off_at_4_1() {
-    // MODEL-NOTES: vx = 5, vz = -5, e = 0.8; mu = 0.5 sticks: vx' = 3.571429; mu = 0.1
+    // docs/model.md: vx = 5, vz = -5, e = 0.8; mu = 0.5 sticks: vx' = 3.571429; mu = 0.1
     // slides: vx' = 4.1.
     let id = Matrix3::identity();
     for (mu, vx2, stick) in [(0.5, 3.571429, true), (0.1, 4.1, false)] {
@@ -207,7 +207,7 @@ fn solid_sphere_rolls_off_at_five_sevenths_and_slides_off_at_4_1() {
         let out = seed::solve(&s).expect("valid");
         assert!(
             (out.u2.x - vx2).abs() < 5e-7,
-            "mu = {mu}: vx' = {:.7}, MODEL-NOTES gives {vx2}",
+            "mu = {mu}: vx' = {:.7}, the closed form gives {vx2}",
             out.u2.x
         );
         assert!(

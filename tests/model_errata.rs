@@ -1,4 +1,4 @@
-//! One test per erratum of MODEL-NOTES, with its numbers. Each test first shows what the
+//! One test per erratum of docs/model.md ("Errata, and what the crate does"), with its numbers. Each test first shows what the
 //! document as printed gives (so the erratum is real) and then that the crate does not.
 
 mod model_support;

@@ -625,7 +625,7 @@ fn three_d_swerve_matches_an_independent_integration_and_never_gains_energy() {
 
 #[test]
 fn document_energy_gain_of_a_sticking_rod_is_reported_and_guarded_falls_back() {
-    // MODEL-NOTES: rod at 45 degrees, e = 1, mu = 1, v = (0.6, 0, -1): KE 0.680 -> 0.7925.
+    // docs/model.md, "Where the document's law is not physical": rod at 45 degrees, e = 1, mu = 1, v = (0.6, 0, -1): KE 0.680 -> 0.7925.
     let (body, inertia, r) = rod_45();
     let c = Contact::fixed(Vector3::z(), r);
     let vel = v(Vector3::new(0.6, 0.0, -1.0), Vector3::zeros());
