@@ -13,7 +13,7 @@
 //!
 //! The table is a half-space at y = 0, marked as ground. The cue ball moves along +x and
 //! starts a hair (1 um along its path) from contact, so that its state at the impact is the flags'. The
-//! closed form (two spheres, MODEL-NOTES "Two bodies"): the normal impulse is
+//! closed form (two spheres, docs/model.md "Two bodies"): the normal impulse is
 //! `(1 + e) u_n / C_n` with `C_n = 2/m`; the contact point's slip `u_t` sticks iff
 //! `|u_t| / C_t <= mu (1 + e) u_n / C_n`, `C_t = 2/m + 2 R^2 / I` (`7/m` for solid balls),
 //! else it slips with `mu P_n` against `u_t`.

@@ -1,5 +1,5 @@
 //! A ball landing with horizontal speed and spin, headless: the velocity and spin after each
-//! bounce, measured against the closed forms (MODEL-NOTES, "Closed forms for tests").
+//! bounce, measured against the closed forms (docs/model.md, "Closed forms used in the tests").
 //!
 //! ```text
 //! cargo run --release --example spin -- --vx 5 --vy 5 --spin 30 --friction 0.1 --shell hollow
