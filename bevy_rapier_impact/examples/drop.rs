@@ -5,14 +5,18 @@
 //! cargo run --release -p bevy_rapier_impact --example drop --ignore-rust-version -- --substeps 4
 //! ```
 //!
-//! Flags: `--dt DT` (s, the frame's physics time, 1/60), `--substeps N` (rapier steps per
-//! frame, `TimestepMode::Fixed`, 1), `--frames F` (300). The ball (radius 0.1 m, e = 0.8,
-//! mu = 0.5) falls 1 m onto a half-space.
+//! Flags (`--help` lists them): `--dt DT` (s, the frame's physics time, 1/60), `--substeps N`
+//! (rapier steps per frame, `TimestepMode::Fixed`, 1), `--frames F` (300). The ball (radius
+//! 0.1 m, e = 0.8, mu = 0.5) falls 1 m onto a half-space, a `Ground` with its own
+//! `GroundMaterial`.
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use bevy_rapier_impact::{EventKind, Ground, ImpactConfig, ImpactMessage, RapierImpactPlugin};
+use bevy_rapier_impact::{
+    EventKind, Ground, GroundMaterial, ImpactConfig, ImpactMessage, RapierImpactPlugin,
+};
 use bevy_rapier3d::prelude::*;
+use clap::Parser;
 use std::time::Duration;
 
 const H0: f64 = 1.0;
@@ -20,37 +24,44 @@ const E: f64 = 0.8;
 const RADIUS: f64 = 0.1;
 const G: f64 = 9.81;
 
+/// A ball dropped 1 m onto a half-space in a headless Bevy app: bounce apexes with the impact
+/// plugin and with bevy_rapier alone, against e^(2n) h0.
+#[derive(Parser)]
+#[command(name = "drop")]
 struct Args {
+    /// The frame's physics time (s).
+    #[arg(
+        long,
+        value_name = "DT",
+        default_value_t = 1.0 / 60.0,
+        value_parser = positive_time,
+        allow_negative_numbers = true
+    )]
     dt: f32,
+    /// Rapier steps per frame (`TimestepMode::Fixed`).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = positive_count)]
     substeps: usize,
+    /// Frames to run.
+    #[arg(long, value_name = "F", default_value_t = 300)]
     frames: usize,
 }
 
-fn parse() -> Result<Args, String> {
-    let usage = "usage: drop [--dt DT] [--substeps N] [--frames F]";
-    let mut a = Args {
-        dt: 1.0 / 60.0,
-        substeps: 1,
-        frames: 300,
-    };
-    let mut it = std::env::args().skip(1);
-    while let Some(flag) = it.next() {
-        let value = it.next().ok_or(format!("{flag} needs a value\n{usage}"))?;
-        let bad = || format!("{flag}: not a valid value: {value}\n{usage}");
-        match flag.as_str() {
-            "--dt" => {
-                a.dt = value
-                    .parse()
-                    .ok()
-                    .filter(|x: &f32| x.is_finite() && *x > 0.0)
-                    .ok_or_else(bad)?
-            }
-            "--substeps" => a.substeps = value.parse().ok().filter(|n| *n > 0).ok_or_else(bad)?,
-            "--frames" => a.frames = value.parse().map_err(|_| bad())?,
-            _ => return Err(format!("unknown flag {flag}\n{usage}")),
-        }
-    }
-    Ok(a)
+/// A finite time step above zero.
+fn positive_time(value: &str) -> Result<f32, String> {
+    value
+        .parse()
+        .ok()
+        .filter(|x: &f32| x.is_finite() && *x > 0.0)
+        .ok_or_else(|| format!("not a positive, finite number of seconds: {value}"))
+}
+
+/// A count above zero.
+fn positive_count(value: &str) -> Result<usize, String> {
+    value
+        .parse()
+        .ok()
+        .filter(|n| *n > 0)
+        .ok_or_else(|| format!("not a whole number above 0: {value}"))
 }
 
 /// Impacts counted by the app (with the plugin only).
@@ -87,12 +98,16 @@ fn run(args: &Args, with_plugin: bool) -> (Vec<f64>, usize) {
         args.dt,
     )))
     .init_resource::<Impacts>();
+    // The ground's own material: the plugin uses its coefficients in place of those rapier
+    // combines from the two colliders (which bevy_rapier alone uses). Its `e` is the colliders'
+    // as rapier stores them (f32), so that both runs bounce with the same coefficient.
     app.world_mut().spawn((
         Transform::default(),
         Collider::halfspace(Vec3::Y).unwrap_or_else(|| Collider::cuboid(10.0, 0.5, 10.0)),
         Restitution::coefficient(E as f32),
         Friction::coefficient(0.5),
         Ground,
+        GroundMaterial::new(f64::from(E as f32), 0.5),
     ));
     let ball = app
         .world_mut()
@@ -135,13 +150,7 @@ fn run(args: &Args, with_plugin: bool) -> (Vec<f64>, usize) {
 }
 
 fn main() {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(2);
-        }
-    };
+    let args = Args::parse();
     let (plugin, impacts) = run(&args, true);
     let (rapier, _) = run(&args, false);
     println!(

@@ -12,6 +12,26 @@
 //! substep at a time), between `before_step` and `after_step`. bevy_rapier's `SyncBackend`
 //! and `Writeback` sets are its own, unchanged.
 //!
+//! # The components and the core plugin
+//!
+//! Each frame, before its rapier steps, the step system compares each context's entities with
+//! what it last gave that context's core plugin (kept in [`ImpactSimulation`]) and calls the
+//! core API for what changed only: `add_ground` / `remove_ground` and `set_ground_material`
+//! for [`Ground`] and [`GroundMaterial`]; `add_impact_body` / `remove_impact_body`,
+//! `set_body_tangential_restitution`, `set_body_restitution_curve` and `set_body_rolling` for
+//! [`ImpactBody`], [`TangentialRestitution`], [`RestitutionBySpeed`] and [`Rolling`]. A
+//! component removed, or its entity despawned, is given back the core default (`None`, or
+//! out of the set). A new rapier object for the same entity (bevy_rapier recreates one when,
+//! say, its collider shape is replaced) is given everything again. So a change made by
+//! reflection (an inspector) is applied like one made by a system. A value changed through
+//! [`ImpactSimulation::plugin_mut`] for an entity that has the matching component is set from
+//! the component again only when the component changes.
+//!
+//! # Features
+//!
+//! `debug-plugin` (default): `ImpactDebugPlugin` and `ImpactGizmos`, with Bevy's
+//! `bevy_gizmos` feature (no renderer). Without it the crate needs no Bevy feature at all.
+//!
 //! # What else it does as bevy_rapier does
 //!
 //! Collision and contact-force messages, the quarantine of non-finite bodies (mirrored as
@@ -38,6 +58,8 @@
 #![deny(missing_docs)]
 
 mod components;
+#[cfg(feature = "debug-plugin")]
+mod debug;
 mod hooks;
 mod messages;
 mod plugin;
@@ -45,12 +67,28 @@ mod step;
 mod timestep;
 
 pub use components::{
-    Ground, ImpactSettings, ImpactSimulation, RestitutionBySpeed, TangentialRestitution,
+    Ground, GroundMaterial, ImpactBody, ImpactSettings, ImpactSimulation, RestitutionBySpeed,
+    Rolling, TangentialRestitution,
 };
+#[cfg(feature = "debug-plugin")]
+pub use debug::{ImpactDebugPlugin, ImpactGizmos};
 pub use hooks::UserHooks;
 pub use messages::{ImpactErrorMessage, ImpactMessage};
 pub use plugin::{ImpactSet, RapierImpactPlugin};
+/// The core crate, for what has no Bevy form here (`ImpactSimulation::plugin_mut`'s API, its
+/// `GroundMaterial`, `RollingSettings`, `ImpactPlugin`).
+pub use rapier_impact;
 pub use rapier_impact::{
-    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactTiming,
-    RestitutionCurve, TimingMode,
+    ConfigError, EventKind, ImpactConfig, ImpactEvent, ImpactTiming, RestitutionCurve, TimingMode,
 };
+
+/// What an app uses: the plugin, the components, the settings and the messages.
+pub mod prelude {
+    pub use crate::{
+        Ground, GroundMaterial, ImpactBody, ImpactConfig, ImpactErrorMessage, ImpactMessage,
+        ImpactSet, ImpactSettings, ImpactSimulation, RapierImpactPlugin, RestitutionBySpeed,
+        RestitutionCurve, Rolling, TangentialRestitution,
+    };
+    #[cfg(feature = "debug-plugin")]
+    pub use crate::{ImpactDebugPlugin, ImpactGizmos};
+}

@@ -6,13 +6,21 @@
 //! with a `MessageReader<ImpactMessage>` in any later system. Entities come from the
 //! `user_data` bevy_rapier stores on every rapier body and collider it creates; an object
 //! made without bevy_rapier (no entity in its `user_data`) is named `Entity::PLACEHOLDER`.
+//!
+//! Reflection: both messages derive `Reflect` (registered by [`crate::RapierImpactPlugin`]),
+//! with their entities and step index; the core crate's `ImpactEvent` and `ConfigError` are
+//! not `Reflect` and are left out (`#[reflect(ignore)]`).
 
 use bevy::prelude::{Entity, Message};
+use bevy::reflect::Reflect;
 use rapier_impact::{ConfigError, ImpactEvent};
 
 /// One change the plugin made to a body in one rapier step: an impact or a correction (see
 /// [`rapier_impact::EventKind`]), named by entities.
-#[derive(Message, Clone, Copy, Debug, PartialEq)]
+///
+/// Reflected: the entities and the step; not `event` (the core crate's `ImpactEvent`).
+#[derive(Message, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Debug, PartialEq, Clone, from_reflect = false)]
 pub struct ImpactMessage {
     /// The rapier context (bevy_rapier's context entity) the step ran in.
     pub context: Entity,
@@ -29,17 +37,23 @@ pub struct ImpactMessage {
     /// In an impact between bodies, the other body's entity; `None` for a ground.
     pub body2: Option<Entity>,
     /// The core crate's event: times, impulses, energies, and the rapier handles.
+    #[reflect(ignore, clone)]
     pub event: ImpactEvent,
 }
 
 /// A ground, a setting or a configuration the plugin refused, and why. Written once per
-/// refusal (a refused `Ground` is not tried again until its collider changes).
-#[derive(Message, Clone, Debug, PartialEq)]
+/// refusal (a refused `Ground` is not tried again until its collider changes, a refused
+/// component value until the component changes).
+///
+/// Reflected: the entities; not `error` (the core crate's `ConfigError`).
+#[derive(Message, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Debug, PartialEq, Clone, from_reflect = false)]
 pub struct ImpactErrorMessage {
     /// The rapier context.
     pub context: Entity,
-    /// The collider entity refused as ground, or `None` for the settings.
+    /// The entity whose ground marker or component was refused, or `None` for the settings.
     pub entity: Option<Entity>,
     /// The core crate's reason.
+    #[reflect(ignore, clone)]
     pub error: ConfigError,
 }

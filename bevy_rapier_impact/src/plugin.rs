@@ -4,10 +4,15 @@
 //! Contract: building it adds bevy_rapier's `RapierPhysicsPlugin` (in the same schedule, with
 //! its `SyncBackend` and `Writeback` systems and without its `StepSimulation` one), the
 //! [`ImpactSettings`] resource (unless the app has one), the messages, [`ImpactSimulation`]
-//! as a required component of every rapier context, and, in `PhysicsSet::StepSimulation`,
-//! the set [`ImpactSet::Step`]: the step system, then the quarantine's mirror.
+//! as a required component of every rapier context, the reflection of every public
+//! component, resource and message of the crate (`App::register_type`), and, in
+//! `PhysicsSet::StepSimulation`, the set [`ImpactSet::Step`]: the step system, then the
+//! quarantine's mirror.
 
-use crate::components::{ImpactSettings, ImpactSimulation};
+use crate::components::{
+    Ground, GroundMaterial, ImpactBody, ImpactSettings, ImpactSimulation, RestitutionBySpeed,
+    Rolling, TangentialRestitution,
+};
 use crate::messages::{ImpactErrorMessage, ImpactMessage};
 use crate::step::{mirror_quarantine, step_with_impacts};
 use bevy::ecs::intern::Interned;
@@ -147,6 +152,16 @@ where
         }
         app.add_message::<ImpactMessage>()
             .add_message::<ImpactErrorMessage>()
+            .register_type::<Ground>()
+            .register_type::<GroundMaterial>()
+            .register_type::<ImpactBody>()
+            .register_type::<TangentialRestitution>()
+            .register_type::<RestitutionBySpeed>()
+            .register_type::<Rolling>()
+            .register_type::<ImpactSettings>()
+            .register_type::<ImpactSimulation>()
+            .register_type::<ImpactMessage>()
+            .register_type::<ImpactErrorMessage>()
             .register_required_components::<RapierContextSimulation, ImpactSimulation>()
             .configure_sets(
                 self.schedule,

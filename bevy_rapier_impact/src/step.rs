@@ -5,7 +5,10 @@
 //! bevy_rapier's `SyncBackend` has created and updated the rapier objects, before its
 //! `Writeback` copies them to the components):
 //! 1. apply [`ImpactSettings`] if they changed; mark the colliders with [`Ground`] that are
-//!    not grounds yet, unmark those whose marker or entity is gone;
+//!    not grounds yet, unmark those whose marker or entity is gone, give each its
+//!    [`GroundMaterial`] where it changed; give the bodies their own settings ([`ImpactBody`],
+//!    [`TangentialRestitution`], [`RestitutionBySpeed`], [`Rolling`]) where they changed, and
+//!    take them back from the bodies whose components or entity are gone;
 //! 2. plan the frame's rapier steps as bevy_rapier would ([`FramePlan`]: its timestep mode,
 //!    substeps and interpolation catch-up);
 //! 3. for each rapier step: `ImpactPlugin::before_step`, one rapier step through bevy_rapier's
@@ -23,7 +26,8 @@
 //! message, a refused ground or setting an [`ImpactErrorMessage`].
 
 use crate::components::{
-    BodyBounce, Ground, ImpactSettings, ImpactSimulation, RestitutionBySpeed, TangentialRestitution,
+    BodySettings, BodyState, Ground, GroundMaterial, GroundState, ImpactBody, ImpactSettings,
+    ImpactSimulation, RestitutionBySpeed, Rolling, TangentialRestitution, curve_of,
 };
 use crate::hooks::UserHooks;
 use crate::messages::{ImpactErrorMessage, ImpactMessage};
@@ -43,8 +47,10 @@ use bevy_rapier3d::prelude::{
     RapierColliderHandle, RapierRigidBodyHandle, RigidBodyDisabled, SoftBodyDisabled,
     TransformInterpolation,
 };
-use bevy_rapier3d::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodySet};
-use rapier_impact::{ImpactConfig, ImpactPlugin};
+use bevy_rapier3d::rapier::prelude::{
+    ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+};
+use rapier_impact::{ConfigError, ImpactConfig, ImpactPlugin};
 
 /// The messages the step writes.
 #[derive(SystemParam)]
@@ -80,7 +86,8 @@ type Contexts<'w, 's> = Query<
     ),
 >;
 
-/// The collider entities marked [`Ground`] that bevy_rapier has created, with their context.
+/// The collider entities marked [`Ground`] that bevy_rapier has created, with their context
+/// and material.
 type Grounds<'w, 's> = Query<
     'w,
     's,
@@ -88,23 +95,33 @@ type Grounds<'w, 's> = Query<
         Entity,
         &'static RapierColliderHandle,
         &'static RapierContextEntityLink,
+        Option<&'static GroundMaterial>,
     ),
     With<Ground>,
 >;
 
-/// The rigid body entities with their own tangential restitution or restitution curve that
-/// bevy_rapier has created, with their context.
-type Bounces<'w, 's> = Query<
+/// The rigid body entities with settings of their own that bevy_rapier has created, with
+/// their context.
+type Bodies<'w, 's> = Query<
     'w,
     's,
     (
         Entity,
         &'static RapierRigidBodyHandle,
         &'static RapierContextEntityLink,
-        Option<&'static TangentialRestitution>,
-        Option<&'static RestitutionBySpeed>,
+        (
+            Has<ImpactBody>,
+            Option<&'static TangentialRestitution>,
+            Option<&'static RestitutionBySpeed>,
+            Option<&'static Rolling>,
+        ),
     ),
-    Or<(With<TangentialRestitution>, With<RestitutionBySpeed>)>,
+    Or<(
+        With<ImpactBody>,
+        With<TangentialRestitution>,
+        With<RestitutionBySpeed>,
+        With<Rolling>,
+    )>,
 >;
 
 /// Advances every rapier context by one frame, the core plugin around each rapier step (see
@@ -112,7 +129,7 @@ type Bounces<'w, 's> = Query<
 pub(crate) fn step_with_impacts<H>(
     mut contexts: Contexts,
     grounds: Grounds,
-    bounces: Bounces,
+    own: Bodies,
     frame: FrameInputs,
     hooks: StaticSystemParam<H>,
     mut writers: StepWriters,
@@ -139,7 +156,7 @@ pub(crate) fn step_with_impacts<H>(
                     continue;
                 };
                 impact.grounds.clear();
-                impact.bounces.clear();
+                impact.bodies.clear();
                 impact.applied = None;
                 fresh
             }
@@ -154,7 +171,14 @@ pub(crate) fn step_with_impacts<H>(
             &colliders.colliders,
             &mut writers.errors,
         );
-        sync_bounces(ctx, &bounces, impact, &mut plugin, &mut writers.errors);
+        sync_bodies(
+            ctx,
+            &own,
+            impact,
+            &mut plugin,
+            &bodies.bodies,
+            &mut writers.errors,
+        );
         if !config.physics_pipeline_active {
             bodies.propagate_modified_body_positions_to_colliders(colliders);
             impact.plugin = Some(plugin);
@@ -270,8 +294,24 @@ fn apply_settings(
     plugin.set_all_fixed_colliders_ground(settings.all_fixed_colliders_ground);
 }
 
-/// Marks the context's new [`Ground`] colliders and unmarks the ones whose marker, entity or
-/// rapier collider is gone.
+/// Reports a refusal of the core plugin.
+fn report(
+    errors: &mut MessageWriter<ImpactErrorMessage>,
+    ctx: Entity,
+    entity: Option<Entity>,
+    result: Result<(), ConfigError>,
+) {
+    if let Err(error) = result {
+        errors.write(ImpactErrorMessage {
+            context: ctx,
+            entity,
+            error,
+        });
+    }
+}
+
+/// Marks the context's new [`Ground`] colliders, gives each its [`GroundMaterial`] where it
+/// changed, and unmarks the ones whose marker, entity or rapier collider is gone.
 fn sync_grounds(
     ctx: Entity,
     grounds: &Grounds,
@@ -282,94 +322,169 @@ fn sync_grounds(
     errors: &mut MessageWriter<ImpactErrorMessage>,
 ) {
     impact.seen.clear();
-    for (entity, handle, link) in grounds.iter() {
+    for (entity, handle, link, material) in grounds.iter() {
         if link.0 != ctx {
             continue;
         }
         impact.seen.insert(entity);
-        let known = impact.grounds.get(&entity).copied();
-        if known.is_some_and(|(h, _)| h == handle.0) {
-            continue;
+        let handle = handle.0;
+        let known = impact.grounds.get_mut(&entity);
+        match known {
+            Some(known) if known.handle == handle => {
+                if known.material.as_ref() == material {
+                    continue;
+                }
+                // Only the material changed; a refused ground has none to change.
+                if known.taken {
+                    let set = set_material(plugin, handle, material);
+                    report(errors, ctx, Some(entity), set);
+                }
+                known.material = material.cloned();
+            }
+            _ => {
+                // New, or bevy_rapier made it a new rapier collider: the old one is no ground.
+                if let Some(old) = known.filter(|old| old.taken) {
+                    plugin.remove_ground(old.handle);
+                }
+                let taken = plugin.add_ground(bodies, colliders, handle);
+                let ok = taken.is_ok();
+                report(errors, ctx, Some(entity), taken);
+                if ok && material.is_some() {
+                    let set = set_material(plugin, handle, material);
+                    report(errors, ctx, Some(entity), set);
+                }
+                let state = GroundState {
+                    handle,
+                    taken: ok,
+                    material: material.cloned(),
+                };
+                impact.grounds.insert(entity, state);
+            }
         }
-        // New, or bevy_rapier made it a new rapier collider: the old one is no ground.
-        if let Some((old, true)) = known {
-            plugin.remove_ground(old);
-        }
-        let taken = plugin.add_ground(bodies, colliders, handle.0);
-        if let Err(error) = &taken {
-            errors.write(ImpactErrorMessage {
-                context: ctx,
-                entity: Some(entity),
-                error: error.clone(),
-            });
-        }
-        impact.grounds.insert(entity, (handle.0, taken.is_ok()));
     }
     let seen = &impact.seen;
-    impact.grounds.retain(|entity, (handle, taken)| {
+    impact.grounds.retain(|entity, state| {
         let keep = seen.contains(entity);
-        if !keep && *taken {
-            plugin.remove_ground(*handle);
+        if !keep && state.taken {
+            plugin.remove_ground(state.handle);
         }
         keep
     });
 }
 
-/// Gives the core plugin the context's bodies' own tangential restitution and restitution
-/// curve where they changed, and takes them back from the bodies whose components, entity or
-/// rapier body are gone.
-fn sync_bounces(
+/// Gives a ground its material, or takes it back (`None`).
+fn set_material(
+    plugin: &mut ImpactPlugin,
+    ground: ColliderHandle,
+    material: Option<&GroundMaterial>,
+) -> Result<(), ConfigError> {
+    let material = material.map(GroundMaterial::to_core).transpose()?;
+    plugin.set_ground_material(ground, material)
+}
+
+/// Gives the core plugin the context's bodies' own settings where they changed, and takes
+/// them back from the bodies whose components, entity or rapier body are gone.
+fn sync_bodies(
     ctx: Entity,
-    bounces: &Bounces,
+    own: &Bodies,
     impact: &mut ImpactSimulation,
     plugin: &mut ImpactPlugin,
+    bodies: &RigidBodySet,
     errors: &mut MessageWriter<ImpactErrorMessage>,
 ) {
     impact.seen.clear();
-    for (entity, handle, link, beta, curve) in bounces.iter() {
+    for (entity, handle, link, (impact_body, beta, curve, rolling)) in own.iter() {
         if link.0 != ctx {
             continue;
         }
         impact.seen.insert(entity);
-        let wanted = BodyBounce {
-            tangential_restitution: beta.map(|b| b.0),
-            restitution_curve: curve.map(|c| c.0.clone()),
+        let handle = handle.0;
+        let dynamic = bodies.get(handle).is_some_and(|rb| rb.is_dynamic());
+        let (impact_body, beta, curve, rolling) = (
+            impact_body.then_some(dynamic),
+            beta.map(|b| b.0),
+            curve.map(|c| c.0.as_slice()),
+            rolling.copied(),
+        );
+        let known = impact.bodies.get(&entity);
+        let applied = match known {
+            Some(known) if known.handle == handle => {
+                let s = &known.settings;
+                if (
+                    s.impact,
+                    s.tangential_restitution,
+                    s.restitution_curve.as_deref(),
+                    s.rolling,
+                ) == (impact_body, beta, curve, rolling)
+                {
+                    continue;
+                }
+                s.clone()
+            }
+            Some(known) => {
+                // bevy_rapier made it a new rapier body: the old one has nothing of its own.
+                forget_body(plugin, known.handle);
+                BodySettings::default()
+            }
+            None => BodySettings::default(),
         };
-        let known = impact.bounces.get(&entity);
-        if known.is_some_and(|(h, applied)| *h == handle.0 && *applied == wanted) {
-            continue;
-        }
-        if let Some((old, _)) = known.filter(|(h, _)| *h != handle.0) {
-            forget_bounce(plugin, *old);
-        }
-        let set = plugin
-            .set_body_tangential_restitution(handle.0, wanted.tangential_restitution)
-            .and_then(|()| {
-                plugin.set_body_restitution_curve(handle.0, wanted.restitution_curve.clone())
+        let wanted = BodySettings {
+            impact: impact_body,
+            tangential_restitution: beta,
+            restitution_curve: curve.map(<[_]>::to_vec),
+            rolling,
+        };
+        let mut refused = |result| report(errors, ctx, Some(entity), result);
+        if wanted.impact != applied.impact {
+            refused(match wanted.impact {
+                Some(_) => plugin.add_impact_body(bodies, handle).inspect_err(|_| {
+                    plugin.remove_impact_body(handle);
+                }),
+                None => {
+                    plugin.remove_impact_body(handle);
+                    Ok(())
+                }
             });
-        if let Err(error) = set {
-            errors.write(ImpactErrorMessage {
-                context: ctx,
-                entity: Some(entity),
-                error,
-            });
         }
-        impact.bounces.insert(entity, (handle.0, wanted));
+        if wanted.tangential_restitution != applied.tangential_restitution {
+            refused(plugin.set_body_tangential_restitution(handle, wanted.tangential_restitution));
+        }
+        if wanted.restitution_curve != applied.restitution_curve {
+            let curve = wanted
+                .restitution_curve
+                .as_deref()
+                .map(curve_of)
+                .transpose();
+            refused(curve.and_then(|curve| plugin.set_body_restitution_curve(handle, curve)));
+        }
+        if wanted.rolling != applied.rolling {
+            let rolling = wanted.rolling.map(Into::into);
+            refused(plugin.set_body_rolling(handle, rolling));
+        }
+        impact.bodies.insert(
+            entity,
+            BodyState {
+                handle,
+                settings: wanted,
+            },
+        );
     }
     let seen = &impact.seen;
-    impact.bounces.retain(|entity, (handle, _)| {
+    impact.bodies.retain(|entity, state| {
         let keep = seen.contains(entity);
         if !keep {
-            forget_bounce(plugin, *handle);
+            forget_body(plugin, state.handle);
         }
         keep
     });
 }
 
-/// Takes a body's own tangential restitution and restitution curve back (never refused).
-fn forget_bounce(plugin: &mut ImpactPlugin, body: bevy_rapier3d::rapier::prelude::RigidBodyHandle) {
+/// Takes a body's own settings back (never refused): the core plugin's defaults apply.
+fn forget_body(plugin: &mut ImpactPlugin, body: RigidBodyHandle) {
+    plugin.remove_impact_body(body);
     let _ = plugin.set_body_tangential_restitution(body, None);
     let _ = plugin.set_body_restitution_curve(body, None);
+    let _ = plugin.set_body_rolling(body, None);
 }
 
 /// The last step's core events as messages, handles turned into entities.

@@ -485,7 +485,7 @@ fn a_body_s_own_tangential_restitution_and_curve_reach_its_impacts() {
     let ball = spawn_ball(&mut app);
     app.world_mut().entity_mut(ball).insert((
         TangentialRestitution(1.0),
-        RestitutionBySpeed(curve.clone()),
+        RestitutionBySpeed::from(curve.clone()),
         Velocity::linear(Vec3::new(1.0, 0.0, 0.0)),
     ));
     let first = |app: &mut App| {

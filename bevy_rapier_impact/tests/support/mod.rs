@@ -58,9 +58,24 @@ where
     H: 'static + BevyPhysicsHooks,
     for<'w, 's> bevy::ecs::system::SystemParamItem<'w, 's, H>: BevyPhysicsHooks,
 {
+    app_with(plugin, mode, frame, |_| {})
+}
+
+/// [`app`], with `more` adding the test's own plugins before the app is finished.
+pub fn app_with<H>(
+    plugin: RapierImpactPlugin<H>,
+    mode: TimestepMode,
+    frame: f64,
+    more: impl FnOnce(&mut App),
+) -> App
+where
+    H: 'static + BevyPhysicsHooks,
+    for<'w, 's> bevy::ecs::system::SystemParamItem<'w, 's, H>: BevyPhysicsHooks,
+{
     let mut app = App::new();
-    app.add_plugins((MinimalPlugins, TransformPlugin, plugin))
-        .insert_resource(mode)
+    app.add_plugins((MinimalPlugins, TransformPlugin, plugin));
+    more(&mut app);
+    app.insert_resource(mode)
         .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
             frame,
         )))
