@@ -131,6 +131,15 @@ impl<'a> ContactMaterial<'a> {
         }
     }
 
+    /// The material of an impact that rests: `e = 0`, whatever a curve says (none is
+    /// evaluated).
+    pub fn resting(&self) -> Material {
+        Material {
+            restitution: 0.0,
+            ..self.constant
+        }
+    }
+
     /// The Coulomb friction coefficient.
     pub fn friction(&self) -> f64 {
         self.constant.friction
@@ -188,10 +197,7 @@ impl<'a> ImpactInput<'a> {
     fn material_at(&self, approach: f64) -> (bool, Material) {
         let settled = self.force_settle || rests_at(approach, self.resting_speed);
         let material = if settled {
-            Material {
-                restitution: 0.0,
-                ..self.material.at(0.0)
-            }
+            self.material.resting()
         } else {
             self.material.at(approach)
         };
