@@ -172,7 +172,8 @@ impl From<rapier_impact::GroundMaterial> for GroundMaterial {
     }
 }
 
-/// The curve through `points`, an invalid one as the error a ground material's would give.
+/// The curve through `points`; points that make none give `ConfigError::Material`, whose
+/// message names the point and what is wrong with it.
 pub(crate) fn curve_of(points: &[(f64, f64)]) -> Result<RestitutionCurve, ConfigError> {
     RestitutionCurve::new(points).map_err(ConfigError::Material)
 }

@@ -420,7 +420,9 @@ pub enum ConfigError {
         /// The value refused.
         value: f64,
     },
-    /// A ground material's restitution or friction is negative or not finite.
+    /// The model refuses a material: a ground material's restitution or friction is negative
+    /// or not finite, or points given for a restitution curve make none (the Bevy crate's
+    /// curve components build theirs from points).
     Material(ModelError),
     /// A ground material's coefficient is above its documented range (or, for the rolling
     /// coefficients, outside it).
@@ -453,7 +455,7 @@ impl fmt::Display for ConfigError {
                 "ImpactConfig::{field} is {value}, outside its range {}",
                 range_of(field)
             ),
-            Self::Material(e) => write!(f, "invalid ground material: {e}"),
+            Self::Material(e) => write!(f, "invalid material: {e}"),
             Self::MaterialOutOfRange { field, value } => write!(
                 f,
                 "GroundMaterial::{field} is {value}, outside its range {}",
