@@ -38,7 +38,7 @@ pub use model::RestitutionCurve;
 pub use plugin::{
     ConfigError, Diagnostic, EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin,
     ImpactSnapshot, ImpactTiming, RestoreError, RollingSettings, Stage, StepCounts, StepProfile,
-    TimingMode,
+    StepSets, TimingMode,
 };
 
 /// Long-form documentation: the files of the repository's `docs/` folder, one module each.

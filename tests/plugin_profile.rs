@@ -7,7 +7,7 @@ mod plugin_support;
 
 use plugin_support::MODES;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactPlugin, Stage, StepProfile, TimingMode};
+use rapier_impact::{ImpactConfig, ImpactPlugin, Stage, StepProfile, StepSets, TimingMode};
 use std::time::Duration;
 
 #[test]
@@ -89,23 +89,10 @@ fn rapier_is_timed_only_when_the_plugin_steps_it() {
         .unwrap();
     plugin.set_profiling(true);
     for _ in 0..10 {
-        plugin.before_step(
-            world.gravity,
-            &world.integration_parameters,
-            &mut world.bodies,
-            &mut world.colliders,
-            &world.narrow_phase,
-            &world.impulse_joints,
-            &world.multibody_joints,
-        );
+        let (gravity, params) = (world.gravity, world.integration_parameters);
+        plugin.before_step(gravity, &params, StepSets::from(&mut world));
         world.step_with_events(&plugin, &());
-        plugin.after_step(
-            &mut world.bodies,
-            &mut world.colliders,
-            &world.narrow_phase,
-            &world.impulse_joints,
-            &world.multibody_joints,
-        );
+        plugin.after_step(StepSets::from(&mut world));
         let p = plugin.profile().expect("profiling is on");
         assert_eq!(p.time(Stage::Rapier), Duration::ZERO);
         assert!(p.time(Stage::Plan) > Duration::ZERO);

@@ -50,7 +50,7 @@ use bevy_rapier3d::prelude::{
 use bevy_rapier3d::rapier::prelude::{
     ColliderHandle, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
 };
-use rapier_impact::{ConfigError, ImpactConfig, ImpactPlugin};
+use rapier_impact::{ConfigError, ImpactConfig, ImpactPlugin, StepSets};
 
 /// The messages the step writes.
 #[derive(SystemParam)]
@@ -206,15 +206,14 @@ pub(crate) fn step_with_impacts<H>(
                 let mut params = sim.integration_parameters;
                 params.dt = plan.step_dt;
                 if full {
-                    hooked.before_step(
-                        config.gravity,
-                        &params,
+                    let sets = StepSets::new(
                         &mut bodies.bodies,
                         &mut colliders.colliders,
                         &sim.narrow_phase,
                         &joints.impulse_joints,
                         &joints.multibody_joints,
                     );
+                    hooked.before_step(config.gravity, &params, sets);
                 }
                 // Without dynamics (`CollisionOnly`) the plugin has nothing to resolve; the
                 // user's hooks still see every pair.
@@ -239,13 +238,13 @@ pub(crate) fn step_with_impacts<H>(
                 // Each call replaces the previous call's pending events: send them now.
                 sim.send_bevy_events(&mut writers.collisions, &mut writers.contact_forces);
                 if full {
-                    hooked.after_step(
+                    hooked.after_step(StepSets::new(
                         &mut bodies.bodies,
                         &mut colliders.colliders,
                         &sim.narrow_phase,
                         &joints.impulse_joints,
                         &joints.multibody_joints,
-                    );
+                    ));
                     write_impacts(
                         ctx,
                         impact.steps,

@@ -14,7 +14,10 @@ use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase, PhysicsWorld,
+    RigidBodyHandle, RigidBodySet,
+};
 
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
 /// and the per-step driver.
@@ -52,7 +55,7 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 /// # Around your own `PhysicsPipeline::step`
 /// ```
 /// use rapier_impact::rapier::prelude::*;
-/// use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, TimingMode};
+/// use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, StepSets, TimingMode};
 ///
 /// let mut bodies = RigidBodySet::new();
 /// let mut colliders = ColliderSet::new();
@@ -72,13 +75,15 @@ use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, Rigid
 /// let params = IntegrationParameters::default();
 /// let gravity = Vector::new(0.0, -9.81, 0.0);
 /// for _ in 0..60 {
-///     plugin.before_step(gravity, &params, &mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
+///     let sets = StepSets::new(&mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
+///     plugin.before_step(gravity, &params, sets);
 ///     pipeline.step(
 ///         gravity, &params, &mut islands, &mut broad_phase, &mut narrow_phase,
 ///         &mut bodies, &mut colliders, &mut impulse_joints, &mut multibody_joints,
 ///         &mut soft_bodies, &mut ccd, &plugin, &(),
 ///     );
-///     plugin.after_step(&mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
+///     let sets = StepSets::new(&mut bodies, &mut colliders, &narrow_phase, &impulse_joints, &multibody_joints);
+///     plugin.after_step(sets);
 ///     for event in plugin.events() {
 ///         // Impacts push; the corrections (push-outs, energy caps) report their own kind.
 ///         assert!(event.kind != EventKind::Impact || event.normal_impulse > 0.0);
@@ -105,6 +110,56 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) reports: Reports,
     /// The step's profile, when profiling is on.
     pub(crate) stopwatch: Stopwatch,
+}
+
+/// The sets of a rapier world that [`ImpactPlugin::before_step`] and
+/// [`ImpactPlugin::after_step`] read and write: the same sets, in the same state, that
+/// rapier's `PhysicsPipeline::step` takes right after (or took right before). The joints are
+/// read for rapier's pair filtering (a joint can disable its bodies' contacts); the narrow
+/// phase for the contacts rapier found.
+pub struct StepSets<'w> {
+    /// The rigid bodies: read, and written where the plugin resolves an impact.
+    pub bodies: &'w mut RigidBodySet,
+    /// The colliders: read, and their poses updated with the bodies the plugin moves.
+    pub colliders: &'w mut ColliderSet,
+    /// rapier's narrow phase: its contact graph.
+    pub narrow_phase: &'w NarrowPhase,
+    /// The impulse joints.
+    pub impulse_joints: &'w ImpulseJointSet,
+    /// The multibody joints.
+    pub multibody_joints: &'w MultibodyJointSet,
+}
+
+impl<'w> StepSets<'w> {
+    /// The sets, in the order `PhysicsPipeline::step` takes them.
+    pub fn new(
+        bodies: &'w mut RigidBodySet,
+        colliders: &'w mut ColliderSet,
+        narrow_phase: &'w NarrowPhase,
+        impulse_joints: &'w ImpulseJointSet,
+        multibody_joints: &'w MultibodyJointSet,
+    ) -> Self {
+        Self {
+            bodies,
+            colliders,
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        }
+    }
+}
+
+impl<'w> From<&'w mut PhysicsWorld> for StepSets<'w> {
+    /// The world's own sets.
+    fn from(world: &'w mut PhysicsWorld) -> Self {
+        Self::new(
+            &mut world.bodies,
+            &mut world.colliders,
+            &world.narrow_phase,
+            &world.impulse_joints,
+            &world.multibody_joints,
+        )
+    }
 }
 
 impl ImpactPlugin<()> {

@@ -31,6 +31,6 @@ mod state;
 
 pub use config::{ConfigError, GroundMaterial, ImpactConfig, RollingSettings, TimingMode};
 pub use events::{Diagnostic, EventKind, ImpactEvent, ImpactTiming};
-pub use impact_plugin::ImpactPlugin;
+pub use impact_plugin::{ImpactPlugin, StepSets};
 pub use profile::{Stage, StepCounts, StepProfile};
 pub use snapshot::{ImpactSnapshot, RestoreError};

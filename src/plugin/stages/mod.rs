@@ -44,7 +44,7 @@ mod view;
 mod woken;
 
 use crate::plugin::config::TimingMode;
-use crate::plugin::impact_plugin::ImpactPlugin;
+use crate::plugin::impact_plugin::{ImpactPlugin, StepSets};
 use crate::plugin::policy::Role;
 use crate::plugin::profile::{Stage, StepCounts};
 use crate::plugin::queries::observe::Sets;
@@ -58,8 +58,8 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
-    ColliderSet, EventHandler, ImpulseJointSet, IntegrationParameters, MultibodyJointSet,
-    NarrowPhase, PhysicsHooks, PhysicsWorld, RigidBodyHandle, RigidBodySet,
+    ColliderSet, EventHandler, IntegrationParameters, PhysicsHooks, PhysicsWorld, RigidBodyHandle,
+    RigidBodySet,
 };
 
 /// The step: its entry points, each a list of stage calls.
@@ -72,44 +72,26 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
 
     /// [`Self::step`] with rapier's event handler `events`.
     pub fn step_with_events(&mut self, world: &mut PhysicsWorld, events: &dyn EventHandler) {
-        self.before_step(
-            world.gravity,
-            &world.integration_parameters,
-            &mut world.bodies,
-            &mut world.colliders,
-            &world.narrow_phase,
-            &world.impulse_joints,
-            &world.multibody_joints,
-        );
+        let (gravity, params) = (world.gravity, world.integration_parameters);
+        self.before_step(gravity, &params, StepSets::from(&mut *world));
         world.step_with_events(&*self, events);
         self.stopwatch.lap(Stage::Rapier);
-        self.after_step(
-            &mut world.bodies,
-            &mut world.colliders,
-            &world.narrow_phase,
-            &world.impulse_joints,
-            &world.multibody_joints,
-        );
+        self.after_step(StepSets::from(world));
     }
 
     /// Prepares a step: call it right before rapier's `PhysicsPipeline::step` with the same
     /// gravity, parameters and sets. Clears the events, reads the managed bodies near a
     /// ground, and in `Step` mode applies the impulses of the contacts that close in this
-    /// step. The joints are read for rapier's pair filtering (a joint can disable its bodies'
-    /// contacts).
-    // The sets rapier's own `PhysicsPipeline::step` takes, which has the same allowance.
-    #[allow(clippy::too_many_arguments)]
-    pub fn before_step(
-        &mut self,
-        gravity: Vector,
-        params: &IntegrationParameters,
-        bodies: &mut RigidBodySet,
-        colliders: &mut ColliderSet,
-        narrow_phase: &NarrowPhase,
-        impulse_joints: &ImpulseJointSet,
-        multibody_joints: &MultibodyJointSet,
-    ) {
+    /// step.
+    pub fn before_step(&mut self, gravity: Vector, params: &IntegrationParameters, sets: StepSets) {
         self.stopwatch.start_step();
+        let StepSets {
+            bodies,
+            colliders,
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        } = sets;
         let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
         let mut step = self.prepare(gravity, params, bodies, colliders);
         self.stopwatch.lap(Stage::Prepare);
@@ -150,14 +132,14 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// Finishes a step: call it right after rapier's `PhysicsPipeline::step`. Resolves the
     /// managed impacts, writes poses and velocities back (bodies woken up), moves their
     /// colliders, and records the [`crate::ImpactEvent`]s.
-    pub fn after_step(
-        &mut self,
-        bodies: &mut RigidBodySet,
-        colliders: &mut ColliderSet,
-        narrow_phase: &NarrowPhase,
-        impulse_joints: &ImpulseJointSet,
-        multibody_joints: &MultibodyJointSet,
-    ) {
+    pub fn after_step(&mut self, sets: StepSets) {
+        let StepSets {
+            bodies,
+            colliders,
+            narrow_phase,
+            impulse_joints,
+            multibody_joints,
+        } = sets;
         let mut step = EndOfStep {
             data: std::mem::take(&mut self.step),
             sets: Sets::new(narrow_phase, impulse_joints, multibody_joints),
