@@ -44,19 +44,12 @@ struct Args {
     /// Coefficient of friction of ball and ground
     #[arg(long, value_name = "MU", default_value = "0.5", value_parser = common::non_negative)]
     friction: f64,
-    /// Time step (s)
-    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
-    dt: f64,
     /// Simulated time (s)
     #[arg(long, value_name = "T", default_value = "5", value_parser = common::positive)]
     duration: f64,
-    /// Rapier alone, or the plugin in one of its timing modes
-    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
-    mode: Mode,
-    /// Double precision: needs a build with `--features f64` (the precision is chosen at
-    /// build time)
-    #[arg(long)]
-    f64: bool,
+    // --dt, --mode and --f64, as in the other scenes.
+    #[command(flatten)]
+    common: common::CommonArgs,
     /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball's centre of mass (m, m/s,
     /// rad/s), one row per step and one at t = 0 [default: none]
     #[arg(long, value_name = "PATH")]
@@ -76,7 +69,7 @@ struct Drop {
 fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
     let g = 9.81;
     let mut world = PhysicsWorld::default();
-    world.integration_parameters.dt = args.dt as Real;
+    world.integration_parameters.dt = args.common.dt as Real;
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
         ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y))
@@ -170,17 +163,17 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
 
 fn main() {
     let args: Args = common::parse();
-    common::check_precision::<Args>(args.f64);
+    common::check_precision::<Args>(args.common.f64);
     let g = 9.81;
-    let run = drop_ball(&args, args.mode, args.csv.as_deref());
+    let run = drop_ball(&args, args.common.mode, args.csv.as_deref());
     // Rapier alone on the same drop, beside a plugin mode.
-    let alone = (args.mode != Mode::Rapier).then(|| drop_ball(&args, Mode::Rapier, None));
+    let alone = (args.common.mode != Mode::Rapier).then(|| drop_ball(&args, Mode::Rapier, None));
     let (h0, e, dt, radius) = (args.height, args.restitution, run.dt, args.radius);
     let t1 = (2.0 * h0 / g).sqrt();
     println!(
         "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {:?}, precision = {}",
         args.friction,
-        args.mode,
+        args.common.mode,
         if cfg!(feature = "f64") { "f64" } else { "f32" }
     );
     let mut header = format!(

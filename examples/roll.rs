@@ -61,19 +61,12 @@ struct Args {
     /// Solid ball or thin shell
     #[arg(long, value_enum, value_name = "SHELL", default_value_t = Shell::Solid)]
     shell: Shell,
-    /// Time step (s)
-    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
-    dt: f64,
     /// Simulated time (s)
     #[arg(long, value_name = "T", default_value = "20", value_parser = common::positive)]
     duration: f64,
-    /// Rapier alone, or the plugin in one of its timing modes
-    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
-    mode: Mode,
-    /// Double precision: needs a build with `--features f64` (the precision is chosen at
-    /// build time)
-    #[arg(long)]
-    f64: bool,
+    // --dt, --mode and --f64, as in the other scenes.
+    #[command(flatten)]
+    common: common::CommonArgs,
     /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball (m, m/s, rad/s), one row per step
     /// and one at t = 0 [default: none]
     #[arg(long, value_name = "PATH")]
@@ -176,7 +169,7 @@ fn frame(slope: f64) -> (Vector3<f64>, Vector3<f64>) {
 }
 
 /// The ground tilted by `args.slope`, the ball on it with velocity `v` and spin `w`, and the
-/// plugin of `args.mode` (none for rapier alone).
+/// plugin of `args.common.mode` (none for rapier alone).
 fn build(
     args: &Args,
     v: Vector3<f64>,
@@ -184,7 +177,7 @@ fn build(
 ) -> (PhysicsWorld, RigidBodyHandle, Option<ImpactPlugin>) {
     let (r, mu) = (args.radius, args.friction);
     let (n, _) = frame(args.slope.to_radians());
-    let mut world = common::world(args.dt);
+    let mut world = common::world(args.common.dt);
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
         ColliderBuilder::halfspace(rapier_impact::rapier::na::Unit::new_unchecked(
@@ -219,7 +212,7 @@ fn build(
             .allow_fast_rotation(true),
         collider,
     );
-    let plugin = match args.mode {
+    let plugin = match args.common.mode {
         Mode::Rapier => None,
         Mode::Plugin(timing) => {
             let mut config = ImpactConfig::default();
@@ -251,7 +244,7 @@ fn run(
     ball: RigidBodyHandle,
     plugin: &mut Option<ImpactPlugin>,
 ) -> Measured {
-    let (r, dt, normal_spin) = (args.radius, args.dt, args.normal_spin);
+    let (r, dt, normal_spin) = (args.radius, args.common.dt, args.normal_spin);
     let (n, d) = frame(args.slope.to_radians());
     let mut csv = args.csv.as_deref().map(|p| TraceCsv::create(p, ball));
     if let Some(c) = csv.as_mut() {
@@ -298,7 +291,7 @@ fn run(
 
 fn main() {
     let args: Args = common::parse();
-    common::check_precision::<Args>(args.f64);
+    common::check_precision::<Args>(args.common.f64);
     let (v0, r, mu, mu_r, mu_sp) = (
         args.speed,
         args.radius,
@@ -309,7 +302,12 @@ fn main() {
     let slope_deg = args.slope;
     let slope = slope_deg.to_radians();
     let k = args.shell.inertia_ratio();
-    let (dt, duration, mode, normal_spin) = (args.dt, args.duration, args.mode, args.normal_spin);
+    let (dt, duration, mode, normal_spin) = (
+        args.common.dt,
+        args.duration,
+        args.common.mode,
+        args.normal_spin,
+    );
     // The ground's frame: normal n, downhill d. Rolling forward along d spins at v / R about
     // n x d; backspin is the opposite sense.
     let (n, d) = frame(slope);

@@ -67,19 +67,12 @@ struct Args {
     /// Solid ball or thin shell
     #[arg(long, value_enum, value_name = "SHELL", default_value_t = Shell::Solid)]
     shell: Shell,
-    /// Time step (s)
-    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = common::positive)]
-    dt: f64,
     /// Simulated time (s)
     #[arg(long, value_name = "T", default_value = "1.5", value_parser = common::positive)]
     duration: f64,
-    /// Rapier alone, or the plugin in one of its timing modes
-    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
-    mode: Mode,
-    /// Double precision: needs a build with `--features f64` (the precision is chosen at
-    /// build time)
-    #[arg(long)]
-    f64: bool,
+    // --dt, --mode and --f64, as in the other scenes.
+    #[command(flatten)]
+    common: common::CommonArgs,
     /// Write the trace t,x,y,z,vx,vy,vz,wx,wy,wz of the ball (m, m/s, rad/s), one row per step
     /// and one at t = 0 [default: none]
     #[arg(long, value_name = "PATH")]
@@ -218,15 +211,15 @@ fn fly(
 
 fn main() {
     let args: Args = common::parse();
-    common::check_precision::<Args>(args.f64);
+    common::check_precision::<Args>(args.common.f64);
     let (radius, e, mu, k) = (
         args.radius,
         args.restitution,
         args.friction,
         args.shell.inertia_ratio(),
     );
-    let (vx0, vy_contact, spin0, mode) = (args.vx, args.vy, args.spin, args.mode);
-    let mut world = common::world(args.dt);
+    let (vx0, vy_contact, spin0, mode) = (args.vx, args.vy, args.spin, args.common.mode);
+    let mut world = common::world(args.common.dt);
     let g = -wide(world.gravity.y);
     let (ground, ball) = insert_ball(&args, &mut world, g, k);
     let mut plugin = common::plugin(mode, Law::Guarded, &mut world, ground);

@@ -1,7 +1,8 @@
 //! Code shared by the example scenes (`mod common;` in each): the command-line values they
 //! share (numbers such as `1/60`, the `--mode`, `--law` and `--shell` choices, the `--f64`
-//! check), the scene's ground, the plugin, one step with or without it, the dice throw, the
-//! CSV trace and events writers, and a seeded random number generator.
+//! check, the flags `roll`, `drop` and `spin` all take), the scene's ground, the plugin, one
+//! step with or without it, the dice throw, the CSV trace and events writers, and a seeded
+//! random number generator.
 //!
 //! Conventions of every scene: y up, ground surface at y = 0, rapier's default gravity.
 #![allow(dead_code)] // each example uses a part of this module
@@ -120,6 +121,22 @@ pub fn check_precision<C: CommandFactory>(f64: bool) {
         );
         command.error(ErrorKind::ArgumentConflict, message).exit();
     }
+}
+
+/// The flags `roll`, `drop` and `spin` share, the same in name, default and help:
+/// `#[command(flatten)]` in a scene's own flags.
+#[derive(clap::Args, Debug)]
+pub struct CommonArgs {
+    /// Time step (s)
+    #[arg(long, value_name = "DT", default_value = "1/60", value_parser = positive)]
+    pub dt: f64,
+    /// Rapier alone, or the plugin in one of its timing modes
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Mode::EXACT)]
+    pub mode: Mode,
+    /// Double precision: needs a build with `--features f64` (the precision is chosen at
+    /// build time)
+    #[arg(long)]
+    pub f64: bool,
 }
 
 /// `--mode`: rapier alone, or the plugin with a timing mode.
