@@ -10,6 +10,7 @@
 
 mod plugin_support;
 
+use approx::assert_abs_diff_eq;
 use plugin_support::*;
 use rapier_impact::model::Regime;
 use rapier_impact::rapier::na::Unit;
@@ -393,13 +394,9 @@ fn a_rising_kinematic_platform_enters_the_model() {
                 v_up - v_ball
             );
             let tol = if F64 { 1e-9 } else { 2e-5 };
-            assert!((t - t_hit).abs() < tol, "impact time {t} vs {t_hit}");
-            assert!(
-                (v[1] - expected).abs() < 10.0 * tol,
-                "vy after {} vs {expected}",
-                v[1]
-            );
-            assert!((ev.approach_speed - (v_up - v_ball)).abs() < 10.0 * tol);
+            assert_abs_diff_eq!(t, t_hit, epsilon = tol);
+            assert_abs_diff_eq!(v[1], expected, epsilon = 10.0 * tol);
+            assert_abs_diff_eq!(ev.approach_speed, v_up - v_ball, epsilon = 10.0 * tol);
             return;
         }
     }
@@ -441,10 +438,7 @@ fn check_slope(ground_collider: ColliderBuilder, n: [f64; 3], label: &str) {
                 ev.normal
             );
             let tol = if F64 { 1e-8 } else { 2e-5 };
-            assert!(
-                (t - t_hit).abs() < tol,
-                "{label}: impact time {t} vs {t_hit}"
-            );
+            assert_abs_diff_eq!(t, t_hit, epsilon = tol);
             assert!(err < 10.0 * tol, "{label}: v' {after:?} vs {expected:?}");
             return;
         }
@@ -534,16 +528,8 @@ fn every_ground_shape_bounces_by_the_closed_form() {
             e * e * h0
         );
         let tol = if F64 { 1e-9 } else { 1e-5 };
-        assert!(
-            (impacts[0] - t1).abs() < tol,
-            "{label}: impact {} vs {t1}",
-            impacts[0]
-        );
-        assert!(
-            apex_err.abs() < tol,
-            "{label}: apex {apex} vs {}",
-            e * e * h0
-        );
+        assert_abs_diff_eq!(impacts[0], t1, epsilon = tol);
+        assert_abs_diff_eq!(apex_err, 0.0, epsilon = tol);
     }
 }
 
@@ -726,7 +712,7 @@ fn a_rolling_ball_rolls_at_the_model_speed_without_jitter() {
         alone.last().unwrap().2
     );
     assert!(impacts < 10, "micro-bounces: {impacts} impacts");
-    assert!((vx - 1.0 / 1.4).abs() < 1e-3, "rolling speed {vx}");
+    assert_abs_diff_eq!(vx, 1.0 / 1.4, epsilon = 1e-3);
     assert!(spread < 1e-5, "rolling ball jitters by {spread} m");
 }
 
@@ -781,14 +767,11 @@ fn a_falling_rod_gets_the_closed_form_impulse_and_spin() {
         assert_eq!(ev.contact_points, 2, "rod end edge");
         let tol = if F64 { 1e-9 } else { 2e-5 };
         let j_err = ev.normal_impulse / j_box - 1.0;
-        assert!(j_err.abs() < tol, "J {} vs {j_box}", ev.normal_impulse);
-        assert!(
-            (w_after / w_box - 1.0).abs() < tol,
-            "w' {w_after} vs {w_box}"
-        );
+        assert_abs_diff_eq!(j_err, 0.0, epsilon = tol);
+        assert_abs_diff_eq!(w_after / w_box, 1.0, epsilon = tol);
         // The line-rod closed form holds to the thickness effect, ~ 2 a tan(phi) / L.
         let thickness = 4.0 * a * phi.tan() / len;
-        assert!((ev.normal_impulse / j - 1.0).abs() < thickness + tol);
+        assert_abs_diff_eq!(ev.normal_impulse / j, 1.0, epsilon = thickness + tol);
     }
 }
 
@@ -886,11 +869,7 @@ fn a_fast_ball_neither_tunnels_nor_bounces_twice() {
             // One bounce at e v (v ~ 40.1 m/s at the impact), rapier adding nothing:
             // after it, only gravity acts.
             let up = vy + G * 11.0 / 60.0;
-            assert!(
-                (up - e * impacts[0].1).abs() < 0.2,
-                "{timing:?}: rebound {up:.4} m/s vs e v = {:.4}",
-                e * impacts[0].1
-            );
+            assert_abs_diff_eq!(up, e * impacts[0].1, epsilon = 0.2);
         }
     }
 }
@@ -1104,8 +1083,8 @@ fn exact_mode_flies_a_damped_ball_in_closed_form() {
     let rb = &world.bodies[ball];
     let tol = if F64 { 1e-12 } else { 1e-6 };
     let (vy, yy) = (wide(rb.linvel().y), wide(rb.translation().y));
-    assert!((vy - v).abs() <= tol * v0, "speed {vy} vs {v}");
-    assert!((yy - y).abs() <= tol * y0, "height {yy} vs {y}");
+    assert_abs_diff_eq!(vy, v, epsilon = tol * v0);
+    assert_abs_diff_eq!(yy, y, epsilon = tol * y0);
 }
 
 #[test]

@@ -13,6 +13,7 @@
 
 mod plugin_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use plugin_support::*;
 use rapier_impact::TimingMode;
 use rapier_impact::rapier::prelude::*;
@@ -178,7 +179,7 @@ fn report(mode: TimingMode, dt: f64, bounces: usize) -> (f64, f64, Trace) {
 fn notes_impact_times_are_the_closed_form() {
     for (k, t) in NOTES_TIMES.iter().enumerate() {
         assert!(
-            (impact_time(k) - t).abs() < 1e-6,
+            abs_diff_eq!(impact_time(k), *t, epsilon = 1e-6),
             "t_{k}: {} vs {t}",
             impact_time(k)
         );
@@ -201,7 +202,7 @@ fn exact_mode_apexes_follow_e_squared_over_ten_bounces() {
     for (k, t) in NOTES_TIMES.iter().enumerate() {
         let m = trace.impacts[k];
         assert!(
-            (m - t).abs() < 1e-6,
+            abs_diff_eq!(m, *t, epsilon = 1e-6),
             "impact {k}: measured {m:.7} s, closed form {t} s"
         );
     }
@@ -229,10 +230,7 @@ fn exact_mode_comes_to_rest_near_the_closed_form_time() {
     // early, plus a step.
     let expected = time_to_rest();
     println!("time to rest: {rest:.4} s, expected {expected:.4} s");
-    assert!(
-        (rest - expected).abs() < 0.1,
-        "time to rest {rest:.4} s, expected {expected:.4} s"
-    );
+    assert_abs_diff_eq!(rest, expected, epsilon = 0.1);
 }
 
 #[test]
@@ -242,11 +240,7 @@ fn toi_mode_impacts_in_step_with_rapier_flight() {
     // The first impact comes from an exact in-step time after rapier's flight: rapier's
     // integrator leaves the ball ~ g h t / 2 low, so it lands ~2 ms early.
     let t = trace.impacts[0];
-    assert!(
-        (t - NOTES_TIMES[0]).abs() < 3e-3,
-        "toi first impact {t:.6} s, expected {}",
-        NOTES_TIMES[0]
-    );
+    assert_abs_diff_eq!(t, NOTES_TIMES[0], epsilon = 3e-3);
     // Free flight is rapier's, so apexes carry its flight error, but never its restitution
     // error on top: at least as close as rapier alone over five bounces.
     for n in 1..=5 {
@@ -268,14 +262,14 @@ fn step_mode_bounces_at_step_boundaries() {
         let a = trace.apexes[n - 1];
         let err = a / apex(n) - 1.0;
         assert!(
-            err.abs() < 0.05,
+            abs_diff_eq!(err, 0.0, epsilon = 0.05),
             "step apex {n}: {a:.6} vs {:.6} ({err:+.3e})",
             apex(n)
         );
         let t = trace.impacts[n - 1];
         let te = impact_time(n - 1);
         assert!(
-            (t - te).abs() < 0.1,
+            abs_diff_eq!(t, te, epsilon = 0.1),
             "step impact {n}: {t:.6} s vs {te:.6} s"
         );
     }

@@ -24,6 +24,7 @@
 
 mod plugin_support;
 
+use approx::assert_abs_diff_eq;
 use plugin_support::*;
 use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material};
 use rapier_impact::na::{Matrix3, Vector3};
@@ -161,10 +162,7 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
             first[i]
         );
         let got = first[i].unwrap_or(f64::NAN);
-        assert!(
-            (got - expected).abs() < tt,
-            "{label}: first impact at {got}, expected {expected}"
-        );
+        assert_abs_diff_eq!(got, expected, epsilon = tt);
     }
     // Off: the automatic grounds are ordinary colliders again, their flags back to the
     // user's from the next step; the ground marked by hand stays.
@@ -308,9 +306,9 @@ fn a_position_based_rising_platform_enters_the_model() {
                 ev.approach_speed,
                 v_up - v_ball
             );
-            assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
-            assert!((vy - expected).abs() < tv, "vy after {vy} vs {expected}");
-            assert!((ev.approach_speed - (v_up - v_ball)).abs() < tv);
+            assert_abs_diff_eq!(t, t_hit, epsilon = tt);
+            assert_abs_diff_eq!(vy, expected, epsilon = tv);
+            assert_abs_diff_eq!(ev.approach_speed, v_up - v_ball, epsilon = tv);
             return;
         }
     }
@@ -344,11 +342,8 @@ fn step_mode_on_a_rising_platform_uses_the_step_boundary_velocity() {
             );
             assert_eq!(events.len(), 1);
             assert_eq!(ev.timing, ImpactTiming::StepStart);
-            assert!(
-                (vy - expected).abs() < tv.max(1e-5),
-                "vy after {vy} vs {expected}"
-            );
-            assert!((ev.approach_speed - (v_up - v0)).abs() < tv.max(1e-5));
+            assert_abs_diff_eq!(vy, expected, epsilon = tv.max(1e-5));
+            assert_abs_diff_eq!(ev.approach_speed, v_up - v0, epsilon = tv.max(1e-5));
             bounced_at = Some(k);
         }
         // Rising with the ball: the ball leaves it and must not be bounced by rapier on the
@@ -420,7 +415,7 @@ fn turntable(mu: f64) {
         if stick { "stick" } else { "slip" },
         ev.regime
     );
-    assert!((t - t_hit).abs() < tt, "impact time {t} vs {t_hit}");
+    assert_abs_diff_eq!(t, t_hit, epsilon = tt);
     assert!((v - expected_v).norm() < tv, "v' {v:?} vs {expected_v:?}");
     assert!(
         (w - expected_w).norm() < tv / radius,
@@ -514,10 +509,7 @@ fn check_ramp(label: &str, shape: ColliderBuilder) {
         "{label} at {SLOPE_DEG} deg: impact {t:.7} s (expected {t_hit:.7}), normal {normal:.6?} (expected {n:.6?}), bounce direction {dir:.6?} (model {dir_m:.6?}), speed {speed:.6} (model {speed_m:.6}), w' {w:.4?} (model {:.4?}), regime {:?} (model {:?})",
         impact.velocity.angular, ev.regime, impact.regime
     );
-    assert!(
-        (t - t_hit).abs() < tt,
-        "{label}: impact time {t} vs {t_hit}"
-    );
+    assert_abs_diff_eq!(t, t_hit, epsilon = tt);
     assert!(
         (normal - n).norm() < 1e-5,
         "{label}: normal {normal:?} vs {n:?}"

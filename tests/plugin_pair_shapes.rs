@@ -7,6 +7,7 @@
 
 mod plugin_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use plugin_support::{F64, MODES, na, real, wide};
 use rapier_impact::model::{self, Body, BodyVelocity, Material, PairContact, PairImpact};
 use rapier_impact::na::{Matrix3, UnitQuaternion, Vector3};
@@ -183,7 +184,7 @@ fn equal_cubes_face_on_exchange_speed_by_the_closed_form() {
         let t_touch = (gap0 - 2.0 * h) / speed;
         for (t, ev) in &seen {
             assert!(
-                (t - t_touch).abs() <= T_TOL,
+                abs_diff_eq!(*t, t_touch, epsilon = T_TOL),
                 "{mode:?}: at {t}, expected {t_touch}"
             );
             assert_eq!(ev.timing, ImpactTiming::InStep);
@@ -214,7 +215,7 @@ fn equal_cubes_face_on_exchange_speed_by_the_closed_form() {
         let t_end = 30.0 * wide(w.integration_parameters.dt);
         let expected = e * speed * (t_end - t_touch);
         assert!(
-            (gap - expected).abs() <= 10.0 * T_TOL * speed,
+            abs_diff_eq!(gap, expected, epsilon = 10.0 * T_TOL * speed),
             "{mode:?}: gap {gap}, {expected}"
         );
     }
@@ -246,7 +247,7 @@ fn a_ball_into_a_cube_face_off_centre_is_the_models_impact_at_the_analytic_conta
         assert_eq!(seen.len(), 2, "{mode:?}: {seen:?}");
         let t_touch = (0.4 - h - r) / speed;
         assert!(
-            (seen[0].0 - t_touch).abs() <= T_TOL,
+            abs_diff_eq!(seen[0].0, t_touch, epsilon = T_TOL),
             "{mode:?}: at {}",
             seen[0].0
         );
@@ -296,7 +297,7 @@ fn a_ball_into_a_cube_face_off_centre_is_the_models_impact_at_the_analytic_conta
             let ke = 0.5 * m * v.norm_squared() + 0.5 * om.dot(&(world_inertia(&w, ev.body) * om));
             let rel = if F64 { 1e-12 } else { 1e-5 };
             assert!(
-                (ev.ke_after - ke).abs() <= rel * ke,
+                abs_diff_eq!(ev.ke_after, ke, epsilon = rel * ke),
                 "{mode:?}: {} written {ke}",
                 ev.ke_after
             );
@@ -399,7 +400,7 @@ fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
         let (point, centre) = corner(hi);
         let ev = seen[0].1;
         assert!(
-            (ev.time - hi).abs() <= T_TOL,
+            abs_diff_eq!(ev.time, hi, epsilon = T_TOL),
             "{mode:?}: at {}, analytic {hi}",
             ev.time
         );
@@ -496,8 +497,8 @@ fn step_mode_resolves_a_cube_pair_at_the_step_start() {
     );
     let (va, vb) = (velocity(&w, a).0.x, velocity(&w, b).0.x);
     let tol = V_TOL * speed;
-    assert!((va - (1.0 - e) / 2.0 * speed).abs() <= tol, "{va}");
-    assert!((vb - (1.0 + e) / 2.0 * speed).abs() <= tol, "{vb}");
+    assert_abs_diff_eq!(va, (1.0 - e) / 2.0 * speed, epsilon = tol);
+    assert_abs_diff_eq!(vb, (1.0 + e) / 2.0 * speed, epsilon = tol);
 }
 
 /// Two cubes whose collision groups exclude each other pass through each other in rapier
@@ -559,7 +560,7 @@ fn dice_meeting_in_the_air_follow_the_closed_form() {
         assert_eq!(seen.len(), 2, "{mode:?}: {seen:?}");
         let t_touch = (0.123 - 2.0 * h) / up;
         assert!(
-            (seen[0].0 - t_touch).abs() <= T_TOL,
+            abs_diff_eq!(seen[0].0, t_touch, epsilon = T_TOL),
             "{mode:?}: at {}",
             seen[0].0
         );
@@ -571,11 +572,11 @@ fn dice_meeting_in_the_air_follow_the_closed_form() {
         let (vh, wh) = velocity(&w, high);
         let tol = V_TOL * up;
         assert!(
-            (vl.y - (fall + (1.0 - e) / 2.0 * up)).abs() <= tol,
+            abs_diff_eq!(vl.y, fall + (1.0 - e) / 2.0 * up, epsilon = tol),
             "{mode:?}: {vl}"
         );
         assert!(
-            (vh.y - (fall + (1.0 + e) / 2.0 * up)).abs() <= tol,
+            abs_diff_eq!(vh.y, fall + (1.0 + e) / 2.0 * up, epsilon = tol),
             "{mode:?}: {vh}"
         );
         assert!(
@@ -886,7 +887,7 @@ fn a_stack_of_dice_lies_still_as_rapiers_resting_contact() {
                 na(alone.bodies[*d0].translation()).y,
             );
             assert!(
-                (y - y0).abs() <= 1e-4,
+                abs_diff_eq!(y, y0, epsilon = 1e-4),
                 "{mode:?}: at {y}, rapier alone {y0}"
             );
             assert!(w.bodies[*d].is_sleeping(), "{mode:?}: asleep");
@@ -927,7 +928,7 @@ fn a_die_spinning_in_place_hits_the_one_beside_it() {
         // 45 - acos(0.065 / (h sqrt 2)) degrees.
         let turn = std::f64::consts::FRAC_PI_4 - (0.065 / (h * 2f64.sqrt())).acos();
         assert!(
-            (seen[0].0 - turn / 20.0).abs() <= 1e-6,
+            abs_diff_eq!(seen[0].0, turn / 20.0, epsilon = 1e-6),
             "{mode:?}: at {}",
             seen[0].0
         );

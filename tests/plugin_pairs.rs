@@ -5,6 +5,7 @@
 
 mod plugin_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use plugin_support::{F64, G, MODES, na, real, wide, world_with_gravity};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
@@ -133,8 +134,14 @@ fn a_slow_pair_is_rapiers_contact_as_it_is_unless_rapier_bounces_it_for_ever() {
                 assert!(vb > 0.5 * slow, "{mode:?}: rapier bounced it, {va} {vb}");
             } else {
                 // Hooked while approaching, zero restitution: they move on together.
-                assert!((va - vb).abs() <= 1e-3 * slow, "{mode:?}: {va} {vb}");
-                assert!((va + vb - slow).abs() <= 1e-3 * slow, "{mode:?}: momentum");
+                assert!(
+                    abs_diff_eq!(va, vb, epsilon = 1e-3 * slow),
+                    "{mode:?}: {va} {vb}"
+                );
+                assert!(
+                    abs_diff_eq!(va + vb, slow, epsilon = 1e-3 * slow),
+                    "{mode:?}: momentum"
+                );
             }
         }
     }
@@ -211,7 +218,7 @@ fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
         );
         for (t, ev) in &seen {
             assert!(
-                (t - t_touch).abs() < 1e-6,
+                abs_diff_eq!(*t, t_touch, epsilon = 1e-6),
                 "{mode:?}: at {t}, expected {t_touch}"
             );
             assert_eq!(ev.timing, ImpactTiming::InStep);
@@ -222,11 +229,11 @@ fn two_balls_meet_at_the_closed_form_time_and_exchange_speed() {
         let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
         let mean = 0.5;
         assert!(
-            (va - (mean - 1.5 * e)).abs() <= V_TOL * 3.0,
+            abs_diff_eq!(va, mean - 1.5 * e, epsilon = V_TOL * 3.0),
             "{mode:?}: va {va}"
         );
         assert!(
-            (vb - (mean + 1.5 * e)).abs() <= V_TOL * 3.0,
+            abs_diff_eq!(vb, mean + 1.5 * e, epsilon = V_TOL * 3.0),
             "{mode:?}: vb {vb}"
         );
     }
@@ -261,8 +268,14 @@ fn one_ball_of_an_impact_pair_carries_the_hook_flags() {
         assert_eq!(impact_steps, 1, "{mode:?}: one impact");
         // Equal masses, head on: (1 -+ e)/2 of the 2 m/s.
         let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
-        assert!((va - (1.0 - e)).abs() <= V_TOL * 2.0, "{mode:?}: va {va}");
-        assert!((vb - (1.0 + e)).abs() <= V_TOL * 2.0, "{mode:?}: vb {vb}");
+        assert!(
+            abs_diff_eq!(va, 1.0 - e, epsilon = V_TOL * 2.0),
+            "{mode:?}: va {va}"
+        );
+        assert!(
+            abs_diff_eq!(vb, 1.0 + e, epsilon = V_TOL * 2.0),
+            "{mode:?}: vb {vb}"
+        );
     }
 }
 
@@ -298,7 +311,7 @@ fn balls_not_opted_in_or_filtered_out_are_rapiers() {
     // Groups that exclude the pair: they pass through each other, as in rapier alone.
     let (events, va) = run(true, true);
     assert_eq!(events, 0);
-    assert!((va - 2.0).abs() < 1e-6, "passed through: {va}");
+    assert_abs_diff_eq!(va, 2.0, epsilon = 1e-6);
 }
 
 /// A chain passes an impact on only along links rapier would solve: in a row of touching
@@ -345,7 +358,7 @@ fn a_chain_stops_at_a_link_rapier_would_not_solve() {
             .collect();
         for (k, expected) in [0.0, 0.0, 1.0, 0.0].into_iter().enumerate() {
             assert!(
-                (vx[k] - expected).abs() <= V_TOL,
+                abs_diff_eq!(vx[k], expected, epsilon = V_TOL),
                 "{mode:?}: ball {k} at {}, expected {expected}",
                 vx[k]
             );
@@ -404,15 +417,15 @@ fn a_rolling_cue_ball_sends_the_object_ball_off_at_the_closed_form_speed() {
         // The object ball's momentum after is the impulse on it.
         let speed = wide(on_object.impulse.x) / m;
         assert!(
-            (speed - (1.0 + e) / 2.0 * v).abs() <= V_TOL * v,
+            abs_diff_eq!(speed, (1.0 + e) / 2.0 * v, epsilon = V_TOL * v),
             "{mode:?}: object ball {speed}"
         );
         let kept = v + wide(on_cue.impulse.x) / m;
         assert!(
-            (kept - (1.0 - e) / 2.0 * v).abs() <= V_TOL * v,
+            abs_diff_eq!(kept, (1.0 - e) / 2.0 * v, epsilon = V_TOL * v),
             "{mode:?}: cue ball {kept}"
         );
-        assert!(wide(on_object.impulse.y).abs() <= V_TOL * m * v);
+        assert_abs_diff_eq!(wide(on_object.impulse.y), 0.0, epsilon = V_TOL * m * v);
     }
 }
 
@@ -493,7 +506,7 @@ fn newtons_cradle_passes_the_impact_along_the_row() {
                 let vx = na(w.bodies[*h].linvel()).x;
                 let expected = if k == 4 { hit } else { (1.0 - e) / 2.0 * hit };
                 assert!(
-                    (vx - expected).abs() <= V_TOL * v0,
+                    abs_diff_eq!(vx, expected, epsilon = V_TOL * v0),
                     "{case}: ball {k} at {vx}, expected {expected}"
                 );
                 hit *= (1.0 + e) / 2.0;
@@ -527,10 +540,8 @@ fn step_mode_resolves_a_pair_at_the_step_start() {
     );
     // Elastic and equal: the speeds exchanged.
     let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
-    assert!(
-        va.abs() <= V_TOL && (vb - 2.0).abs() <= V_TOL * 2.0,
-        "{va} {vb}"
-    );
+    assert_abs_diff_eq!(va, 0.0, epsilon = V_TOL);
+    assert_abs_diff_eq!(vb, 2.0, epsilon = V_TOL * 2.0);
 }
 
 /// A pile: 100 opted-in balls (5 cm, e = 0.7) dropped into a walled box bounce off each other
@@ -627,7 +638,8 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
         assert_eq!(hits, 2, "{mode:?}: the fast ball hit once");
         let (va, vb) = (na(w.bodies[a].linvel()).x, na(w.bodies[b].linvel()).x);
         assert!(
-            va.abs() <= 100.0 * V_TOL && (vb - 100.0).abs() <= 100.0 * V_TOL,
+            abs_diff_eq!(va, 0.0, epsilon = 100.0 * V_TOL)
+                && abs_diff_eq!(vb, 100.0, epsilon = 100.0 * V_TOL),
             "{mode:?}: {va} {vb}"
         );
         assert!(na(w.bodies[a].center_of_mass()).x < na(w.bodies[b].center_of_mass()).x);
@@ -666,11 +678,11 @@ fn fast_heavy_overlapping_and_grazing_pairs() {
         let expected_l = (ml - 0.5 * mh) / (ml + mh);
         let expected_h = (1.5 * ml) / (ml + mh);
         assert!(
-            (vl - expected_l).abs() <= V_TOL * 10.0,
+            abs_diff_eq!(vl, expected_l, epsilon = V_TOL * 10.0),
             "{mode:?}: light {vl}, expected {expected_l}"
         );
         assert!(
-            (vh - expected_h).abs() <= 1e-9 + V_TOL * expected_h,
+            abs_diff_eq!(vh, expected_h, epsilon = 1e-9 + V_TOL * expected_h),
             "{mode:?}: heavy {vh}, expected {expected_h}"
         );
 

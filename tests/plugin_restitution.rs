@@ -8,6 +8,7 @@
 
 mod plugin_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use plugin_support::{F64, na, real, up, wide, world_with_gravity};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
@@ -291,7 +292,7 @@ fn each_bounce_takes_the_curve_at_its_impact_speed() {
     for (k, event) in impacts.iter().enumerate() {
         let speed = event.approach_speed;
         assert!(
-            (speed - v).abs() <= 1e-5 * v.max(1.0),
+            abs_diff_eq!(speed, v, epsilon = 1e-5 * v.max(1.0)),
             "impact {k}: {speed} m/s, closed form {v}"
         );
         let e = if event.settled { 0.0 } else { e_of.at(speed) };
@@ -305,7 +306,8 @@ fn each_bounce_takes_the_curve_at_its_impact_speed() {
     assert!(bounces >= 8, "{bounces} bounces: {impacts:?}");
     // It ends at rest on the ground.
     let rb = &w.bodies[b];
-    assert!(na(rb.linvel()).norm() < 1e-3 && (wide(rb.translation().y) - r).abs() < 5e-3);
+    assert!(na(rb.linvel()).norm() < 1e-3);
+    assert_abs_diff_eq!(wide(rb.translation().y), r, epsilon = 5e-3);
     println!("{bounces} bounces, each at the curve's e for its speed");
 }
 

@@ -5,6 +5,7 @@
 
 mod plugin_support;
 
+use approx::abs_diff_eq;
 use plugin_support::{F64, G, MODES, na, real, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
@@ -169,7 +170,7 @@ fn a_rolling_ball_stops_at_the_closed_form_distance_and_sleeps() {
             // rounding of each step's state adds up (2e-6 to 3e-6 here); `Exact` carries it.
             let tol = tolerance(mode, 0.0);
             assert!(
-                (x - distance).abs() <= tol * distance,
+                abs_diff_eq!(x, distance, epsilon = tol * distance),
                 "{mode:?} at {hz} Hz: stopped at {x}, closed form {distance}"
             );
             assert!(rb.is_sleeping(), "{mode:?} at {hz} Hz: asleep once stopped");
@@ -252,7 +253,7 @@ fn a_held_ball_set_rolling_again_stops_where_the_closed_form_says_and_is_held_ag
             let expected = v1 * v1 / (2.0 * a);
             let tol = tolerance(mode, t_stop * hz);
             assert!(
-                (travelled - expected).abs() <= tol * expected,
+                abs_diff_eq!(travelled, expected, epsilon = tol * expected),
                 "{at}: {travelled} vs {expected}"
             );
             run.assert_held(&at, &w, ball, &n);
@@ -286,7 +287,7 @@ fn the_ground_overrides_the_ball_which_overrides_the_configuration() {
     ] {
         let x = run(ground, body);
         assert!(
-            (x - stop(expected)).abs() <= X_TOL * stop(expected),
+            abs_diff_eq!(x, stop(expected), epsilon = X_TOL * stop(expected)),
             "{ground:?} {body:?}: {x}"
         );
     }
@@ -351,7 +352,7 @@ fn up_and_down_a_slope_it_stops_where_the_closed_form_says() {
                 // slope at 240 Hz, 1 865 steps, 2.2e-5; `Exact` 5.5e-9).
                 let tol = tolerance(mode, t_stop * hz);
                 assert!(
-                    (travelled - expected).abs() <= tol * expected,
+                    abs_diff_eq!(travelled, expected, epsilon = tol * expected),
                     "{at}: {travelled} vs {expected}"
                 );
                 run.assert_held(&at, &w, ball, &Vector3::new(th.sin(), th.cos(), 0.0));
@@ -384,12 +385,12 @@ fn the_spin_about_the_normal_decays_at_the_closed_form_rate() {
             let wy = wide(w.bodies[ball].angvel().y);
             let tol = tolerance(mode, half as f64);
             assert!(
-                (wy - (w0 - rate * t)).abs() <= tol * w0,
+                abs_diff_eq!(wy, w0 - rate * t, epsilon = tol * w0),
                 "{mode:?} at {hz} Hz: {wy} at {t} s"
             );
             // Rolling on at v0, no resistance.
             assert!(
-                (wide(w.bodies[ball].linvel().x) - v0).abs() <= tol * v0,
+                abs_diff_eq!(wide(w.bodies[ball].linvel().x), v0, epsilon = tol * v0),
                 "{mode:?} at {hz} Hz: rolls on at v0"
             );
             for _ in 0..(t0 * hz) as usize {
@@ -431,12 +432,12 @@ fn rolling_across_a_slope_it_curves_down_and_stops_where_the_pursuit_curve_says(
             let moved = run.stop(&at) - start;
             let tol = tolerance(mode, 0.0);
             assert!(
-                (moved.dot(&down) - along).abs() <= tol * along,
+                abs_diff_eq!(moved.dot(&down), along, epsilon = tol * along),
                 "{mode:?} at {hz} Hz: down {} vs {along}",
                 moved.dot(&down)
             );
             assert!(
-                (moved.z - across).abs() <= tol * across,
+                abs_diff_eq!(moved.z, across, epsilon = tol * across),
                 "{mode:?} at {hz} Hz: across {} vs {across}",
                 moved.z
             );
@@ -502,7 +503,7 @@ fn across_a_seam_between_two_tiles_it_stops_as_on_one_plane() {
             // in `f32`); `Exact` 9.4e-9.
             let tol = tolerance(mode, 0.0);
             assert!(
-                (x - distance).abs() <= tol * distance,
+                abs_diff_eq!(x, distance, epsilon = tol * distance),
                 "{mode:?} at {hz} Hz: stopped at {x}, closed form {distance}"
             );
             assert!(highest <= 1e-6, "{mode:?} at {hz} Hz: hopped {highest} m");
@@ -616,7 +617,7 @@ fn down_a_slope_onto_level_ground_it_meets_the_crease_and_stops_where_the_closed
             let tol = tolerance(mode, 0.0);
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
-                (x - x_end).abs() <= tol * x_end,
+                abs_diff_eq!(x, x_end, epsilon = tol * x_end),
                 "{at}: stopped at {x}, closed form {x_end}"
             );
             let [(t, impact)] = impacts.as_slice() else {
@@ -627,12 +628,12 @@ fn down_a_slope_onto_level_ground_it_meets_the_crease_and_stops_where_the_closed
                 "{at}: the impact is with the level ground"
             );
             assert!(
-                (t - t_crease).abs() <= tol * t_crease,
+                abs_diff_eq!(*t, t_crease, epsilon = tol * t_crease),
                 "{at}: the impact at {t} s, closed form {t_crease} s"
             );
             let approach = vc * th.sin();
             assert!(
-                (impact.approach_speed - approach).abs() <= tol * approach,
+                abs_diff_eq!(impact.approach_speed, approach, epsilon = tol * approach),
                 "{at}: approach {} m/s, closed form {approach}",
                 impact.approach_speed
             );
@@ -711,11 +712,11 @@ fn into_a_wall_it_bounces_off_by_the_model_and_flies_as_a_ball_thrown_up() {
         );
         // Measured in `f32`: below 6e-8; in `f64`: below 1e-14.
         assert!(
-            (t1 - t_wall).abs() <= X_TOL * t_wall,
+            abs_diff_eq!(*t1, t_wall, epsilon = X_TOL * t_wall),
             "{at}: the wall at {t1} s, closed form {t_wall}"
         );
         assert!(
-            (hit.approach_speed - approach).abs() <= X_TOL * approach,
+            abs_diff_eq!(hit.approach_speed, approach, epsilon = X_TOL * approach),
             "{at}: into the wall at {} m/s, closed form {approach}",
             hit.approach_speed
         );
@@ -723,12 +724,12 @@ fn into_a_wall_it_bounces_off_by_the_model_and_flies_as_a_ball_thrown_up() {
         assert!(vy > 0.0, "{at}: the wall's friction throws it up");
         let flight = 2.0 * vy / G;
         assert!(
-            (t2 - t1 - flight).abs() <= X_TOL * flight,
+            abs_diff_eq!(t2 - t1, flight, epsilon = X_TOL * flight),
             "{at}: landed after {} s, thrown up at {vy} m/s: {flight} s",
             t2 - t1
         );
         assert!(
-            (landing.approach_speed - vy).abs() <= X_TOL * vy,
+            abs_diff_eq!(landing.approach_speed, vy, epsilon = X_TOL * vy),
             "{at}: landed at {} m/s, thrown up at {vy}",
             landing.approach_speed
         );
@@ -819,7 +820,7 @@ fn down_a_flat_mesh_or_heightfield_it_stops_as_on_one_plane() {
                 // In `f64`: 3.8e-14.
                 let tol = tolerance(mode, t_stop * hz);
                 assert!(
-                    (moved - distance).abs() <= tol * distance,
+                    abs_diff_eq!(moved, distance, epsilon = tol * distance),
                     "{at}: stopped after {moved} m, closed form {distance}"
                 );
                 assert_eq!(run.others, 0, "{at}: nothing to correct");
@@ -981,7 +982,7 @@ fn set_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried_as_the_closed_for
             let tol = tolerance(mode, 0.0);
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
-                (x - expected).abs() <= tol * expected,
+                abs_diff_eq!(x, expected, epsilon = tol * expected),
                 "{at}: at {x} m, closed form {expected}"
             );
             assert_eq!(events, 0, "{at}: nothing to correct");
@@ -993,7 +994,10 @@ fn set_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried_as_the_closed_for
                 (v - Vector3::new(u, 0.0, 0.0)).norm() <= 1e-6,
                 "{at}: carried at the belt's speed, {v:?}"
             );
-            assert!((y - R).abs() <= 1e-6, "{at}: on the belt, y = {y}");
+            assert!(
+                abs_diff_eq!(y, R, epsilon = 1e-6),
+                "{at}: on the belt, y = {y}"
+            );
         }
     }
 }
@@ -1176,12 +1180,12 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
                     // Relative to the speed (at least 1 m/s: near a stop, to the start's).
                     let scale = v_cf.abs().max(case.v0).max(1.0);
                     assert!(
-                        (x - x_cf).abs() <= tol * x_cf.abs().max(1e-3),
+                        abs_diff_eq!(x, x_cf, epsilon = tol * x_cf.abs().max(1e-3)),
                         "{}: x {x} vs {x_cf}",
                         at(t)
                     );
                     assert!(
-                        (v - v_cf).abs() <= tol * scale,
+                        abs_diff_eq!(v, v_cf, epsilon = tol * scale),
                         "{}: v {v} vs {v_cf}",
                         at(t)
                     );
