@@ -14,6 +14,7 @@
 
 mod scene_support;
 
+use approx::assert_abs_diff_eq;
 use rapier_impact::TimingMode;
 use rapier_impact::rapier::prelude::*;
 use scene_support::*;
@@ -90,12 +91,8 @@ fn tiny_huge_light_and_dense_balls_bounce_by_e_and_rest() {
                     TimingMode::Exact => 1e-4 * v,
                     _ => 0.5 * G / 60.0,
                 };
-                assert!(
-                    (first.approach_speed - v).abs() < tol,
-                    "approach {} vs {v}",
-                    first.approach_speed
-                );
-                assert!((ratio - e * e).abs() < 1e-6, "KE ratio {ratio}");
+                assert_abs_diff_eq!(first.approach_speed, v, epsilon = tol);
+                assert_abs_diff_eq!(ratio, e * e, epsilon = 1e-6);
                 assert!(
                     wide(rb.linvel().length()) < 1e-2 * v.max(0.1),
                     "not at rest: {:?}",
@@ -200,8 +197,8 @@ fn mu_zero_keeps_the_slide_and_mu_ten_sticks() {
         stats.summary()
     );
     assert_eq!(ev.regime, rapier_impact::model::Regime::Stick);
-    assert!((vx1 - 5.0 / 7.0 * vx).abs() < 1e-5);
-    assert!((vx1 + wz * 0.1).abs() < 1e-5);
+    assert_abs_diff_eq!(vx1, 5.0 / 7.0 * vx, epsilon = 1e-5);
+    assert_abs_diff_eq!(vx1, -wz * 0.1, epsilon = 1e-5);
 }
 
 #[test]
@@ -235,7 +232,7 @@ fn restitution_combine_rules_are_rapiers() {
         }
         let (e, ratio) = used.expect("no impact");
         println!("{rule:?}: e used {e:.6} (expected {expected}), KE ratio {ratio:.6}");
-        assert!((e - expected).abs() < 1e-6, "{rule:?}: e {e}");
-        assert!((ratio - expected * expected).abs() < 1e-5);
+        assert_abs_diff_eq!(e, expected, epsilon = 1e-6);
+        assert_abs_diff_eq!(ratio, expected * expected, epsilon = 1e-5);
     }
 }

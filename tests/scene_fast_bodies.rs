@@ -16,6 +16,7 @@
 
 mod scene_support;
 
+use approx::abs_diff_eq;
 use rapier_impact::TimingMode;
 use rapier_impact::rapier::prelude::*;
 use scene_support::*;
@@ -112,7 +113,7 @@ fn run(
                     2e-6 * (n + 1.0) * vy0.abs().max(10.0)
                 };
                 assert!(
-                    err.abs() <= tol,
+                    abs_diff_eq!(err, 0.0, epsilon = tol),
                     "{label}: step {k}: vy {vy} after landing at step {k0} with {vy0}: {err:e} off free flight"
                 );
                 free_flight_err = free_flight_err.max(err.abs());

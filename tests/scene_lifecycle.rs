@@ -11,6 +11,7 @@
 
 mod scene_support;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use rapier_impact::TimingMode;
 use rapier_impact::rapier::prelude::*;
 use scene_support::*;
@@ -204,7 +205,7 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
                 };
                 for e in p.events() {
                     assert!(
-                        (wide(e.point.y) - ground_y).abs() < tol,
+                        abs_diff_eq!(wide(e.point.y), ground_y, epsilon = tol),
                         "{label}: impact at y = {} on the ground at {ground_y}",
                         e.point.y
                     );
@@ -217,7 +218,7 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
             stats.summary()
         );
         assert!(bounces_on_moved > 0, "{label}");
-        assert!((y - 1.1).abs() < 0.01, "{label}: ball at {y}");
+        assert_abs_diff_eq!(y, 1.1, epsilon = 0.01);
     }
 }
 

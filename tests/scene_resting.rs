@@ -13,6 +13,7 @@
 
 mod scene_support;
 
+use approx::assert_abs_diff_eq;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, TimingMode};
 use scene_support::*;
@@ -199,12 +200,8 @@ fn a_ball_launched_sliding_rolls_at_five_sevenths() {
                 stats.summary()
             );
             assert_eq!(stats.bounces, 0, "{label}: bounced");
-            assert!(err.abs() < tol, "{label}: rolling speed {vx} vs {expected}");
-            assert!(
-                (vx + wz * r).abs() < tol * v0,
-                "{label}: not rolling: vx {vx}, w r {}",
-                -wz * r
-            );
+            assert_abs_diff_eq!(err, 0.0, epsilon = tol);
+            assert_abs_diff_eq!(vx, -wz * r, epsilon = tol * v0);
             let t = rolled_at.unwrap();
             // The first step end at or after the closed-form time (slip below 1 mm/s).
             assert!(
@@ -264,11 +261,8 @@ fn a_ball_with_backspin_comes_back_at_the_closed_form_speed() {
                 stats.summary()
             );
             assert_eq!(stats.bounces, 0, "{label}: bounced");
-            assert!(
-                (vx - expected).abs() < tol * v0,
-                "{label}: {vx} vs {expected}"
-            );
-            assert!((vx + wz * r).abs() < tol * v0, "{label}: still slipping");
+            assert_abs_diff_eq!(vx, expected, epsilon = tol * v0);
+            assert_abs_diff_eq!(vx, -wz * r, epsilon = tol * v0);
             let t = turned_at.unwrap();
             assert!(
                 t > t_roll - 1e-3 && t <= t_roll + dt,

@@ -12,6 +12,7 @@
     unused_imports
 )]
 
+use approx::abs_diff_eq;
 use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
@@ -345,7 +346,11 @@ pub fn check_written(world: &PhysicsWorld, events: &[ImpactEvent], stats: &mut S
         let written = kinetic_energy_f64(rb);
         let rounding = if F64 { 1e-12 } else { 1e-5 };
         assert!(
-            (written - ev.ke_after).abs() <= rounding * written.max(ev.ke_after) + 1e-12,
+            abs_diff_eq!(
+                written,
+                ev.ke_after,
+                epsilon = rounding * written.max(ev.ke_after) + 1e-12
+            ),
             "{label}: step {}: body {:?} was written with KE {written:e} J, its last event says {:e} J: {ev:?}",
             stats.steps,
             ev.body,
