@@ -10,6 +10,7 @@ use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::profile::{StepProfile, Stopwatch};
+use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
@@ -146,6 +147,18 @@ impl<'w> StepSets<'w> {
             impulse_joints,
             multibody_joints,
         }
+    }
+}
+
+impl<'w> StepSets<'w> {
+    /// The sets the stages write, and those they only read.
+    pub(crate) fn into_parts(self) -> (&'w mut RigidBodySet, &'w mut ColliderSet, Sets<'w>) {
+        let sets = Sets::new(
+            self.narrow_phase,
+            self.impulse_joints,
+            self.multibody_joints,
+        );
+        (self.bodies, self.colliders, sets)
     }
 }
 

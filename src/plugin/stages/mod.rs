@@ -85,14 +85,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// step.
     pub fn before_step(&mut self, gravity: Vector, params: &IntegrationParameters, sets: StepSets) {
         self.stopwatch.start_step();
-        let StepSets {
-            bodies,
-            colliders,
-            narrow_phase,
-            impulse_joints,
-            multibody_joints,
-        } = sets;
-        let sets = Sets::new(narrow_phase, impulse_joints, multibody_joints);
+        let (bodies, colliders, sets) = sets.into_parts();
         let mut step = self.prepare(gravity, params, bodies, colliders);
         self.stopwatch.lap(Stage::Prepare);
         if !step.active {
@@ -133,16 +126,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// managed impacts, writes poses and velocities back (bodies woken up), moves their
     /// colliders, and records the [`crate::ImpactEvent`]s.
     pub fn after_step(&mut self, sets: StepSets) {
-        let StepSets {
-            bodies,
-            colliders,
-            narrow_phase,
-            impulse_joints,
-            multibody_joints,
-        } = sets;
+        let (bodies, colliders, sets) = sets.into_parts();
         let mut step = EndOfStep {
             data: std::mem::take(&mut self.step),
-            sets: Sets::new(narrow_phase, impulse_joints, multibody_joints),
+            sets,
             moved_together: HandleSet::default(),
         };
         if !step.active {
