@@ -132,6 +132,12 @@ pub(crate) const FAR_TEST_MARGIN: f64 = 1e-4;
 /// See [`FAR_TEST_MARGIN`].
 pub(crate) const FAR_TEST_GROWTH: f64 = 1.0001;
 
+/// How far (m, plus as many per metre of distance from the origin) a ball's gap to a ground,
+/// as a contact query gives it, may fall below the bound taken from the ground's swept box
+/// when the plan looks for the ground a ball rests on: the box's `f32` corners and parry's
+/// `f32` distance. A ground whose bound exceeds the least gap found by more is not queried.
+pub(crate) const GAP_BOUND_SLACK: f64 = 1e-4;
+
 /// Allowance on a torque-free spin's growth bound `I_max / I_min` for the rounding of rapier's
 /// `f32` inertias (2 per cent).
 pub(crate) const SPIN_UP_ALLOWANCE: f64 = 1.02;

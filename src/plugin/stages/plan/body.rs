@@ -4,9 +4,13 @@
 use super::Planner;
 use crate::motion::{Flight, Rolling, State};
 use crate::parry::query::Unsupported;
-use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use crate::plugin::config::TimingMode;
-use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, PairContact, contact_checked};
+use crate::plugin::policy::GAP_BOUND_SLACK;
+use crate::plugin::queries::geometry::{
+    BodyGeom, GroundGeom, PairContact, contact_checked, part_pose,
+};
+use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, body_geom, centred_ball, ground_geom, snapshot};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
@@ -42,9 +46,10 @@ pub(super) struct BodyNear<'c> {
     pub jointed: bool,
     /// The grounds near it with their geometry, the one a ball rests on first.
     pub grounds: SmallList<(usize, GroundGeom<'c>)>,
-    /// For a ball near several grounds: its contact with each of `grounds` at the start,
-    /// in the same order (empty otherwise).
-    pub start_contacts: SmallList<StartContact>,
+    /// For a ball near several grounds: its contact with each of `grounds` at the start, in
+    /// the same order, where `nearest_first` queried it (read through
+    /// [`BodyNear::start_contact`]); empty otherwise.
+    pub start_contacts: SmallList<Option<StartContact>>,
 }
 
 /// What one body's plan reads and never writes: the body near its grounds, rapier's world,
@@ -90,6 +95,22 @@ impl BodyNear<'_> {
             rolling: None,
             held: false,
             rolling_pieces: None,
+        }
+    }
+
+    /// The ball's contact with its `k`-th ground at the step's start, for a ball near several
+    /// grounds (`None` for any other body): the one `nearest_first` found, else queried now,
+    /// with the same arguments, so the same answer.
+    pub fn start_contact(&self, k: usize) -> Option<StartContact> {
+        match self.start_contacts.get(k)? {
+            Some(found) => Some(*found),
+            None => Some(contact_checked(
+                &self.geom.parts[0],
+                &self.grounds[k].1,
+                &self.start,
+                0.0,
+                self.reach,
+            )),
         }
     }
 
@@ -175,7 +196,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], scene.colliders)?)))
             .collect();
         if !turns_surface && body.grounds.len() > 1 {
-            body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
+            body.start_contacts =
+                nearest_first(&body.geom, &mut body.grounds, &step.grounds, &start, reach);
         }
         Some(body)
     }
@@ -215,31 +237,58 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 }
 
 /// A ball (`geom`, one centred ball) near several grounds (a seam between floor tiles): the
-/// ground it rests on (least `|gap|` at `start`) moved first in `grounds`, so that if it rolls
-/// there on one plane with the others, the rest are only that plane's pieces. Returns its
-/// contact with each ground at `start`, in the new order: the pairs' roles reuse them while
-/// the ball has not moved (a `Step` impulse changes only its velocity). One query per ground,
-/// no sort (which would query each pair again).
+/// ground it rests on (least `|gap|` at `start`, the first in `grounds`' order on a tie) moved
+/// first in `grounds`, so that if it rolls there on one plane with the others, the rest are
+/// only that plane's pieces. Returns its contact with each ground at `start` that it queried,
+/// in the new order: the pairs' roles reuse them while the ball has not moved (a `Step`
+/// impulse changes only its velocity). A ground whose swept box (`motions`) keeps the ball
+/// farther than the least `|gap|` already found cannot be the nearest, and is not queried
+/// here: a ball rolling on one tile of a floor queries that tile alone.
 fn nearest_first(
     geom: &BodyGeom,
     grounds: &mut SmallList<(usize, GroundGeom)>,
+    motions: &[GroundMotion],
     start: &State,
     reach: f64,
-) -> SmallList<StartContact> {
-    let mut start_contacts: SmallList<_> = grounds
-        .iter()
-        .map(|(_, gg)| contact_checked(&geom.parts[0], gg, start, 0.0, reach))
-        .collect();
+) -> SmallList<Option<StartContact>> {
+    let part = &geom.parts[0];
+    let centre = part_pose(part, start).translation.vector;
+    let radius = part.shape.as_ball().map_or(0.0, |b| to_f64(b.radius)) + part.skin;
+    let slack = GAP_BOUND_SLACK * (1.0 + centre.norm());
+    // The least `|gap|` the ball can have to a ground: its distance to the box, which holds
+    // the ground and its skin over the step, less its radius and skin.
+    let bound = |i: usize| {
+        let aabb = &motions[i].aabb;
+        let (lo, hi) = (vec_to_na(aabb.mins), vec_to_na(aabb.maxs));
+        let nearest = centre.zip_zip_map(&lo, &hi, |c, l, h| c.clamp(l, h));
+        ((nearest - centre).norm() - radius - slack).max(0.0)
+    };
     let gap = |found: &StartContact| match found {
         Ok(Some((dist, ..))) => f64::abs(*dist),
         _ => f64::INFINITY,
     };
+    let bounds: SmallList<f64> = grounds.iter().map(|(i, _)| bound(*i)).collect();
+    let mut start_contacts: SmallList<Option<StartContact>> =
+        grounds.iter().map(|_| None).collect();
+    let mut least = f64::INFINITY;
+    // The ground with the least bound first (most often the one the ball rests on): its gap
+    // then rules out the others.
+    let first = (0..bounds.len())
+        .min_by(|a, b| bounds[*a].total_cmp(&bounds[*b]))
+        .unwrap_or(0);
+    for k in std::iter::once(first).chain((0..grounds.len()).filter(|k| *k != first)) {
+        if bounds[k] > least {
+            continue;
+        }
+        let found = contact_checked(part, &grounds[k].1, start, 0.0, reach);
+        least = least.min(gap(&found));
+        start_contacts[k] = Some(found);
+    }
+    // Every ground whose `|gap|` can equal the least was queried: the first of them.
     let nearest = start_contacts
         .iter()
-        .map(gap)
-        .enumerate()
-        .min_by(|(_, a), (_, b)| a.total_cmp(b))
-        .map_or(0, |(k, _)| k);
+        .position(|found| found.as_ref().is_some_and(|f| gap(f) == least))
+        .unwrap_or(0);
     grounds.swap(0, nearest);
     start_contacts.swap(0, nearest);
     start_contacts

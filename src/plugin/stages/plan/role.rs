@@ -213,11 +213,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     ) -> Role {
         let body = reads.body;
         let Pair { k, part, gg, .. } = pair;
-        let found = match body.start_contacts.get(k) {
-            Some(found) if plan.state.com == body.start.com && plan.state.rot == body.start.rot => {
-                *found
-            }
-            _ => contact_checked(part, gg, &plan.state, 0.0, body.reach),
+        let at_start = plan.state.com == body.start.com && plan.state.rot == body.start.rot;
+        let found = match at_start.then(|| body.start_contact(k)).flatten() {
+            Some(found) => found,
+            None => contact_checked(part, gg, &plan.state, 0.0, body.reach),
         };
         let found = self.mesh_side(reads, plan, pair, found, step);
         let contact0 = found.as_ref().ok().copied().flatten();
@@ -368,10 +367,10 @@ fn rolling_piece_role(
     if pieces.contains(&gg.handle) {
         return Some(Role::Rolling);
     }
-    verdict.any_impact |= match body.start_contacts.get(k) {
-        Some(found) => within_reach(found),
-        None => within_reach(&contact_checked(part, gg, &plan.state, 0.0, body.reach)),
-    };
+    let found = body
+        .start_contact(k)
+        .unwrap_or_else(|| contact_checked(part, gg, &plan.state, 0.0, body.reach));
+    verdict.any_impact |= within_reach(&found);
     Some(Role::Impact)
 }
 
