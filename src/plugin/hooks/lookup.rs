@@ -19,11 +19,14 @@ use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
 pub(crate) struct Lookup {
     /// `roles` holds what `StepData::roles` holds.
     pub roles_built: bool,
-    /// By body collider index: one of its pairs, and whether it has others (then in
-    /// `StepData::roles`); or, for a collider of a body `before_step` found with no ground
-    /// in reach, that all its ground pairs are `Resting` (rapier's broad phase still pairs
-    /// it with the grounds whose bounds it overlaps, a half-space with every body).
+    /// By body collider index: one of its pairs, with its others in `rest`; or, for a
+    /// collider of a body `before_step` found with no ground in reach, that all its ground
+    /// pairs are `Resting` (rapier's broad phase still pairs it with the grounds whose bounds
+    /// it overlaps, a half-space with every body). Every pair of `StepData::roles` is here.
     pub roles: Vec<Option<RoleSlot>>,
+    /// A body collider's pairs after the first, together (`RoleSlot::rest`): the ground, the
+    /// role, and the user's flags on the two colliders.
+    pub rest: Vec<(ColliderHandle, Role, ActiveHooks)>,
     /// By collider index: the hook flags the user set on a collider the plugin flagged.
     pub user_flags: Vec<Option<(ColliderHandle, ActiveHooks)>>,
 }
@@ -35,16 +38,20 @@ pub(crate) struct RoleSlot {
     pub role: Role,
     /// The hook flags the user set on the two colliders (what rapier would have seen).
     pub user: ActiveHooks,
-    pub more: bool,
+    /// The hook flags the user set on the body collider alone.
+    pub body_user: ActiveHooks,
+    /// Its other pairs: `Lookup::rest[rest.0..rest.1]`.
+    pub rest: (u32, u32),
 }
 
 /// What the table says of a pair (see [`Lookup::pair`]).
 #[derive(Clone, Copy)]
 pub(crate) enum Looked {
     /// A pair the table holds: its key, role and the user's flags on both colliders.
-    Pair(PairKey, RoleSlot),
-    /// `key.0` is a collider of a body with no ground in reach: if `key.1` is a managed
-    /// ground, the pair is `Resting`; `user` is the user's flags on `key.0` only.
+    Pair(PairKey, Role, ActiveHooks),
+    /// `key.0` is a collider of a body with no ground in reach, or none but those of its
+    /// pairs in the table: if `key.1` is a managed ground, the pair is `Resting`; `user` is
+    /// the user's flags on `key.0` only.
     Far(PairKey, ActiveHooks),
 }
 
@@ -63,6 +70,7 @@ impl Lookup {
         let mut out = Self {
             roles_built: true,
             roles: vec![None; len(&mut roles.keys().map(|k| k.0).chain(far.iter().copied()))],
+            rest: Vec::new(),
             user_flags: vec![
                 None;
                 len(&mut hooked
@@ -74,30 +82,74 @@ impl Lookup {
             out.user_flags[slot_of(c)] = Some((c, user));
         }
         for body in far {
+            let user = user_flags(*body);
             out.roles[slot_of(*body)] = Some(RoleSlot {
                 body: *body,
                 ground: ColliderHandle::invalid(),
                 role: Role::Resting,
-                user: user_flags(*body),
-                more: false,
+                user,
+                body_user: user,
+                rest: (0, 0),
             });
         }
+        // The pairs after a collider's first, by its slot, then gathered slot by slot.
+        let mut rest = Vec::new();
         for ((body, ground), role) in roles {
             let slot = &mut out.roles[slot_of(*body)];
             match slot {
-                Some(first) => first.more = true,
+                Some(first) => rest.push((
+                    slot_of(*body),
+                    (*ground, *role, first.body_user | user_flags(*ground)),
+                )),
                 None => {
+                    let body_user = user_flags(*body);
                     *slot = Some(RoleSlot {
                         body: *body,
                         ground: *ground,
                         role: *role,
-                        user: user_flags(*body) | user_flags(*ground),
-                        more: false,
+                        user: body_user | user_flags(*ground),
+                        body_user,
+                        rest: (0, 0),
                     })
                 }
             }
         }
+        rest.sort_unstable_by_key(|(slot, _)| *slot);
+        for (k, (slot, _)) in rest.iter().enumerate() {
+            if let Some(first) = &mut out.roles[*slot] {
+                if first.rest.1 == 0 {
+                    first.rest.0 = k as u32;
+                }
+                first.rest.1 = k as u32 + 1;
+            }
+        }
+        out.rest = rest.into_iter().map(|(_, pair)| pair).collect();
         out
+    }
+
+    /// The role and user flags of the body collider's pair with `ground`, if the table holds
+    /// it.
+    fn held(&self, slot: &RoleSlot, ground: ColliderHandle) -> Option<(Role, ActiveHooks)> {
+        if slot.ground == ground {
+            return Some((slot.role, slot.user));
+        }
+        let (from, to) = (slot.rest.0 as usize, slot.rest.1 as usize);
+        self.rest
+            .get(from..to)?
+            .iter()
+            .find(|(g, ..)| *g == ground)
+            .map(|(_, role, user)| (*role, *user))
+    }
+
+    /// The role of the pair (body collider, ground collider) as the table holds it; `Resting`
+    /// for a pair it does not hold (a pair the plan did not see coming).
+    pub fn role(&self, key: &PairKey) -> Role {
+        match self.roles.get(slot_of(key.0)) {
+            Some(Some(slot)) if slot.body == key.0 => self
+                .held(slot, key.1)
+                .map_or(Role::Resting, |(role, _)| role),
+            _ => Role::Resting,
+        }
     }
 
     /// The pair `(c1, c2)` in either order as the table holds it (body collider, ground
@@ -109,14 +161,10 @@ impl Lookup {
         }
         [(c1, c2), (c2, c1)].into_iter().find_map(|(body, ground)| {
             match self.roles.get(slot_of(body)) {
-                Some(Some(slot)) if slot.body == body && slot.ground == ground => {
-                    Some(Looked::Pair((body, ground), *slot))
-                }
-                Some(Some(slot))
-                    if slot.body == body && slot.ground == ColliderHandle::invalid() =>
-                {
-                    Some(Looked::Far((body, ground), slot.user))
-                }
+                Some(Some(slot)) if slot.body == body => Some(match self.held(slot, ground) {
+                    Some((role, user)) => Looked::Pair((body, ground), role, user),
+                    None => Looked::Far((body, ground), slot.body_user),
+                }),
                 _ => None,
             }
         })

@@ -139,19 +139,8 @@ impl<H> ImpactPlugin<H> {
     /// plugin did not see coming, e.g. of a body woken during the step, is left to rapier's
     /// solver without bounce).
     fn role(&self, key: &PairKey) -> Role {
-        let lookup = &self.lookup;
-        if lookup.roles_built {
-            match lookup.roles.get(slot_of(key.0)) {
-                Some(Some(slot)) if slot.body == key.0 => {
-                    if slot.ground == key.1 {
-                        return slot.role;
-                    }
-                    if !slot.more {
-                        return Role::Resting;
-                    }
-                }
-                _ => return Role::Resting,
-            }
+        if self.lookup.roles_built {
+            return self.lookup.role(key);
         }
         self.step.roles.get(key).copied().unwrap_or(Role::Resting)
     }
@@ -179,17 +168,18 @@ impl<H> ImpactPlugin<H> {
         }
         let current = self.registry.index.entry(c1).is_ok();
         match current.then(|| self.lookup.pair(c1, c2)).flatten() {
-            Some(Looked::Pair(key, slot)) => {
+            Some(Looked::Pair(key, role, user)) => {
                 // A body collider that is itself marked as ground (its body turned dynamic
                 // after it was marked) makes the pair two grounds: not the plugin's, as
                 // `managed_pair` says.
                 if self.registry.entry(key.0).is_none() {
-                    return Some((key, slot.role, slot.user));
+                    return Some((key, role, user));
                 }
                 return None;
             }
-            // A body with no ground in reach against a managed ground (not on a dynamic
-            // body, as `managed_pair` asks): `Resting`, as every pair the plugin gave no role.
+            // A body with no ground in reach, or none but its pairs in the table, against a
+            // managed ground (not on a dynamic body, as `managed_pair` asks): `Resting`, as
+            // every pair the plugin gave no role.
             Some(Looked::Far(key, user)) => {
                 let ground_managed = self.registry.entry(key.1).is_some()
                     && self.registry.entry(key.0).is_none()
