@@ -152,8 +152,9 @@ impl Lookup {
         }
     }
 
-    /// The pair `(c1, c2)` in either order as the table holds it (body collider, ground
-    /// collider), if it holds it alone.
+    /// The pair `(c1, c2)` in either order (body collider, ground collider): as the table
+    /// holds it, or `Far` for a body collider the table knows with a ground it does not hold;
+    /// `None` when neither collider is a body collider of the table.
     #[inline]
     pub fn pair(&self, c1: ColliderHandle, c2: ColliderHandle) -> Option<Looked> {
         if !self.roles_built {
