@@ -188,6 +188,7 @@ impl AfterStep<'_> {
             }
             if has_grounds {
                 self.turned_end(bodies, colliders, cand, step);
+                self.turning_resting_checked(step, cand, bodies, colliders);
             }
             return;
         }
@@ -198,18 +199,21 @@ impl AfterStep<'_> {
         match first_search(rb, &subject, mode != TimingMode::Step && free) {
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
+                self.turning_resting_checked(step, cand, bodies, colliders);
             }
             Some(Search::Clear) if mode == TimingMode::TimeOfImpact && !cand.turns_surface => {
                 // rapier's integrator, whose end state stands in this mode, ends lower than
                 // the flight the search followed (`StepData::integrator_lag`; 0.3 m lower at
                 // dt = 0.5 s): its end is checked (a turning body's, more strictly, below).
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::Lagged);
+                self.turning_resting_checked(step, cand, bodies, colliders);
             }
             Some(Search::Clear) => {
                 if mode == TimingMode::Exact {
                     self.fly_exactly(bodies, cand, step.dt);
                 }
                 self.turned_end(bodies, colliders, cand, step);
+                self.turning_resting_checked(step, cand, bodies, colliders);
             }
             Some(first) => {
                 self.fly_through_impacts(bodies, colliders, &subject, &inertia, first);
@@ -234,6 +238,22 @@ impl AfterStep<'_> {
             turns_surface: cand.turns_surface,
         };
         self.settle_rapier_end(bodies, colliders, &subject, why) != EndAction::Keep
+    }
+
+    /// A body with `Impact` grounds whose end state is rapier's after their checks: its
+    /// resting pairs that turn fast are checked too (`EndCheck::TurningResting`), as for a
+    /// body with none, so that a body tumbling on one ground beside another it may hit ends
+    /// no deeper than the resting gap in the first.
+    fn turning_resting_checked(
+        &mut self,
+        step: &EndOfStep,
+        cand: &Candidate,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        if !cand.turning_resting.is_empty() {
+            self.turning_resting_corrected(step, cand, bodies, colliders);
+        }
     }
 
     /// `Exact` mode, a body that flew free all step: its translation and linear velocity

@@ -198,6 +198,11 @@ impl AfterStep<'_> {
             ) else {
                 break;
             };
+            // A contact touching with no approach left: the impact changes nothing, and
+            // resolving it again would report the same empty impact up to the step's limit.
+            if after == s && hit.dist == 0.0 {
+                break;
+            }
             s = after;
             s.com -= hit.normal * hit.dist;
             self.commit.event(event);
