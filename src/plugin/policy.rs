@@ -134,8 +134,8 @@ pub(crate) const FAR_TEST_GROWTH: f64 = 1.0001;
 
 /// How far (m, plus as many per metre of distance from the origin) a ball's gap to a ground,
 /// as a contact query gives it, may fall below the bound taken from the ground's swept box
-/// when the plan looks for the ground a ball rests on: the box's `f32` corners and parry's
-/// `f32` distance. A ground whose bound exceeds the least gap found by more is not queried.
+/// (`GroundGeom::gap_bound`): the box's `f32` corners and parry's `f32` distance. A ground
+/// whose bound exceeds the least gap found by more is not queried.
 pub(crate) const GAP_BOUND_SLACK: f64 = 1e-4;
 
 /// Allowance on a torque-free spin's growth bound `I_max / I_min` for the rounding of rapier's

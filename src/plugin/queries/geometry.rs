@@ -19,6 +19,9 @@ pub(crate) use plane::{
 
 use crate::motion::State;
 use crate::parry::shape::Shape;
+use crate::plugin::bridge::convert::vec_to_na;
+use crate::plugin::policy::GAP_BOUND_SLACK;
+use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::ColliderHandle;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -47,17 +50,9 @@ pub(crate) struct GroundGeom<'a> {
     pub handle: ColliderHandle,
     pub shape: &'a dyn Shape,
     pub skin: f64,
-    /// Centre of mass of the ground body at the start of the step (the collider's origin for
-    /// fixed ground).
-    pub com0: Vector3<f64>,
-    /// Orientation of the ground's centre-of-mass frame at the start of the step.
-    pub rot0: UnitQuaternion<f64>,
-    /// Collider pose in the ground's centre-of-mass frame.
-    pub local: Isometry3<f64>,
-    /// Ground linear velocity at its centre of mass (m/s).
-    pub v: Vector3<f64>,
-    /// Ground angular velocity (rad/s).
-    pub w: Vector3<f64>,
+    /// Its motion over the step (the ground index's): centre of mass, orientation and
+    /// velocities at the start, the collider's pose in that frame, and a box holding it.
+    pub motion: &'a GroundMotion,
     /// The collider's world pose at the start of the step (`pose_at(0)`, kept because a
     /// still ground is asked for it in every query).
     pub pose0: Isometry3<f64>,
@@ -67,32 +62,51 @@ pub(crate) struct GroundGeom<'a> {
 }
 
 impl GroundGeom<'_> {
+    /// A lower bound of the gap (m, as a contact query gives it: skins off, negative inside)
+    /// between the ground at any time of the step and a ball of centre `centre` and radius
+    /// `radius` (its skin included): the ball's distance to the box that holds the ground
+    /// over the step ([`GroundMotion::aabb`]), less `GAP_BOUND_SLACK` for the box's `f32`
+    /// corners and parry's `f32` distance; `-inf` with the centre in the box.
+    pub fn gap_bound(&self, centre: &Vector3<f64>, radius: f64) -> f64 {
+        let (lo, hi) = (
+            vec_to_na(self.motion.aabb.mins),
+            vec_to_na(self.motion.aabb.maxs),
+        );
+        let nearest = centre.zip_zip_map(&lo, &hi, |c, l, h| c.clamp(l, h));
+        let outside = (nearest - centre).norm();
+        if outside > 0.0 {
+            outside - radius - GAP_BOUND_SLACK * (1.0 + centre.norm())
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+
     fn com_at(&self, t: f64) -> Vector3<f64> {
-        self.com0 + self.v * t
+        self.motion.com0 + self.motion.v * t
     }
 
     /// The collider's world pose at time `t` of the step.
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
-        if self.v == Vector3::zeros() && self.w == Vector3::zeros() {
+        if self.motion.v == Vector3::zeros() && self.motion.w == Vector3::zeros() {
             return self.pose0;
         }
         // A ground that does not turn: no rotation to compose.
-        let rot = if self.w == Vector3::zeros() {
-            self.rot0
+        let rot = if self.motion.w == Vector3::zeros() {
+            self.motion.rot0
         } else {
-            UnitQuaternion::from_scaled_axis(self.w * t) * self.rot0
+            UnitQuaternion::from_scaled_axis(self.motion.w * t) * self.motion.rot0
         };
-        Isometry3::from_parts(Translation3::from(self.com_at(t)), rot) * self.local
+        Isometry3::from_parts(Translation3::from(self.com_at(t)), rot) * self.motion.local
     }
 
     /// Velocity of the ground's material point at `p` at time `t` (m/s).
     pub fn velocity_at(&self, p: &Vector3<f64>, t: f64) -> Vector3<f64> {
-        self.v + self.w.cross(&(p - self.com_at(t)))
+        self.motion.v + self.motion.w.cross(&(p - self.com_at(t)))
     }
 
     /// A bound on the speed of the ground's points within `reach` of its centre of mass.
     fn max_speed(&self, reach: f64) -> f64 {
-        self.v.norm() + self.w.norm() * reach
+        self.motion.v.norm() + self.motion.w.norm() * reach
     }
 }
 

@@ -201,7 +201,7 @@ pub(crate) fn centred(offset: &Vector3<f64>, radius: f64) -> bool {
 
 /// A ground's geometry for the queries, if its collider still exists.
 pub(crate) fn ground_geom<'a>(
-    gm: &GroundMotion,
+    gm: &'a GroundMotion,
     colliders: &'a ColliderSet,
 ) -> Option<GroundGeom<'a>> {
     let co = colliders.get(gm.handle)?;
@@ -209,11 +209,7 @@ pub(crate) fn ground_geom<'a>(
         handle: gm.handle,
         shape: co.shape(),
         skin: to_f64(co.contact_skin()),
-        com0: gm.com0,
-        rot0: gm.rot0,
-        local: gm.local,
-        v: gm.v,
-        w: gm.w,
+        motion: gm,
         pose0: Isometry3::from_parts(Translation3::from(gm.com0), gm.rot0) * gm.local,
         skip: Vec::new(),
     })
@@ -457,6 +453,8 @@ pub(crate) struct Scene<'s> {
     pub colliders: &'s ColliderSet,
     pub sets: &'s Sets<'s>,
     pub registry: &'s Registry,
+    /// The grounds' motions over the step (`StepData::grounds`).
+    pub grounds: &'s [GroundMotion],
 }
 
 /// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
@@ -483,6 +481,7 @@ pub(crate) fn within_reach_of_other(
         colliders,
         sets,
         registry,
+        ..
     } = *scene;
     if sets.impulse_joints.attached_joints(body).next().is_some()
         || sets.multibody_joints.rigid_body_link(body).is_some()

@@ -393,8 +393,8 @@ impl AfterStep<'_> {
         let onto = (event.settled || event.restitution == 0.0)
             && after.v.dot(&motion.normal) > 0.0
             && n.dot(&motion.accel) < 0.0;
-        let in_plane =
-            og.w == Vector3::zeros() && og.v.dot(&n).abs() <= IN_PLANE_TOLERANCE * og.v.norm();
+        let in_plane = og.motion.w == Vector3::zeros()
+            && og.motion.v.dot(&n).abs() <= IN_PLANE_TOLERANCE * og.motion.v.norm();
         let ball = part.shape.as_ball().filter(|_| onto && in_plane)?;
         let radius = to_f64(ball.radius) + part.skin + og.skin;
         let default = (
@@ -411,7 +411,7 @@ impl AfterStep<'_> {
             rolling_resistance,
             spinning_friction,
             accel: motion.accel,
-            ground_velocity: og.v,
+            ground_velocity: og.motion.v,
         };
         let end = on_new.advance_checked(&after, step.dt - t)?;
         // Still on the new ground's plane at the end, and in no other ground.

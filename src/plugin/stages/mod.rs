@@ -241,14 +241,18 @@ impl<H> ImpactPlugin<H> {
                 self.stopwatch.commit_log(),
             ),
         };
+        // Lent to the plan while it writes the rest of the step's values: the bodies it
+        // plans hold the grounds' motions.
+        let grounds = std::mem::take(&mut step.grounds);
         for handle in to_plan {
-            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
+            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, &grounds, step);
             if is_near {
                 near.push(handle);
             } else {
                 not_near.push(handle);
             }
         }
+        step.grounds = grounds;
         (near, not_near)
     }
 

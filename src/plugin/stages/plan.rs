@@ -24,6 +24,7 @@ mod rolling;
 use crate::plugin::config::ImpactConfig;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::filter;
+use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, Sets};
 use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::state::handles::{HandleSet, PairKey};
@@ -73,6 +74,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
+        grounds: &[GroundMotion],
         step: &mut StepData,
     ) -> bool {
         let scene = Scene {
@@ -80,6 +82,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             colliders,
             sets,
             registry: self.registry,
+            grounds,
         };
         // Used in place: a body's start is a large value, and every move of it a copy.
         let mut started = None;

@@ -308,7 +308,7 @@ impl AfterStep<'_> {
         impact_grounds: &[usize],
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
-        step: &StepData,
+        step: &'a StepData,
     ) -> SmallList<GroundGeom<'a>> {
         self.pair_geoms(impact_grounds.iter().copied(), geom, colliders, step)
     }
@@ -321,7 +321,7 @@ impl AfterStep<'_> {
         listed: &[(usize, Vector3<f64>)],
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
-        step: &StepData,
+        step: &'a StepData,
     ) -> SmallList<GroundGeom<'a>> {
         let once = listed
             .iter()
@@ -337,7 +337,7 @@ impl AfterStep<'_> {
         indices: impl Iterator<Item = usize>,
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
-        step: &StepData,
+        step: &'a StepData,
     ) -> SmallList<GroundGeom<'a>> {
         indices
             .filter_map(|i| self.pair_geom(&step.grounds[i], geom, colliders))
@@ -352,7 +352,7 @@ impl AfterStep<'_> {
         colliders: &'a ColliderSet,
         com: Vector,
         geom: &BodyGeom,
-        step: &StepData,
+        step: &'a StepData,
         refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
     ) -> SmallList<GroundGeom<'a>> {
         let half = crate::plugin::bridge::convert::to_real(geom.radius + step.policy.resting_gap);
@@ -381,7 +381,7 @@ impl AfterStep<'_> {
     /// `Filtered` pairs skipped.
     pub fn pair_geom<'a>(
         &self,
-        gm: &GroundMotion,
+        gm: &'a GroundMotion,
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
     ) -> Option<GroundGeom<'a>> {
@@ -448,7 +448,7 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
 /// Where a part of the body was at the step's start, carried with `ground` to `t`.
 fn start_point(cand: &Candidate, part: &BodyPart, ground: &GroundGeom, t: f64) -> Vector3<f64> {
     let start = part_pose(part, &cand.start).translation.vector;
-    if ground.v == Vector3::zeros() && ground.w == Vector3::zeros() {
+    if ground.motion.v == Vector3::zeros() && ground.motion.w == Vector3::zeros() {
         return start;
     }
     (ground.pose_at(t) * ground.pose_at(0.0).inverse() * nalgebra::Point3::from(start)).coords

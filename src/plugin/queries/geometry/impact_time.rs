@@ -85,7 +85,9 @@ fn ball_on_flat(fly: &Flying, t_from: f64, t_to: f64) -> Option<Search> {
         if ground.skip.contains(&part.handle) {
             continue;
         }
-        if ground.v != Vector3::zeros() || !flat_relative(part, ground, s0, travel, body.radius) {
+        if ground.motion.v != Vector3::zeros()
+            || !flat_relative(part, ground, s0, travel, body.radius)
+        {
             return None;
         }
         let (d, n, _) = plane_contact_on(part, ground, s0, t0, center, None).ok()?;
@@ -178,7 +180,7 @@ pub(crate) fn cannot_close(
     }
     // Any point of the body moves at most this far in the step.
     let travel = speed.max(FLIGHT_SPEED_FLOOR) * dt;
-    if ground.v != Vector3::zeros() || !flat_relative(part, ground, s, travel, radius) {
+    if ground.motion.v != Vector3::zeros() || !flat_relative(part, ground, s, travel, radius) {
         return false;
     }
     // The lowest the centre of mass's flight goes along `n` in the step:

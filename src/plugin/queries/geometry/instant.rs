@@ -391,9 +391,23 @@ pub(crate) fn closest(
 ) -> Option<Hit> {
     let mut best: Option<Hit> = None;
     for (i, part) in body.parts.iter().enumerate() {
+        // A ball's centre and radius, for a bound of its gap to each ground without a query
+        // (worth it only among several grounds).
+        let ball = part.shape.as_ball().filter(|_| grounds.len() > 1).map(|b| {
+            let centre = part_pose(part, s).translation.vector;
+            (centre, to_f64(b.radius) + part.skin)
+        });
         for (j, ground) in grounds.iter().enumerate() {
             if ground.skip.contains(&part.handle) {
                 continue;
+            }
+            // A ground the ball cannot be nearer than the best found (or within
+            // `prediction`) is not queried: its contact could not be taken.
+            if let Some((centre, radius)) = ball {
+                let limit = best.map_or(prediction, |b| b.dist.min(prediction));
+                if ground.gap_bound(&centre, radius) > limit {
+                    continue;
+                }
             }
             if let Some(found) = contact(part, ground, s, t, prediction) {
                 if best.is_none_or(|b| found.0 < b.dist) {

@@ -27,7 +27,7 @@ pub(crate) fn flat_relative(
     radius: f64,
 ) -> bool {
     use crate::parry::shape::TypedShape;
-    if ground.w != Vector3::zeros()
+    if ground.motion.w != Vector3::zeros()
         || part.shape.as_support_map().is_none()
         || !(travel.is_finite() && radius.is_finite())
     {
@@ -146,7 +146,7 @@ enum PlanePiece {
 /// ball's reach all lie below the plane; `None` for any other ground.
 fn plane_piece(ground: &GroundGeom, plane: &PlaneNear) -> Option<PlanePiece> {
     use crate::parry::shape::TypedShape;
-    if ground.v != Vector3::zeros() || ground.w != Vector3::zeros() {
+    if ground.motion.v != Vector3::zeros() || ground.motion.w != Vector3::zeros() {
         return None;
     }
     let (n, height) = (&plane.n, plane.height);

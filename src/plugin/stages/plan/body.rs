@@ -4,13 +4,11 @@
 use super::Planner;
 use crate::motion::{Flight, Rolling, State};
 use crate::parry::query::Unsupported;
-use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na};
 use crate::plugin::config::TimingMode;
-use crate::plugin::policy::GAP_BOUND_SLACK;
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, PairContact, contact_checked, part_pose,
 };
-use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, body_geom, centred_ball, ground_geom, snapshot};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
@@ -153,7 +151,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let near =
             self.registry
                 .index
-                .near_ball(&step.grounds, sphere.center(), sphere.half_extents().x);
+                .near_ball(scene.grounds, sphere.center(), sphere.half_extents().x);
         let member = step.pairs.members.contains(&handle);
         if near.is_empty() {
             if self.config.timing == TimingMode::Exact || member {
@@ -193,11 +191,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         body.grounds = body
             .near
             .iter()
-            .filter_map(|i| Some((*i, ground_geom(&step.grounds[*i], scene.colliders)?)))
+            .filter_map(|i| Some((*i, ground_geom(&scene.grounds[*i], scene.colliders)?)))
             .collect();
         if !turns_surface && body.grounds.len() > 1 {
-            body.start_contacts =
-                nearest_first(&body.geom, &mut body.grounds, &step.grounds, &start, reach);
+            body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
         }
         Some(body)
     }
@@ -241,33 +238,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 /// first in `grounds`, so that if it rolls there on one plane with the others, the rest are
 /// only that plane's pieces. Returns its contact with each ground at `start` that it queried,
 /// in the new order: the pairs' roles reuse them while the ball has not moved (a `Step`
-/// impulse changes only its velocity). A ground whose swept box (`motions`) keeps the ball
-/// farther than the least `|gap|` already found cannot be the nearest, and is not queried
-/// here: a ball rolling on one tile of a floor queries that tile alone.
+/// impulse changes only its velocity). A ground whose box keeps the ball farther than the
+/// least `|gap|` already found (`GroundGeom::gap_bound`) cannot be the nearest, and is not
+/// queried here: a ball rolling on one tile of a floor queries that tile alone.
 fn nearest_first(
     geom: &BodyGeom,
     grounds: &mut SmallList<(usize, GroundGeom)>,
-    motions: &[GroundMotion],
     start: &State,
     reach: f64,
 ) -> SmallList<Option<StartContact>> {
     let part = &geom.parts[0];
     let centre = part_pose(part, start).translation.vector;
     let radius = part.shape.as_ball().map_or(0.0, |b| to_f64(b.radius)) + part.skin;
-    let slack = GAP_BOUND_SLACK * (1.0 + centre.norm());
-    // The least `|gap|` the ball can have to a ground: its distance to the box, which holds
-    // the ground and its skin over the step, less its radius and skin.
-    let bound = |i: usize| {
-        let aabb = &motions[i].aabb;
-        let (lo, hi) = (vec_to_na(aabb.mins), vec_to_na(aabb.maxs));
-        let nearest = centre.zip_zip_map(&lo, &hi, |c, l, h| c.clamp(l, h));
-        ((nearest - centre).norm() - radius - slack).max(0.0)
-    };
     let gap = |found: &StartContact| match found {
         Ok(Some((dist, ..))) => f64::abs(*dist),
         _ => f64::INFINITY,
     };
-    let bounds: SmallList<f64> = grounds.iter().map(|(i, _)| bound(*i)).collect();
+    // The least `|gap|` the ball can have to each ground.
+    let bounds: SmallList<f64> = grounds
+        .iter()
+        .map(|(_, gg)| gg.gap_bound(&centre, radius).max(0.0))
+        .collect();
     let mut start_contacts: SmallList<Option<StartContact>> =
         grounds.iter().map(|_| None).collect();
     let mut least = f64::INFINITY;

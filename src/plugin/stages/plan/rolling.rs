@@ -276,8 +276,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // A ground moving at constant velocity along its plane without turning (a conveyor):
         // relative to it the ball moves as on a still one. Any other moving ground is
         // rapier's.
-        let u = gg.v;
-        if gg.w != Vector3::zeros() || u.dot(n).abs() > IN_PLANE_TOLERANCE * u.norm() {
+        let u = gg.motion.v;
+        if gg.motion.w != Vector3::zeros() || u.dot(n).abs() > IN_PLANE_TOLERANCE * u.norm() {
             return None;
         }
         let v = on_ground.v - u;
