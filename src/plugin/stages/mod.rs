@@ -228,12 +228,14 @@ impl<H> ImpactPlugin<H> {
         let mut near = Vec::with_capacity(self.flags.hooked().len());
         let mut not_near = Vec::new();
         let exact = self.config.timing == TimingMode::Exact;
+        let grounds = std::mem::take(&mut step.grounds);
         let mut planner = Planner {
             config: &self.config,
             registry: &self.registry,
             flags: &self.flags,
             user_hooks: &self.user_hooks,
             prev_holds: &self.memory.holds,
+            grounds: &grounds,
             commit: Commit::new(
                 &mut self.reports,
                 &mut self.memory.shadows,
@@ -241,11 +243,8 @@ impl<H> ImpactPlugin<H> {
                 self.stopwatch.commit_log(),
             ),
         };
-        // Lent to the plan while it writes the rest of the step's values: the bodies it
-        // plans hold the grounds' motions.
-        let grounds = std::mem::take(&mut step.grounds);
         for handle in to_plan {
-            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, &grounds, step);
+            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
             if is_near {
                 near.push(handle);
             } else {

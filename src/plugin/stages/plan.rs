@@ -57,6 +57,9 @@ pub(crate) struct Planner<'a, H> {
     pub user_hooks: &'a H,
     /// The pairs held at rest last step (`StepData::holds`).
     pub prev_holds: &'a HandleSet<PairKey>,
+    /// The grounds' motions over the step (`StepData::grounds`, lent to the plan while it
+    /// writes the rest of the step's values: the bodies it plans hold them).
+    pub grounds: &'a [GroundMotion],
     pub commit: Commit<'a>,
 }
 
@@ -74,7 +77,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
-        grounds: &[GroundMotion],
         step: &mut StepData,
     ) -> bool {
         let scene = Scene {
@@ -82,7 +84,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             colliders,
             sets,
             registry: self.registry,
-            grounds,
+            grounds: self.grounds,
         };
         // Used in place: a body's start is a large value, and every move of it a copy.
         let mut started = None;
