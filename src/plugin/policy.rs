@@ -132,10 +132,10 @@ pub(crate) const FAR_TEST_MARGIN: f64 = 1e-4;
 /// See [`FAR_TEST_MARGIN`].
 pub(crate) const FAR_TEST_GROWTH: f64 = 1.0001;
 
-/// How far (m, plus as many per metre of distance from the origin) a ball's gap to a ground,
-/// as a contact query gives it, may fall below the bound taken from the ground's swept box
-/// (`GroundGeom::gap_bound`): the box's `f32` corners and parry's `f32` distance. A ground
-/// whose bound exceeds the least gap found by more is not queried.
+/// How far (m, plus as many per metre of distance from the origin) a ball's gap to a still
+/// ground, as a contact query gives it, may fall below its distance to the ground's box less
+/// its radius: the box's `f32` corners and parry's `f32` distance. `GroundGeom::gap_bound`
+/// subtracts it; a ground whose bound exceeds the gap that would be taken is not queried.
 pub(crate) const GAP_BOUND_SLACK: f64 = 1e-4;
 
 /// Allowance on a torque-free spin's growth bound `I_max / I_min` for the rounding of rapier's

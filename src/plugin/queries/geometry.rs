@@ -63,16 +63,24 @@ pub(crate) struct GroundGeom<'a> {
 
 impl GroundGeom<'_> {
     /// A lower bound of the gap (m, as a contact query gives it: skins off, negative inside)
-    /// between the ground at any time of the step and a ball of centre `centre` and radius
-    /// `radius` (its skin included): the ball's distance to the box that holds the ground
-    /// over the step ([`GroundMotion::aabb`]), less `GAP_BOUND_SLACK` for the box's `f32`
-    /// corners and parry's `f32` distance; `-inf` with the centre in the box.
+    /// between a still ground and a ball of centre `centre` and radius `radius` (its skin
+    /// included): the ball's distance to the ground's box ([`GroundMotion::aabb`]), less
+    /// `GAP_BOUND_SLACK * (1 + |centre|)` for the box's `f32` corners and parry's `f32`
+    /// distance. The box is loosened by the resting gap and the ground's skin, and the
+    /// bound subtracts neither: that is its margin. `-inf` (no bound) for a moving ground,
+    /// whose box holds only its poses at the step's ends (not the arc of a turn between) and
+    /// is taken from its collider, which rapier moves with a body the user moved only in its
+    /// step; `-inf` also with the centre in the box.
     pub fn gap_bound(&self, centre: &Vector3<f64>, radius: f64) -> f64 {
+        if !self.motion.is_still() {
+            return f64::NEG_INFINITY;
+        }
         let (lo, hi) = (
             vec_to_na(self.motion.aabb.mins),
             vec_to_na(self.motion.aabb.maxs),
         );
-        let nearest = centre.zip_zip_map(&lo, &hi, |c, l, h| c.clamp(l, h));
+        // `max` then `min`, not `clamp`: an empty or NaN box gives no bound, and no panic.
+        let nearest = centre.zip_zip_map(&lo, &hi, |c, l, h| c.max(l).min(h));
         let outside = (nearest - centre).norm();
         if outside > 0.0 {
             outside - radius - GAP_BOUND_SLACK * (1.0 + centre.norm())

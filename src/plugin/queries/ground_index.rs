@@ -61,8 +61,8 @@ pub(crate) struct GroundMotion {
     pub local: Isometry3<f64>,
     pub v: Vector3<f64>,
     pub w: Vector3<f64>,
-    /// World AABB over the step (start and predicted end), loosened by the resting gap and
-    /// the collider's contact skin.
+    /// World AABB of the collider's poses at the step's start and predicted end (not the arc
+    /// of a turn between), loosened by the resting gap and the collider's contact skin.
     pub aabb: Aabb,
     /// A half-space ground that does not turn in the step: its world outward normal `n` and
     /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
@@ -663,5 +663,78 @@ mod tests {
         );
         index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
         assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![]);
+    }
+
+    /// The first-impact search skips a ground by its box only where the box holds it at
+    /// every instant: a bar turning through the step sweeps outside the boxes of its poses
+    /// at the step's ends, and a ball 1 mm from its tip at mid-step is found beside a far
+    /// second ground as it is with the bar alone. A still tile's bound stays below its gap.
+    #[test]
+    fn the_first_impact_search_skips_only_grounds_its_box_holds() {
+        use crate::motion::State;
+        use crate::plugin::queries::geometry::{GroundGeom, closest};
+        use crate::plugin::queries::observe::{body_geom, ground_geom};
+        use crate::rapier::prelude::RigidBodyType;
+        let mut world = PhysicsWorld::default();
+        let spin = 24.0;
+        // A 2 m bar along y, turning about x, upright at mid-step.
+        let tilt = -0.5 * spin * DT;
+        let (_, bar) = world.insert(
+            RigidBodyBuilder::new(RigidBodyType::KinematicVelocityBased)
+                .rotation(Vector::new(tilt as Real, 0.0, 0.0))
+                .angvel(Vector::new(spin as Real, 0.0, 0.0)),
+            ColliderBuilder::cuboid(0.005, 1.0, 0.005),
+        );
+        let far = world.colliders.insert(
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(10.0, 0.0, 0.0)),
+        );
+        let (radius, gap) = (0.1, 0.001);
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(
+                0.0,
+                (1.0 + radius + gap) as Real,
+                0.0,
+            )),
+            ColliderBuilder::ball(radius as Real),
+        );
+        let reg = registry(&[bar, far]);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        let geoms: Vec<GroundGeom> = index
+            .motions
+            .iter()
+            .map(|m| ground_geom(m, &world.colliders).unwrap())
+            .collect();
+        let rb = &world.bodies[ball];
+        let geom = body_geom(rb, &world.colliders, &Vector3::zeros());
+        let s = State {
+            com: Vector3::new(0.0, 1.0 + radius + gap, 0.0),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        };
+        let hit = |grounds: &[GroundGeom]| {
+            closest(&geom, grounds, &s, 0.5 * DT, 0.002).map(|h| (grounds[h.ground].handle, h.dist))
+        };
+        let bar_only: Vec<GroundGeom> = index.motions[..1]
+            .iter()
+            .map(|m| ground_geom(m, &world.colliders).unwrap())
+            .collect();
+        assert_eq!(bar_only[0].handle, bar);
+        let alone = hit(&bar_only).expect("the bar alone is found");
+        assert_eq!(alone.0, bar);
+        assert!((alone.1 - gap).abs() < 1e-4, "gap {}", alone.1);
+        assert_eq!(hit(&geoms), Some(alone));
+        // The still tile: its bound is a bound, and a ball beside it is queried and found.
+        let tile = geoms.iter().find(|g| g.handle == far).unwrap();
+        for (x, y) in [(10.0, 0.2 + gap), (10.6 + gap, 0.0), (10.55, 0.15)] {
+            let centre = Vector3::new(x, y, 0.0);
+            let state = State { com: centre, ..s };
+            let found = closest(&geom, std::slice::from_ref(tile), &state, 0.0, 1.0).unwrap();
+            assert!(
+                tile.gap_bound(&centre, radius) <= found.dist,
+                "at ({x}, {y})"
+            );
+        }
     }
 }

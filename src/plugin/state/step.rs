@@ -110,6 +110,8 @@ pub(crate) struct StepData {
     pub first_holds: Vec<FirstHold>,
     /// The pairs of opted-in balls and their roles (`pair_plan.rs`).
     pub pairs: PairPlan,
+    /// Every ground's motion over the step (the ground index's list). Lent to the plan
+    /// (`Planner::grounds`) while it runs, and empty here meanwhile.
     pub grounds: Vec<GroundMotion>,
     pub candidates: Vec<Candidate>,
     /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).

@@ -381,7 +381,9 @@ fn plane_contact_facing(
     Ok((height - skins, n, support - n * part.skin))
 }
 
-/// The closest contact over every body part and ground (indices in `grounds`), at `t`.
+/// The closest contact over every body part and ground (indices in `grounds`), at `t`. A
+/// ball skips the grounds whose [`GroundGeom::gap_bound`] exceeds the best gap found or
+/// `prediction`: their contact could not be taken.
 pub(crate) fn closest(
     body: &BodyGeom,
     grounds: &[GroundGeom],
