@@ -681,8 +681,8 @@ mod tests {
         let tilt = -0.5 * spin * DT;
         let (_, bar) = world.insert(
             RigidBodyBuilder::new(RigidBodyType::KinematicVelocityBased)
-                .rotation(Vector::new(tilt as Real, 0.0, 0.0))
-                .angvel(Vector::new(spin as Real, 0.0, 0.0)),
+                .rotation(Vector::new(to_real(tilt), 0.0, 0.0))
+                .angvel(Vector::new(to_real(spin), 0.0, 0.0)),
             ColliderBuilder::cuboid(0.005, 1.0, 0.005),
         );
         let far = world.colliders.insert(
@@ -692,10 +692,10 @@ mod tests {
         let (ball, _) = world.insert(
             RigidBodyBuilder::dynamic().translation(Vector::new(
                 0.0,
-                (1.0 + radius + gap) as Real,
+                to_real(1.0 + radius + gap),
                 0.0,
             )),
-            ColliderBuilder::ball(radius as Real),
+            ColliderBuilder::ball(to_real(radius)),
         );
         let reg = registry(&[bar, far]);
         let mut index = GroundIndex::default();
