@@ -70,6 +70,19 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
         let (bodies, colliders) = (context.bodies, context.colliders);
         let (c1, c2) = (context.collider1, context.collider2);
+        // A manifold without solver contacts (rapier asks for every manifold of a hooked pair,
+        // near or not): no role changes anything the solver reads, and the manifold's material
+        // is made again at rapier's next update of the pair. Only the user's own modification
+        // can apply, and only if one of the colliders asks for it.
+        let no_contacts = context
+            .rigid()
+            .is_some_and(|m| m.solver_contacts.is_empty());
+        if no_contacts
+            && !(self.user_flags(colliders, c1) | self.user_flags(colliders, c2))
+                .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+        {
+            return;
+        }
         let managed = self.pair_in_step(bodies, colliders, c1, c2);
         match managed {
             Some((_, Role::Impact | Role::Rolling, _)) => {}
