@@ -12,8 +12,8 @@
 //! - role `Resting` (or a pair the plugin did not see coming): rapier's solver keeps it (the
 //!   user's filter still decides, when the colliders ask for it), and
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
-//!   platform), then sets its restitution to 0 (and the ground's friction override, if any):
-//!   the plugin owns every bounce off a ground. A ball the closed form holds at rest on a
+//!   platform), then sets its restitution to 0 (and the ground's friction override, if any)
+//!   where it has solver contacts: the plugin owns every bounce off a ground. A ball the closed form holds at rest on a
 //!   slope (`StepData::holds`) also has its contact points moved to where the ground's
 //!   normal force acts, so that rapier's solver holds it still and rapier sleeps it;
 //! - a pair of two opted-in balls (`pair_plan.rs`): `Impact` out of rapier's solver as above
