@@ -67,7 +67,7 @@ impl PairIndex {
                 let (i, j) = (ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
                 out.push((i.min(j), i.max(j)));
             });
-        out.sort_unstable();
+        sort_pairs(&mut out);
         out
     }
 
@@ -173,10 +173,22 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
         }
     }
     // In increasing order, as the traversal's: not the tree's, which depends on its history.
-    pairs.sort_unstable();
+    sort_pairs(&mut pairs);
     Candidates {
         pairs,
         traversed: None,
+    }
+}
+
+/// Sorts pairs of ball indices in increasing order, as one `u64` key each (`i` high, `j`
+/// low: the same order as the tuples', at a fraction of the comparisons' cost). The indices
+/// fit in 32 bits: a step's balls are numbered in `PairIndex::ball_of`'s `u32`s.
+fn sort_pairs(pairs: &mut [(usize, usize)]) {
+    let key = |(i, j): (usize, usize)| ((i as u64) << 32) | j as u64;
+    let mut keys: Vec<u64> = pairs.iter().map(|p| key(*p)).collect();
+    keys.sort_unstable();
+    for (p, k) in pairs.iter_mut().zip(keys) {
+        *p = ((k >> 32) as usize, (k & u64::from(u32::MAX)) as usize);
     }
 }
 
