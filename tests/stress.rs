@@ -348,10 +348,14 @@ impl Sim {
             check_pair_energy(events, &label);
         }
         check_written(world, events, &mut self.stats, &label);
-        // No body below a ground it was resolved against in the step: every ground's top is
-        // at y = 0, over its footprint (the floor's is everywhere); a body beside a ground
-        // (pushed out of its side) is not under it.
+        // No body on the far side of a ground it was resolved against in the step: every
+        // ground's top is at y = 0, over its footprint (the floor's is everywhere). A body met
+        // from above (the event's normal up) ends above the top; one met from below (a body
+        // rapier let sink into the floor under a slab, then rising into its underside: the
+        // normal down) ends below the ground's bottom; a body beside a ground (pushed out of
+        // its side) is neither.
         let allowed = wide(world.integration_parameters.allowed_linear_error());
+        let slack = allowed + penetration_rounding(1.0);
         for ev in events.iter().filter(|ev| ev.body2.is_none()) {
             let Some(rb) = world.bodies.get(ev.body) else {
                 continue;
@@ -365,17 +369,33 @@ impl Sim {
             if !over {
                 continue;
             }
-            let bottom = rb
-                .colliders()
-                .iter()
-                .map(|c| wide(world.colliders[*c].compute_aabb().mins.y))
-                .fold(f64::INFINITY, f64::min);
-            assert!(
-                bottom >= -(allowed + penetration_rounding(1.0)),
-                "{label}: body {:?} ends {:e} m below the ground it was resolved against: {ev:?}",
-                ev.body,
-                -bottom
-            );
+            let boxes = || {
+                rb.colliders()
+                    .iter()
+                    .map(|c| world.colliders[*c].compute_aabb())
+            };
+            if ev.normal.y >= 0.0 {
+                let bottom = boxes()
+                    .map(|b| wide(b.mins.y))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    bottom >= -slack,
+                    "{label}: body {:?} ends {:e} m below the ground it was resolved against: {ev:?}",
+                    ev.body,
+                    -bottom
+                );
+            } else {
+                let top = boxes()
+                    .map(|b| wide(b.maxs.y))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let under = wide(footprint.mins.y);
+                assert!(
+                    top <= under + slack,
+                    "{label}: body {:?} met from below ends {:e} m above the underside of the ground it was resolved against: {ev:?}",
+                    ev.body,
+                    top - under
+                );
+            }
         }
     }
 }
