@@ -52,9 +52,10 @@ pub enum EventKind {
     Hold,
     /// A ball the closed form rolled (rolling resistance, spinning friction, sliding) handed
     /// to rapier's resting contact: another body or collider can touch it within the step
-    /// (`timing` `StepStart`: nothing is written), or in the step a contact pushed it, a joint
-    /// held it or rapier's CCD stopped it short (`StepEnd`: rapier's end state stands,
-    /// corrected only as the settle stage corrects any). The closed form takes the ball again
+    /// (`timing` `StepStart`: nothing is written; rapier's end state is checked against the
+    /// ground for another body pushing it in deeper than the resting gap), or in the step a
+    /// contact pushed it, a joint held it or rapier's CCD stopped it short (`StepEnd`:
+    /// rapier's end state stands, corrected only as the settle stage corrects any). The closed form takes the ball again
     /// once nothing can reach it. `impulse` zero, `ke_before` equal to `ke_after`.
     Released,
 }

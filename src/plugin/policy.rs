@@ -240,6 +240,10 @@ pub(crate) enum EndCheck {
     /// rapier's end state of a rolling ball something else acted on, in which it flew
     /// without its ground; `fall` (m/s) is the step's fall, `|a.n| dt`.
     DisturbedRolling { fall: f64 },
+    /// rapier's end state of a ball handed from its closed-form rolling to rapier's resting
+    /// contact at the step's start (something else within reach): rapier keeps its resting
+    /// depth, but what pushes it in harder (another body) is checked.
+    ReleasedResting,
 }
 
 /// What holds a resting body that turned, asked only when [`EndCheck::TurningResting`] needs
@@ -348,6 +352,8 @@ impl Policy {
     /// | `Lagged` | deeper than the gap, leaving | push out, velocity kept |
     /// | `DisturbedRolling` | into the ground no faster than the step's fall plus the resting speed | push out, stopped |
     /// | `DisturbedRolling` | faster (something pushed it down) | impact, `e = 0` |
+    /// | `ReleasedResting` | deeper than the gap, approaching | impact, `e = 0` |
+    /// | `ReleasedResting` | deeper than the gap, leaving | push out, velocity kept |
     /// | `TurningResting` | deeper than the gap, a point swinging down, not (slow and touching) and not pressed at its pivot | impact, `e = 0` if slower than a fall through the gap |
     /// | `TurningResting` | deeper than the gap otherwise, nothing lying on it | push out (a ball's speed into the ground removed) |
     /// | any | otherwise | keep |
@@ -369,6 +375,8 @@ impl Policy {
             EndCheck::Woken if deep && approaching => EndAction::Impact { settle: true },
             EndCheck::Lagged if deep && approaching => EndAction::Impact { settle: false },
             EndCheck::Lagged if deep => EndAction::PushOut { stop: false },
+            EndCheck::ReleasedResting if deep && approaching => EndAction::Impact { settle: true },
+            EndCheck::ReleasedResting if deep => EndAction::PushOut { stop: false },
             EndCheck::DisturbedRolling { fall } => {
                 if un >= -(fall + self.resting_speed) {
                     EndAction::PushOut { stop: true }
@@ -499,6 +507,12 @@ mod tests {
         let rolling = |un| p.end_action(EndCheck::DisturbedRolling { fall }, -0.001, un, never);
         assert_eq!(rolling(-0.2), EndAction::PushOut { stop: true });
         assert_eq!(rolling(-0.3), EndAction::Impact { settle: true });
+        // A ball released at the start keeps rapier's resting depth; deeper than the gap it
+        // is settled if still going in, else moved out.
+        let released = |dist, un| p.end_action(EndCheck::ReleasedResting, dist, un, never);
+        assert_eq!(released(-0.004, -1.0), EndAction::Keep);
+        assert_eq!(released(-0.016, -1.5), EndAction::Impact { settle: true });
+        assert_eq!(released(-0.016, 0.1), EndAction::PushOut { stop: false });
     }
 
     #[test]

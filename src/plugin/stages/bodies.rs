@@ -67,6 +67,9 @@ impl<H> ImpactPlugin<H> {
             } else {
                 view.fly(step, cand, bodies, colliders);
             }
+            if let Some(ground) = cand.released {
+                view.released_checked(step, cand, ground, bodies, colliders);
+            }
         }
         let released = std::mem::take(&mut view.released);
         self.memory.release(released);
@@ -254,6 +257,30 @@ impl AfterStep<'_> {
         if !cand.turning_resting.is_empty() {
             self.turning_resting_corrected(step, cand, bodies, colliders);
         }
+    }
+
+    /// A ball released from its closed-form rolling at the step's start
+    /// (`Candidate::released`): rapier's end state checked against that ground
+    /// (`EndCheck::ReleasedResting`): another body can push it deeper into the ground than
+    /// rapier's resting contact leaves it.
+    fn released_checked(
+        &mut self,
+        step: &EndOfStep,
+        cand: &Candidate,
+        ground: usize,
+        bodies: &mut RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let Some(rb) = bodies.get(cand.body) else {
+            return;
+        };
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let Some(gg) = self.pair_geom(&step.grounds[ground], &geom, colliders) else {
+            return;
+        };
+        let grounds = [gg];
+        let subject = Subject::new(cand, &geom, &grounds, step);
+        self.settle_rapier_end(bodies, colliders, &subject, EndCheck::ReleasedResting);
     }
 
     /// `Exact` mode, a body that flew free all step: its translation and linear velocity

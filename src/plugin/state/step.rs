@@ -55,6 +55,11 @@ pub(crate) struct Candidate {
     /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
     /// `StepData::grounds`) and the motion. `start` then touches the ground.
     pub rolling: Option<(usize, Rolling)>,
+    /// A ball that rolled in closed form last step and is handed to rapier's resting contact
+    /// at this step's start (`EventKind::Released`, something else within reach): the
+    /// ground's index (in `StepData::grounds`). rapier's end state is checked against it
+    /// (`EndCheck::ReleasedResting`).
+    pub released: Option<usize>,
 }
 
 impl Candidate {
@@ -77,6 +82,7 @@ impl Candidate {
             turning_resting: SmallList::Empty,
             turns_surface: false,
             rolling: None,
+            released: None,
         }
     }
 }

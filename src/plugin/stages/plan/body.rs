@@ -79,6 +79,8 @@ pub(super) struct BodyPlan {
     pub held: bool,
     /// The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
     pub rolling_pieces: Option<SmallList<ColliderHandle>>,
+    /// Released from last step's rolling at the start (`Candidate::released`).
+    pub released: Option<usize>,
 }
 
 impl BodyNear<'_> {
@@ -93,6 +95,7 @@ impl BodyNear<'_> {
             rolling: None,
             held: false,
             rolling_pieces: None,
+            released: None,
         }
     }
 
@@ -212,6 +215,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let wanted = !plan.impact_grounds.is_empty()
             || !plan.turning_resting.is_empty()
             || plan.rolling.is_some()
+            || plan.released.is_some()
             || self.config.timing == TimingMode::Exact
             || body.member;
         if !wanted {
@@ -229,6 +233,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             turning_resting: std::mem::take(&mut plan.turning_resting),
             turns_surface: body.turns_surface,
             rolling: plan.rolling.take(),
+            released: plan.released,
         });
     }
 }

@@ -156,6 +156,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 let inertia = Inertia::of(&scene.bodies[body.handle]);
                 self.commit
                     .event(released(&site, &inertia, &plan.state, 0.0));
+                plan.released = Some(*gi);
             }
             Some(OnPlane::Reached) | None => {}
         }
