@@ -4,6 +4,7 @@
 
 use super::body::{BodyNear, BodyPlan, BodyReads, StartContact};
 use super::{Planner, closes_within};
+use crate::motion::State;
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::{Inertia, Site, correction};
 use crate::plugin::config::{TimingMode, coefficients_in_range};
@@ -128,7 +129,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// (rapier's resting contact can let a thin body through a mesh's edge): while it is over
     /// the face, it is put back on the side it was on, by its depth measured from that side,
     /// its speed into the ground removed (a `PushOut` at the step's start, written with the
-    /// plan's state), and the contact found again. Records the side of the pair's contact
+    /// plan's state), and the contact found again; not where that puts it deeper than the
+    /// resting gap in another of its grounds (a mesh lying on a solid floor). Records the side of the pair's contact
     /// for the next step (`StepData::mesh_sides`). Other grounds: `found` as it is.
     fn mesh_side(
         &mut self,
@@ -139,7 +141,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &mut StepData,
     ) -> StartContact {
         use crate::parry::shape::TypedShape;
-        let Pair { part, gg, key, .. } = pair;
+        let Pair { k, part, gg, key } = pair;
         let Ok(Some((dist, n, _))) = found else {
             return found;
         };
@@ -161,7 +163,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let centre = part_pose(part, &plan.state).translation.vector;
             let from = centre + side * (2.0 * body.geom.radius + dist.abs());
             let crossed = contact_from_side(part, gg, &plan.state, 0.0, from, true)
-                .filter(|(depth, ..)| *depth < 0.0);
+                .filter(|(depth, ..)| *depth < 0.0)
+                .filter(|(depth, normal, _)| {
+                    // Not back inside another ground: a mesh lying on a solid floor has no
+                    // side below it a body can be on, and the solid's outside wins.
+                    let back = State {
+                        com: plan.state.com - normal * *depth,
+                        ..plan.state
+                    };
+                    !body.grounds.iter().enumerate().any(|(j, (_, other))| {
+                        j != k
+                            && !self.filtered(body, reads.scene, (part.handle, other.handle))
+                            && contact_checked(part, other, &back, 0.0, 0.0).is_ok_and(|c| {
+                                c.is_some_and(|(dist, ..)| dist < -step.policy.resting_gap)
+                            })
+                    })
+                });
             if let Some((depth, normal, point)) = crossed {
                 let before = plan.state;
                 plan.state.com -= normal * depth;
