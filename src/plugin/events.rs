@@ -55,8 +55,8 @@ pub enum EventKind {
     /// (`timing` `StepStart`: nothing is written; rapier's end state is checked against the
     /// ground for another body pushing it in deeper than the resting gap), or in the step a
     /// contact pushed it, a joint held it or rapier's CCD stopped it short (`StepEnd`:
-    /// rapier's end state stands, corrected only as the settle stage corrects any). The closed form takes the ball again
-    /// once nothing can reach it. `impulse` zero, `ke_before` equal to `ke_after`.
+    /// rapier's end state stands, corrected only as the settle stage corrects any). The
+    /// closed form takes the ball again once nothing can reach it. `impulse` zero, `ke_before` equal to `ke_after`.
     Released,
 }
 

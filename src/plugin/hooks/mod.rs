@@ -13,9 +13,10 @@
 //!   user's filter still decides, when the colliders ask for it), and
 //!   `modify_solver_contacts` hands it to the user's hook first (a conveyor ground, a one-way
 //!   platform), then sets its restitution to 0 (and the ground's friction override, if any)
-//!   where it has solver contacts: the plugin owns every bounce off a ground. A ball the closed form holds at rest on a
-//!   slope (`StepData::holds`) also has its contact points moved to where the ground's
-//!   normal force acts, so that rapier's solver holds it still and rapier sleeps it;
+//!   where it has solver contacts: the plugin owns every bounce off a ground. A ball the
+//!   closed form holds at rest on a slope (`StepData::holds`) also has its contact points
+//!   moved to where the ground's normal force acts, so that rapier's solver holds it still
+//!   and rapier sleeps it;
 //! - a pair of two opted-in balls (`pair_plan.rs`): `Impact` out of rapier's solver as above
 //!   (the reconstruct stage moves the two together), `Resting` in it with zero restitution (only
 //!   the resting pairs rapier would bounce above the resting gap are hooked: `pair_plan.rs`);
@@ -49,8 +50,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
             // filter when the colliders ask for it, as rapier would.
             _ => {
                 let flags = managed.map(|(_, _, user)| user).unwrap_or_else(|| {
-                    self.user_flags(colliders, context.collider1)
-                        | self.user_flags(colliders, context.collider2)
+                    self.pair_user_flags(colliders, context.collider1, context.collider2)
                 });
                 if flags.contains(ActiveHooks::FILTER_CONTACT_PAIRS) {
                     self.user_hooks.filter_contact_pair(context)
@@ -78,7 +78,8 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
             .rigid()
             .is_some_and(|m| m.solver_contacts.is_empty());
         if no_contacts
-            && !(self.user_flags(colliders, c1) | self.user_flags(colliders, c2))
+            && !self
+                .pair_user_flags(colliders, c1, c2)
                 .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
         {
             return;
@@ -137,7 +138,7 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                 }
             }
             None => {
-                let flags = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                let flags = self.pair_user_flags(colliders, c1, c2);
                 if flags.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS) {
                     self.user_hooks.modify_solver_contacts(context);
                 }
@@ -175,7 +176,7 @@ impl<H> ImpactPlugin<H> {
         if !self.step.pairs.roles.is_empty() {
             let key = pair_key(c1, c2);
             if let Some(role) = self.step.pairs.roles.get(&key) {
-                let user = self.user_flags(colliders, c1) | self.user_flags(colliders, c2);
+                let user = self.pair_user_flags(colliders, c1, c2);
                 return Some((key, *role, user));
             }
         }
@@ -209,9 +210,19 @@ impl<H> ImpactPlugin<H> {
             (
                 key,
                 self.role(&key),
-                self.user_flags(colliders, c1) | self.user_flags(colliders, c2),
+                self.pair_user_flags(colliders, c1, c2),
             )
         })
+    }
+
+    /// The hook flags the user asked for on either collider of a pair.
+    fn pair_user_flags(
+        &self,
+        colliders: &ColliderSet,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+    ) -> ActiveHooks {
+        self.user_flags(colliders, c1) | self.user_flags(colliders, c2)
     }
 
     /// The hook flags the user asked for on a collider.

@@ -725,7 +725,8 @@ mod tests {
         assert_eq!(alone.0, bar);
         assert!((alone.1 - gap).abs() < 1e-4, "gap {}", alone.1);
         assert_eq!(hit(&geoms), Some(alone));
-        // The still tile: its bound is a bound, and a ball beside it is queried and found.
+        // The still tile: its bound stays at or below the gap the query finds, above, beside
+        // and in its corner (alone, `closest` queries it without the bound).
         let tile = geoms.iter().find(|g| g.handle == far).unwrap();
         for (x, y) in [(10.0, 0.2 + gap), (10.6 + gap, 0.0), (10.55, 0.15)] {
             let centre = Vector3::new(x, y, 0.0);

@@ -130,8 +130,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// the face, it is put back on the side it was on, by its depth measured from that side,
     /// its speed into the ground removed (a `PushOut` at the step's start, written with the
     /// plan's state), and the contact found again; not where that puts it deeper than the
-    /// resting gap in another of its grounds (a mesh lying on a solid floor). Records the side of the pair's contact
-    /// for the next step (`StepData::mesh_sides`). Other grounds: `found` as it is.
+    /// resting gap in another of its grounds (a mesh lying on a solid floor). Records the
+    /// side of the pair's contact for the next step (`StepData::mesh_sides`). Other grounds:
+    /// `found` as it is.
     fn mesh_side(
         &mut self,
         reads: BodyReads,
