@@ -370,9 +370,12 @@ impl GroundIndex {
             .copied()
             .filter(|i| !motions[*i].misses_cube(centre, half))
             .collect();
-        let leaves = (!self.tree.is_empty()).then(|| self.tree.intersect_aabb(&cube));
-        for leaf in leaves.into_iter().flatten() {
-            out.push(leaf as usize);
+        // Only a tree with leaves is traversed: its traversal state is a large value, and the
+        // grounds are most often all listed (a half-space floor).
+        if !self.tree.is_empty() {
+            for leaf in self.tree.intersect_aabb(&cube) {
+                out.push(leaf as usize);
+            }
         }
         if out.len() > 1 {
             out.sort_unstable();
