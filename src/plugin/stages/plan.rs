@@ -23,7 +23,6 @@ mod rolling;
 
 use crate::plugin::config::ImpactConfig;
 use crate::plugin::hooks::flags::HookFlags;
-use crate::plugin::queries::filter;
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, Sets};
 use crate::plugin::stages::commit::{Commit, Origin};
@@ -31,7 +30,9 @@ use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+};
 use body::BodyReads;
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
@@ -109,13 +110,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         true
     }
 
-    /// Does the user's filter refuse the managed pair `(body collider, ground collider)`?
-    /// Asked only when the colliders' own hook flags ask for the user's filter, with the
-    /// start-of-step state, so that every pair the plugin could resolve in the step is
-    /// covered (rapier asks it again during the step, for the pairs its broad phase has).
-    fn user_refuses(&self, bodies: &RigidBodySet, colliders: &ColliderSet, key: PairKey) -> bool {
-        let flags = self.flags.recorded_user_flags(colliders, key.0)
-            | self.flags.recorded_user_flags(colliders, key.1);
-        filter::user_refuses(self.user_hooks, flags, bodies, colliders, key)
+    /// The hook flags the user set on the two colliders of the managed pair `key`: the
+    /// user's filter is asked for the pair (with the start-of-step state, so that every pair
+    /// the plugin could resolve in the step is covered; rapier asks it again during the step,
+    /// for the pairs its broad phase has) only where they ask for it, and a pair whose
+    /// contacts the user modifies is not rolled.
+    fn pair_user_flags(&self, colliders: &ColliderSet, key: PairKey) -> ActiveHooks {
+        self.flags.recorded_user_flags(colliders, key.0)
+            | self.flags.recorded_user_flags(colliders, key.1)
     }
 }

@@ -19,16 +19,18 @@ use crate::plugin::queries::geometry::{
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::PhysicsHooks;
+use crate::rapier::prelude::{ActiveHooks, PhysicsHooks};
 
 /// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
-/// part, and the pair's key.
+/// part, the pair's key, and the hook flags the user set on its two colliders (read once:
+/// the filter and the rolling ask them).
 #[derive(Clone, Copy)]
 pub(super) struct Pair<'q, 'c> {
     pub k: usize,
     pub part: &'q BodyPart<'c>,
     pub gg: &'q GroundGeom<'c>,
     pub key: PairKey,
+    pub user: ActiveHooks,
 }
 
 /// What a ground's pairs with the body tell the search after the step.
@@ -59,14 +61,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         for part in &body.geom.parts {
             let key = (part.handle, gg.handle);
-            let pair = Pair { k, part, gg, key };
-            let role = if self.filtered(body, scene, key) || self.coefficients_refused(scene, key) {
-                Role::Filtered
-            } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
-                role
-            } else {
-                self.contact_role(reads, plan, pair, &mut verdict, step)
+            let user = self.pair_user_flags(scene.colliders, key);
+            let pair = Pair {
+                k,
+                part,
+                gg,
+                key,
+                user,
             };
+            let role =
+                if self.filtered(body, scene, key, user) || self.coefficients_refused(scene, key) {
+                    Role::Filtered
+                } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
+                    role
+                } else {
+                    self.contact_role(reads, plan, pair, &mut verdict, step)
+                };
             step.roles.insert(key, role);
         }
         if verdict.any_impact {
@@ -76,8 +86,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 
     /// Does rapier have no contact for the pair: a joint of the body with the ground's body
-    /// that disables contacts, rapier's own filtering, or the user's filter? Reads only.
-    fn filtered(&self, body: &BodyNear, scene: &Scene, key: PairKey) -> bool {
+    /// that disables contacts, rapier's own filtering, or the user's filter (asked when `user`,
+    /// the pair's user hook flags, asks for it)? Reads only.
+    fn filtered(&self, body: &BodyNear, scene: &Scene, key: PairKey, user: ActiveHooks) -> bool {
         let (bodies, colliders, sets) = (scene.bodies, scene.colliders, scene.sets);
         let joint_filtered = body.jointed
             && colliders[key.1].parent().is_some_and(|ground_body| {
@@ -90,7 +101,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             });
         joint_filtered
             || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
-            || self.user_refuses(bodies, colliders, key)
+            || filter::user_refuses(self.user_hooks, user, bodies, colliders, key)
     }
 
     /// Is a collider of the pair out of the plugin's coefficient ranges, with no ground
@@ -142,7 +153,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &mut StepData,
     ) -> StartContact {
         use crate::parry::shape::TypedShape;
-        let Pair { k, part, gg, key } = pair;
+        let Pair {
+            k, part, gg, key, ..
+        } = pair;
         let Ok(Some((dist, n, _))) = found else {
             return found;
         };
@@ -174,7 +187,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     };
                     !body.grounds.iter().enumerate().any(|(j, (_, other))| {
                         j != k
-                            && !self.filtered(body, reads.scene, (part.handle, other.handle))
+                            && !self.filtered(
+                                body,
+                                reads.scene,
+                                (part.handle, other.handle),
+                                self.pair_user_flags(
+                                    reads.scene.colliders,
+                                    (part.handle, other.handle),
+                                ),
+                            )
                             && contact_checked(part, other, &back, 0.0, 0.0).is_ok_and(|c| {
                                 c.is_some_and(|(dist, ..)| dist < -step.policy.resting_gap)
                             })

@@ -37,11 +37,12 @@ pub(crate) enum OnPlane {
 
 /// A ball (the body's only collider, centred) resting on the ground `gg` with normal `n`, as
 /// `Planner::rolling_of` asks it: `on_ground` is its state put on the ground (touching it,
-/// no normal speed), `others` the other grounds near it.
+/// no normal speed), `others` the other grounds near it, `user` the pair's user hook flags.
 struct BallOnGround<'q, 'c> {
     handle: RigidBodyHandle,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
+    user: ActiveHooks,
     others: &'q [&'q GroundGeom<'c>],
     flight: &'q Flight,
     n: Vector3<f64>,
@@ -92,7 +93,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &mut StepData,
     ) -> Role {
         let BodyReads { body, scene, last } = reads;
-        let Pair { k, part, gg, key } = pair;
+        let Pair {
+            k,
+            part,
+            gg,
+            key,
+            user,
+        } = pair;
         let (gi, _) = &body.grounds[k];
         let state = plan.state;
         let on_ground = State {
@@ -110,6 +117,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             handle: body.handle,
             part,
             gg,
+            user,
             others: &others,
             flight: &body.flight,
             n,
@@ -268,9 +276,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
         let level = (flight.accel - n * an).norm() <= LEVEL_TOLERANCE * flight.accel.norm();
-        let user_modifies = (self.flags.recorded_user_flags(colliders, part.handle)
-            | self.flags.recorded_user_flags(colliders, gg.handle))
-        .contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
+        let user_modifies = ball.user.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS);
         let plain = flight.linear_damping == 0.0
             && flight.angular_damping == 0.0
             && rb.user_torque() == Vector::ZERO;
