@@ -51,11 +51,9 @@ pub(crate) struct GroundGeom<'a> {
     pub shape: &'a dyn Shape,
     pub skin: f64,
     /// Its motion over the step (the ground index's): centre of mass, orientation and
-    /// velocities at the start, the collider's pose in that frame, and a box holding it.
+    /// velocities at the start, the collider's pose in that frame and in the world, and a
+    /// box holding it.
     pub motion: &'a GroundMotion,
-    /// The collider's world pose at the start of the step (`pose_at(0)`, kept because a
-    /// still ground is asked for it in every query).
-    pub pose0: Isometry3<f64>,
     /// Body colliders that have no contact with this ground for the plugin (the pair is
     /// `Filtered`: rapier's filtering or the user's filter refuses it).
     pub skip: Vec<ColliderHandle>,
@@ -96,7 +94,7 @@ impl GroundGeom<'_> {
     /// The collider's world pose at time `t` of the step.
     pub fn pose_at(&self, t: f64) -> Isometry3<f64> {
         if self.motion.v == Vector3::zeros() && self.motion.w == Vector3::zeros() {
-            return self.pose0;
+            return self.motion.pose0;
         }
         // A ground that does not turn: no rotation to compose.
         let rot = if self.motion.w == Vector3::zeros() {

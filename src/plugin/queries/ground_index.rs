@@ -59,6 +59,9 @@ pub(crate) struct GroundMotion {
     pub com0: Vector3<f64>,
     pub rot0: UnitQuaternion<f64>,
     pub local: Isometry3<f64>,
+    /// The collider's world pose at the step's start (`com0`, `rot0` and `local` composed):
+    /// every query of a still ground asks for it, so it is composed once per motion.
+    pub pose0: Isometry3<f64>,
     pub v: Vector3<f64>,
     pub w: Vector3<f64>,
     /// World AABB of the collider's poses at the step's start and predicted end (not the arc
@@ -399,6 +402,16 @@ pub(crate) fn build_bvh(leaves: Vec<(usize, Aabb)>) -> Bvh {
     }
 }
 
+/// The collider's world pose from its centre-of-mass frame's (`com0`, `rot0`) and its pose
+/// `local` in that frame.
+fn start_pose(
+    com0: Vector3<f64>,
+    rot0: UnitQuaternion<f64>,
+    local: &Isometry3<f64>,
+) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::from(com0), rot0) * local
+}
+
 /// The place-holder motion of a ground not queried this step.
 fn absent(handle: ColliderHandle) -> GroundMotion {
     GroundMotion {
@@ -407,6 +420,7 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
         com0: Vector3::zeros(),
         rot0: UnitQuaternion::identity(),
         local: Isometry3::identity(),
+        pose0: Isometry3::identity(),
         v: Vector3::zeros(),
         w: Vector3::zeros(),
         aabb: Aabb::new_invalid(),
@@ -475,6 +489,7 @@ fn motion_of(
                 com0,
                 rot0: frame0.rotation,
                 local: local_frame,
+                pose0: start_pose(com0, frame0.rotation, &local_frame),
                 v,
                 w,
                 aabb,
@@ -483,12 +498,18 @@ fn motion_of(
         }
         _ => {
             let pose = pose_to_na(co.position());
+            let (com0, rot0, local) = (
+                pose.translation.vector,
+                pose.rotation,
+                Isometry3::identity(),
+            );
             Some(GroundMotion {
                 handle,
                 body: None,
-                com0: pose.translation.vector,
-                rot0: pose.rotation,
-                local: Isometry3::identity(),
+                com0,
+                rot0,
+                local,
+                pose0: start_pose(com0, rot0, &local),
                 v: Vector3::zeros(),
                 w: Vector3::zeros(),
                 aabb,

@@ -210,7 +210,6 @@ pub(crate) fn ground_geom<'a>(
         shape: co.shape(),
         skin: to_f64(co.contact_skin()),
         motion: gm,
-        pose0: Isometry3::from_parts(Translation3::from(gm.com0), gm.rot0) * gm.local,
         skip: Vec::new(),
     })
 }

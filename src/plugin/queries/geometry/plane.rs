@@ -150,7 +150,7 @@ fn plane_piece(ground: &GroundGeom, plane: &PlaneNear) -> Option<PlanePiece> {
         return None;
     }
     let (n, height) = (&plane.n, plane.height);
-    let pose = ground.pose0;
+    let pose = ground.motion.pose0;
     match ground.shape.as_typed_shape() {
         TypedShape::HalfSpace(hs) => {
             let normal = pose.rotation * vec_to_na(hs.normal);
@@ -200,7 +200,7 @@ fn triangles_near(
 ) {
     use crate::parry::bounding_volume::Aabb;
     use crate::parry::shape::TypedShape;
-    let pose = ground.pose0;
+    let pose = ground.motion.pose0;
     // A ball's reach is a sphere: its box in the ground's frame is the same cube.
     let local = pose
         .inverse_transform_point(&nalgebra::Point3::from(*centre))
