@@ -367,12 +367,14 @@ impl GroundIndex {
     /// increasing order.
     pub fn near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
         let cube = Aabb::from_half_extents(centre, Vector::splat(half));
-        let mut out: SmallList<usize> = self
-            .listed
-            .iter()
-            .copied()
-            .filter(|i| !motions[*i].misses_cube(centre, half))
-            .collect();
+        // A loop, not an iterator chain collected: this runs for every body near a ground
+        // every step, most often over one listed half-space.
+        let mut out = SmallList::Empty;
+        for &i in &self.listed {
+            if !motions[i].misses_cube(centre, half) {
+                out.push(i);
+            }
+        }
         // Only a tree with leaves is traversed: its traversal state is a large value, and the
         // grounds are most often all listed (a half-space floor).
         if !self.tree.is_empty() {
