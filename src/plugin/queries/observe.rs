@@ -155,16 +155,28 @@ pub(crate) fn body_geom<'a>(
         if !co.is_enabled() || co.is_sensor() {
             continue;
         }
-        let to_com =
-            Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity());
+        // The collider's pose in the body's centre-of-mass frame: its pose in the body's
+        // frame, shifted by the centre of mass (no rotation between the two frames).
         let local = match co.position_wrt_parent() {
-            Some(pose) => to_com * pose_to_na(pose),
-            None => to_com,
+            Some(pose) => {
+                let pose = pose_to_na(pose);
+                Isometry3::from_parts(
+                    Translation3::from(pose.translation.vector - local_com),
+                    pose.rotation,
+                )
+            }
+            None => {
+                Isometry3::from_parts(Translation3::from(-local_com), UnitQuaternion::identity())
+            }
         };
         let bs = co.shape().compute_local_bounding_sphere();
-        let center = local * nalgebra::Point3::from(vec_to_na(bs.center));
+        let center = if bs.center == Vector::ZERO {
+            local.translation.vector
+        } else {
+            (local * nalgebra::Point3::from(vec_to_na(bs.center))).coords
+        };
         let skin = to_f64(co.contact_skin());
-        radius = radius.max(center.coords.norm() + to_f64(bs.radius) + skin);
+        radius = radius.max(center.norm() + to_f64(bs.radius) + skin);
         parts.push(BodyPart {
             handle: *ch,
             shape: co.shape(),
