@@ -92,14 +92,24 @@ impl Lookup {
                 rest: (0, 0),
             });
         }
-        // The pairs after a collider's first, by its slot, then gathered slot by slot.
+        // The pairs after a collider's first, by its slot, then gathered slot by slot. Most
+        // pairs share their ground with the pair before (one floor): its flags are read once.
+        let mut last_ground: Option<(ColliderHandle, ActiveHooks)> = None;
+        let mut ground_flags = |ground: ColliderHandle| match last_ground {
+            Some((g, flags)) if g == ground => flags,
+            _ => {
+                let flags = user_flags(ground);
+                last_ground = Some((ground, flags));
+                flags
+            }
+        };
         let mut rest = Vec::new();
         for ((body, ground), role) in roles {
             let slot = &mut out.roles[slot_of(*body)];
             match slot {
                 Some(first) => rest.push((
                     slot_of(*body),
-                    (*ground, *role, first.body_user | user_flags(*ground)),
+                    (*ground, *role, first.body_user | ground_flags(*ground)),
                 )),
                 None => {
                     let body_user = user_flags(*body);
@@ -107,7 +117,7 @@ impl Lookup {
                         body: *body,
                         ground: *ground,
                         role: *role,
-                        user: body_user | user_flags(*ground),
+                        user: body_user | ground_flags(*ground),
                         body_user,
                         rest: (0, 0),
                     })

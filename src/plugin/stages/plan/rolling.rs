@@ -107,12 +107,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             v: state.v - n * n.dot(&state.v),
             ..state
         };
-        let others: SmallList<&GroundGeom> = body
-            .grounds
-            .iter()
-            .filter(|(other, _)| other != gi)
-            .map(|(_, g)| g)
-            .collect();
+        // Most often a ball alone on one ground: nothing to gather.
+        let others: SmallList<&GroundGeom> = if body.grounds.len() > 1 {
+            body.grounds
+                .iter()
+                .filter(|(other, _)| other != gi)
+                .map(|(_, g)| g)
+                .collect()
+        } else {
+            SmallList::Empty
+        };
         let ball = BallOnGround {
             handle: body.handle,
             part,
