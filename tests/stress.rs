@@ -356,7 +356,10 @@ impl Sim {
         // its side) is neither. Whether a box is below the top is read from its bounding box,
         // which also holds the corner of a body hanging over the ground's edge: one so found
         // is under the ground only if it is inside it (parry's contact) or its centre of mass
-        // is below the top (through a sheet).
+        // is below the top (through a sheet). Every ground's underside lies inside the floor,
+        // so a body met from below is inside the floor: when the plugin also resolved it
+        // against the floor from above in the step, the floor's outside wins (the body must
+        // end above the floor, its own event's check), not the underside of the other.
         let allowed = wide(world.integration_parameters.allowed_linear_error());
         let slack = allowed + penetration_rounding(1.0);
         for ev in events.iter().filter(|ev| ev.body2.is_none()) {
@@ -402,6 +405,15 @@ impl Sim {
                     -bottom
                 );
             } else {
+                let out_of_floor = events.iter().any(|other| {
+                    other.body == ev.body
+                        && other.body2.is_none()
+                        && other.ground == self.floor
+                        && other.normal.y > 0.0
+                });
+                if out_of_floor {
+                    continue;
+                }
                 let top = boxes()
                     .map(|b| wide(b.maxs.y))
                     .fold(f64::NEG_INFINITY, f64::max);
