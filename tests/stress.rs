@@ -353,7 +353,7 @@ impl Sim {
         // from above (the event's normal up) ends above the top; one met from below (a body
         // rapier let sink into the floor under a slab, then rising into its underside: the
         // normal down) ends below the ground's bottom; a body beside a ground (pushed out of
-        // its side) is neither. Whether a box is below the top is read from its bounding box,
+        // its side) is neither. Whether a body is below the top is read from its bounding box,
         // which also holds the corner of a body hanging over the ground's edge: one so found
         // is under the ground only if it is inside it (parry's contact) or its centre of mass
         // is below the top (through a sheet). Every ground's underside lies inside the floor,
