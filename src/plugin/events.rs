@@ -56,18 +56,20 @@ pub enum EventKind {
     /// ground for another body pushing it in deeper than the resting gap), or in the step a
     /// contact pushed it, a joint held it or rapier's CCD stopped it short (`StepEnd`:
     /// rapier's end state stands, corrected only as the settle stage corrects any). The
-    /// closed form takes the ball again once nothing can reach it. `impulse` zero, `ke_before` equal to `ke_after`.
+    /// closed form takes the ball again once nothing can reach it. `impulse` zero,
+    /// `ke_before` equal to `ke_after`.
     Released,
 }
 
 /// One change the plugin made to a body in the last step: a ground impact resolved by the
 /// model, or a correction ([`EventKind`]). World frame, y-up or not: the frame is rapier's.
 ///
-/// `ke_after` is the kinetic energy of the state the change left; where it is the last change in
-/// the step and no flight follows (`timing` `StepEnd`), that state is what was written into rapier.
-/// For the corrections (`kind` not `Impact`), `regime` is `Separating`, `law` `Consistent`,
-/// `contact_points` 0, `restitution`, `friction` and `tangential_restitution` 0, `settled` true, and `impulse` the change of
-/// linear momentum (zero for a change of pose only).
+/// `ke_after` is the kinetic energy of the state the change left; where it is the last change
+/// in the step and no flight follows (`timing` `StepEnd`), that state is what was written into
+/// rapier. For the corrections (`kind` not `Impact`), `regime` is `Separating`, `law`
+/// `Consistent`, `contact_points` 0, `restitution`, `friction` and `tangential_restitution` 0,
+/// `settled` true, and `impulse` the change of linear momentum (zero for a change of pose
+/// only).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",

@@ -21,7 +21,7 @@
 //! from rapier's solver and zeroes the others' restitution. The flags the user had set are
 //! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
-use crate::plugin::state::handles::{ArenaOrder, HandleMap, SlotTable};
+use crate::plugin::state::handles::{ArenaOrder, HandleMap, PairKey, SlotTable};
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::prelude::{
@@ -154,6 +154,12 @@ impl HookFlags {
             .and_then(|p| self.hooked.get(&p))
             .and_then(|e| e.colliders.iter().find(|(h, _)| *h == c))
             .map_or(flags, |(_, user)| *user)
+    }
+
+    /// The hook flags the user set on either collider of the pair `key` (what rapier would
+    /// have seen for the pair without the plugin).
+    pub fn recorded_pair_flags(&self, colliders: &ColliderSet, key: PairKey) -> ActiveHooks {
+        self.recorded_user_flags(colliders, key.0) | self.recorded_user_flags(colliders, key.1)
     }
 
     /// Takes the plugin's hook flags off every collider: the user's flags back.

@@ -554,12 +554,12 @@ pub(crate) fn within_reach_of_other(
     false
 }
 
-/// How much a body of motion `own` (a centred ball) and the collider `other` can close in
-/// the step `own.dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
-/// or in any direction; infinite when the other's motion cannot be read. The relative speed
-/// of the centres of mass, the other's spin times how far its surface lies from its centre
-/// of mass, and the step squared times the accelerations' difference and what `own`'s ground
-/// adds: rapier's substeps move a body by `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`.
+/// How much a body of motion `own` (a centred ball) and the collider `other` can close in the step
+/// `own.dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
+/// or in any direction; infinite when the other's motion cannot be read. The relative speed of the
+/// centres of mass, the other's spin times how far its surface lies from its centre of mass, and
+/// the step squared times the accelerations' difference and what `own`'s ground adds: rapier's
+/// substeps move a body by `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`.
 fn closing_bound(
     own: &OwnMotion,
     other: &Collider,

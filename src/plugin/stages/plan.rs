@@ -1,14 +1,14 @@
 //! Plan: what the step decides for each body and pair before rapier's step, and the data it
 //! carries to the stages after it.
 //!
-//! Contract: [`Planner::plan_body`] takes one awake managed body that may reach a ground and
-//! gives each of its pairs with the grounds near it a role (`Role`, decided by
+//! Contract: [`Planner::plan_body`] takes one awake managed body that may reach a ground and gives
+//! each of its pairs with the grounds near it a role (`Role`, decided by
 //! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
-//! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and which grounds may reach it) for the
-//! stages after rapier's step, and the balls held at rest on a slope their first step
-//! (`StepData::first_holds`). It writes into rapier only through the commit: in `Step` mode
-//! the impulses of the contacts that close in the step, each with its event; and it reports a
-//! rolling ball that something can now reach (`EventKind::Released`, nothing written). It
+//! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and
+//! which grounds may reach it) for the stages after rapier's step, and the balls held at rest on a
+//! slope their first step (`StepData::first_holds`). It writes into rapier only through the commit:
+//! in `Step` mode the impulses of the contacts that close in the step, each with its event; and it
+//! reports a rolling ball that something can now reach (`EventKind::Released`, nothing written). It
 //! reads rapier and the registry and calls the user's filter where the colliders ask for it;
 //! [`StepData`] carries the step's thresholds, roles and candidates.
 //!
@@ -30,9 +30,7 @@ use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{
-    ActiveHooks, ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet,
-};
+use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use body::BodyReads;
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
@@ -108,15 +106,5 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 .state(bodies, handle, &state, &local_com, Origin::Correction);
         }
         true
-    }
-
-    /// The hook flags the user set on the two colliders of the managed pair `key`: the
-    /// user's filter is asked for the pair (with the start-of-step state, so that every pair
-    /// the plugin could resolve in the step is covered; rapier asks it again during the step,
-    /// for the pairs its broad phase has) only where they ask for it, and a pair whose
-    /// contacts the user modifies is not rolled.
-    fn pair_user_flags(&self, colliders: &ColliderSet, key: PairKey) -> ActiveHooks {
-        self.flags.recorded_user_flags(colliders, key.0)
-            | self.flags.recorded_user_flags(colliders, key.1)
     }
 }

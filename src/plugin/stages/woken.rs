@@ -41,8 +41,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 continue;
             }
             let refused = |bodies: &RigidBodySet, part: ColliderHandle, ground: ColliderHandle| {
-                let user = view.flags.recorded_user_flags(colliders, part)
-                    | view.flags.recorded_user_flags(colliders, ground);
+                let user = view.flags.recorded_pair_flags(colliders, (part, ground));
                 colliders[ground].parent().is_some_and(|ground_body| {
                     filter::joint_disables_contacts(
                         impulse_joints,

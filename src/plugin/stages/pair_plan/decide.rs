@@ -120,8 +120,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     pub(super) fn refused(&self, key: PairKey, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
         let inputs = self.inputs;
         let (bodies, colliders) = (self.bodies, inputs.colliders);
-        let user = inputs.flags.recorded_user_flags(colliders, key.0)
-            | inputs.flags.recorded_user_flags(colliders, key.1);
+        let user = inputs.flags.recorded_pair_flags(colliders, key);
         !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
             || filter::joint_disables_contacts(
                 inputs.sets.impulse_joints,

@@ -61,7 +61,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         for part in &body.geom.parts {
             let key = (part.handle, gg.handle);
-            let user = self.pair_user_flags(scene.colliders, key);
+            // Read once: the user's filter and the rolling decision both ask for them.
+            let user = self.flags.recorded_pair_flags(scene.colliders, key);
             let pair = Pair {
                 k,
                 part,
@@ -87,7 +88,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 
     /// Does rapier have no contact for the pair: a joint of the body with the ground's body
     /// that disables contacts, rapier's own filtering, or the user's filter (asked when `user`,
-    /// the pair's user hook flags, asks for it)? Reads only.
+    /// the pair's user hook flags, asks for it, with the start-of-step state, so that every
+    /// pair the plugin could resolve in the step is covered; rapier asks it again during the
+    /// step, for the pairs its broad phase has)? Reads only.
     fn filtered(&self, body: &BodyNear, scene: &Scene, key: PairKey, user: ActiveHooks) -> bool {
         let (bodies, colliders, sets) = (scene.bodies, scene.colliders, scene.sets);
         let joint_filtered = body.jointed
@@ -191,7 +194,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                 body,
                                 reads.scene,
                                 (part.handle, other.handle),
-                                self.pair_user_flags(
+                                self.flags.recorded_pair_flags(
                                     reads.scene.colliders,
                                     (part.handle, other.handle),
                                 ),
