@@ -346,12 +346,6 @@ fn print_profile(profile: &StepProfile, steps: u64) {
         "plugin (all but rapier)",
         100.0 * plugin / whole
     );
-    let commit = per_step(profile.commit_time);
-    println!(
-        "  {:<22} {commit:>12.4} {:>7.1}%",
-        "commit (in the above)",
-        100.0 * commit / whole
-    );
     let c = &profile.counts;
     let avg = |n: usize| n as f64 / steps as f64;
     println!(

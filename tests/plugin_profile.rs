@@ -52,7 +52,7 @@ fn the_profile_counts_what_the_step_did() {
                 _ if c.events == 0 => assert_eq!(c.writes, 0, "{timing:?}: {c:?}"),
                 _ => {}
             }
-            assert!(p.commit_time <= p.plugin_time(), "{timing:?}");
+            assert!(p.time(Stage::Commit) <= p.plugin_time(), "{timing:?}");
             run.accumulate(p);
         }
         let c = &run.counts;

@@ -15,6 +15,7 @@ use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
+use crate::plugin::state::writes::Writes;
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase, PhysicsWorld,
     RigidBodyHandle, RigidBodySet,
@@ -111,6 +112,9 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) reports: Reports,
     /// The step's profile, when profiling is on.
     pub(crate) stopwatch: Stopwatch,
+    /// The writes recorded in the current half of the step, for the commit stage
+    /// (`state/writes.rs`).
+    pub(crate) writes: Writes,
 }
 
 /// The sets of a rapier world that [`ImpactPlugin::before_step`] and
@@ -202,6 +206,7 @@ impl<H> ImpactPlugin<H> {
             pair_index: PairIndex::default(),
             reports: Reports::default(),
             stopwatch: Stopwatch::default(),
+            writes: Writes::default(),
         })
     }
 
@@ -244,6 +249,7 @@ impl<H> ImpactPlugin<H> {
             pair_index,
             reports,
             stopwatch,
+            writes,
         } = self;
         let plugin = ImpactPlugin {
             config,
@@ -256,6 +262,7 @@ impl<H> ImpactPlugin<H> {
             pair_index,
             reports,
             stopwatch,
+            writes,
         };
         (plugin, old)
     }

@@ -18,6 +18,10 @@ pub enum Stage {
     Survey,
     /// The planned bodies' pairs with the grounds near them, and their candidates.
     Plan,
+    /// The writes the stages recorded, applied to rapier's bodies: the last stage of each
+    /// half of the step, so it runs twice (after the plan, and after the holds); its time is
+    /// both runs'.
+    Commit,
     /// The hook flags and the tables rapier's hook calls read (with the plan's memory put
     /// back).
     Install,
@@ -33,8 +37,7 @@ pub enum Stage {
     Bodies,
     /// The pairs between bodies not moved together, checked at the step's end.
     PairEnds,
-    /// The balls held at rest on a slope, put back (with the finish: the colliders moved to
-    /// their bodies).
+    /// The balls held at rest on a slope, put back.
     Holds,
 }
 
@@ -45,6 +48,7 @@ impl Stage {
         Stage::PairPlan,
         Stage::Survey,
         Stage::Plan,
+        Stage::Commit,
         Stage::Install,
         Stage::Rapier,
         Stage::Woken,
@@ -64,6 +68,7 @@ impl Stage {
             Stage::PairPlan => "pair plan",
             Stage::Survey => "survey",
             Stage::Plan => "plan",
+            Stage::Commit => "commit",
             Stage::Install => "install",
             Stage::Rapier => "rapier",
             Stage::Woken => "woken",
@@ -163,9 +168,6 @@ pub struct StepProfile {
     times: [Duration; Stage::COUNT],
     /// What the step did, counted.
     pub counts: StepCounts,
-    /// The time spent inside the one writer (part of the stages' times): the setters only;
-    /// what a write costs rapier shows in its next step.
-    pub commit_time: Duration,
 }
 
 impl StepProfile {
@@ -188,7 +190,6 @@ impl StepProfile {
         for (t, o) in self.times.iter_mut().zip(other.times) {
             *t += o;
         }
-        self.commit_time += other.commit_time;
         self.counts += other.counts;
     }
 }
@@ -244,11 +245,6 @@ impl Stopwatch {
             f(&mut p.counts);
         }
     }
-
-    /// The writer's log for this step, when profiling.
-    pub fn commit_log(&mut self) -> Option<&mut StepProfile> {
-        self.profile.as_mut()
-    }
 }
 
 #[cfg(test)]
@@ -271,15 +267,15 @@ mod tests {
     fn accumulating_adds_every_count_and_time() {
         let mut step = StepProfile::default();
         step.times[Stage::Plan.index()] = Duration::from_micros(3);
-        step.commit_time = Duration::from_micros(1);
+        step.times[Stage::Commit.index()] = Duration::from_micros(1);
         step.counts.far = 2;
         step.counts.events = 5;
         let mut run = StepProfile::default();
         run.accumulate(&step);
         run.accumulate(&step);
         assert_eq!(run.time(Stage::Plan), Duration::from_micros(6));
-        assert_eq!(run.plugin_time(), Duration::from_micros(6));
-        assert_eq!(run.commit_time, Duration::from_micros(2));
+        assert_eq!(run.time(Stage::Commit), Duration::from_micros(2));
+        assert_eq!(run.plugin_time(), Duration::from_micros(8));
         assert_eq!((run.counts.far, run.counts.events), (4, 10));
     }
 }

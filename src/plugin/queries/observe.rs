@@ -20,6 +20,7 @@ use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
+use crate::plugin::state::writes::{Now, Writes};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
     Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,
@@ -91,20 +92,21 @@ pub(crate) fn surely_far(
 /// The start-of-step state of a body: its `f64` shadow if rapier still holds exactly what
 /// the plugin wrote, else rapier's values.
 pub(crate) fn snapshot(
-    rb: &RigidBody,
+    now: &Now,
     gravity: Vector3<f64>,
     dt: f64,
     shadow: Option<&Shadow>,
 ) -> (State, Flight, Vector3<f64>) {
+    let rb = now.rb();
     let local_com = vec_to_na(rb.local_center_of_mass());
-    let mut state = rapier_state(rb);
+    let mut state = now.state();
     if let Some(sh) = shadow {
-        if sh.written_translation == rb.translation() && sh.written_linvel == rb.linvel() {
+        if sh.written_translation == now.translation() && sh.written_linvel == now.linvel() {
             state.com = sh.com;
             state.v = sh.v;
             // The spin too, where rapier left it as written (its gyroscopic step changes an
             // anisotropic body's).
-            if sh.written_angvel == rb.angvel() {
+            if sh.written_angvel == now.angvel() {
                 state.w = sh.w;
             }
         }
@@ -466,6 +468,8 @@ pub(crate) struct Scene<'s> {
     pub registry: &'s Registry,
     /// The grounds' motions over the step (`StepData::grounds`).
     pub grounds: &'s [GroundMotion],
+    /// The writes recorded so far in the step (a body is read as they leave it).
+    pub writes: &'s Writes,
 }
 
 /// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
@@ -492,6 +496,7 @@ pub(crate) fn within_reach_of_other(
         colliders,
         sets,
         registry,
+        writes,
         ..
     } = *scene;
     if sets.impulse_joints.attached_joints(body).next().is_some()
@@ -533,7 +538,9 @@ pub(crate) fn within_reach_of_other(
                     // Two centres close no faster than along their line now:
                     // |d + x| >= |d| + x.d/|d| for any relative displacement x.
                     let line = (len > 0.0).then(|| d / len);
-                    if gap > closing_bound(own, oc, true, line, bodies) || is_ground(&other) {
+                    if gap > closing_bound(own, oc, true, line, (bodies, writes))
+                        || is_ground(&other)
+                    {
                         continue;
                     }
                     return true;
@@ -546,7 +553,7 @@ pub(crate) fn within_reach_of_other(
                 },
             };
             let other_ball = oc.shape().as_ball().is_some();
-            if gap <= closing_bound(own, oc, other_ball, None, bodies) {
+            if gap <= closing_bound(own, oc, other_ball, None, (bodies, writes)) {
                 return true;
             }
         }
@@ -565,7 +572,7 @@ fn closing_bound(
     other: &Collider,
     other_ball: bool,
     line: Option<Vector3<f64>>,
-    bodies: &RigidBodySet,
+    (bodies, writes): (&RigidBodySet, &Writes),
 ) -> f64 {
     let dt = own.dt;
     // Along the line, the part of a vector that closes the gap; else its length.
@@ -580,11 +587,11 @@ fn closing_bound(
         }
         None => own.pressed + own.dragged,
     };
-    let Some(ob) = other.parent().and_then(|p| bodies.get(p)) else {
+    let Some((handle, ob)) = other.parent().and_then(|p| Some((p, bodies.get(p)?))) else {
         // A collider without a body: it stays where it is.
         return closing(own.v) * dt + (across(own.accel) + pushed) * dt * dt;
     };
-    let com = ob.center_of_mass();
+    let (com, linvel, angvel) = writes.motion(handle, ob);
     // How far its surface lies from its centre of mass: a ball turning about its centre does
     // not move its surface.
     let arm = if other_ball {
@@ -593,8 +600,8 @@ fn closing_bound(
         let bs = other.shape().compute_local_bounding_sphere();
         to_f64((other.position().transform_point(bs.center) - com).length() + bs.radius)
     };
-    let mut approach = closing(own.v - vec_to_na(ob.linvel()));
-    let mut turn = to_f64(ob.angvel().length()) * arm;
+    let mut approach = closing(own.v - vec_to_na(linvel));
+    let mut turn = to_f64(angvel.length()) * arm;
     let mut accel = across(own.accel);
     if ob.is_dynamic() {
         let theirs = own.gravity * to_f64(ob.gravity_scale())

@@ -29,7 +29,7 @@ use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::{EndAction, EndCheck, IN_PLANE_TOLERANCE, on_plane};
 use crate::plugin::queries::geometry::{GroundGeom, Hit, Search, closest, first_impact};
 use crate::plugin::queries::observe::{
-    body_geom, pushed_by_other, rapier_state, touched_besides_grounds, touches_other,
+    body_geom, pushed_by_other, touched_besides_grounds, touches_other,
 };
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::reconstruct::{self, Subject, ccd_consistent};
@@ -39,8 +39,9 @@ use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, FirstHold};
+use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodySet};
+use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBodySet};
 use nalgebra::Vector3;
 
 impl<H> ImpactPlugin<H> {
@@ -50,15 +51,15 @@ impl<H> ImpactPlugin<H> {
     pub(super) fn reconstruct_bodies(
         &mut self,
         step: &EndOfStep,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         let moved_together = &step.moved_together;
         let mut view = self.after_view();
         for cand in &step.candidates {
-            let awake_managed = bodies
-                .get(cand.body)
-                .is_some_and(|rb| view.registry.manages(cand.body, rb) && !rb.is_sleeping());
+            let awake_managed = bodies.get(cand.body).is_some_and(|rb| {
+                view.registry.manages(cand.body, rb) && !view.commit.is_sleeping(cand.body, rb)
+            });
             if moved_together.contains(&cand.body) || !awake_managed {
                 continue;
             }
@@ -79,7 +80,7 @@ impl<H> ImpactPlugin<H> {
     /// where it stopped, at rest, with its `EventKind::Hold` event, unless something else
     /// touched it in the step (or it leaves faster than the resting speed), or rapier put it
     /// to sleep.
-    pub(super) fn put_back_held(&mut self, step: &EndOfStep, bodies: &mut RigidBodySet) {
+    pub(super) fn put_back_held(&mut self, step: &EndOfStep, bodies: &RigidBodySet) {
         let mut view = self.after_view();
         for hold in &step.first_holds {
             view.put_back(hold, step, bodies);
@@ -95,11 +96,13 @@ impl AfterStep<'_> {
         cand: &Candidate,
         ground: usize,
         motion: &Rolling,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let rb = &bodies[cand.body];
-        let geom = body_geom(rb, colliders, &cand.local_com);
+        let Some(now) = self.commit.body(bodies, cand.body) else {
+            return;
+        };
+        let geom = body_geom(now.rb(), colliders, &cand.local_com);
         let Some(gg) = self.pair_geom(&step.grounds[ground], &geom, colliders) else {
             return;
         };
@@ -123,8 +126,8 @@ impl AfterStep<'_> {
             .next()
             .is_some()
             || sets.multibody_joints.rigid_body_link(cand.body).is_some()
-            || pushed_by_other(rb, sets.narrow_phase)
-            || !ccd_consistent(rb, cand, step.dt, step.dt, step);
+            || pushed_by_other(now.rb(), sets.narrow_phase)
+            || !ccd_consistent(&now, cand, step.dt, step.dt, step);
         if !disturbed && !cand.impact_grounds.is_empty() {
             // A ground it may roll into: where it does, that impact, and on from there.
             let obstacles = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
@@ -138,13 +141,16 @@ impl AfterStep<'_> {
             .flatten();
         if let Some(end) = rolled {
             self.commit
-                .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+                .state(cand.body, &end, &cand.local_com, Origin::Model);
             return;
         }
         // rapier's end state stands, in which the ball flew without its ground.
         if let (true, Some(part)) = (disturbed, geom.parts.first()) {
             let key = (part.handle, grounds[0].handle);
-            let event = released_at_end(cand, &bodies[cand.body], key, motion, step.dt);
+            let Some(now) = self.commit.body(bodies, cand.body) else {
+                return;
+            };
+            let event = released_at_end(cand, &now, key, motion, step.dt);
             self.commit.event(event);
             self.released.push(key);
         }
@@ -158,7 +164,7 @@ impl AfterStep<'_> {
         &mut self,
         step: &EndOfStep,
         cand: &Candidate,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         let mode = self.config.timing;
@@ -172,8 +178,10 @@ impl AfterStep<'_> {
         {
             return;
         }
-        let rb = &bodies[cand.body];
-        let free = flew_alone(rb, cand, has_grounds, step);
+        let Some(now) = self.commit.body(bodies, cand.body) else {
+            return;
+        };
+        let free = flew_alone(&now, cand, has_grounds, step);
         // Before any geometry: a body with no ground left to search, or whose search would
         // find the step clear (`Candidate::closing`) and that rapier's CCD did not cut short,
         // only flies (exactly, in `Exact` mode).
@@ -181,11 +189,11 @@ impl AfterStep<'_> {
             && free
             && has_grounds
             && !cand.closing
-            && ccd_consistent(rb, cand, step.dt, step.dt, step);
+            && ccd_consistent(&now, cand, step.dt, step.dt, step);
         if !has_grounds || clear {
             if mode == TimingMode::Exact
                 && free
-                && (clear || ccd_consistent(rb, cand, step.dt, step.dt, step))
+                && (clear || ccd_consistent(&now, cand, step.dt, step.dt, step))
             {
                 self.fly_exactly(bodies, cand, step.dt);
             }
@@ -195,11 +203,11 @@ impl AfterStep<'_> {
             }
             return;
         }
-        let geom = body_geom(rb, colliders, &cand.local_com);
+        let geom = body_geom(now.rb(), colliders, &cand.local_com);
         let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
-        let inertia = Inertia::of(rb);
-        match first_search(rb, &subject, mode != TimingMode::Step && free) {
+        let inertia = Inertia::of(now.rb());
+        match first_search(&now, &subject, mode != TimingMode::Step && free) {
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -231,7 +239,7 @@ impl AfterStep<'_> {
         &mut self,
         step: &EndOfStep,
         cand: &Candidate,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) -> bool {
         let geom = body_geom(&bodies[cand.body], colliders, &cand.local_com);
@@ -251,7 +259,7 @@ impl AfterStep<'_> {
         &mut self,
         step: &EndOfStep,
         cand: &Candidate,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         if !cand.turning_resting.is_empty() {
@@ -268,7 +276,7 @@ impl AfterStep<'_> {
         step: &EndOfStep,
         cand: &Candidate,
         ground: usize,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         let Some(rb) = bodies.get(cand.body) else {
@@ -288,17 +296,22 @@ impl AfterStep<'_> {
     /// anisotropic body or of one with a locked rotation axis (rapier turns it its own way,
     /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
     /// rapier's gyroscopic forces off) gets the exact spin too.
-    fn fly_exactly(&mut self, bodies: &mut RigidBodySet, cand: &Candidate, dt: f64) {
+    fn fly_exactly(&mut self, bodies: &RigidBodySet, cand: &Candidate, dt: f64) {
         let end = cand.flight.advance(&cand.start, dt);
-        let rb = &bodies[cand.body];
-        let exact_spin =
-            cand.flight.gyro.is_none() && !rb.locked_axes().intersects(LockedAxes::ROTATION_LOCKED);
+        let Some(now) = self.commit.body(bodies, cand.body) else {
+            return;
+        };
+        let exact_spin = cand.flight.gyro.is_none()
+            && !now
+                .rb()
+                .locked_axes()
+                .intersects(LockedAxes::ROTATION_LOCKED);
         let s = State {
-            rot: rot_to_na(*rb.rotation()),
+            rot: rot_to_na(now.rotation()),
             w: if exact_spin {
                 end.w
             } else {
-                vec_to_na(rb.angvel())
+                vec_to_na(now.angvel())
             },
             ..end
         };
@@ -307,13 +320,13 @@ impl AfterStep<'_> {
     }
 
     /// One ball held at rest for its first step (`ImpactPlugin::put_back_held`).
-    fn put_back(&mut self, hold: &FirstHold, step: &EndOfStep, bodies: &mut RigidBodySet) {
-        let Some(rb) = bodies.get(hold.body) else {
+    fn put_back(&mut self, hold: &FirstHold, step: &EndOfStep, bodies: &RigidBodySet) {
+        let Some(now) = self.commit.body(bodies, hold.body) else {
             return;
         };
-        let end = rapier_state(rb);
+        let (rb, end) = (now.rb(), now.state());
         let still = step.policy.is_still(&end, hold.radius);
-        if rb.is_sleeping()
+        if now.is_sleeping()
             || !still
             || (end.com == hold.start.com && end.rot == hold.start.rot)
             || touched_besides_grounds(hold.body, rb, &step.sets, self.registry)
@@ -330,13 +343,8 @@ impl AfterStep<'_> {
         };
         let inertia = Inertia::of(rb);
         let event = correction(EventKind::Hold, &site, &inertia, &end, &hold.start, step.dt);
-        self.commit.state(
-            bodies,
-            hold.body,
-            &hold.start,
-            &hold.local_com,
-            Origin::Model,
-        );
+        self.commit
+            .state(hold.body, &hold.start, &hold.local_com, Origin::Model);
         self.commit.event(event);
     }
 
@@ -349,7 +357,7 @@ impl AfterStep<'_> {
     /// `obstacles` among them.
     fn rolled_into(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         subject: &Subject,
         motion: &Rolling,
@@ -364,7 +372,7 @@ impl AfterStep<'_> {
         if let Some((end, event)) = rolls_on {
             self.commit.event(event);
             self.commit
-                .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+                .state(cand.body, &end, &cand.local_com, Origin::Model);
             return;
         }
         let Some(index) = subject.grounds.iter().position(|g| g.handle == og.handle) else {
@@ -452,7 +460,7 @@ impl AfterStep<'_> {
     /// a ground, nor lifted out with energy gained), and committed.
     fn fly_through_impacts(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         subject: &Subject,
         inertia: &Inertia,
@@ -474,22 +482,24 @@ impl AfterStep<'_> {
         let (_, settled) = self.check(bodies, colliders, &checked, &flown, why, step);
         let end = settled.unwrap_or(flown);
         self.commit
-            .state(bodies, cand.body, &end, &cand.local_com, Origin::Model);
+            .state(cand.body, &end, &cand.local_com, Origin::Model);
     }
 
     /// The settle stage's check of rapier's end state of a candidate against its grounds for
     /// `why`, and the commit of what it corrected; returns the action it took.
     fn settle_rapier_end(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         subject: &Subject,
         why: EndCheck,
     ) -> EndAction {
         let (cand, geom, grounds, step) =
             (subject.cand, subject.geom, subject.grounds, subject.step);
-        let rb = &bodies[cand.body];
-        let inertia = Inertia::of(rb);
+        let Some(now) = self.commit.body(bodies, cand.body) else {
+            return EndAction::Keep;
+        };
+        let (inertia, end) = (Inertia::of(now.rb()), now.state());
         let checked = Checked {
             body: cand.body,
             geom,
@@ -498,11 +508,10 @@ impl AfterStep<'_> {
             grounds,
             events_from: self.commit.reported().len(),
         };
-        let end = rapier_state(rb);
         let (action, settled) = self.check(bodies, colliders, &checked, &end, why, step);
         if let Some(s) = settled {
             self.commit
-                .state(bodies, cand.body, &s, &cand.local_com, Origin::Correction);
+                .state(cand.body, &s, &cand.local_com, Origin::Correction);
         }
         action
     }
@@ -514,7 +523,7 @@ impl AfterStep<'_> {
     /// grounds is checked (`RapierEnd`).
     fn turned_end(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         cand: &Candidate,
         step: &EndOfStep,
@@ -532,9 +541,9 @@ impl AfterStep<'_> {
 /// Nothing but its flight moved the body in rapier's step: no contact in rapier's solver,
 /// joint, torque or `Step` impulse. A body whose linear velocity rapier changed otherwise than
 /// its flight does was pushed (a ball resting in a pile), and its contacts are not walked.
-fn flew_alone(rb: &RigidBody, cand: &Candidate, has_grounds: bool, step: &EndOfStep) -> bool {
-    let sets = &step.sets;
-    (has_grounds || reconstruct::moved_as_flown(rb, cand, step.dt))
+fn flew_alone(body: &Now, cand: &Candidate, has_grounds: bool, step: &EndOfStep) -> bool {
+    let (sets, rb) = (&step.sets, body.rb());
+    (has_grounds || reconstruct::moved_as_flown(body, cand, step.dt))
         && sets
             .impulse_joints
             .attached_joints(cand.body)
@@ -550,7 +559,7 @@ fn flew_alone(rb: &RigidBody, cand: &Candidate, has_grounds: bool, step: &EndOfS
 /// is none: the body did not fly `free` (it touched something else, or the mode is `Step`),
 /// or rapier's CCD cut its motion short before that first event; rapier's end state is then
 /// checked instead.
-fn first_search(rb: &RigidBody, subject: &Subject, free: bool) -> Option<Search> {
+fn first_search(body: &Now, subject: &Subject, free: bool) -> Option<Search> {
     let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
     let first = free.then(|| {
         if cand.closing {
@@ -564,7 +573,7 @@ fn first_search(rb: &RigidBody, subject: &Subject, free: bool) -> Option<Search>
             Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
             Search::Clear => step.dt,
         };
-        ccd_consistent(rb, cand, t_first, step.dt, step)
+        ccd_consistent(body, cand, t_first, step.dt, step)
     })
 }
 
@@ -572,12 +581,12 @@ fn first_search(rb: &RigidBody, subject: &Subject, free: bool) -> Option<Search>
 /// touched in the step: rapier's end state, unchanged.
 fn released_at_end(
     cand: &Candidate,
-    rb: &RigidBody,
+    body: &Now,
     (collider, ground): PairKey,
     motion: &Rolling,
     dt: f64,
 ) -> ImpactEvent {
-    let end = rapier_state(rb);
+    let end = body.state();
     let site = Site {
         body: cand.body,
         collider,
@@ -586,5 +595,5 @@ fn released_at_end(
         normal: motion.normal,
         point: end.com - motion.normal * motion.radius,
     };
-    released(&site, &Inertia::of(rb), &end, dt)
+    released(&site, &Inertia::of(body.rb()), &end, dt)
 }

@@ -1,25 +1,28 @@
-//! Commit: the one writer. Every change the step makes to a rapier body, and every event that
-//! reports one, goes through [`Commit`].
+//! Commit: the one writer. Every change the step makes to a rapier body is recorded through
+//! [`Commit`] by the stage that decides it, and applied by the commit stage ([`apply`]), the
+//! last stage of each half of the step; every event that reports a change is appended through
+//! [`Commit`] too.
 //!
-//! Contract: the only code that calls rapier's body setters (pose, velocities, wake-up) and
-//! the only code that appends to the step's events. [`Commit::state`] sets a body's pose and
-//! velocities (woken up) from an `f64` state, [`Commit::flight`] what free flight changes,
-//! [`Commit::wake`] wakes a sleeping body a step must plan. In `Exact` mode a state the model
-//! reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], so that the next step
-//! continues from the `f64` state rather than from its rounding to rapier's precision, as long
-//! as rapier still holds exactly what was written; a correction of rapier's own end state
-//! ([`Origin::Correction`]) is not: rapier's precision is its truth.
+//! Contract: the only code that calls rapier's body setters (pose, velocities, wake-up), in
+//! [`apply`] alone (the stages take rapier's bodies read-only), and the only code that appends to the step's events. [`Commit::state`]
+//! records a body's pose and velocities (woken up) from an `f64` state, [`Commit::flight`] what
+//! free flight changes, [`Commit::wake`] a wake-up of a sleeping body a step must plan; a
+//! stage reads a body the step may already have written through [`Commit::body`], which gives
+//! what rapier will hold once the writes so far are applied (`state/writes.rs`). In `Exact`
+//! mode a state the model reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], so
+//! that the next step continues from the `f64` state rather than from its rounding to
+//! rapier's precision, as long as rapier still holds exactly what was written; a correction of
+//! rapier's own end state ([`Origin::Correction`]) is not: rapier's precision is its truth.
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
-use crate::plugin::profile::StepProfile;
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::writes::{Now, Write, Writes};
 use crate::rapier::math::{Pose, Real};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
-use std::time::Instant;
 
 /// Where a written state comes from, which decides whether `Exact` mode keeps it.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -33,28 +36,69 @@ pub(crate) enum Origin {
     Correction,
 }
 
-/// The step's writer: the events and diagnostics of the step and `Exact` mode's shadows.
+/// The commit stage: applies the writes recorded in this half of the step to rapier's
+/// bodies, in the order recorded; returns how many it applied. A write to a body removed
+/// since is dropped.
+pub(crate) fn apply(writes: &mut Writes, bodies: &mut RigidBodySet) -> usize {
+    let count = writes.len();
+    writes.apply_all(|body, write| {
+        if let Some(rb) = bodies.get_mut(body) {
+            apply_one(write, rb);
+        }
+    });
+    count
+}
+
+/// Applies one write to `rb` through rapier's setters, in the order [`Write`] gives (every
+/// read of the body before the commit mirrors this: `state/writes.rs`'s `Held`).
+fn apply_one(write: &Write, rb: &mut RigidBody) {
+    match *write {
+        Write::State {
+            pose,
+            angvel,
+            linvel,
+        } => {
+            rb.set_position(pose, true);
+            rb.set_angvel(angvel, true);
+            rb.set_linvel(linvel, true);
+        }
+        Write::Flight {
+            translation,
+            linvel,
+            angvel,
+        } => {
+            rb.set_translation(translation, true);
+            rb.set_linvel(linvel, true);
+            if let Some(w) = angvel {
+                rb.set_angvel(w, true);
+            }
+        }
+        Write::Wake => rb.wake_up(true),
+    }
+}
+
+/// The step's writer: records the writes (applied by [`apply`]), reports the events and
+/// diagnostics of the step, and keeps `Exact` mode's shadows.
 pub(crate) struct Commit<'a> {
+    writes: &'a mut Writes,
     reports: &'a mut Reports,
     shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
     /// `Exact` mode: states of [`Origin::Model`] are remembered.
     exact: bool,
-    /// The step's profile, when profiling: each write counted and timed.
-    log: Option<&'a mut StepProfile>,
 }
 
 impl<'a> Commit<'a> {
     pub fn new(
+        writes: &'a mut Writes,
         reports: &'a mut Reports,
         shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
         exact: bool,
-        log: Option<&'a mut StepProfile>,
     ) -> Self {
         Self {
+            writes,
             reports,
             shadows,
             exact,
-            log,
         }
     }
 
@@ -90,10 +134,25 @@ impl<'a> Commit<'a> {
         &self.reports.events
     }
 
+    /// `body` as rapier will hold it once the writes so far are applied, if it exists.
+    pub fn body<'b>(&'b self, bodies: &'b RigidBodySet, body: RigidBodyHandle) -> Option<Now<'b>> {
+        self.writes.body(bodies, body)
+    }
+
+    /// `body` (`rb`, as rapier holds it now) as rapier will hold it once the writes so far
+    /// are applied.
+    pub fn now<'b>(&self, body: RigidBodyHandle, rb: &'b RigidBody) -> Now<'b> {
+        self.writes.now(body, rb)
+    }
+
+    /// Is `body` (`rb`, as rapier holds it now) asleep once the writes so far are applied?
+    pub fn is_sleeping(&self, body: RigidBodyHandle, rb: &RigidBody) -> bool {
+        self.writes.is_sleeping(body, rb)
+    }
+
     /// Writes `s` into `body` (woken up): its pose and velocities.
     pub fn state(
         &mut self,
-        bodies: &mut RigidBodySet,
         body: RigidBodyHandle,
         s: &State,
         local_com: &Vector3<f64>,
@@ -103,11 +162,24 @@ impl<'a> Commit<'a> {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
         }
-        let started = self.clock();
-        let rb = &mut bodies[body];
-        write_pose_and_velocities(rb, s, local_com, true);
-        self.remember(body, rb, s, origin);
-        self.logged(started);
+        let translation = s.com - s.rot * local_com;
+        let (pose, angvel, linvel) = (
+            Pose::from_parts(vec_from_na(&translation), rot_from_na(&s.rot)),
+            vec_from_na(&s.w),
+            vec_from_na(&s.v),
+        );
+        self.writes.record(
+            body,
+            Write::State {
+                pose,
+                angvel,
+                linvel,
+            },
+        );
+        if self.exact && origin == Origin::Model {
+            let written = (pose.translation, linvel, angvel);
+            self.shadows.insert(body, Shadow::of(s, written));
+        }
     }
 
     /// Writes a free flight's end into `body` (woken up): the translation and linear
@@ -115,7 +187,7 @@ impl<'a> Commit<'a> {
     /// for rapier's update, so an unchanged spin is not written); rapier's rotation is kept.
     pub fn flight(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         body: RigidBodyHandle,
         s: &State,
         local_com: &Vector3<f64>,
@@ -125,43 +197,30 @@ impl<'a> Commit<'a> {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
         }
-        let started = self.clock();
-        let rb = &mut bodies[body];
-        write_pose_and_velocities(rb, s, local_com, false);
-        let w = vec_from_na(&s.w);
-        if exact_spin && rb.angvel() != w {
-            rb.set_angvel(w, true);
+        let Some(before) = self.writes.body(bodies, body) else {
+            return;
+        };
+        let translation = vec_from_na(&(s.com - rot_to_na(before.rotation()) * local_com));
+        let (linvel, w) = (vec_from_na(&s.v), vec_from_na(&s.w));
+        let angvel = (exact_spin && before.angvel() != w).then_some(w);
+        let spin = angvel.unwrap_or(before.angvel());
+        self.writes.record(
+            body,
+            Write::Flight {
+                translation,
+                linvel,
+                angvel,
+            },
+        );
+        if self.exact {
+            self.shadows
+                .insert(body, Shadow::of(s, (translation, linvel, spin)));
         }
-        self.remember(body, rb, s, Origin::Model);
-        self.logged(started);
     }
 
     /// Wakes a sleeping body the step must plan.
-    pub fn wake(&mut self, bodies: &mut RigidBodySet, body: RigidBodyHandle) {
-        let started = self.clock();
-        if let Some(rb) = bodies.get_mut(body) {
-            rb.wake_up(true);
-        }
-        self.logged(started);
-    }
-
-    /// The clock at a write's start, when profiling.
-    fn clock(&self) -> Option<Instant> {
-        self.log.as_ref().map(|_| Instant::now())
-    }
-
-    /// One write done, started at `started`: counted and timed, when profiling.
-    fn logged(&mut self, started: Option<Instant>) {
-        if let (Some(log), Some(started)) = (self.log.as_deref_mut(), started) {
-            log.commit_time += started.elapsed();
-            log.counts.writes += 1;
-        }
-    }
-
-    fn remember(&mut self, body: RigidBodyHandle, rb: &RigidBody, s: &State, origin: Origin) {
-        if self.exact && origin == Origin::Model {
-            self.shadows.insert(body, Shadow::of(rb, s));
-        }
+    pub fn wake(&mut self, body: RigidBodyHandle) {
+        self.writes.record(body, Write::Wake);
     }
 }
 
@@ -180,20 +239,134 @@ fn fits(s: &State) -> bool {
             .all(|x| x.abs() <= limit)
 }
 
-/// Sets a body's pose and velocities (woken up) from an `f64` state: the full pose, or
-/// (`full = false`) the translation only, keeping rapier's rotation, and the spin unchanged.
-fn write_pose_and_velocities(rb: &mut RigidBody, s: &State, local_com: &Vector3<f64>, full: bool) {
-    if full {
-        let translation = s.com - s.rot * local_com;
-        rb.set_position(
-            Pose::from_parts(vec_from_na(&translation), rot_from_na(&s.rot)),
-            true,
-        );
-        rb.set_angvel(vec_from_na(&s.w), true);
-    } else {
-        let rot = rot_to_na(*rb.rotation());
-        let translation = s.com - rot * local_com;
-        rb.set_translation(vec_from_na(&translation), true);
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plugin::bridge::convert::vec_to_na;
+    use crate::rapier::prelude::{ColliderBuilder, ColliderSet, RigidBodyBuilder};
+    use nalgebra::UnitQuaternion;
+
+    /// What a stage reads of a body: pose, next pose, centre of mass, velocities, sleep.
+    type Read = (Pose, Pose, crate::rapier::math::Vector, [Real; 6], bool);
+
+    fn read_now(now: &Now) -> Read {
+        let (v, w) = (now.linvel(), now.angvel());
+        // `Now` has no next pose: a pose write moves both, and the commit's reads after it
+        // check that.
+        (
+            now.position(),
+            now.position(),
+            now.center_of_mass(),
+            [v.x, v.y, v.z, w.x, w.y, w.z],
+            now.is_sleeping(),
+        )
     }
-    rb.set_linvel(vec_from_na(&s.v), true);
+
+    fn read_rapier(rb: &RigidBody) -> Read {
+        let (v, w) = (rb.linvel(), rb.angvel());
+        (
+            *rb.position(),
+            *rb.next_position(),
+            rb.center_of_mass(),
+            [v.x, v.y, v.z, w.x, w.y, w.z],
+            rb.is_sleeping(),
+        )
+    }
+
+    /// A body whose centre of mass is off its origin (an offset box), of one of four kinds:
+    /// dynamic awake, dynamic asleep, velocity-based kinematic, fixed and asleep (a pose
+    /// write wakes the dynamic one only).
+    fn body(kind: usize) -> (RigidBodySet, RigidBodyHandle) {
+        let mut bodies = RigidBodySet::new();
+        let mut colliders = ColliderSet::new();
+        let builder = match kind {
+            0 | 1 => RigidBodyBuilder::dynamic(),
+            2 => RigidBodyBuilder::kinematic_velocity_based(),
+            _ => RigidBodyBuilder::fixed(),
+        };
+        let h = bodies.insert(
+            builder
+                .translation(crate::rapier::math::Vector::new(0.3, 1.0, -0.2))
+                .rotation(crate::rapier::math::Vector::new(0.1, 0.2, 0.3))
+                .linvel(crate::rapier::math::Vector::new(1.0, -2.0, 0.5))
+                .angvel(crate::rapier::math::Vector::new(0.0, 3.0, -1.0)),
+        );
+        colliders.insert_with_parent(
+            ColliderBuilder::cuboid(0.1, 0.2, 0.3)
+                .translation(crate::rapier::math::Vector::new(0.05, -0.02, 0.01))
+                .density(2.0),
+            h,
+            &mut bodies,
+        );
+        if kind == 1 || kind == 3 {
+            bodies[h].sleep();
+        }
+        (bodies, h)
+    }
+
+    /// One of the writes a stage records, by number: a full state (twice the same, the
+    /// second changing nothing), a flight's end with and without its spin, a wake-up.
+    fn record(commit: &mut Commit, bodies: &RigidBodySet, h: RigidBodyHandle, k: usize) {
+        let local_com = vec_to_na(bodies[h].local_center_of_mass());
+        let s = State {
+            com: Vector3::new(0.7, 1.3 + 0.1 * k as f64, -0.4),
+            rot: UnitQuaternion::from_euler_angles(0.3, -0.2, 0.1 * k as f64),
+            v: Vector3::new(0.2, -(k as f64), 0.3),
+            w: Vector3::new(4.0, 0.0, 1.0 + k as f64),
+        };
+        match k % 5 {
+            0 | 1 => commit.state(h, &s, &local_com, Origin::Model),
+            2 => commit.flight(bodies, h, &s, &local_com, true),
+            3 => commit.flight(bodies, h, &s, &local_com, false),
+            _ => commit.wake(h),
+        }
+    }
+
+    #[test]
+    fn a_body_read_before_the_commit_reads_as_after_it() {
+        // Every sequence of up to four writes (of the five kinds, repeats included), on each
+        // kind of body: what a stage reads before the commit (`Now`) is what rapier holds
+        // after it, bit for bit, and the next pose moves with the pose.
+        let kinds: Vec<Vec<usize>> = (0..5usize.pow(4))
+            .flat_map(|n| (1..=4).map(move |len| (0..len).map(|i| n / 5usize.pow(i) % 5).collect()))
+            .collect();
+        for kind in 0..4 {
+            for seq in &kinds {
+                let (mut bodies, h) = body(kind);
+                let mut writes = Writes::default();
+                let (mut reports, mut shadows) = (Reports::default(), HandleMap::default());
+                let mut commit = Commit::new(&mut writes, &mut reports, &mut shadows, true);
+                for (i, k) in seq.iter().enumerate() {
+                    record(&mut commit, &bodies, h, *k + i);
+                }
+                let before = read_now(&commit.body(&bodies, h).unwrap());
+                let applied = apply(&mut writes, &mut bodies);
+                assert_eq!(applied, seq.len());
+                let after = read_rapier(&bodies[h]);
+                assert_eq!(before, after, "kind {kind}, writes {seq:?}");
+                // The plugin writes only managed bodies, which are dynamic.
+                if let (Some(sh), true) = (shadows.get(&h), kind <= 1) {
+                    let rb = &bodies[h];
+                    assert_eq!(
+                        (sh.written_translation, sh.written_linvel, sh.written_angvel),
+                        (rb.translation(), rb.linvel(), rb.angvel()),
+                        "kind {kind}, writes {seq:?}: the shadow holds what was written"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn nothing_is_written_before_the_commit() {
+        let (bodies, h) = body(0);
+        let was = read_rapier(&bodies[h]);
+        let mut writes = Writes::default();
+        let (mut reports, mut shadows) = (Reports::default(), HandleMap::default());
+        let mut commit = Commit::new(&mut writes, &mut reports, &mut shadows, false);
+        record(&mut commit, &bodies, h, 0);
+        assert_ne!(read_now(&commit.body(&bodies, h).unwrap()), was);
+        assert_eq!(read_rapier(&bodies[h]), was);
+        assert_eq!(writes.len(), 1);
+    }
 }

@@ -1,5 +1,6 @@
-//! Install: the last stage before rapier's step puts the plugin's hook flags where this step
-//! needs them and builds the tables rapier's hook calls read.
+//! Install: the stage before rapier's step that puts the plugin's hook flags where this step
+//! needs them and builds the tables rapier's hook calls read (after the commit, which has
+//! written the bodies).
 //!
 //! Contract: reads the plan (the roles of the pairs with grounds and between opted-in
 //! bodies, which bodies are near a ground and which far); writes the hook flags on the

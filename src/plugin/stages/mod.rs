@@ -9,7 +9,9 @@
 //!    `Exact` mode a flying candidate each), or to be planned.
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
 //!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
-//! 5. install (`install.rs`): the hook flags and the tables rapier's hook calls read.
+//! 5. commit (`commit.rs`): the writes recorded so far (the wake-ups and, in `Step` mode, the
+//!    impulses) applied to rapier's bodies.
+//! 6. install (`install.rs`): the hook flags and the tables rapier's hook calls read.
 //!
 //! During rapier's step the plugin is its `PhysicsHooks` (`hooks/`).
 //!
@@ -26,9 +28,13 @@
 //! 5. pair ends (`pair_settle.rs`): the pairs between bodies not moved together, checked at
 //!    the step's end, after their bodies' own checks.
 //! 6. holds (`bodies.rs`): the balls held at rest on a slope for their first step, put back.
-//! 7. the colliders moved to the bodies' poses; the step's tables kept for the next.
+//! 7. commit (`commit.rs`): the writes recorded after rapier's step applied, and the colliders
+//!    moved to their bodies' poses; the step's tables kept for the next.
 //!
-//! Every write into rapier and every event goes through the one writer (`commit.rs`).
+//! The stages take rapier's bodies read-only: every write is recorded through the one writer
+//! (`commit.rs`), and applied, in the order recorded, by the commit stage alone; a stage
+//! reads a body the step may have written as those writes leave it (`Commit::body`). Every
+//! event goes through the same writer.
 
 mod bodies;
 mod commit;
@@ -48,9 +54,9 @@ use crate::plugin::impact_plugin::{ImpactPlugin, StepSets};
 use crate::plugin::policy::Role;
 use crate::plugin::profile::{Stage, StepCounts};
 use crate::plugin::queries::observe::Sets;
-use crate::plugin::stages::commit::Commit;
+use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
-use crate::plugin::stages::plan::Planner;
+use crate::plugin::stages::plan::{PlanReports, Planner};
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::HandleSet;
@@ -111,6 +117,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         if !self.reports.diagnostics.is_empty() {
             self.memory.report_once(&mut self.reports.diagnostics);
         }
+        self.commit(bodies, None);
         let planned = (near.as_slice(), survey.far.as_slice());
         self.install(&step, (bodies, colliders), planned, survey.unmanaged);
         self.memory.end_planning(last);
@@ -148,8 +155,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.settle_pairs(&step, bodies, colliders);
         self.stopwatch.lap(Stage::PairEnds);
         self.put_back_held(&step, bodies);
-        bodies.propagate_modified_body_positions_to_colliders(colliders);
         self.stopwatch.lap(Stage::Holds);
+        self.commit(bodies, Some(colliders));
         let events = self.reports.events.len();
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
@@ -165,7 +172,7 @@ impl<H> ImpactPlugin<H> {
     fn plan_pairs(
         &mut self,
         step: &mut StepData,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
@@ -188,13 +195,17 @@ impl<H> ImpactPlugin<H> {
         step.pairs = pairs;
         let config = &self.config;
         let exact = config.timing == TimingMode::Exact;
-        let log = self.stopwatch.commit_log();
-        let mut commit = Commit::new(&mut self.reports, &mut self.memory.shadows, exact, log);
+        let mut commit = Commit::new(
+            &mut self.writes,
+            &mut self.reports,
+            &mut self.memory.shadows,
+            exact,
+        );
         for diagnostic in std::mem::take(&mut step.pairs.refused) {
             commit.diagnose(diagnostic);
         }
         for body in woken {
-            commit.wake(bodies, body);
+            commit.wake(body);
         }
         if config.timing == TimingMode::Step && !step.pairs.members.is_empty() {
             let inputs = StepStart {
@@ -211,13 +222,13 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
-    /// Plans each body of `to_plan` (`plan/`); returns those with a ground near them and
-    /// the others, each in the order planned.
+    /// Plans each body of `to_plan` (`plan/`) and records what its plan wrote and reported;
+    /// returns those with a ground near them and the others, each in the order planned.
     fn plan_bodies(
         &mut self,
         step: &mut StepData,
         to_plan: Vec<RigidBodyHandle>,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
@@ -229,22 +240,34 @@ impl<H> ImpactPlugin<H> {
         let mut not_near = Vec::new();
         let exact = self.config.timing == TimingMode::Exact;
         let grounds = std::mem::take(&mut step.grounds);
-        let mut planner = Planner {
-            config: &self.config,
-            registry: &self.registry,
-            flags: &self.flags,
-            user_hooks: &self.user_hooks,
-            prev_holds: &self.memory.holds,
-            grounds: &grounds,
-            commit: Commit::new(
-                &mut self.reports,
-                &mut self.memory.shadows,
-                exact,
-                self.stopwatch.commit_log(),
-            ),
-        };
+        let mut reports = PlanReports::default();
         for handle in to_plan {
+            let mut planner = Planner {
+                config: &self.config,
+                registry: &self.registry,
+                flags: &self.flags,
+                user_hooks: &self.user_hooks,
+                prev_holds: &self.memory.holds,
+                grounds: &grounds,
+                writes: &self.writes,
+                reports: &mut reports,
+            };
             let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
+            if !reports.is_empty() {
+                let mut commit = Commit::new(
+                    &mut self.writes,
+                    &mut self.reports,
+                    &mut self.memory.shadows,
+                    exact,
+                );
+                commit.events(reports.events.drain(..));
+                for diagnostic in reports.diagnostics.drain(..) {
+                    commit.diagnose(diagnostic);
+                }
+                if let Some((state, local_com)) = reports.touched.take() {
+                    commit.state(handle, &state, &local_com, Origin::Correction);
+                }
+            }
             if is_near {
                 near.push(handle);
             } else {
@@ -258,8 +281,20 @@ impl<H> ImpactPlugin<H> {
     /// What the stages after rapier's step read of the plugin, and the writer.
     fn after_view(&mut self) -> AfterStep<'_> {
         let reads = (&self.config, &self.registry, &self.flags);
-        let writes = (&mut self.reports, self.stopwatch.commit_log());
+        let writes = (&mut self.writes, &mut self.reports);
         AfterStep::new(reads, &mut self.memory, writes)
+    }
+
+    /// The commit stage, the last of each half of the step: the writes recorded in it applied
+    /// to rapier's bodies (`commit.rs`); after rapier's step, the colliders moved with their
+    /// bodies (before it, rapier's step moves them).
+    fn commit(&mut self, bodies: &mut RigidBodySet, colliders: Option<&mut ColliderSet>) {
+        let applied = commit::apply(&mut self.writes, bodies);
+        if let Some(colliders) = colliders {
+            bodies.propagate_modified_body_positions_to_colliders(colliders);
+        }
+        self.stopwatch.count(|c| c.writes += applied);
+        self.stopwatch.lap(Stage::Commit);
     }
 }
 

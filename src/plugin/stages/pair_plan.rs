@@ -22,8 +22,8 @@
 //! than the pressed speed start none). A pair's closing speed is along the line of centres for
 //! two balls, and for other shapes the contact points' along parry's normal plus what the
 //! bodies' turning can add (angular speed times bounding radius). It writes nothing into
-//! rapier: it returns the sleeping bodies an `Impact` pair may reach, which the caller wakes
-//! through the commit, so that the step plans them as awake bodies.
+//! rapier: it returns the sleeping bodies an `Impact` pair may reach, whose wake-ups the caller
+//! records through the commit, so that the step plans them as awake bodies.
 //!
 //! Its parts, in the order they run: gather the members (`gather.rs`), find the pairs that
 //! may meet (`index.rs`), decide each pair's role (`decide.rs`), expand the chains of

@@ -74,7 +74,7 @@ pub(crate) struct ClusterBall<'a> {
 /// written. Returns the bodies written.
 pub(crate) fn move_clusters(
     view: &mut AfterStep,
-    bodies: &mut RigidBodySet,
+    bodies: &RigidBodySet,
     colliders: &ColliderSet,
     step: &EndOfStep,
 ) -> HandleSet<RigidBodyHandle> {
@@ -116,8 +116,7 @@ pub(crate) fn move_clusters(
             let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
             let end = settled.unwrap_or(end);
             let (body, local_com) = (ball.cand.body, &ball.cand.local_com);
-            view.commit
-                .state(bodies, body, &end, local_com, Origin::Model);
+            view.commit.state(body, &end, local_com, Origin::Model);
             written.insert(ball.cand.body);
         }
     }
@@ -220,17 +219,18 @@ fn moves_alone(
     let step = cands.step;
     let sets = &step.sets;
     members.iter().all(|h| {
-        let (Some(rb), Some(cand)) = (bodies.get(*h), cands.get(h)) else {
+        let (Some(now), Some(cand)) = (view.commit.body(bodies, *h), cands.get(h)) else {
             return false;
         };
+        let rb = now.rb();
         view.registry.manages(*h, rb)
-            && !rb.is_sleeping()
+            && !now.is_sleeping()
             && !touches_other(rb, sets.narrow_phase)
             && sets.impulse_joints.attached_joints(*h).next().is_none()
             && sets.multibody_joints.rigid_body_link(*h).is_none()
             && rb.user_torque() == Vector::ZERO
             && !cand.touched
-            && ccd_consistent(rb, cand, step.dt, step.dt, step)
+            && ccd_consistent(&now, cand, step.dt, step.dt, step)
     })
 }
 

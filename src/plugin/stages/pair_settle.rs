@@ -19,7 +19,7 @@ use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
-use crate::plugin::queries::observe::{body_geom, rapier_state, touched_besides_grounds};
+use crate::plugin::queries::observe::{body_geom, touched_besides_grounds};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
@@ -37,7 +37,7 @@ impl<H> ImpactPlugin<H> {
     pub(super) fn settle_pairs(
         &mut self,
         step: &EndOfStep,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         let (moved_together, mut view) = (&step.moved_together, self.after_view());
@@ -63,7 +63,7 @@ impl<'v> AfterStep<'v> {
     /// with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
     pub fn pair_end(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         pair: &PlannedPair,
         step: &EndOfStep,
@@ -71,10 +71,14 @@ impl<'v> AfterStep<'v> {
         if !pair.balls {
             return self.pair_end_bodies(bodies, colliders, pair, step);
         }
-        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+        // Each body as the step left it: a member may have been corrected already.
+        let (Some(na), Some(nb)) = (
+            self.commit.body(bodies, pair.a),
+            self.commit.body(bodies, pair.b),
+        ) else {
             return;
         };
-        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let (ra, rb, mut sa, mut sb) = (na.rb(), nb.rb(), na.state(), nb.state());
         let d = sb.com - sa.com;
         let len = d.norm();
         // Out of rapier's solver, the balls may have passed into or through each other in the
@@ -160,15 +164,19 @@ impl<'v> AfterStep<'v> {
     /// checked, as rapier's solver would see it.)
     fn pair_end_bodies(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         pair: &PlannedPair,
         step: &EndOfStep,
     ) {
-        let (Some(ra), Some(rb)) = (bodies.get(pair.a), bodies.get(pair.b)) else {
+        // Each body as the step left it: a member may have been corrected already.
+        let (Some(na), Some(nb)) = (
+            self.commit.body(bodies, pair.a),
+            self.commit.body(bodies, pair.b),
+        ) else {
             return;
         };
-        let (mut sa, mut sb) = (rapier_state(ra), rapier_state(rb));
+        let (ra, rb, mut sa, mut sb) = (na.rb(), nb.rb(), na.state(), nb.state());
         let (la, lb) = (
             vec_to_na(ra.local_center_of_mass()),
             vec_to_na(rb.local_center_of_mass()),
@@ -281,7 +289,7 @@ impl<'v> AfterStep<'v> {
     /// against the grounds near it, as rapier's end state is.
     fn check_moved_apart(
         &mut self,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         moved: [(RigidBodyHandle, State); 2],
         step: &EndOfStep,
@@ -305,7 +313,7 @@ impl<'v> AfterStep<'v> {
             let (_, settled) = self.check(bodies, colliders, &checked, &state, why, step);
             let end = settled.unwrap_or(state);
             self.commit
-                .state(bodies, body, &end, &local_com, Origin::Correction);
+                .state(body, &end, &local_com, Origin::Correction);
         }
     }
 }

@@ -6,10 +6,11 @@
 //! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
 //! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and
 //! which grounds may reach it) for the stages after rapier's step, and the balls held at rest on a
-//! slope their first step (`StepData::first_holds`). It writes into rapier only through the commit:
-//! in `Step` mode the impulses of the contacts that close in the step, each with its event; and it
-//! reports a rolling ball that something can now reach (`EventKind::Released`, nothing written). It
-//! reads rapier and the registry and calls the user's filter where the colliders ask for it;
+//! slope their first step (`StepData::first_holds`). It records nothing itself: it returns, in
+//! `Step` mode, the body's state after the impulses of the contacts that close in the step, with
+//! their events in [`PlanReports`], and reports there a rolling ball that something can now reach
+//! (`EventKind::Released`, nothing written); the stage's loop records them through the commit. It
+//! reads rapier (each body as the step's writes so far leave it, `Scene::writes`) and the registry and calls the user's filter where the colliders ask for it;
 //! [`StepData`] carries the step's thresholds, roles and candidates.
 //!
 //! The parts, by what each decides: the body's start, the grounds near it and its candidate
@@ -21,17 +22,20 @@ mod impulse;
 mod role;
 mod rolling;
 
+use crate::motion::State;
 use crate::plugin::config::ImpactConfig;
+use crate::plugin::events::{Diagnostic, ImpactEvent};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, Sets};
-use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
+use crate::plugin::state::writes::Writes;
 use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use body::BodyReads;
+use nalgebra::Vector3;
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
 /// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
@@ -47,8 +51,8 @@ pub(crate) fn closes_within(dist: f64, un: f64, an: f64, dt: f64) -> bool {
     false
 }
 
-/// The plan stage's view of the plugin: what it reads, and the events of `Step` mode's
-/// step-start impulses.
+/// The plan stage's view of the plugin: what it reads, and where a body's plan reports its
+/// events and diagnostics.
 pub(crate) struct Planner<'a, H> {
     pub config: &'a ImpactConfig,
     pub registry: &'a Registry,
@@ -59,7 +63,29 @@ pub(crate) struct Planner<'a, H> {
     /// The grounds' motions over the step (`StepData::grounds`, lent to the plan while it
     /// writes the rest of the step's values: the bodies it plans hold them).
     pub grounds: &'a [GroundMotion],
-    pub commit: Commit<'a>,
+    /// The writes recorded so far in the step (a body is read as they leave it).
+    pub writes: &'a Writes,
+    /// The events and diagnostics of the body being planned, committed after its plan.
+    pub reports: &'a mut PlanReports,
+}
+
+/// What one body's plan leaves to be recorded through the commit, in order, once it is done:
+/// `Step` mode's step-start impulses and push-outs, a rolling ball released, a collider's
+/// coefficients out of range, and the state to write.
+#[derive(Default)]
+pub(crate) struct PlanReports {
+    pub events: Vec<ImpactEvent>,
+    pub diagnostics: Vec<Diagnostic>,
+    /// In `Step` mode, the body's state after the step-start impulses of the contacts that
+    /// close in the step (its centre of mass in its own frame with it).
+    pub touched: Option<(State, Vector3<f64>)>,
+}
+
+impl PlanReports {
+    /// Nothing to record.
+    pub fn is_empty(&self) -> bool {
+        self.events.is_empty() && self.diagnostics.is_empty() && self.touched.is_none()
+    }
 }
 
 impl<H: PhysicsHooks> Planner<'_, H> {
@@ -68,11 +94,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// `step.candidates`), and in `Step` mode the impulses of the contacts that close in the
     /// step (written, with their events). The step's gravity and length are `step.gravity`
     /// and `step.dt`. Returns whether a ground is near it (its colliders then need the
-    /// plugin's hook flags in the bodies arrangement).
+    /// plugin's hook flags in the bodies arrangement); its state to write, if touched, is in
+    /// `self.reports`.
     pub fn plan_body(
         &mut self,
         handle: RigidBodyHandle,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
         sets: &Sets,
         last: &LastStep,
@@ -84,6 +111,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             sets,
             registry: self.registry,
             grounds: self.grounds,
+            writes: self.writes,
         };
         // Used in place: a body's start is a large value, and every move of it a copy.
         let mut started = None;
@@ -99,12 +127,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         for k in 0..body.grounds.len() {
             self.plan_ground(reads, &mut plan, k, step);
         }
-        let (local_com, state, touched) = (body.local_com, plan.state, plan.touched);
-        self.push_candidate(body, &mut plan, step);
-        if touched {
-            self.commit
-                .state(bodies, handle, &state, &local_com, Origin::Correction);
+        if plan.touched {
+            self.reports.touched = Some((plan.state, body.local_com));
         }
+        self.push_candidate(body, &mut plan, step);
         true
     }
 }

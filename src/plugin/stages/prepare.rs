@@ -108,7 +108,8 @@ impl<H> ImpactPlugin<H> {
                 survey.unmanaged |= rb.is_dynamic() && rb.is_enabled();
                 continue;
             }
-            if rb.is_sleeping() {
+            // Asleep unless the pair plan woke it (written at this half's commit).
+            if self.writes.is_sleeping(handle, rb) {
                 step.asleep.push(handle);
                 continue;
             }
@@ -123,7 +124,7 @@ impl<H> ImpactPlugin<H> {
                     if self.config.timing == TimingMode::Exact {
                         let shadow = last.shadows.get(&handle);
                         let (start, flight, local_com) =
-                            snapshot(rb, step.gravity, step.dt, shadow);
+                            snapshot(&self.writes.now(handle, rb), step.gravity, step.dt, shadow);
                         step.candidates
                             .push(Candidate::flying(handle, start, flight, local_com));
                     }

@@ -26,7 +26,8 @@ use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{ColliderSet, RigidBody};
+use crate::plugin::state::writes::Now;
+use crate::rapier::prelude::ColliderSet;
 
 /// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
 /// grounds it is checked against, and the step.
@@ -226,9 +227,9 @@ pub(crate) fn rest_on_ground(
 /// Did rapier's step change the body's linear velocity only as its flight does (gravity and
 /// any force, damping), to rapier's rounding? An impulse from a contact shows as more: a
 /// resting contact takes back all of `|g| dt`.
-pub(crate) fn moved_as_flown(rb: &RigidBody, cand: &Candidate, dt: f64) -> bool {
+pub(crate) fn moved_as_flown(body: &Now, cand: &Candidate, dt: f64) -> bool {
     let flown = cand.flight.advance(&cand.start, dt).v;
-    let actual = vec_to_na(rb.linvel());
+    let actual = vec_to_na(body.linvel());
     // rapier adds the step's velocity change in its substeps, in its precision, and damps
     // once at the step's end, `(v0 + a dt) / (1 + c dt)`, where the flight decays exactly:
     // `v0 (c dt)^2 / 2` and `|a| dt c dt / 2` apart (twice those allowed).
@@ -242,13 +243,13 @@ pub(crate) fn moved_as_flown(rb: &RigidBody, cand: &Candidate, dt: f64) -> bool 
 /// ground impact at `t_first`? If rapier clamped it earlier, something other than a ground
 /// stopped it, and re-integrating its flight would undo that.
 pub(crate) fn ccd_consistent(
-    rb: &RigidBody,
+    body: &Now,
     cand: &Candidate,
     t_first: f64,
     dt: f64,
     step: &StepData,
 ) -> bool {
-    if !rb.is_ccd_active() {
+    if !body.rb().is_ccd_active() {
         return true;
     }
     let free_end = cand.flight.advance(&cand.start, dt).com;
@@ -257,7 +258,7 @@ pub(crate) fn ccd_consistent(
     if len2 < STILL_TRAVEL_SQUARED {
         return true;
     }
-    let actual = vec_to_na(rb.center_of_mass()) - cand.start.com;
+    let actual = vec_to_na(body.center_of_mass()) - cand.start.com;
     let fraction = actual.dot(&exact) / len2;
     // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
     // body up to about a prediction distance before the contact.

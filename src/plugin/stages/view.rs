@@ -6,13 +6,13 @@ use crate::plugin::config::{ImpactConfig, TimingMode};
 use crate::plugin::events::Reports;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
-use crate::plugin::profile::StepProfile;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
+use crate::plugin::state::writes::Writes;
 use crate::rapier::prelude::RigidBodyHandle;
 
 /// The step's data in `after_step`, with rapier's sets after its step.
@@ -57,7 +57,7 @@ impl<'a> AfterStep<'a> {
     pub fn new(
         (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
         memory: &'a mut Memory,
-        (reports, log): (&'a mut Reports, Option<&'a mut StepProfile>),
+        (writes, reports): (&'a mut Writes, &'a mut Reports),
     ) -> Self {
         let exact = config.timing == TimingMode::Exact;
         Self {
@@ -65,7 +65,7 @@ impl<'a> AfterStep<'a> {
             registry,
             flags,
             roles: &memory.roles,
-            commit: Commit::new(reports, &mut memory.shadows, exact, log),
+            commit: Commit::new(writes, reports, &mut memory.shadows, exact),
             released: Vec::new(),
         }
     }

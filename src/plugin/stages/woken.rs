@@ -11,7 +11,7 @@ use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::EndCheck;
 use crate::plugin::queries::filter;
-use crate::plugin::queries::observe::{body_geom, rapier_state};
+use crate::plugin::queries::observe::body_geom;
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
@@ -24,12 +24,12 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     pub(super) fn check_woken(
         &mut self,
         step: &EndOfStep,
-        bodies: &mut RigidBodySet,
+        bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
         let user_hooks = &self.user_hooks;
         let reads = (&self.config, &self.registry, &self.flags);
-        let writes = (&mut self.reports, self.stopwatch.commit_log());
+        let writes = (&mut self.writes, &mut self.reports);
         let mut view = AfterStep::new(reads, &mut self.memory, writes);
         let (impulse_joints, multibody_joints) =
             (step.sets.impulse_joints, step.sets.multibody_joints);
@@ -37,9 +37,11 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             let Some(rb) = bodies.get(*handle) else {
                 continue;
             };
-            if rb.is_sleeping() || !view.registry.manages(*handle, rb) {
+            if view.commit.is_sleeping(*handle, rb) || !view.registry.manages(*handle, rb) {
                 continue;
             }
+            let now = view.commit.now(*handle, rb);
+            let (end, com) = (now.state(), now.center_of_mass());
             let refused = |bodies: &RigidBodySet, part: ColliderHandle, ground: ColliderHandle| {
                 let user = view.flags.recorded_pair_flags(colliders, (part, ground));
                 colliders[ground].parent().is_some_and(|ground_body| {
@@ -53,14 +55,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             };
             let local_com = vec_to_na(rb.local_center_of_mass());
             let geom = body_geom(rb, colliders, &local_com);
-            let grounds = view.woken_geoms(
-                bodies,
-                colliders,
-                rb.center_of_mass(),
-                &geom,
-                step,
-                &refused,
-            );
+            let grounds = view.woken_geoms(bodies, colliders, com, &geom, step, &refused);
             let inertia = Inertia::of(rb);
             let checked = Checked {
                 body: *handle,
@@ -70,12 +65,11 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 grounds: &grounds,
                 events_from: view.commit.reported().len(),
             };
-            let end = rapier_state(rb);
             let why = EndCheck::Woken;
             let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
             if let Some(s) = settled {
                 view.commit
-                    .state(bodies, *handle, &s, &local_com, Origin::Correction);
+                    .state(*handle, &s, &local_com, Origin::Correction);
             }
         }
     }

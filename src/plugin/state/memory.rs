@@ -8,7 +8,6 @@ use crate::plugin::state::handles::{
 };
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::RigidBody;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
@@ -42,15 +41,18 @@ impl Shadow {
             && written.iter().all(|v| v.is_finite())
     }
 
-    /// The shadow of the state `s` just written into `rb`.
-    pub fn of(rb: &RigidBody, s: &State) -> Self {
+    /// The shadow of the state `s`, written into a dynamic body as `written` (its
+    /// translation, linear and angular velocities: what rapier holds of them once the write
+    /// is applied).
+    pub fn of(s: &State, written: (Vector, Vector, Vector)) -> Self {
+        let (written_translation, written_linvel, written_angvel) = written;
         Self {
             com: s.com,
             v: s.v,
             w: s.w,
-            written_translation: rb.translation(),
-            written_linvel: rb.linvel(),
-            written_angvel: rb.angvel(),
+            written_translation,
+            written_linvel,
+            written_angvel,
         }
     }
 }

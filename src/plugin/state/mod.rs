@@ -8,3 +8,4 @@ pub(crate) mod memory;
 pub(crate) mod registry;
 pub(crate) mod small_list;
 pub(crate) mod step;
+pub(crate) mod writes;

@@ -13,7 +13,7 @@ use crate::plugin::events::{ImpactEvent, ImpactTiming};
 use crate::plugin::policy::rests_at;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
-use crate::plugin::queries::observe::{body_geom, rapier_state};
+use crate::plugin::queries::observe::body_geom;
 use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::{PairPlan, PlannedPair};
@@ -50,7 +50,7 @@ type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 /// second time. Writes and reports through `commit`.
 pub(crate) fn step_start_impulses(
     plan: &mut PairPlan,
-    bodies: &mut RigidBodySet,
+    bodies: &RigidBodySet,
     commit: &mut Commit,
     inputs: &StepStart,
 ) {
@@ -63,12 +63,17 @@ pub(crate) fn step_start_impulses(
         let mut any = false;
         for k in &impacts {
             let pair = plan.pairs[*k];
-            let (sa, sb) = (rapier_state(&bodies[pair.a]), rapier_state(&bodies[pair.b]));
+            // Each body as the pairs before wrote it.
+            let (Some(na), Some(nb)) = (commit.body(bodies, pair.a), commit.body(bodies, pair.b))
+            else {
+                continue;
+            };
+            let (sa, sb) = (na.state(), nb.state());
             let states = (sa, sb);
             let resolved = if pair.balls {
-                step_start_balls(&pair, states, (&bodies[pair.a], &bodies[pair.b]), inputs)
+                step_start_balls(&pair, states, (na.rb(), nb.rb()), inputs)
             } else {
-                step_start_bodies(&pair, states, (&bodies[pair.a], &bodies[pair.b]), inputs)
+                step_start_bodies(&pair, states, (na.rb(), nb.rb()), inputs)
             };
             let Some((after_a, after_b, pair_events)) = resolved else {
                 continue;
@@ -99,7 +104,7 @@ pub(crate) fn step_start_impulses(
 /// `f64` round trip, `Commit::state`).
 fn write_velocities<const N: usize>(
     commit: &mut Commit,
-    bodies: &mut RigidBodySet,
+    bodies: &RigidBodySet,
     written: [(RigidBodyHandle, State, State); N],
 ) {
     for (h, s, after) in written {
@@ -109,7 +114,7 @@ fn write_velocities<const N: usize>(
             w: after.w,
             ..s
         };
-        commit.state(bodies, h, &s, &local_com, Origin::Correction);
+        commit.state(h, &s, &local_com, Origin::Correction);
     }
 }
 

@@ -138,8 +138,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         out: &'o mut Option<BodyNear<'c>>,
     ) -> Option<&'o mut BodyNear<'c>> {
         let rb = &scene.bodies[handle];
+        let now = scene.writes.now(handle, rb);
         let (start, flight, local_com) =
-            snapshot(rb, step.gravity, step.dt, last.shadows.get(&handle));
+            snapshot(&now, step.gravity, step.dt, last.shadows.get(&handle));
         let geom = body_geom(rb, scene.colliders, &local_com);
         if geom.parts.is_empty() {
             return None;

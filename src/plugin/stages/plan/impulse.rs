@@ -22,7 +22,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// slower than the resting speed, else `Impact` (out of rapier's solver: a touching pair
     /// kept in the solver after the impulse would let a heavy body landing on this one in
     /// the same step press it into the ground). No impulse: `Resting`. Writes nothing to
-    /// rapier (the state is written, through the commit, once the body's plan is done).
+    /// rapier (the plan returns the state, recorded through the commit once the body's plan is
+    /// done).
     pub(super) fn step_start_impulse(
         &mut self,
         reads: BodyReads,
@@ -58,7 +59,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             Some((after, event)) => {
                 plan.state = after;
                 plan.touched = true;
-                self.commit.event(event);
+                self.reports.events.push(event);
                 let un2 =
                     n.dot(&(body_velocity_at(&plan.state, &point) - gg.velocity_at(&point, 0.0)));
                 if rests_at(un2, step.policy.resting_speed) {

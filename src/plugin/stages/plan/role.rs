@@ -128,11 +128,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
         for (c, co) in [(key.0, body), (key.1, ground)] {
             if let Some(co) = co {
-                self.commit.diagnose(Diagnostic::CoefficientsOutOfRange {
-                    collider: c,
-                    restitution: to_f64(co.restitution()),
-                    friction: to_f64(co.friction()),
-                });
+                self.reports
+                    .diagnostics
+                    .push(Diagnostic::CoefficientsOutOfRange {
+                        collider: c,
+                        restitution: to_f64(co.restitution()),
+                        friction: to_f64(co.friction()),
+                    });
             }
         }
         true
@@ -230,7 +232,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     0.0,
                 );
                 event.timing = ImpactTiming::StepStart;
-                self.commit.event(event);
+                self.reports.events.push(event);
                 found = contact_checked(part, gg, &plan.state, 0.0, body.reach);
             }
         }

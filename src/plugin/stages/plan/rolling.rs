@@ -166,8 +166,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     point,
                 };
                 let inertia = Inertia::of(&scene.bodies[body.handle]);
-                self.commit
-                    .event(released(&site, &inertia, &plan.state, 0.0));
+                self.reports
+                    .events
+                    .push(released(&site, &inertia, &plan.state, 0.0));
                 plan.released = Some(*gi);
             }
             Some(OnPlane::Reached) | None => {}

@@ -1,0 +1,328 @@
+//! The step's writes into rapier's bodies, recorded by the stages (through
+//! `stages/commit.rs`'s `Commit`) and applied by the commit stage (`commit::apply`) at the end
+//! of each half of the step, in the order they were recorded.
+//!
+//! Until then rapier's bodies hold what they held when the half began; a stage that reads a
+//! body the step may already have written reads it through [`Writes::now`], which gives the
+//! values rapier will hold once the writes so far are applied: the body's writes replayed
+//! over rapier's values, its setters mirrored value for value ([`Held`]), so that a read
+//! before the commit equals the same read after it, bit for bit.
+
+use crate::motion::State;
+use crate::plugin::bridge::convert::{rot_to_na, vec_to_na};
+use crate::rapier::math::{Pose, Rotation, Vector};
+use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType};
+
+/// One recorded write: rapier's setters, called in this order when the commit stage applies
+/// it (`stages/commit.rs`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Write {
+    /// `set_position`, `set_angvel`, `set_linvel` (woken up).
+    State {
+        pose: Pose,
+        angvel: Vector,
+        linvel: Vector,
+    },
+    /// `set_translation`, `set_linvel`, and `set_angvel` where given (woken up): a free
+    /// flight's end, rapier's rotation kept.
+    Flight {
+        translation: Vector,
+        linvel: Vector,
+        angvel: Option<Vector>,
+    },
+    /// `wake_up`.
+    Wake,
+}
+
+/// What rapier will hold of a written body once the writes recorded so far are applied: the
+/// values its setters change, changed as they change them (`RigidBody::set_position` and
+/// `set_translation` move the pose and the next pose together and recompute the centre of
+/// mass from the pose; a setter that changes a value wakes the body; a dynamic body's
+/// velocities are set as given).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Held {
+    position: Pose,
+    next_position: Pose,
+    com: Vector,
+    linvel: Vector,
+    angvel: Vector,
+    sleeping: bool,
+    /// rapier's setters leave a soft frame's state alone, and set velocities only of dynamic
+    /// and velocity-based kinematic bodies; a pose write wakes only dynamic and kinematic
+    /// bodies.
+    soft_frame: bool,
+    takes_velocities: bool,
+    wakes_on_pose: bool,
+}
+
+impl Held {
+    fn of(rb: &RigidBody) -> Self {
+        Self {
+            position: *rb.position(),
+            next_position: *rb.next_position(),
+            com: rb.center_of_mass(),
+            linvel: rb.linvel(),
+            angvel: rb.angvel(),
+            sleeping: rb.is_sleeping(),
+            soft_frame: rb.is_soft_frame(),
+            takes_velocities: matches!(
+                rb.body_type(),
+                RigidBodyType::Dynamic | RigidBodyType::KinematicVelocityBased
+            ),
+            wakes_on_pose: rb.is_dynamic_or_kinematic(),
+        }
+    }
+
+    /// `write` as rapier's setters would apply it to the body (`rb`, for its mass
+    /// properties).
+    fn apply(&mut self, write: &Write, rb: &RigidBody) {
+        if let Write::Wake = write {
+            self.sleeping = false;
+            return;
+        }
+        if self.soft_frame {
+            return;
+        }
+        match *write {
+            Write::State {
+                pose,
+                angvel,
+                linvel,
+            } => {
+                if self.position != pose || self.next_position != pose {
+                    (self.position, self.next_position) = (pose, pose);
+                    self.moved(rb);
+                }
+                self.mirror_angvel(angvel);
+                self.mirror_linvel(linvel);
+            }
+            Write::Flight {
+                translation,
+                linvel,
+                angvel,
+            } => {
+                if self.position.translation != translation
+                    || self.next_position.translation != translation
+                {
+                    self.position.translation = translation;
+                    self.next_position.translation = translation;
+                    self.moved(rb);
+                }
+                self.mirror_linvel(linvel);
+                if let Some(w) = angvel {
+                    self.mirror_angvel(w);
+                }
+            }
+            Write::Wake => {}
+        }
+    }
+
+    /// The pose changed: the centre of mass follows (rapier's
+    /// `RigidBodyMassProps::update_world_mass_properties`), and the body wakes.
+    fn moved(&mut self, rb: &RigidBody) {
+        self.com = rb.mass_properties().local_mprops.world_com(&self.position);
+        self.sleeping &= !self.wakes_on_pose;
+    }
+
+    fn mirror_linvel(&mut self, v: Vector) {
+        if self.takes_velocities && self.linvel != v {
+            self.linvel = v;
+            self.sleeping = false;
+        }
+    }
+
+    fn mirror_angvel(&mut self, w: Vector) {
+        if self.takes_velocities && self.angvel != w {
+            self.angvel = w;
+            self.sleeping = false;
+        }
+    }
+}
+
+/// The step's writes, recorded in order. A read of a body the half has written replays that
+/// body's writes over what rapier holds (most written bodies are not read again in the half,
+/// so nothing is mirrored at the write).
+#[derive(Default)]
+pub(crate) struct Writes {
+    log: Vec<Entry>,
+    /// By a body handle's arena slot: 1 + the place in `log` of the body's last write, or 0
+    /// (a read of a body nothing wrote is an index, not a hash).
+    slots: Vec<u32>,
+}
+
+/// One write in the log, linked to the same body's write before it.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    body: RigidBodyHandle,
+    write: Write,
+    /// 1 + the place in the log of the body's previous write, or 0.
+    prev: u32,
+}
+
+impl Writes {
+    /// Records `write` to `body`.
+    pub fn record(&mut self, body: RigidBodyHandle, write: Write) {
+        let slot = body.into_raw_parts().0 as usize;
+        if slot >= self.slots.len() {
+            self.slots.resize(slot + 1, 0);
+        }
+        let prev = self.last_of(body).map_or(0, |k| k as u32 + 1);
+        self.log.push(Entry { body, write, prev });
+        self.slots[slot] = self.log.len() as u32;
+    }
+
+    /// The place in the log of `body`'s last write, if it has one.
+    #[inline]
+    fn last_of(&self, body: RigidBodyHandle) -> Option<usize> {
+        match self.slots.get(body.into_raw_parts().0 as usize) {
+            Some(&k) if k > 0 && self.log[k as usize - 1].body == body => Some(k as usize - 1),
+            _ => None,
+        }
+    }
+
+    /// `body` (`rb`, as rapier holds it now) as it will be once the writes so far are
+    /// applied.
+    #[inline]
+    pub fn now<'a>(&self, body: RigidBodyHandle, rb: &'a RigidBody) -> Now<'a> {
+        Now {
+            rb,
+            held: self
+                .last_of(body)
+                .map(|last| Box::new(self.replay(last, rb))),
+        }
+    }
+
+    /// What rapier will hold of the body of the log's entry `last` after its writes up to
+    /// that one.
+    #[cold]
+    fn replay(&self, last: usize, rb: &RigidBody) -> Held {
+        let mut chain = vec![last];
+        let mut k = self.log[last].prev;
+        while k > 0 {
+            chain.push(k as usize - 1);
+            k = self.log[k as usize - 1].prev;
+        }
+        let mut held = Held::of(rb);
+        for k in chain.iter().rev() {
+            held.apply(&self.log[*k].write, rb);
+        }
+        held
+    }
+
+    /// [`Self::now`] for a body of `bodies`, if it exists.
+    #[inline]
+    pub fn body<'a>(&self, bodies: &'a RigidBodySet, body: RigidBodyHandle) -> Option<Now<'a>> {
+        bodies.get(body).map(|rb| self.now(body, rb))
+    }
+
+    /// The centre of mass and the linear and angular velocities of `body` (`rb`, as rapier
+    /// holds it now) once the writes so far are applied: [`Self::now`]'s, without building
+    /// it (a neighbour's motion, read for every contact pair of a planned ball).
+    #[inline]
+    pub fn motion(&self, body: RigidBodyHandle, rb: &RigidBody) -> (Vector, Vector, Vector) {
+        match self.last_of(body) {
+            None => (rb.center_of_mass(), rb.linvel(), rb.angvel()),
+            Some(last) => {
+                let held = self.replay(last, rb);
+                (held.com, held.linvel, held.angvel)
+            }
+        }
+    }
+
+    /// Is `body` (`rb`, as rapier holds it now) asleep once the writes so far are applied?
+    /// A write only wakes: a body rapier holds awake is read no further.
+    #[inline]
+    pub fn is_sleeping(&self, body: RigidBodyHandle, rb: &RigidBody) -> bool {
+        rb.is_sleeping() && self.now(body, rb).is_sleeping()
+    }
+
+    /// How many writes are recorded.
+    pub fn len(&self) -> usize {
+        self.log.len()
+    }
+
+    /// Hands each write to `apply`, in the order recorded, and empties the table.
+    pub fn apply_all(&mut self, mut apply: impl FnMut(RigidBodyHandle, &Write)) {
+        for e in &self.log {
+            if let Some(k) = self.slots.get_mut(e.body.into_raw_parts().0 as usize) {
+                *k = 0;
+            }
+            apply(e.body, &e.write);
+        }
+        self.log.clear();
+    }
+}
+
+/// A body as the step's writes so far leave it ([`Writes::now`]): the pose, centre of mass,
+/// velocities and sleep those writes change, and everything else as rapier holds it.
+#[derive(Clone)]
+pub(crate) struct Now<'a> {
+    rb: &'a RigidBody,
+    /// Boxed: a body the half wrote is rarely read again, and the common `Now` stays two
+    /// words.
+    held: Option<Box<Held>>,
+}
+
+impl<'a> Now<'a> {
+    /// rapier's body, for what the step does not write (its colliders, mass properties,
+    /// type, forces, damping).
+    #[inline]
+    pub fn rb(&self) -> &'a RigidBody {
+        self.rb
+    }
+
+    #[inline]
+    pub fn center_of_mass(&self) -> Vector {
+        self.held
+            .as_ref()
+            .map_or_else(|| self.rb.center_of_mass(), |h| h.com)
+    }
+
+    #[inline]
+    pub fn position(&self) -> Pose {
+        self.held
+            .as_ref()
+            .map_or_else(|| *self.rb.position(), |h| h.position)
+    }
+
+    #[inline]
+    pub fn rotation(&self) -> Rotation {
+        self.position().rotation
+    }
+
+    #[inline]
+    pub fn translation(&self) -> Vector {
+        self.position().translation
+    }
+
+    #[inline]
+    pub fn linvel(&self) -> Vector {
+        self.held
+            .as_ref()
+            .map_or_else(|| self.rb.linvel(), |h| h.linvel)
+    }
+
+    #[inline]
+    pub fn angvel(&self) -> Vector {
+        self.held
+            .as_ref()
+            .map_or_else(|| self.rb.angvel(), |h| h.angvel)
+    }
+
+    #[inline]
+    pub fn is_sleeping(&self) -> bool {
+        self.held
+            .as_ref()
+            .map_or_else(|| self.rb.is_sleeping(), |h| h.sleeping)
+    }
+
+    /// The body's state in the model's `f64` terms.
+    pub fn state(&self) -> State {
+        State {
+            com: vec_to_na(self.center_of_mass()),
+            rot: rot_to_na(self.rotation()),
+            v: vec_to_na(self.linvel()),
+            w: vec_to_na(self.angvel()),
+        }
+    }
+}
