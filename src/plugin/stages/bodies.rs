@@ -195,7 +195,7 @@ impl AfterStep<'_> {
                 && free
                 && (clear || ccd_consistent(&now, cand, step.dt, step.dt, step))
             {
-                self.fly_exactly(bodies, cand, step.dt);
+                self.fly_exactly(&now, cand, step.dt);
             }
             if has_grounds {
                 self.turned_end(bodies, colliders, cand, step);
@@ -221,7 +221,7 @@ impl AfterStep<'_> {
             }
             Some(Search::Clear) => {
                 if mode == TimingMode::Exact {
-                    self.fly_exactly(bodies, cand, step.dt);
+                    self.fly_exactly(&now, cand, step.dt);
                 }
                 self.turned_end(bodies, colliders, cand, step);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -296,11 +296,8 @@ impl AfterStep<'_> {
     /// anisotropic body or of one with a locked rotation axis (rapier turns it its own way,
     /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
     /// rapier's gyroscopic forces off) gets the exact spin too.
-    fn fly_exactly(&mut self, bodies: &RigidBodySet, cand: &Candidate, dt: f64) {
+    fn fly_exactly(&mut self, now: &Now, cand: &Candidate, dt: f64) {
         let end = cand.flight.advance(&cand.start, dt);
-        let Some(now) = self.commit.body(bodies, cand.body) else {
-            return;
-        };
         let exact_spin = cand.flight.gyro.is_none()
             && !now
                 .rb()
@@ -315,8 +312,8 @@ impl AfterStep<'_> {
             },
             ..end
         };
-        self.commit
-            .flight(bodies, cand.body, &s, &cand.local_com, exact_spin);
+        let body = (cand.body, now);
+        self.commit.flight(body, &s, &cand.local_com, exact_spin);
     }
 
     /// One ball held at rest for its first step (`ImpactPlugin::put_back_held`).

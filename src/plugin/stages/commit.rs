@@ -135,7 +135,7 @@ impl<'a> Commit<'a> {
     }
 
     /// `body` as rapier will hold it once the writes so far are applied, if it exists.
-    pub fn body<'b>(&'b self, bodies: &'b RigidBodySet, body: RigidBodyHandle) -> Option<Now<'b>> {
+    pub fn body<'b>(&self, bodies: &'b RigidBodySet, body: RigidBodyHandle) -> Option<Now<'b>> {
         self.writes.body(bodies, body)
     }
 
@@ -185,10 +185,10 @@ impl<'a> Commit<'a> {
     /// Writes a free flight's end into `body` (woken up): the translation and linear
     /// velocity, and the spin where `exact_spin` and rapier's differs (a write queues the body
     /// for rapier's update, so an unchanged spin is not written); rapier's rotation is kept.
+    /// `before`: the body as the writes so far leave it ([`Self::body`]).
     pub fn flight(
         &mut self,
-        bodies: &RigidBodySet,
-        body: RigidBodyHandle,
+        (body, before): (RigidBodyHandle, &Now),
         s: &State,
         local_com: &Vector3<f64>,
         exact_spin: bool,
@@ -197,9 +197,6 @@ impl<'a> Commit<'a> {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
         }
-        let Some(before) = self.writes.body(bodies, body) else {
-            return;
-        };
         let translation = vec_from_na(&(s.com - rot_to_na(before.rotation()) * local_com));
         let (linvel, w) = (vec_from_na(&s.v), vec_from_na(&s.w));
         let angvel = (exact_spin && before.angvel() != w).then_some(w);
@@ -316,8 +313,10 @@ mod tests {
         };
         match k % 5 {
             0 | 1 => commit.state(h, &s, &local_com, Origin::Model),
-            2 => commit.flight(bodies, h, &s, &local_com, true),
-            3 => commit.flight(bodies, h, &s, &local_com, false),
+            2 | 3 => {
+                let before = commit.body(bodies, h).unwrap();
+                commit.flight((h, &before), &s, &local_com, k % 5 == 2);
+            }
             _ => commit.wake(h),
         }
     }

@@ -174,6 +174,9 @@ impl Writes {
     /// The place in the log of `body`'s last write, if it has one.
     #[inline]
     fn last_of(&self, body: RigidBodyHandle) -> Option<usize> {
+        if self.log.is_empty() {
+            return None;
+        }
         match self.slots.get(body.into_raw_parts().0 as usize) {
             Some(&k) if k > 0 && self.log[k as usize - 1].body == body => Some(k as usize - 1),
             _ => None,
