@@ -17,8 +17,8 @@ use rapier_impact::rapier::na::Unit;
 use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{
-    ConfigError, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming, RestitutionCurve,
-    RollingSettings, TimingMode,
+    ConfigError, EventKind, GroundMaterial, ImpactConfig, ImpactPlugin, ImpactTiming,
+    RestitutionCurve, RollingSettings, TimingMode,
 };
 
 #[test]
@@ -253,6 +253,81 @@ fn hook_flags_follow_the_bodies_near_a_ground() {
     assert_eq!(flags(&world, ground), ActiveHooks::MODIFY_SOLVER_CONTACTS);
     assert_eq!(flags(&world, low), none);
     assert_eq!(flags(&world, own), none);
+}
+
+/// While every managed body is far from every ground and none sleeps, the grounds need no
+/// hook flags: after 30 such steps they get the user's flags back (rapier then calls no hook
+/// for their pairs), and the plugin's come back on the step a body nears a ground, in time
+/// for its impact, which is the closed form's. A sleeping body keeps them on.
+#[test]
+fn grounds_carry_no_flags_while_every_body_is_far_and_awake() {
+    let mut world = PhysicsWorld::default();
+    let user = ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(0.7)
+            .friction(0.0)
+            .active_hooks(user),
+    );
+    // Thrown up from 10 m: about two seconds before it comes back down.
+    let (_, ball) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 10.0, 0.0))
+            .linvel(Vector::new(0.0, 5.0, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.7).friction(0.0),
+    );
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
+    let both = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
+    let flags = |w: &PhysicsWorld| w.colliders[ground].active_hooks();
+    for n in 1..=40 {
+        p.step(&mut world);
+        let expected = if n <= 30 { both } else { user };
+        assert_eq!(flags(&world), expected, "step {n}");
+    }
+    let mut bounce = None;
+    for _ in 0..200 {
+        p.step(&mut world);
+        if let Some(e) = p.events().iter().find(|e| e.kind == EventKind::Impact) {
+            assert_eq!(flags(&world), both, "flagged again for the impact");
+            bounce = Some(*e);
+            break;
+        }
+    }
+    let e = bounce.expect("the ball came back down and bounced");
+    assert_eq!(e.collider, ball);
+    // A straight drop without spin or friction: it leaves at e times its approach speed.
+    assert!(e.approach_speed > 10.0, "{e:?}");
+    assert_abs_diff_eq!(e.restitution, 0.7, epsilon = 1e-7);
+    assert_abs_diff_eq!(
+        (e.ke_after / e.ke_before).sqrt(),
+        e.restitution,
+        epsilon = 1e-9
+    );
+
+    // The same flight beside a sleeping ball: the flags stay on.
+    let mut world = PhysicsWorld::default();
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up()).restitution(0.7),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.0, 10.0, 0.0))
+            .linvel(Vector::new(0.0, 5.0, 0.0)),
+        ColliderBuilder::ball(0.1).restitution(0.7),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(5.0, 0.1, 0.0))
+            .sleeping(true),
+        ColliderBuilder::ball(0.1).restitution(0.7),
+    );
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
+    for n in 1..=40 {
+        p.step(&mut world);
+        assert_eq!(world.colliders[ground].active_hooks(), both, "step {n}");
+    }
 }
 
 #[test]

@@ -14,13 +14,18 @@
 //!   layer: not recycled, and the hooks called).
 //!
 //! The plugin takes the first while every dynamic body in the world is managed (the usual
-//! scene), and the second from the first step some dynamic, enabled body is not. In either,
+//! scene), and the second from the first step some dynamic, enabled body is not. In the
+//! first, a scene whose managed bodies all stay far from every ground and awake (balls in
+//! flight high above it) needs no flags at all: after `GROUND_FLAGS_IDLE_STEPS` such steps
+//! the grounds' flags come off, and rapier calls no hook for their pairs, until a body nears a
+//! ground again. In either,
 //! one ball of each of the step's impacts between bodies, and of each resting pair rapier
 //! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
 //! too (rapier hooks a pair when either collider asks): the plugin takes the impact pairs
 //! from rapier's solver and zeroes the others' restitution. The flags the user had set are
 //! recorded and handed back: the wrapped hook is called exactly when they ask for it.
 
+use crate::plugin::policy::GROUND_FLAGS_IDLE_STEPS;
 use crate::plugin::state::handles::{ArenaOrder, HandleMap, PairKey, SlotTable};
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
@@ -50,6 +55,11 @@ pub(crate) struct HookFlags {
     grounds: SlotTable<ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     stamp: u64,
+    /// Steps in a row no managed body was near a ground or asleep (the grounds' flags come
+    /// off after [`GROUND_FLAGS_IDLE_STEPS`]).
+    idle_steps: u32,
+    /// This step's arrangement flags the grounds.
+    grounds_on: bool,
 }
 
 impl HookFlags {
@@ -62,30 +72,39 @@ impl HookFlags {
     /// `near` are the managed bodies that can reach a ground in the step, `pairs` a body of
     /// each of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
     /// arrangement), `unmanaged` whether the world holds a dynamic, enabled body the plugin
-    /// does not manage. `registry.flags_stale` is read here and
-    /// cleared by the caller.
+    /// does not manage, `idle` whether no managed body is near a ground or asleep this step.
+    /// `registry.flags_stale` is read here and cleared by the caller.
     pub fn update(
         &mut self,
         registry: &Registry,
-        near: &[RigidBodyHandle],
-        pairs: &[RigidBodyHandle],
-        unmanaged: bool,
+        (near, pairs): (&[RigidBodyHandle], &[RigidBodyHandle]),
+        (unmanaged, idle): (bool, bool),
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
     ) {
-        // Grounds: flagged in the first arrangement, and never once unmarked. Which grounds
-        // keep their flags changes only with the registry or the arrangement.
+        // Grounds: flagged in the first arrangement, and never once unmarked, nor after
+        // `GROUND_FLAGS_IDLE_STEPS` idle steps in a row (no contact of a ground pair is then
+        // the plugin's: a body far from every ground by the survey's bound cannot touch one
+        // in the step, and a sleeping one keeps the flags on). Which grounds keep their flags
+        // changes only with the registry, the arrangement or idleness.
+        self.idle_steps = if idle {
+            self.idle_steps.saturating_add(1)
+        } else {
+            0
+        };
+        let off = unmanaged || self.idle_steps > GROUND_FLAGS_IDLE_STEPS;
+        self.grounds_on = !off;
         let grounds = &registry.grounds;
-        if unmanaged || registry.flags_stale {
+        if off || registry.flags_stale {
             self.grounds.retain(|c, user| {
-                let keep = !unmanaged && grounds.contains_key(c);
+                let keep = !off && grounds.contains_key(c);
                 if !keep {
                     restore(colliders, *c, *user);
                 }
                 keep
             });
         }
-        if !unmanaged {
+        if !off {
             for c in registry.grounds.keys() {
                 // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
                 // and narrow phase updates, which for every ground every step cost more
@@ -134,6 +153,11 @@ impl HookFlags {
             false
         });
         self.hooked = hooked;
+    }
+
+    /// Do grounds carry the plugin's flags this step (the first arrangement, not idle)?
+    pub fn grounds_flagged(&self) -> bool {
+        self.grounds_on
     }
 
     /// The hook flags the user set on a collider (those rapier would have seen without the
@@ -228,6 +252,8 @@ pub(crate) struct SavedFlags {
     hooked: Vec<SavedHookedBody>,
     grounds: Vec<(ColliderHandle, u32)>,
     stamp: u64,
+    #[cfg_attr(feature = "serde-serialize", serde(default))]
+    idle_steps: u32,
 }
 
 /// A hooked body: its flagged colliders with the user's flags, and its stamp.
@@ -249,6 +275,7 @@ impl HookFlags {
             hooked,
             grounds: self.grounds.iter().map(|(c, u)| (*c, u.bits())).collect(),
             stamp: self.stamp,
+            idle_steps: self.idle_steps,
         }
     }
 
@@ -258,6 +285,7 @@ impl HookFlags {
         let user = ActiveHooks::from_bits_retain;
         let mut flags = Self {
             stamp: saved.stamp,
+            idle_steps: saved.idle_steps,
             ..Self::default()
         };
         for (body, colliders, stamp) in &saved.hooked {

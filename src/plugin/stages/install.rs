@@ -25,10 +25,15 @@ impl<H> ImpactPlugin<H> {
         unmanaged: bool,
     ) {
         let members = self.hooked_pair_members(step);
+        // Idle: no managed body near a ground, none asleep (`HookFlags::update`).
+        let idle = near.is_empty() && step.asleep.is_empty();
+        let (flagged, arrangement) = ((near, members.as_slice()), (unmanaged, idle));
         self.flags
-            .update(&self.registry, near, &members, unmanaged, bodies, colliders);
+            .update(&self.registry, flagged, arrangement, bodies, colliders);
         self.registry.flags_stale = false;
         let flags = &self.flags;
+        // The far bodies' ground pairs are hooked only through flagged grounds.
+        let far = if flags.grounds_flagged() { far } else { &[] };
         let far_colliders: Vec<ColliderHandle> = far
             .iter()
             .filter_map(|h| bodies.get(*h))
