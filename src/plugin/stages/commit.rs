@@ -19,7 +19,7 @@ use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
-use crate::plugin::state::writes::{Now, Write, Writes};
+use crate::plugin::state::writes::{Now, Place, Write, Writes};
 use crate::rapier::math::{Pose, Real};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
@@ -52,28 +52,17 @@ pub(crate) fn apply(writes: &mut Writes, bodies: &mut RigidBodySet) -> usize {
 /// Applies one write to `rb` through rapier's setters, in the order [`Write`] gives (every
 /// read of the body before the commit mirrors this: `state/writes.rs`'s `Held`).
 fn apply_one(write: &Write, rb: &mut RigidBody) {
-    match *write {
-        Write::State {
-            pose,
-            angvel,
-            linvel,
-        } => {
-            rb.set_position(pose, true);
-            rb.set_angvel(angvel, true);
-            rb.set_linvel(linvel, true);
-        }
-        Write::Flight {
-            translation,
-            linvel,
-            angvel,
-        } => {
-            rb.set_translation(translation, true);
-            rb.set_linvel(linvel, true);
-            if let Some(w) = angvel {
-                rb.set_angvel(w, true);
-            }
-        }
-        Write::Wake => rb.wake_up(true),
+    let Write::Move { to, linvel, angvel } = *write else {
+        rb.wake_up(true);
+        return;
+    };
+    match to {
+        Place::Pose(pose) => rb.set_position(pose, true),
+        Place::Translation(t) => rb.set_translation(t, true),
+    }
+    rb.set_linvel(linvel, true);
+    if let Some(w) = angvel {
+        rb.set_angvel(w, true);
     }
 }
 
@@ -168,14 +157,13 @@ impl<'a> Commit<'a> {
             vec_from_na(&s.w),
             vec_from_na(&s.v),
         );
-        self.writes.record(
-            body,
-            Write::State {
-                pose,
-                angvel,
-                linvel,
-            },
-        );
+        let (to, spin) = (Place::Pose(pose), Some(angvel));
+        let write = Write::Move {
+            to,
+            linvel,
+            angvel: spin,
+        };
+        self.writes.record(body, write);
         if self.exact && origin == Origin::Model {
             let written = (pose.translation, linvel, angvel);
             self.shadows.insert(body, Shadow::of(s, written));
@@ -201,14 +189,8 @@ impl<'a> Commit<'a> {
         let (linvel, w) = (vec_from_na(&s.v), vec_from_na(&s.w));
         let angvel = (exact_spin && before.angvel() != w).then_some(w);
         let spin = angvel.unwrap_or(before.angvel());
-        self.writes.record(
-            body,
-            Write::Flight {
-                translation,
-                linvel,
-                angvel,
-            },
-        );
+        let to = Place::Translation(translation);
+        self.writes.record(body, Write::Move { to, linvel, angvel });
         if self.exact {
             self.shadows
                 .insert(body, Shadow::of(s, (translation, linvel, spin)));

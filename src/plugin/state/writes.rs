@@ -17,21 +17,22 @@ use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet, RigidBody
 /// it (`stages/commit.rs`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Write {
-    /// `set_position`, `set_angvel`, `set_linvel` (woken up).
-    State {
-        pose: Pose,
-        angvel: Vector,
-        linvel: Vector,
-    },
-    /// `set_translation`, `set_linvel`, and `set_angvel` where given (woken up): a free
-    /// flight's end, rapier's rotation kept.
-    Flight {
-        translation: Vector,
+    /// The pose or translation, the linear velocity, and the spin where given (woken up):
+    /// a state, or a free flight's end with rapier's rotation (and perhaps its spin) kept.
+    Move {
+        to: Place,
         linvel: Vector,
         angvel: Option<Vector>,
     },
     /// `wake_up`.
     Wake,
+}
+
+/// Where a [`Write::Move`] puts the body: `set_position` or `set_translation`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Place {
+    Pose(Pose),
+    Translation(Vector),
 }
 
 /// What rapier will hold of a written body once the writes recorded so far are applied: the
@@ -76,44 +77,31 @@ impl Held {
     /// `write` as rapier's setters would apply it to the body (`rb`, for its mass
     /// properties).
     fn apply(&mut self, write: &Write, rb: &RigidBody) {
-        if let Write::Wake = write {
+        let Write::Move { to, linvel, angvel } = *write else {
             self.sleeping = false;
             return;
-        }
+        };
         if self.soft_frame {
             return;
         }
-        match *write {
-            Write::State {
-                pose,
-                angvel,
-                linvel,
-            } => {
-                if self.position != pose || self.next_position != pose {
-                    (self.position, self.next_position) = (pose, pose);
-                    self.moved(rb);
-                }
-                self.mirror_angvel(angvel);
-                self.mirror_linvel(linvel);
-            }
-            Write::Flight {
-                translation,
-                linvel,
-                angvel,
-            } => {
-                if self.position.translation != translation
-                    || self.next_position.translation != translation
-                {
-                    self.position.translation = translation;
-                    self.next_position.translation = translation;
-                    self.moved(rb);
-                }
-                self.mirror_linvel(linvel);
-                if let Some(w) = angvel {
-                    self.mirror_angvel(w);
+        let (position, next) = (self.position, self.next_position);
+        let moved = match to {
+            Place::Pose(pose) => position != pose || next != pose,
+            Place::Translation(t) => position.translation != t || next.translation != t,
+        };
+        if moved {
+            match to {
+                Place::Pose(pose) => (self.position, self.next_position) = (pose, pose),
+                Place::Translation(t) => {
+                    self.position.translation = t;
+                    self.next_position.translation = t;
                 }
             }
-            Write::Wake => {}
+            self.moved(rb);
+        }
+        self.mirror_linvel(linvel);
+        if let Some(w) = angvel {
+            self.mirror_angvel(w);
         }
     }
 
