@@ -4,11 +4,12 @@
 //! [`Commit`] too.
 //!
 //! Contract: the only code that calls rapier's body setters (pose, velocities, wake-up), in
-//! [`apply`] alone (the stages take rapier's bodies read-only), and the only code that appends to the step's events. [`Commit::state`]
-//! records a body's pose and velocities (woken up) from an `f64` state, [`Commit::flight`] what
-//! free flight changes, [`Commit::wake`] a wake-up of a sleeping body a step must plan; a
-//! stage reads a body the step may already have written through [`Commit::body`], which gives
-//! what rapier will hold once the writes so far are applied (`state/writes.rs`). In `Exact`
+//! [`apply`] alone (the stages take rapier's bodies read-only), and the only code that
+//! appends to the step's events. [`Commit::state`] records a body's pose and velocities
+//! (woken up) from an `f64` state, [`Commit::flight`] what free flight changes,
+//! [`Commit::wake`] a wake-up of a sleeping body a step must plan; a stage reads a body the
+//! step may already have written through [`Commit::body`], which gives what rapier will hold
+//! once the writes so far are applied (`state/writes.rs`). In `Exact`
 //! mode a state the model reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], so
 //! that the next step continues from the `f64` state rather than from its rounding to
 //! rapier's precision, as long as rapier still holds exactly what was written; a correction of
@@ -37,8 +38,8 @@ pub(crate) enum Origin {
 }
 
 /// The commit stage: applies the writes recorded in this half of the step to rapier's
-/// bodies, in the order recorded; returns how many it applied. A write to a body removed
-/// since is dropped.
+/// bodies, in the order recorded, and returns how many there were (a write to a body that no
+/// longer exists is dropped).
 pub(crate) fn apply(writes: &mut Writes, bodies: &mut RigidBodySet) -> usize {
     let count = writes.len();
     writes.apply_all(|body, write| {

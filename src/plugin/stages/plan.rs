@@ -6,12 +6,13 @@
 //! `crate::plugin::policy::Policy`: rapier's filtering first, then resting, rolling or impact), and
 //! the body a [`Candidate`](crate::plugin::state::step::Candidate) (its start state, flight, and
 //! which grounds may reach it) for the stages after rapier's step, and the balls held at rest on a
-//! slope their first step (`StepData::first_holds`). It records nothing itself: it returns, in
-//! `Step` mode, the body's state after the impulses of the contacts that close in the step, with
-//! their events in [`PlanReports`], and reports there a rolling ball that something can now reach
-//! (`EventKind::Released`, nothing written); the stage's loop records them through the commit. It
-//! reads rapier (each body as the step's writes so far leave it, `Scene::writes`) and the registry and calls the user's filter where the colliders ask for it;
-//! [`StepData`] carries the step's thresholds, roles and candidates.
+//! slope their first step (`StepData::first_holds`). It records nothing itself: it leaves in
+//! [`PlanReports`], in `Step` mode, the body's state after the impulses of the contacts that
+//! close in the step with their events, and a rolling ball that something can now reach
+//! (`EventKind::Released`, nothing written); the stage's loop records them through the commit.
+//! It reads rapier (each body as the step's writes so far leave it, `Scene::writes`) and the
+//! registry, and calls the user's filter where the colliders ask for it; [`StepData`] carries
+//! the step's thresholds, roles and candidates.
 //!
 //! The parts, by what each decides: the body's start, the grounds near it and its candidate
 //! (`plan/body.rs`); one pair's role (`plan/role.rs`); `Step` mode's start-of-step impulse
