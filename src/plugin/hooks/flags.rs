@@ -16,9 +16,9 @@
 //! The plugin takes the first while every dynamic body in the world is managed (the usual
 //! scene), and the second from the first step some dynamic, enabled body is not. In the
 //! first, a scene whose managed bodies all stay far from every ground and awake (balls in
-//! flight high above it) needs no flags at all: after `GROUND_FLAGS_IDLE_STEPS` such steps
-//! the grounds' flags come off, and rapier calls no hook for their pairs, until a body nears a
-//! ground again. In either,
+//! flight high above it) needs no flags at all: the grounds get none until a first body nears
+//! a ground (or sleeps), and lose them after `GROUND_FLAGS_IDLE_STEPS` such steps in a row;
+//! rapier then calls no hook for their pairs, until a body nears a ground again. In either,
 //! one ball of each of the step's impacts between bodies, and of each resting pair rapier
 //! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
 //! too (rapier hooks a pair when either collider asks): the plugin takes the impact pairs
@@ -55,9 +55,10 @@ pub(crate) struct HookFlags {
     grounds: SlotTable<ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     stamp: u64,
-    /// Steps in a row no managed body was near a ground or asleep (the grounds' flags come
-    /// off after [`GROUND_FLAGS_IDLE_STEPS`]).
-    idle_steps: u32,
+    /// Steps since one needed the grounds' flags (a managed body near a ground or asleep),
+    /// `None` before any did: the flags are off beyond [`GROUND_FLAGS_IDLE_STEPS`], and
+    /// until a first step needs them.
+    since_needed: Option<u32>,
     /// This step's arrangement flags the grounds.
     grounds_on: bool,
 }
@@ -82,17 +83,20 @@ impl HookFlags {
         bodies: &RigidBodySet,
         colliders: &mut ColliderSet,
     ) {
-        // Grounds: flagged in the first arrangement, and never once unmarked, nor after
-        // `GROUND_FLAGS_IDLE_STEPS` idle steps in a row (no contact of a ground pair is then
-        // the plugin's: a body far from every ground by the survey's bound cannot touch one
-        // in the step, and a sleeping one keeps the flags on). Which grounds keep their flags
-        // changes only with the registry, the arrangement or idleness.
-        self.idle_steps = if idle {
-            self.idle_steps.saturating_add(1)
-        } else {
-            0
+        // Grounds: flagged in the first arrangement, and never once unmarked, nor before a
+        // step needs them or after `GROUND_FLAGS_IDLE_STEPS` idle steps in a row (no contact
+        // of a ground pair is then the plugin's: a body far from every ground by the survey's
+        // bound cannot touch one in the step, and a sleeping one keeps the flags on). Which
+        // grounds keep their flags changes only with the registry, the arrangement or
+        // idleness.
+        self.since_needed = match (idle, self.since_needed) {
+            (false, _) => Some(0),
+            (true, since) => since.map(|n| n.saturating_add(1)),
         };
-        let off = unmanaged || self.idle_steps > GROUND_FLAGS_IDLE_STEPS;
+        let idle_too_long = self
+            .since_needed
+            .is_none_or(|n| n > GROUND_FLAGS_IDLE_STEPS);
+        let off = unmanaged || idle_too_long;
         self.grounds_on = !off;
         let grounds = &registry.grounds;
         if off || registry.flags_stale {
@@ -253,7 +257,7 @@ pub(crate) struct SavedFlags {
     grounds: Vec<(ColliderHandle, u32)>,
     stamp: u64,
     #[cfg_attr(feature = "serde-serialize", serde(default))]
-    idle_steps: u32,
+    since_needed: Option<u32>,
 }
 
 /// A hooked body: its flagged colliders with the user's flags, and its stamp.
@@ -275,7 +279,7 @@ impl HookFlags {
             hooked,
             grounds: self.grounds.iter().map(|(c, u)| (*c, u.bits())).collect(),
             stamp: self.stamp,
-            idle_steps: self.idle_steps,
+            since_needed: self.since_needed,
         }
     }
 
@@ -285,7 +289,7 @@ impl HookFlags {
         let user = ActiveHooks::from_bits_retain;
         let mut flags = Self {
             stamp: saved.stamp,
-            idle_steps: saved.idle_steps,
+            since_needed: saved.since_needed,
             ..Self::default()
         };
         for (body, colliders, stamp) in &saved.hooked {
