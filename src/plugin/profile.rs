@@ -18,9 +18,9 @@ pub enum Stage {
     Survey,
     /// The planned bodies' pairs with the grounds near them, and their candidates.
     Plan,
-    /// The writes the stages recorded, applied to rapier's bodies: the last stage of each
-    /// half of the step, so it runs twice (after the plan, and after the holds); its time is
-    /// both runs'.
+    /// The writes the stages recorded, applied to rapier's bodies. It closes each half of the
+    /// step's work on bodies, so it runs twice (after the plan, and after the holds); its time
+    /// is both runs'.
     Commit,
     /// The hook flags and the tables rapier's hook calls read (with the plan's memory put
     /// back).

@@ -1,7 +1,8 @@
 //! Commit: the one writer. Every change the step makes to a rapier body is recorded through
-//! [`Commit`] by the stage that decides it, and applied by the commit stage ([`apply`]), the
-//! last stage of each half of the step; every event that reports a change is appended through
-//! [`Commit`] too.
+//! [`Commit`] by the stage that decides it, and applied by the commit stage ([`apply`]), which
+//! closes each half of the step's work on bodies (before rapier's step, only the install of
+//! the hook flags on colliders follows it); every event that reports a change is appended
+//! through [`Commit`] too.
 //!
 //! Contract: the only code that calls rapier's body setters (pose, velocities, wake-up), in
 //! [`apply`] alone (the stages take rapier's bodies read-only), and the only code that

@@ -285,9 +285,9 @@ impl<H> ImpactPlugin<H> {
         AfterStep::new(reads, &mut self.memory, writes)
     }
 
-    /// The commit stage, the last of each half of the step: the writes recorded in it applied
-    /// to rapier's bodies (`commit.rs`); after rapier's step, the colliders moved with their
-    /// bodies (before it, rapier's step moves them).
+    /// The commit stage, closing each half of the step's work on bodies: the writes recorded
+    /// in the half applied to rapier's bodies (`commit.rs`); after rapier's step, the
+    /// colliders moved with their bodies (before it, rapier's step moves them).
     fn commit(&mut self, bodies: &mut RigidBodySet, colliders: Option<&mut ColliderSet>) {
         let applied = commit::apply(&mut self.writes, bodies);
         if let Some(colliders) = colliders {

@@ -1,6 +1,6 @@
 //! The step's writes into rapier's bodies, recorded by the stages (through
-//! `stages/commit.rs`'s `Commit`) and applied by the commit stage (`commit::apply`) at the end
-//! of each half of the step, in the order they were recorded.
+//! `stages/commit.rs`'s `Commit`) and applied by the commit stage (`commit::apply`), which
+//! closes each half of the step's work on bodies, in the order they were recorded.
 //!
 //! Until then rapier's bodies hold what they held when the half began; a stage that reads a
 //! body the step may already have written reads it through [`Writes::now`], which gives the
