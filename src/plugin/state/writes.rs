@@ -48,12 +48,6 @@ pub(crate) struct Held {
     linvel: Vector,
     angvel: Vector,
     sleeping: bool,
-    /// rapier's setters leave a soft frame's state alone, and set velocities only of dynamic
-    /// and velocity-based kinematic bodies; a pose write wakes only dynamic and kinematic
-    /// bodies.
-    soft_frame: bool,
-    takes_velocities: bool,
-    wakes_on_pose: bool,
 }
 
 impl Held {
@@ -65,64 +59,47 @@ impl Held {
             linvel: rb.linvel(),
             angvel: rb.angvel(),
             sleeping: rb.is_sleeping(),
-            soft_frame: rb.is_soft_frame(),
-            takes_velocities: matches!(
-                rb.body_type(),
-                RigidBodyType::Dynamic | RigidBodyType::KinematicVelocityBased
-            ),
-            wakes_on_pose: rb.is_dynamic_or_kinematic(),
         }
     }
 
-    /// `write` as rapier's setters would apply it to the body (`rb`, for its mass
-    /// properties).
+    /// `write` as rapier's setters would apply it to the body `rb` (read for what decides
+    /// them: its type and mass properties). They leave a soft frame alone, set velocities
+    /// only of dynamic and velocity-based kinematic bodies, and wake on a pose only dynamic
+    /// and kinematic ones.
     fn apply(&mut self, write: &Write, rb: &RigidBody) {
         let Write::Move { to, linvel, angvel } = *write else {
             self.sleeping = false;
             return;
         };
-        if self.soft_frame {
+        if rb.is_soft_frame() {
             return;
         }
-        let (position, next) = (self.position, self.next_position);
-        let moved = match to {
-            Place::Pose(pose) => position != pose || next != pose,
-            Place::Translation(t) => position.translation != t || next.translation != t,
+        let new = match to {
+            Place::Pose(pose) => (pose, pose),
+            Place::Translation(t) => (
+                Pose::from_parts(t, self.position.rotation),
+                Pose::from_parts(t, self.next_position.rotation),
+            ),
         };
-        if moved {
-            match to {
-                Place::Pose(pose) => (self.position, self.next_position) = (pose, pose),
-                Place::Translation(t) => {
-                    self.position.translation = t;
-                    self.next_position.translation = t;
-                }
+        if (self.position, self.next_position) != new {
+            (self.position, self.next_position) = new;
+            // rapier's `RigidBodyMassProps::update_world_mass_properties`.
+            self.com = rb.mass_properties().local_mprops.world_com(&self.position);
+            self.sleeping &= !rb.is_dynamic_or_kinematic();
+        }
+        let takes_velocities = matches!(
+            rb.body_type(),
+            RigidBodyType::Dynamic | RigidBodyType::KinematicVelocityBased
+        );
+        let set = |held: &mut Vector, v: Vector, sleeping: &mut bool| {
+            if takes_velocities && *held != v {
+                *held = v;
+                *sleeping = false;
             }
-            self.moved(rb);
-        }
-        self.mirror_linvel(linvel);
+        };
+        set(&mut self.linvel, linvel, &mut self.sleeping);
         if let Some(w) = angvel {
-            self.mirror_angvel(w);
-        }
-    }
-
-    /// The pose changed: the centre of mass follows (rapier's
-    /// `RigidBodyMassProps::update_world_mass_properties`), and the body wakes.
-    fn moved(&mut self, rb: &RigidBody) {
-        self.com = rb.mass_properties().local_mprops.world_com(&self.position);
-        self.sleeping &= !self.wakes_on_pose;
-    }
-
-    fn mirror_linvel(&mut self, v: Vector) {
-        if self.takes_velocities && self.linvel != v {
-            self.linvel = v;
-            self.sleeping = false;
-        }
-    }
-
-    fn mirror_angvel(&mut self, w: Vector) {
-        if self.takes_velocities && self.angvel != w {
-            self.angvel = w;
-            self.sleeping = false;
+            set(&mut self.angvel, w, &mut self.sleeping);
         }
     }
 }
