@@ -32,7 +32,7 @@ use crate::plugin::queries::observe::{
     body_geom, pushed_by_other, touched_besides_grounds, touches_other,
 };
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::reconstruct::{self, Subject, ccd_consistent};
+use crate::plugin::stages::reconstruct::{self, FlownEnd, Subject, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -127,7 +127,7 @@ impl AfterStep<'_> {
             .is_some()
             || sets.multibody_joints.rigid_body_link(cand.body).is_some()
             || pushed_by_other(now.rb(), sets.narrow_phase)
-            || !ccd_consistent(&now, cand, step.dt, step.dt, step);
+            || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
         if !disturbed && !cand.impact_grounds.is_empty() {
             // A ground it may roll into: where it does, that impact, and on from there.
             let obstacles = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
@@ -181,7 +181,8 @@ impl AfterStep<'_> {
         let Some(now) = self.commit.body(bodies, cand.body) else {
             return;
         };
-        let free = flew_alone(&now, cand, has_grounds, step);
+        let flown = FlownEnd::new(cand, step.dt);
+        let free = flew_alone(&now, &flown, has_grounds, step);
         // Before any geometry: a body with no ground left to search, or whose search would
         // find the step clear (`Candidate::closing`) and that rapier's CCD did not cut short,
         // only flies (exactly, in `Exact` mode).
@@ -189,13 +190,13 @@ impl AfterStep<'_> {
             && free
             && has_grounds
             && !cand.closing
-            && ccd_consistent(&now, cand, step.dt, step.dt, step);
+            && ccd_consistent(&now, &flown, step.dt, step);
         if !has_grounds || clear {
             if mode == TimingMode::Exact
                 && free
-                && (clear || ccd_consistent(&now, cand, step.dt, step.dt, step))
+                && (clear || ccd_consistent(&now, &flown, step.dt, step))
             {
-                self.fly_exactly(&now, cand, step.dt);
+                self.fly_exactly(&now, &flown);
             }
             if has_grounds {
                 self.turned_end(bodies, colliders, cand, step);
@@ -207,7 +208,7 @@ impl AfterStep<'_> {
         let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(now.rb());
-        match first_search(&now, &subject, mode != TimingMode::Step && free) {
+        match first_search(&now, &subject, &flown, mode != TimingMode::Step && free) {
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -221,7 +222,7 @@ impl AfterStep<'_> {
             }
             Some(Search::Clear) => {
                 if mode == TimingMode::Exact {
-                    self.fly_exactly(&now, cand, step.dt);
+                    self.fly_exactly(&now, &flown);
                 }
                 self.turned_end(bodies, colliders, cand, step);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -296,8 +297,8 @@ impl AfterStep<'_> {
     /// anisotropic body or of one with a locked rotation axis (rapier turns it its own way,
     /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
     /// rapier's gyroscopic forces off) gets the exact spin too.
-    fn fly_exactly(&mut self, now: &Now, cand: &Candidate, dt: f64) {
-        let end = cand.flight.advance(&cand.start, dt);
+    fn fly_exactly(&mut self, now: &Now, flown: &FlownEnd) {
+        let (cand, end) = (flown.candidate(), *flown.get());
         let exact_spin = cand.flight.gyro.is_none()
             && !now
                 .rb()
@@ -538,9 +539,9 @@ impl AfterStep<'_> {
 /// Nothing but its flight moved the body in rapier's step: no contact in rapier's solver,
 /// joint, torque or `Step` impulse. A body whose linear velocity rapier changed otherwise than
 /// its flight does was pushed (a ball resting in a pile), and its contacts are not walked.
-fn flew_alone(body: &Now, cand: &Candidate, has_grounds: bool, step: &EndOfStep) -> bool {
-    let (sets, rb) = (&step.sets, body.rb());
-    (has_grounds || reconstruct::moved_as_flown(body, cand, step.dt))
+fn flew_alone(body: &Now, flown: &FlownEnd, has_grounds: bool, step: &EndOfStep) -> bool {
+    let (sets, rb, cand) = (&step.sets, body.rb(), flown.candidate());
+    (has_grounds || reconstruct::moved_as_flown(body, flown))
         && sets
             .impulse_joints
             .attached_joints(cand.body)
@@ -556,7 +557,7 @@ fn flew_alone(body: &Now, cand: &Candidate, has_grounds: bool, step: &EndOfStep)
 /// is none: the body did not fly `free` (it touched something else, or the mode is `Step`),
 /// or rapier's CCD cut its motion short before that first event; rapier's end state is then
 /// checked instead.
-fn first_search(body: &Now, subject: &Subject, free: bool) -> Option<Search> {
+fn first_search(body: &Now, subject: &Subject, flown: &FlownEnd, free: bool) -> Option<Search> {
     let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
     let first = free.then(|| {
         if cand.closing {
@@ -570,7 +571,7 @@ fn first_search(body: &Now, subject: &Subject, free: bool) -> Option<Search> {
             Search::Hit(t, ..) | Search::Stalled(t, _) => *t,
             Search::Clear => step.dt,
         };
-        ccd_consistent(body, cand, t_first, step.dt, step)
+        ccd_consistent(body, flown, t_first, step)
     })
 }
 

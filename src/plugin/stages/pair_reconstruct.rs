@@ -39,7 +39,7 @@ use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
 use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::reconstruct::ccd_consistent;
+use crate::plugin::stages::reconstruct::{FlownEnd, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -230,7 +230,7 @@ fn moves_alone(
             && sets.multibody_joints.rigid_body_link(*h).is_none()
             && rb.user_torque() == Vector::ZERO
             && !cand.touched
-            && ccd_consistent(&now, cand, step.dt, step.dt, step)
+            && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)
     })
 }
 

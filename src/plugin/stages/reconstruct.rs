@@ -224,11 +224,41 @@ pub(crate) fn rest_on_ground(
     true
 }
 
+/// A candidate's free flight over the whole step from its start state: computed once, when
+/// first asked (several checks of one body read it).
+pub(crate) struct FlownEnd<'c> {
+    cand: &'c Candidate,
+    dt: f64,
+    end: std::cell::OnceCell<State>,
+}
+
+impl<'c> FlownEnd<'c> {
+    pub fn new(cand: &'c Candidate, dt: f64) -> Self {
+        Self {
+            cand,
+            dt,
+            end: std::cell::OnceCell::new(),
+        }
+    }
+
+    /// The candidate that flies.
+    pub fn candidate(&self) -> &'c Candidate {
+        self.cand
+    }
+
+    /// The state the flight reaches at the step's end.
+    pub fn get(&self) -> &State {
+        self.end
+            .get_or_init(|| self.cand.flight.advance(&self.cand.start, self.dt))
+    }
+}
+
 /// Did rapier's step change the body's linear velocity only as its flight does (gravity and
 /// any force, damping), to rapier's rounding? An impulse from a contact shows as more: a
 /// resting contact takes back all of `|g| dt`.
-pub(crate) fn moved_as_flown(body: &Now, cand: &Candidate, dt: f64) -> bool {
-    let flown = cand.flight.advance(&cand.start, dt).v;
+pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd) -> bool {
+    let (cand, dt) = (flown.cand, flown.dt);
+    let flown = flown.get().v;
     let actual = vec_to_na(body.linvel());
     // rapier adds the step's velocity change in its substeps, in its precision, and damps
     // once at the step's end, `(v0 + a dt) / (1 + c dt)`, where the flight decays exactly:
@@ -242,17 +272,12 @@ pub(crate) fn moved_as_flown(body: &Now, cand: &Candidate, dt: f64) -> bool {
 /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its first
 /// ground impact at `t_first`? If rapier clamped it earlier, something other than a ground
 /// stopped it, and re-integrating its flight would undo that.
-pub(crate) fn ccd_consistent(
-    body: &Now,
-    cand: &Candidate,
-    t_first: f64,
-    dt: f64,
-    step: &StepData,
-) -> bool {
+pub(crate) fn ccd_consistent(body: &Now, flown: &FlownEnd, t_first: f64, step: &StepData) -> bool {
+    let (cand, dt) = (flown.cand, flown.dt);
     if !body.rb().is_ccd_active() {
         return true;
     }
-    let free_end = cand.flight.advance(&cand.start, dt).com;
+    let free_end = flown.get().com;
     let exact = free_end - cand.start.com;
     let len2 = exact.norm_squared();
     if len2 < STILL_TRAVEL_SQUARED {
