@@ -366,8 +366,9 @@ fn print_profile(profile: &StepProfile, steps: u64) {
         avg(c.body_pairs)
     );
     println!(
-        "writes per step {:.1}, events per step {:.2}",
+        "writes per step {:.1} ({:.1} of them moves), events per step {:.2}",
         avg(c.writes),
+        avg(c.moves),
         avg(c.events)
     );
 }

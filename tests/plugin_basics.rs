@@ -1169,6 +1169,81 @@ fn exact_mode_flies_a_damped_ball_in_closed_form() {
     assert_abs_diff_eq!(yy, y, epsilon = tol * y0);
 }
 
+/// `Exact` mode flies a body far from every ground without moving it every step: from its
+/// second step of flight, its velocity is set to `v - g dt / 2N` before rapier's step
+/// (`Stage::Steer`), under which rapier's own integrator lands on the exact positions, and to
+/// its own after; its translation is written only where rapier's rounding drifted beyond two
+/// roundings. At every step end rapier's translation is the closed form to within two
+/// roundings a coordinate and its velocity the closed form's, rounded once; a velocity the
+/// user sets in flight is the body's own from there on.
+#[test]
+fn exact_flight_far_from_the_grounds_is_steered_not_moved() {
+    let mut world = PhysicsWorld::default();
+    let dt = wide(world.integration_parameters.dt);
+    let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+    let (ball, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.3, 20.0, -0.2))
+            .linvel(Vector::new(1.5, 5.0, -0.5)),
+        ColliderBuilder::ball(0.1),
+    );
+    let mut p = plugin_on(&world, ground, TimingMode::Exact);
+    p.set_profiling(true);
+    let g = na(world.gravity);
+    let eps = f64::from(Real::EPSILON);
+    // The closed form from `(x, v)` at step `k0`, started again where the user sets a velocity.
+    let rb = &world.bodies[ball];
+    let (mut k0, mut xs, mut vs) = (0, na(rb.translation()), na(rb.linvel()));
+    let (mut moves, mut worst_x, mut worst_v) = (Vec::new(), 0.0f64, 0.0f64);
+    for k in 1..=120 {
+        if k == 61 {
+            let v = Vector::new(-1.0, 2.0, 0.25);
+            world.bodies[ball].set_linvel(v, true);
+            (k0, xs, vs) = (k - 1, na(world.bodies[ball].translation()), na(v));
+        }
+        p.step(&mut world);
+        moves.push(p.profile().unwrap().counts.moves);
+        let t = (k - k0) as f64 * dt;
+        let (x, v) = (xs + vs * t + 0.5 * g * t * t, vs + g * t);
+        let rb = &world.bodies[ball];
+        let (held, held_v) = (na(rb.translation()), na(rb.linvel()));
+        for i in 0..3 {
+            worst_x = worst_x.max((held[i] - x[i]).abs() / (eps * x[i].abs()));
+            worst_v = worst_v.max((held_v[i] - v[i]).abs() / (eps * v[i].abs()));
+        }
+        assert!(p.events().is_empty(), "step {k}: far from the ground");
+    }
+    let moved = |from: usize, to: usize| moves[from..to].iter().sum::<usize>();
+    println!(
+        "moves {moves:?}; translation within {worst_x:.2} roundings, velocity within {worst_v:.2}"
+    );
+    // Moved on its first step of flight, and on the first at the user's velocity; then only
+    // where rapier's rounding drifted beyond two roundings (a flight written as before would
+    // move it on all 118 other steps).
+    assert_eq!((moves[0], moves[60]), (1, 1));
+    let drifts = moved(1, 60) + moved(61, 120);
+    assert!(
+        drifts * 2 <= 118,
+        "moved on {drifts} of 118 steps: {moves:?}"
+    );
+    // `f32`: two roundings carried, half of one written (and the plugin's `f64` flight's own
+    // rounding); `f64`: that flight's rounding over the steps against one closed form (2e-12
+    // relative).
+    let (x_tol, v_tol) = if F64 {
+        (1e4, 1e4)
+    } else {
+        (2.0 + 1e-6, 0.5 + 1e-6)
+    };
+    assert!(
+        worst_x <= x_tol,
+        "translation {worst_x} roundings off the closed form"
+    );
+    assert!(
+        worst_v <= v_tol,
+        "velocity {worst_v} roundings off the closed form"
+    );
+}
+
 #[test]
 fn values_too_large_are_refused_naming_the_field_and_its_range() {
     let mut world = PhysicsWorld::default();

@@ -7,7 +7,9 @@
 //! [`Policy::end_action`]) read nothing else and write nothing, so they are unit-tested on
 //! synthetic inputs below.
 
+use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::config::ImpactConfig;
+use crate::rapier::math::Real;
 
 /// Slip speed (m/s) below which a ball on the ground counts as rolling without slip: a
 /// rolling ball slower than the resting speed is left to rapier's resting contact, which
@@ -278,6 +280,23 @@ pub(crate) enum EndAction {
     /// The model's impulse on the end state (`e = 0` if `settle`), then moved out; repeated
     /// on the next deepest point under the `RapierEnd` row.
     Impact { settle: bool },
+}
+
+/// How many of rapier's roundings (its precision's epsilon times the coordinate) a steered
+/// flight's translation may drift from the exact flight's before the exact one is written
+/// ([`Policy::carries`]). At 2, the apexes and impact times of the drop tests are those of a
+/// flight written every step (rounded to half of one); at 4 the apexes at 1000 Hz lose a
+/// third of their accuracy, and each halving costs more writes (idle scene, 1 000 balls:
+/// 42, 49, 71 and 242 writes a step at 4, 2, 1 and 0.5).
+pub(crate) const STEERED_DRIFT_ROUNDINGS: f64 = 2.0;
+
+/// Does rapier's translation `held` of a steered flight (`stages/steer.rs`) stand for the
+/// exact flight's `exact` without a write: each coordinate within
+/// [`STEERED_DRIFT_ROUNDINGS`] of rapier's roundings of that coordinate? Beyond it, the exact
+/// translation is written.
+pub(crate) fn carries(held: &nalgebra::Vector3<f64>, exact: &nalgebra::Vector3<f64>) -> bool {
+    let rounding = STEERED_DRIFT_ROUNDINGS * to_f64(Real::EPSILON);
+    (0..3).all(|i| (held[i] - exact[i]).abs() <= rounding * exact[i].abs())
 }
 
 impl Policy {

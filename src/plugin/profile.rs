@@ -18,6 +18,9 @@ pub enum Stage {
     Survey,
     /// The planned bodies' pairs with the grounds near them, and their candidates.
     Plan,
+    /// `Exact` mode's free flights steered onto the exact positions, and the velocities of
+    /// those that end given back.
+    Steer,
     /// The writes the stages recorded, applied to rapier's bodies. It closes each half of the
     /// step's work on bodies, so it runs twice (after the plan, and after the holds); its time
     /// is both runs'.
@@ -48,6 +51,7 @@ impl Stage {
         Stage::PairPlan,
         Stage::Survey,
         Stage::Plan,
+        Stage::Steer,
         Stage::Commit,
         Stage::Install,
         Stage::Rapier,
@@ -68,6 +72,7 @@ impl Stage {
             Stage::PairPlan => "pair plan",
             Stage::Survey => "survey",
             Stage::Plan => "plan",
+            Stage::Steer => "steer",
             Stage::Commit => "commit",
             Stage::Install => "install",
             Stage::Rapier => "rapier",
@@ -117,9 +122,13 @@ pub struct StepCounts {
     /// "Filtering and hooks"), and this counts only the balls flagged for pairs between
     /// bodies.
     pub hooked_bodies: usize,
-    /// Writes into rapier's bodies (a state, a flight's end, a wake-up): each costs rapier
-    /// an update of the body in its next step.
+    /// Writes into rapier's bodies (a state, a flight's end, a velocity, a wake-up): each
+    /// costs rapier an update of the body in its next step.
     pub writes: usize,
+    /// Of the writes, those that move a body (a pose or a translation): rapier then also
+    /// updates its colliders, wakes the bodies they have contact pairs with, and updates its
+    /// broad phase, several times what a velocity costs it.
+    pub moves: usize,
     /// Events reported.
     pub events: usize,
 }
@@ -140,6 +149,7 @@ impl std::ops::AddAssign for StepCounts {
             body_pairs,
             hooked_bodies,
             writes,
+            moves,
             events,
         } = o;
         for (total, add) in [
@@ -155,6 +165,7 @@ impl std::ops::AddAssign for StepCounts {
             (&mut self.body_pairs, body_pairs),
             (&mut self.hooked_bodies, hooked_bodies),
             (&mut self.writes, writes),
+            (&mut self.moves, moves),
             (&mut self.events, events),
         ] {
             *total += add;

@@ -10,8 +10,10 @@
 //! - a body that flew alone with a closing ground: the in-step impacts from its start state
 //!   (`reconstruct::through_impacts`), the end state checked (`EndCheck::Flown`);
 //! - a body that flew alone with the step clear: `Exact` mode's exact flight
-//!   (`fly_exactly`), and a check of rapier's rotation for a body whose turning moves its
-//!   surface (`turned_end`);
+//!   (`fly_exactly`; of a flight the steer stage steered, the velocity alone where rapier's
+//!   integrator carried the translation), and a check of rapier's rotation for a body whose
+//!   turning moves its surface (`turned_end`); a steered body something else touched keeps
+//!   rapier's end state, its velocity given back the steering's offset;
 //! - any other: rapier's end state, checked (`EndCheck::RapierEnd`).
 //!
 //! The checks are the settle stage's (`settle.rs`); every write and event goes through the
@@ -19,7 +21,7 @@
 //! put back (`put_back_held`).
 
 use crate::motion::{Rolling, State};
-use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_to_na};
+use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, released, resolve,
 };
@@ -197,6 +199,10 @@ impl AfterStep<'_> {
                 && (clear || ccd_consistent(&now, &flown, step.dt, step))
             {
                 self.fly_exactly(&now, &flown);
+            } else if let Some(steer) = cand.steer {
+                // rapier's end state stands: its velocity gets the steering's offset back.
+                let v = vec_to_na(now.linvel()) + steer.offset;
+                self.commit.velocity(cand.body, vec_from_na(&v));
             }
             if has_grounds {
                 self.turned_end(bodies, colliders, cand, step);
@@ -314,7 +320,8 @@ impl AfterStep<'_> {
             ..end
         };
         let body = (cand.body, now);
-        self.commit.flight(body, &s, &cand.local_com, exact_spin);
+        let spin_steered = (exact_spin, cand.steer.is_some());
+        self.commit.flight(body, &s, &cand.local_com, spin_steered);
     }
 
     /// One ball held at rest for its first step (`ImpactPlugin::put_back_held`).

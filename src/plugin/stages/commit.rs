@@ -17,12 +17,13 @@
 //! rapier's own end state ([`Origin::Correction`]) is not: rapier's precision is its truth.
 
 use crate::motion::State;
-use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na};
+use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
+use crate::plugin::policy::carries;
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
 use crate::plugin::state::writes::{Now, Place, Write, Writes};
-use crate::rapier::math::{Pose, Real};
+use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 
@@ -39,24 +40,33 @@ pub(crate) enum Origin {
 }
 
 /// The commit stage: applies the writes recorded in this half of the step to rapier's
-/// bodies, in the order recorded, and returns how many there were (a write to a body that no
-/// longer exists is dropped).
-pub(crate) fn apply(writes: &mut Writes, bodies: &mut RigidBodySet) -> usize {
+/// bodies, in the order recorded, and returns how many there were and how many of them move
+/// a body (a write to a body that no longer exists is dropped).
+pub(crate) fn apply(writes: &mut Writes, bodies: &mut RigidBodySet) -> (usize, usize) {
     let count = writes.len();
+    let mut moves = 0;
     writes.apply_all(|body, write| {
+        moves += usize::from(matches!(write, Write::Move { .. }));
         if let Some(rb) = bodies.get_mut(body) {
             apply_one(write, rb);
         }
     });
-    count
+    (count, moves)
 }
 
 /// Applies one write to `rb` through rapier's setters, in the order [`Write`] gives (every
 /// read of the body before the commit mirrors this: `state/writes.rs`'s `Held`).
 fn apply_one(write: &Write, rb: &mut RigidBody) {
-    let Write::Move { to, linvel, angvel } = *write else {
-        rb.wake_up(true);
-        return;
+    let (to, linvel, angvel) = match *write {
+        Write::Move { to, linvel, angvel } => (to, linvel, angvel),
+        Write::Velocity(linvel) => {
+            rb.set_linvel(linvel, true);
+            return;
+        }
+        Write::Wake => {
+            rb.wake_up(true);
+            return;
+        }
     };
     match to {
         Place::Pose(pose) => rb.set_position(pose, true),
@@ -175,27 +185,55 @@ impl<'a> Commit<'a> {
     /// Writes a free flight's end into `body` (woken up): the translation and linear
     /// velocity, and the spin where `exact_spin` and rapier's differs (a write queues the body
     /// for rapier's update, so an unchanged spin is not written); rapier's rotation is kept.
-    /// `before`: the body as the writes so far leave it ([`Self::body`]).
+    /// Of a flight `steered` onto the exact positions (`steer.rs`), the translation is kept
+    /// where rapier's carries the flight's (within a few roundings: `policy::carries`) and
+    /// the spin needs no write: only the velocity is written, which a pose write would cost
+    /// rapier much more than. `before`: the body as the writes so far leave it
+    /// ([`Self::body`]).
     pub fn flight(
         &mut self,
         (body, before): (RigidBodyHandle, &Now),
         s: &State,
         local_com: &Vector3<f64>,
-        exact_spin: bool,
+        (exact_spin, steered): (bool, bool),
     ) {
         if !fits(s) {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
         }
-        let translation = vec_from_na(&(s.com - rot_to_na(before.rotation()) * local_com));
+        let exact = s.com - rot_to_na(before.rotation()) * local_com;
         let (linvel, w) = (vec_from_na(&s.v), vec_from_na(&s.w));
         let angvel = (exact_spin && before.angvel() != w).then_some(w);
         let spin = angvel.unwrap_or(before.angvel());
-        let to = Place::Translation(translation);
-        self.writes.record(body, Write::Move { to, linvel, angvel });
+        let held = before.translation();
+        let translation = if steered && angvel.is_none() && carries(&vec_to_na(held), &exact) {
+            if before.linvel() != linvel {
+                self.writes.record(body, Write::Velocity(linvel));
+            }
+            held
+        } else {
+            let translation = vec_from_na(&exact);
+            let to = Place::Translation(translation);
+            self.writes.record(body, Write::Move { to, linvel, angvel });
+            translation
+        };
         if self.exact {
             self.shadows
                 .insert(body, Shadow::of(s, (translation, linvel, spin)));
+        }
+    }
+
+    /// Sets `body`'s linear velocity alone (woken up): a free flight steered, or its
+    /// steering's offset given back (`steer.rs`).
+    pub fn velocity(&mut self, body: RigidBodyHandle, linvel: Vector) {
+        if linvel.is_finite() {
+            self.writes.record(body, Write::Velocity(linvel));
+            // No state of the step's is then what rapier holds.
+            if self.exact {
+                self.shadows.remove(&body);
+            }
+        } else {
+            self.diagnose(Diagnostic::NonFiniteState { body });
         }
     }
 
@@ -285,33 +323,46 @@ mod tests {
         (bodies, h)
     }
 
+    /// The kinds of write [`record`] makes.
+    const KINDS: usize = 7;
+
     /// One of the writes a stage records, by number: a full state (twice the same, the
-    /// second changing nothing), a flight's end with and without its spin, a wake-up.
+    /// second changing nothing), a flight's end with and without its spin, a steered
+    /// flight's end where the body is (its velocity alone, where rapier's translation carries
+    /// it), a velocity alone, a wake-up.
     fn record(commit: &mut Commit, bodies: &RigidBodySet, h: RigidBodyHandle, k: usize) {
         let local_com = vec_to_na(bodies[h].local_center_of_mass());
-        let s = State {
+        let mut s = State {
             com: Vector3::new(0.7, 1.3 + 0.1 * k as f64, -0.4),
             rot: UnitQuaternion::from_euler_angles(0.3, -0.2, 0.1 * k as f64),
             v: Vector3::new(0.2, -(k as f64), 0.3),
             w: Vector3::new(4.0, 0.0, 1.0 + k as f64),
         };
-        match k % 5 {
+        match k % KINDS {
             0 | 1 => commit.state(h, &s, &local_com, Origin::Model),
             2 | 3 => {
                 let before = commit.body(bodies, h).unwrap();
-                commit.flight((h, &before), &s, &local_com, k % 5 == 2);
+                commit.flight((h, &before), &s, &local_com, (k % KINDS == 2, false));
             }
+            4 => {
+                let before = commit.body(bodies, h).unwrap();
+                s.com = vec_to_na(before.center_of_mass());
+                commit.flight((h, &before), &s, &local_com, (false, true));
+            }
+            5 => commit.velocity(h, vec_from_na(&s.v)),
             _ => commit.wake(h),
         }
     }
 
     #[test]
     fn a_body_read_before_the_commit_reads_as_after_it() {
-        // Every sequence of up to four writes (of the five kinds, repeats included), on each
-        // kind of body: what a stage reads before the commit (`Now`) is what rapier holds
-        // after it, bit for bit, and the next pose moves with the pose.
-        let kinds: Vec<Vec<usize>> = (0..5usize.pow(4))
-            .flat_map(|n| (1..=4).map(move |len| (0..len).map(|i| n / 5usize.pow(i) % 5).collect()))
+        // Every sequence of up to four writes (of every kind, repeats included), on each kind
+        // of body: what a stage reads before the commit (`Now`) is what rapier holds after
+        // it, bit for bit, and the next pose moves with the pose.
+        let kinds: Vec<Vec<usize>> = (0..KINDS.pow(4))
+            .flat_map(|n| {
+                (1..=4).map(move |len| (0..len).map(|i| n / KINDS.pow(i) % KINDS).collect())
+            })
             .collect();
         for kind in 0..4 {
             for seq in &kinds {
@@ -323,8 +374,9 @@ mod tests {
                     record(&mut commit, &bodies, h, *k + i);
                 }
                 let before = read_now(&commit.body(&bodies, h).unwrap());
-                let applied = apply(&mut writes, &mut bodies);
-                assert_eq!(applied, seq.len());
+                let recorded = writes.len();
+                let (applied, _) = apply(&mut writes, &mut bodies);
+                assert_eq!(applied, recorded);
                 let after = read_rapier(&bodies[h]);
                 assert_eq!(before, after, "kind {kind}, writes {seq:?}");
                 // The plugin writes only managed bodies, which are dynamic.

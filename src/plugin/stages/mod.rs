@@ -9,9 +9,11 @@
 //!    `Exact` mode a flying candidate each), or to be planned.
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
 //!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
-//! 5. commit (`commit.rs`): the writes recorded so far (the wake-ups and, in `Step` mode, the
-//!    impulses) applied to rapier's bodies.
-//! 6. install (`install.rs`): the hook flags and the tables rapier's hook calls read.
+//! 5. steer (`steer.rs`): in `Exact` mode, the free flights far from the grounds given the
+//!    velocity under which rapier's integrator lands on the exact positions.
+//! 6. commit (`commit.rs`): the writes recorded so far (the wake-ups, the steering velocities
+//!    and, in `Step` mode, the impulses) applied to rapier's bodies.
+//! 7. install (`install.rs`): the hook flags and the tables rapier's hook calls read.
 //!
 //! During rapier's step the plugin is its `PhysicsHooks` (`hooks/`).
 //!
@@ -46,6 +48,7 @@ mod plan;
 mod prepare;
 mod reconstruct;
 mod settle;
+mod steer;
 mod view;
 mod woken;
 
@@ -114,6 +117,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             (c.near, c.candidates) = (near.len(), step.candidates.len());
         });
         survey.far.extend(not_near);
+        self.steer(&mut step, bodies, &sets, &last);
+        self.stopwatch.lap(Stage::Steer);
         if !self.reports.diagnostics.is_empty() {
             self.memory.report_once(&mut self.reports.diagnostics);
         }
@@ -289,11 +294,12 @@ impl<H> ImpactPlugin<H> {
     /// in the half applied to rapier's bodies (`commit.rs`); after rapier's step, the
     /// colliders moved with their bodies (before it, rapier's step moves them).
     fn commit(&mut self, bodies: &mut RigidBodySet, colliders: Option<&mut ColliderSet>) {
-        let applied = commit::apply(&mut self.writes, bodies);
+        let (applied, moves) = commit::apply(&mut self.writes, bodies);
         if let Some(colliders) = colliders {
             bodies.propagate_modified_body_positions_to_colliders(colliders);
         }
-        self.stopwatch.count(|c| c.writes += applied);
+        self.stopwatch
+            .count(|c| (c.writes, c.moves) = (c.writes + applied, c.moves + moves));
         self.stopwatch.lap(Stage::Commit);
     }
 }

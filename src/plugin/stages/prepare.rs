@@ -64,6 +64,7 @@ impl<H> ImpactPlugin<H> {
                 }
                 TimingMode::Step | TimingMode::Exact => 0.0,
             },
+            substeps: params.num_solver_iterations.max(1),
             down: g.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
             gravity: g,
             ..Default::default()

@@ -260,13 +260,19 @@ pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd) -> bool {
     let (cand, dt) = (flown.cand, flown.dt);
     let flown = flown.get().v;
     let actual = vec_to_na(body.linvel());
+    // A steered flight (`steer.rs`) changes rapier's velocity as the flight changes its own,
+    // from the velocity rapier held.
+    let (from, expected) = match cand.steer {
+        None => (cand.start.v, flown),
+        Some(st) => (st.held, st.held + (flown - cand.start.v)),
+    };
     // rapier adds the step's velocity change in its substeps, in its precision, and damps
     // once at the step's end, `(v0 + a dt) / (1 + c dt)`, where the flight decays exactly:
     // `v0 (c dt)^2 / 2` and `|a| dt c dt / 2` apart (twice those allowed).
-    let scale = cand.start.v.norm() + flown.norm() + cand.flight.accel.norm() * dt;
+    let scale = from.norm() + expected.norm() + cand.flight.accel.norm() * dt;
     let x = cand.flight.linear_damping * dt;
-    let damping = x * x * cand.start.v.norm() + x * cand.flight.accel.norm() * dt;
-    (actual - flown).norm() <= MOVED_AS_FLOWN_ROUNDING * scale + damping
+    let damping = x * x * from.norm() + x * cand.flight.accel.norm() * dt;
+    (actual - expected).norm() <= MOVED_AS_FLOWN_ROUNDING * scale + damping
 }
 
 /// Was the body's motion in the step cut short by rapier's CCD only at (or after) its first

@@ -60,6 +60,19 @@ pub(crate) struct Candidate {
     /// ground's index (in `StepData::grounds`). rapier's end state is checked against it
     /// (`EndCheck::ReleasedResting`).
     pub released: Option<usize>,
+    /// `Exact` mode's steering of a free flight (`stages/steer.rs`); `None` for a body not
+    /// steered.
+    pub steer: Option<Steer>,
+}
+
+/// A free flight steered for rapier's step (`stages/steer.rs`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Steer {
+    /// How much lower than the body's own velocity rapier's step started (m/s): `a dt / 2N`.
+    pub offset: Vector3<f64>,
+    /// The linear velocity rapier's step started from (m/s): `start.v - offset` in rapier's
+    /// precision.
+    pub held: Vector3<f64>,
 }
 
 impl Candidate {
@@ -83,6 +96,7 @@ impl Candidate {
             turns_surface: false,
             rolling: None,
             released: None,
+            steer: None,
         }
     }
 }
@@ -101,8 +115,11 @@ pub(crate) struct StepData {
     /// of impacts can be, per unit of acceleration (s^2): in `TimeOfImpact` mode rapier's
     /// substepped integrator, which moves a body by `(N + 1) / 2N a dt^2` in `N` substeps
     /// where the flight moves it `a dt^2 / 2`, so `dt^2 / 2N`; 0 in the other modes (`Exact`
-    /// writes the flight; `Step` does not search).
+    /// flies exactly; `Step` does not search).
     pub integrator_lag: f64,
+    /// rapier's solver substeps in the step (`IntegrationParameters::num_solver_iterations`,
+    /// at least 1).
+    pub substeps: usize,
     pub roles: HandleMap<PairKey, Role>,
     /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to

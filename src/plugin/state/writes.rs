@@ -24,6 +24,9 @@ pub(crate) enum Write {
         linvel: Vector,
         angvel: Option<Vector>,
     },
+    /// The linear velocity alone (woken up): `Exact` mode's steering of a free flight
+    /// (`stages/steer.rs`).
+    Velocity(Vector),
     /// `wake_up`.
     Wake,
 }
@@ -67,25 +70,19 @@ impl Held {
     /// only of dynamic and velocity-based kinematic bodies, and wake on a pose only dynamic
     /// and kinematic ones.
     fn apply(&mut self, write: &Write, rb: &RigidBody) {
-        let Write::Move { to, linvel, angvel } = *write else {
-            self.sleeping = false;
-            return;
+        let (to, linvel, angvel) = match *write {
+            Write::Move { to, linvel, angvel } => (Some(to), linvel, angvel),
+            Write::Velocity(linvel) => (None, linvel, None),
+            Write::Wake => {
+                self.sleeping = false;
+                return;
+            }
         };
         if rb.is_soft_frame() {
             return;
         }
-        let new = match to {
-            Place::Pose(pose) => (pose, pose),
-            Place::Translation(t) => (
-                Pose::from_parts(t, self.position.rotation),
-                Pose::from_parts(t, self.next_position.rotation),
-            ),
-        };
-        if (self.position, self.next_position) != new {
-            (self.position, self.next_position) = new;
-            // rapier's `RigidBodyMassProps::update_world_mass_properties`.
-            self.com = rb.mass_properties().local_mprops.world_com(&self.position);
-            self.sleeping &= !rb.is_dynamic_or_kinematic();
+        if let Some(to) = to {
+            self.move_to(to, rb);
         }
         let takes_velocities = matches!(
             rb.body_type(),
@@ -100,6 +97,23 @@ impl Held {
         set(&mut self.linvel, linvel, &mut self.sleeping);
         if let Some(w) = angvel {
             set(&mut self.angvel, w, &mut self.sleeping);
+        }
+    }
+
+    /// rapier's `set_position` / `set_translation` on the body `rb`.
+    fn move_to(&mut self, to: Place, rb: &RigidBody) {
+        let new = match to {
+            Place::Pose(pose) => (pose, pose),
+            Place::Translation(t) => (
+                Pose::from_parts(t, self.position.rotation),
+                Pose::from_parts(t, self.next_position.rotation),
+            ),
+        };
+        if (self.position, self.next_position) != new {
+            (self.position, self.next_position) = new;
+            // rapier's `RigidBodyMassProps::update_world_mass_properties`.
+            self.com = rb.mass_properties().local_mprops.world_com(&self.position);
+            self.sleeping &= !rb.is_dynamic_or_kinematic();
         }
     }
 }

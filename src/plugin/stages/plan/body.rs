@@ -235,6 +235,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             turns_surface: body.turns_surface,
             rolling: plan.rolling.take(),
             released: plan.released,
+            steer: None,
         });
     }
 }
