@@ -279,9 +279,7 @@ fn solver_contact_besides(
     sets: &Sets,
     counts: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
-    if sets.impulse_joints.attached_joints(body).next().is_some()
-        || sets.multibody_joints.rigid_body_link(body).is_some()
-    {
+    if sets.jointed(body) {
         return true;
     }
     rb.colliders().iter().any(|ch| {
@@ -399,6 +397,12 @@ pub(crate) struct Sets<'a> {
 }
 
 impl<'a> Sets<'a> {
+    /// Has `body` a joint (an impulse joint attached, or a link of a multibody)?
+    pub fn jointed(&self, body: RigidBodyHandle) -> bool {
+        self.impulse_joints.attached_joints(body).next().is_some()
+            || self.multibody_joints.rigid_body_link(body).is_some()
+    }
+
     pub fn new(
         narrow_phase: &'a NarrowPhase,
         impulse_joints: &'a ImpulseJointSet,
@@ -422,8 +426,7 @@ pub(crate) fn neighbours(
     registry: &Registry,
     down: &Vector3<f64>,
 ) -> NonGround {
-    let jointed = sets.impulse_joints.attached_joints(body).next().is_some()
-        || sets.multibody_joints.rigid_body_link(body).is_some();
+    let jointed = sets.jointed(body);
     if jointed {
         return NonGround::JOINTED;
     }
@@ -499,9 +502,7 @@ pub(crate) fn within_reach_of_other(
         writes,
         ..
     } = *scene;
-    if sets.impulse_joints.attached_joints(body).next().is_some()
-        || sets.multibody_joints.rigid_body_link(body).is_some()
-    {
+    if sets.jointed(body) {
         return true;
     }
     let index = &registry.index;

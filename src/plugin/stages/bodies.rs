@@ -122,12 +122,7 @@ impl AfterStep<'_> {
         // Something else acted on it in the step: a contact, a joint, or rapier's CCD
         // stopping it short (against a thin body).
         let sets = &step.sets;
-        let disturbed = sets
-            .impulse_joints
-            .attached_joints(cand.body)
-            .next()
-            .is_some()
-            || sets.multibody_joints.rigid_body_link(cand.body).is_some()
+        let disturbed = sets.jointed(cand.body)
             || pushed_by_other(now.rb(), sets.narrow_phase)
             || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
         if !disturbed && !cand.impact_grounds.is_empty() {
@@ -549,12 +544,7 @@ impl AfterStep<'_> {
 fn flew_alone(body: &Now, flown: &FlownEnd, has_grounds: bool, step: &EndOfStep) -> bool {
     let (sets, rb, cand) = (&step.sets, body.rb(), flown.candidate());
     (has_grounds || reconstruct::moved_as_flown(body, flown))
-        && sets
-            .impulse_joints
-            .attached_joints(cand.body)
-            .next()
-            .is_none()
-        && sets.multibody_joints.rigid_body_link(cand.body).is_none()
+        && !sets.jointed(cand.body)
         && rb.user_torque() == Vector::ZERO
         && !cand.touched
         && !touches_other(rb, sets.narrow_phase)

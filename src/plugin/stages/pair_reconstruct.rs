@@ -226,8 +226,7 @@ fn moves_alone(
         view.registry.manages(*h, rb)
             && !now.is_sleeping()
             && !touches_other(rb, sets.narrow_phase)
-            && sets.impulse_joints.attached_joints(*h).next().is_none()
-            && sets.multibody_joints.rigid_body_link(*h).is_none()
+            && !sets.jointed(*h)
             && rb.user_torque() == Vector::ZERO
             && !cand.touched
             && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)

@@ -88,10 +88,5 @@ fn integrated_alone(cand: &Candidate, rb: &RigidBody, sets: &Sets) -> bool {
         && rb.is_enabled()
         && rb.linear_damping() == 0.0
         && rb.locked_axes() == LockedAxes::empty()
-        && sets
-            .impulse_joints
-            .attached_joints(cand.body)
-            .next()
-            .is_none()
-        && sets.multibody_joints.rigid_body_link(cand.body).is_none()
+        && !sets.jointed(cand.body)
 }

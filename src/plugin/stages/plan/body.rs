@@ -165,17 +165,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-        let jointed = scene
-            .sets
-            .impulse_joints
-            .attached_joints(handle)
-            .next()
-            .is_some()
-            || scene
-                .sets
-                .multibody_joints
-                .rigid_body_link(handle)
-                .is_some();
+        let jointed = scene.sets.jointed(handle);
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
