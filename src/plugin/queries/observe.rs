@@ -101,7 +101,7 @@ pub(crate) fn snapshot(
     let local_com = vec_to_na(rb.local_center_of_mass());
     let mut state = now.state();
     if let Some(sh) = shadow {
-        if sh.written_translation == now.translation() && sh.written_linvel == now.linvel() {
+        if sh.held_by(now) {
             state.com = sh.com;
             state.v = sh.v;
             // The spin too, where rapier left it as written (its gyroscopic step changes an

@@ -196,7 +196,7 @@ impl AfterStep<'_> {
                 self.fly_exactly(&now, &flown);
             } else if let Some(steer) = cand.steer {
                 // rapier's end state stands: its velocity gets the steering's offset back.
-                let v = vec_to_na(now.linvel()) + steer.offset;
+                let v = vec_to_na(now.linvel()) + steer;
                 self.commit.velocity(cand.body, vec_from_na(&v));
             }
             if has_grounds {

@@ -262,9 +262,9 @@ pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd) -> bool {
     let actual = vec_to_na(body.linvel());
     // A steered flight (`steer.rs`) changes rapier's velocity as the flight changes its own,
     // from the velocity rapier held.
-    let (from, expected) = match cand.steer {
+    let (from, expected) = match cand.steered_velocity().map(vec_to_na) {
         None => (cand.start.v, flown),
-        Some(st) => (st.held, st.held + (flown - cand.start.v)),
+        Some(held) => (held, held + (flown - cand.start.v)),
     };
     // rapier adds the step's velocity change in its substeps, in its precision, and damps
     // once at the step's end, `(v0 + a dt) / (1 + c dt)`, where the flight decays exactly:

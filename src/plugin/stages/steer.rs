@@ -16,15 +16,13 @@
 //! touched in the step gets the offset back on rapier's end velocity. Between steps rapier
 //! holds the body's own velocity, always.
 
-use crate::plugin::bridge::convert::{vec_from_na, vec_to_na};
 use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::memory::LastStep;
-use crate::plugin::state::step::{Candidate, Steer, StepData};
+use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::prelude::{LockedAxes, RigidBody, RigidBodySet};
-use nalgebra::Vector3;
 
 impl<H> ImpactPlugin<H> {
     /// The steer stage (see the module's contract): records the steering velocities of this
@@ -57,21 +55,17 @@ impl<H> ImpactPlugin<H> {
                 continue;
             };
             let now = commit.now(cand.body, rb);
-            let owned = last.shadows.get(&cand.body).is_some_and(|sh| {
-                sh.written_linvel == now.linvel() && sh.written_translation == now.translation()
-            });
-            if !owned {
+            if !last
+                .shadows
+                .get(&cand.body)
+                .is_some_and(|sh| sh.held_by(&now))
+            {
                 continue;
             }
-            let offset = cand.flight.accel * lag;
-            let held = vec_from_na(&(cand.start.v - offset));
-            if offset != Vector3::zeros() {
+            cand.steer = Some(cand.flight.accel * lag);
+            if let Some(held) = cand.steered_velocity().filter(|v| *v != now.linvel()) {
                 commit.velocity(cand.body, held);
             }
-            cand.steer = Some(Steer {
-                offset,
-                held: vec_to_na(held),
-            });
         }
     }
 }

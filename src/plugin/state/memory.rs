@@ -7,6 +7,7 @@ use crate::plugin::state::handles::{
     HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
 };
 use crate::plugin::state::step::{Candidate, StepData};
+use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
@@ -28,6 +29,13 @@ pub(crate) struct Shadow {
 }
 
 impl Shadow {
+    /// Does rapier still hold what was written (its translation and linear velocity as
+    /// `now` reads them)? Then the `f64` state is the body's; else something (the user, a
+    /// contact) changed it since.
+    pub fn held_by(&self, now: &Now) -> bool {
+        self.written_translation == now.translation() && self.written_linvel == now.linvel()
+    }
+
     /// Every number finite (a snapshot's shadow is checked before it is restored).
     pub fn is_finite(&self) -> bool {
         let written = [

@@ -2,11 +2,13 @@
 //! step to the stages after it.
 
 use crate::motion::{Flight, Rolling, State};
+use crate::plugin::bridge::convert::vec_from_na;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
 use crate::plugin::state::small_list::SmallList;
+use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
@@ -60,22 +62,20 @@ pub(crate) struct Candidate {
     /// ground's index (in `StepData::grounds`). rapier's end state is checked against it
     /// (`EndCheck::ReleasedResting`).
     pub released: Option<usize>,
-    /// `Exact` mode's steering of a free flight (`stages/steer.rs`); `None` for a body not
-    /// steered.
-    pub steer: Option<Steer>,
-}
-
-/// A free flight steered for rapier's step (`stages/steer.rs`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Steer {
-    /// How much lower than the body's own velocity rapier's step started (m/s): `a dt / 2N`.
-    pub offset: Vector3<f64>,
-    /// The linear velocity rapier's step started from (m/s): `start.v - offset` in rapier's
-    /// precision.
-    pub held: Vector3<f64>,
+    /// `Exact` mode's steering of a free flight (`stages/steer.rs`): how much lower than its
+    /// own velocity rapier's step started it (m/s), `a dt / 2N`; `None` for a body not steered.
+    pub steer: Option<Vector3<f64>>,
 }
 
 impl Candidate {
+    /// The linear velocity rapier's step starts a steered flight from: `start.v - steer` in
+    /// rapier's precision (the steer stage writes it, and the bodies stage checks rapier's
+    /// change of velocity from it).
+    pub fn steered_velocity(&self) -> Option<Vector> {
+        self.steer
+            .map(|offset| vec_from_na(&(self.start.v - offset)))
+    }
+
     /// A body that no ground can reach in the step (only its flight, in `Exact` mode).
     pub fn flying(
         body: RigidBodyHandle,
