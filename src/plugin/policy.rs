@@ -163,9 +163,8 @@ pub(crate) const CCD_SLACK: f64 = 1e-3;
 
 /// Steps in a row with no managed body near any ground and none asleep after which the
 /// grounds' hook flags come off (they go on the first step a body nears a ground, and are
-/// not put on before): no
-/// ground pair can then have a contact the plugin changes, and each hooked pair would cost a
-/// hook call every step. A flag put on or taken off costs rapier an update of the ground's
+/// not put on before): no ground pair can then have a contact the plugin changes, and each
+/// hooked pair would cost a hook call every step. A flag put on or taken off costs rapier an update of the ground's
 /// collider, so a scene whose bodies near the ground now and then does not toggle it each
 /// time (half a second at 60 Hz).
 pub(crate) const GROUND_FLAGS_IDLE_STEPS: u32 = 30;
@@ -284,7 +283,7 @@ pub(crate) enum EndAction {
 
 /// How many of rapier's roundings (its precision's epsilon times the coordinate) a steered
 /// flight's translation may drift from the exact flight's before the exact one is written
-/// ([`Policy::carries`]). At 2, the apexes and impact times of the drop tests are those of a
+/// ([`carries`]). At 2, the apexes and impact times of the drop tests are those of a
 /// flight written every step (rounded to half of one); at 4 the apexes at 1000 Hz lose a
 /// third of their accuracy, and each halving costs more writes (idle scene, 1 000 balls:
 /// 42, 49, 71 and 242 writes a step at 4, 2, 1 and 0.5).

@@ -18,8 +18,8 @@ pub enum Stage {
     Survey,
     /// The planned bodies' pairs with the grounds near them, and their candidates.
     Plan,
-    /// `Exact` mode's free flights steered onto the exact positions, and the velocities of
-    /// those that end given back.
+    /// `Exact` mode's free flights far from the grounds given the velocity under which
+    /// rapier's integrator lands on the exact positions.
     Steer,
     /// The writes the stages recorded, applied to rapier's bodies. It closes each half of the
     /// step's work on bodies, so it runs twice (after the plan, and after the holds); its time
