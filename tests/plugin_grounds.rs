@@ -14,7 +14,10 @@
 //!   called for every pair that is not a managed ground contact (a conveyor platform that
 //!   moves a box, an excluded body on a ground), and its filter decides whether a ball and a
 //!   ground touch at all (a ghost ball falls through a ground the plugin would bounce);
-//!   a conveyor ground still conveys a box resting on it.
+//!   a conveyor ground still conveys a box resting on it;
+//! - a floor of flush tiles: one ground to the plan (balls bounce exactly as on one cuboid,
+//!   each event names the tile under its point), and the tiles one by one for a ball whose
+//!   pairs the user's filter decides (a refused tile lets it through).
 //!
 //! Every test prints measured against expected.
 
@@ -30,7 +33,7 @@ use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material};
 use rapier_impact::na::{Matrix3, Vector3};
 use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
+use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
 
 /// Tolerances `(time (s), velocity (m/s))` of an exact in-step impact.
 fn tol() -> (f64, f64) {
@@ -681,4 +684,213 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
         "the ghost did not fall through the ground: y = {ghost_y}"
     );
     assert!(bounces >= 1, "the ball never bounced");
+}
+
+// ---------------------------------------------------------------------------------------
+// A floor of flush tiles: one ground to the plan
+// ---------------------------------------------------------------------------------------
+
+/// Side of the tiled floor (m), and of one of its `TILES x TILES` tiles.
+const FLOOR: f64 = 2.0;
+const TILES: usize = 8;
+
+/// The floor, top at y = 0, 0.5 m thick, centred on the origin: one cuboid (`tiled` false)
+/// or `TILES x TILES` flush tiles, each on a fixed body of its own, in rows of increasing
+/// `x` then `z` (returned in that order).
+fn floor(world: &mut PhysicsWorld, tiled: bool) -> Vec<ColliderHandle> {
+    let n = if tiled { TILES } else { 1 };
+    let side = FLOOR / n as f64;
+    let mut out = Vec::new();
+    for i in 0..n {
+        for k in 0..n {
+            let centre = |j: usize| -0.5 * FLOOR + (j as f64 + 0.5) * side;
+            out.push(
+                world
+                    .insert(
+                        RigidBodyBuilder::fixed(),
+                        ColliderBuilder::cuboid(real(0.5 * side), 0.25, real(0.5 * side))
+                            .translation(Vector::new(real(centre(i)), -0.25, real(centre(k))))
+                            .restitution(0.6)
+                            .friction(0.4),
+                    )
+                    .1,
+            );
+        }
+    }
+    out
+}
+
+/// The tile of `floor(_, true)` under the point `(x, z)`.
+fn tile_under(tiles: &[ColliderHandle], x: f64, z: f64) -> ColliderHandle {
+    let side = FLOOR / TILES as f64;
+    let at = |c: f64| (((c + 0.5 * FLOOR) / side).floor() as usize).min(TILES - 1);
+    tiles[at(x) * TILES + at(z)]
+}
+
+/// What `thrown_on_floor` measured: the balls' states after every step, the events (each
+/// with its ball's number), the most ground pairs planned as impacts in a step, the grounds.
+type Thrown = (
+    Vec<Vec<[f64; 6]>>,
+    Vec<(usize, ImpactEvent)>,
+    usize,
+    Vec<ColliderHandle>,
+);
+
+/// Balls thrown onto the floor at seams, at a corner where four tiles meet, and mid-tile,
+/// with spin.
+fn thrown_on_floor(mode: TimingMode, tiled: bool) -> Thrown {
+    let mut world = PhysicsWorld::default();
+    let grounds = floor(&mut world, tiled);
+    let side = FLOOR / TILES as f64;
+    let starts = [
+        (0.0, 0.0),                // the corner of four tiles
+        (side, 0.3 * side),        // a seam along z
+        (0.4 * side, -side),       // a seam along x
+        (-0.5 * side, 0.5 * side), // mid-tile
+        (0.7, -0.7),
+    ];
+    let balls: Vec<RigidBodyHandle> = starts
+        .iter()
+        .enumerate()
+        .map(|(k, (x, z))| {
+            world
+                .insert(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(real(*x), real(0.3 + 0.07 * k as f64), real(*z)))
+                        .linvel(Vector::new(
+                            real(0.8 - 0.3 * k as f64),
+                            0.0,
+                            real(0.2 * k as f64),
+                        ))
+                        .angvel(Vector::new(real(3.0), real(-1.0), real(2.0 * k as f64))),
+                    ColliderBuilder::ball(0.05).restitution(0.6).friction(0.4),
+                )
+                .0
+        })
+        .collect();
+    let mut p = ImpactPlugin::new(ImpactConfig::default().with_timing(mode)).unwrap();
+    for g in &grounds {
+        p.add_ground(&world.bodies, &world.colliders, *g).unwrap();
+    }
+    p.set_profiling(true);
+    let (mut states, mut events, mut impact_pairs) = (Vec::new(), Vec::new(), 0);
+    for _ in 0..50 {
+        p.step(&mut world);
+        states.push(
+            balls
+                .iter()
+                .map(|b| {
+                    let rb = &world.bodies[*b];
+                    let (t, v) = (rb.translation(), rb.linvel());
+                    [t.x, t.y, t.z, v.x, v.y, v.z].map(wide)
+                })
+                .collect(),
+        );
+        for e in p.events() {
+            let k = balls.iter().position(|b| *b == e.body).unwrap();
+            events.push((k, *e));
+        }
+        impact_pairs = impact_pairs.max(p.profile().unwrap().counts.impact_pairs);
+    }
+    (states, events, impact_pairs, grounds)
+}
+
+/// A floor of 8 x 8 flush tiles of one material is one ground to the plan (one box): balls
+/// thrown onto its seams and onto the corner where four tiles meet bounce exactly as on one
+/// cuboid of the floor's size, in every mode, each with one ground pair planned as an
+/// impact, not one per tile within its reach; each event names the tile under its point.
+#[test]
+fn a_floor_of_flush_tiles_bounces_as_one_cuboid() {
+    for mode in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        let (one, one_events, one_pairs, _) = thrown_on_floor(mode, false);
+        let (tiled, events, pairs, tiles) = thrown_on_floor(mode, true);
+        let mut worst: f64 = 0.0;
+        for (a, b) in one.iter().zip(&tiled) {
+            for (sa, sb) in a.iter().zip(b) {
+                for (x, y) in sa.iter().zip(sb) {
+                    worst = worst.max((x - y).abs());
+                }
+            }
+        }
+        let impacts = events
+            .iter()
+            .filter(|(_, e)| e.kind == EventKind::Impact)
+            .count();
+        println!(
+            "{mode:?}: tiled floor vs one cuboid, largest difference of a coordinate or velocity {worst:e}; {impacts} impacts ({} on one cuboid); impact pairs a step at most {pairs} ({one_pairs} on one cuboid)",
+            one_events
+                .iter()
+                .filter(|(_, e)| e.kind == EventKind::Impact)
+                .count()
+        );
+        assert_eq!(
+            worst, 0.0,
+            "{mode:?}: the tiled floor moved a ball differently"
+        );
+        assert!(impacts >= 5, "{mode:?}: only {impacts} impacts");
+        assert_eq!(events.len(), one_events.len());
+        for ((k, e), (j, o)) in events.iter().zip(&one_events) {
+            assert_eq!((k, e.kind, e.time), (j, o.kind, o.time));
+            let (x, z) = (wide(e.point.x), wide(e.point.z));
+            assert_eq!(e.ground, tile_under(&tiles, x, z), "{mode:?}: {e:?}");
+        }
+        assert_eq!(pairs, one_pairs, "{mode:?}: a pair per tile");
+    }
+}
+
+/// The user's filter decides a body's pairs one by one: a ball whose collider asks for it
+/// meets the tiles, not their box. The filter refuses one tile: the ball dropped over it
+/// falls through, and the one dropped over the next tile bounces off that tile.
+#[test]
+fn a_users_filter_refusing_one_tile_lets_a_ball_through_that_tile_only() {
+    let mut world = PhysicsWorld::default();
+    let tiles = floor(&mut world, true);
+    let side = FLOOR / TILES as f64;
+    let (x_ghost, x_next) = (0.5 * side, 1.5 * side);
+    let ghost_tile = tile_under(&tiles, x_ghost, 0.1);
+    let drop = |world: &mut PhysicsWorld, x: f64| {
+        world
+            .insert(
+                RigidBodyBuilder::dynamic().translation(Vector::new(real(x), 0.3, 0.1)),
+                ColliderBuilder::ball(0.05)
+                    .restitution(0.6)
+                    .active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS),
+            )
+            .0
+    };
+    let (through, bouncer) = (drop(&mut world, x_ghost), drop(&mut world, x_next));
+    let mut p =
+        ImpactPlugin::with_hooks(ImpactConfig::default(), GhostFilter::new(ghost_tile)).unwrap();
+    for g in &tiles {
+        p.add_ground(&world.bodies, &world.colliders, *g).unwrap();
+    }
+    let mut bounced_on = Vec::new();
+    for _ in 0..60 {
+        p.step(&mut world);
+        for e in p.events() {
+            assert_ne!(
+                e.body, through,
+                "the ball over the refused tile was bounced"
+            );
+            bounced_on.push(e.ground);
+        }
+    }
+    let y = wide(world.bodies[through].translation().y);
+    println!("through the refused tile: y = {y:.3} m; the other ball bounced on {bounced_on:?}");
+    assert!(
+        y < -0.6,
+        "the ball did not fall through the refused tile: y = {y}"
+    );
+    assert!(!bounced_on.is_empty(), "the other ball never bounced");
+    assert!(
+        bounced_on
+            .iter()
+            .all(|g| *g == tile_under(&tiles, x_next, 0.1)),
+        "{bounced_on:?}"
+    );
+    assert!(wide(world.bodies[bouncer].translation().y) > 0.0);
 }

@@ -14,17 +14,31 @@
 //!   cube and the log of their number, never with the number of grounds;
 //!   [`GroundIndex::near_ball`]: the same, less the grounds in the cube's corners that the
 //!   ball inside it misses (the plan's grounds near a body);
-//! - the motions are in a deterministic order (by collider handle), and an index into
-//!   [`GroundIndex::motions`] names a ground for the whole step.
+//! - flush coplanar tiles are one ground (`slabs.rs`): at a rebuild, the still cuboid grounds
+//!   that form one box with the same material and filtering become a *slab*, a motion of its
+//!   own after the grounds' (its shape the box, [`GroundMotion::slab`]; its handle its first
+//!   tile's, which stands for every tile of it in the plugin's tables:
+//!   [`GroundIndex::stand_in`]). The BVH holds the slab, not its tiles, so a body over a tiled
+//!   floor meets one ground; [`GroundIndex::near_ball_tiles`] answers with the tiles instead,
+//!   for a body whose pairs the user's filter decides one by one, and
+//!   [`GroundIndex::tile_at`] names the tile under an event's point;
+//! - the motions are in a deterministic order (by collider handle, then the slabs by their
+//!   first tile), and an index into [`GroundIndex::motions`] names a ground for the whole
+//!   step.
 
 use crate::model::Material;
-use crate::plugin::bridge::convert::{pose_from_na, pose_to_na, to_f64, to_real, vec_to_na};
+use crate::plugin::bridge::convert::{
+    pose_from_na, pose_to_na, to_f64, to_real, vec_from_na, vec_to_na,
+};
+use crate::plugin::queries::slabs::{Slab, Tile, find_slabs};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
+use crate::rapier::parry::shape::Cuboid;
 use crate::rapier::prelude::{
-    Collider, ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet, RigidBodyType,
+    ActiveCollisionTypes, ActiveHooks, CoefficientCombineRule, Collider, ColliderHandle,
+    ColliderSet, InteractionGroups, RigidBodyHandle, RigidBodySet, RigidBodyType,
 };
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
@@ -71,6 +85,9 @@ pub(crate) struct GroundMotion {
     /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
     /// half-space an AABB as large as the number range, which every body meets.)
     pub plane: Option<(Vector, Real)>,
+    /// A slab of tiles: the box they form (its pose `pose0`), the shape every query asks for
+    /// in place of the collider's (`handle` is its first tile).
+    pub slab: Option<Cuboid>,
 }
 
 impl GroundMotion {
@@ -113,6 +130,20 @@ struct Basis {
     class: Class,
     pose: Pose,
     skin: Real,
+    /// What a slab's tiles must share beyond their shape: a change moves a tile out of (or
+    /// into) a slab, so a tile of one rebuilds the index.
+    props: Props,
+}
+
+/// A ground's coefficients and filtering, as rapier's contacts with it read them.
+#[derive(Clone, Copy, PartialEq)]
+struct Props {
+    friction: Real,
+    restitution: Real,
+    combine: (CoefficientCombineRule, CoefficientCombineRule),
+    groups: (InteractionGroups, InteractionGroups),
+    types: ActiveCollisionTypes,
+    hooks: ActiveHooks,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -143,6 +174,14 @@ impl Basis {
             },
             pose: *co.position(),
             skin: co.contact_skin(),
+            props: Props {
+                friction: co.friction(),
+                restitution: co.restitution(),
+                combine: (co.friction_combine_rule(), co.restitution_combine_rule()),
+                groups: (co.collision_groups(), co.solver_groups()),
+                types: co.active_collision_types(),
+                hooks: co.active_hooks(),
+            },
         }
     }
 }
@@ -156,6 +195,8 @@ enum Place {
     Tree,
     /// In the short list tested one by one (a half-space, or moving).
     Listed,
+    /// A tile of a slab: the slab is in the BVH, the tile in `GroundIndex::tiles`.
+    Tile,
 }
 
 /// Every ground's motion over the step and a BVH to find those near a body (see the module's
@@ -178,7 +219,22 @@ pub(crate) struct GroundIndex {
     dt: f64,
     gap: f64,
     /// By collider slot: the ground's handle and entry, for the hooks' lookups.
-    by_slot: Vec<Option<(ColliderHandle, GroundEntry)>>,
+    by_slot: Vec<Option<Slot>>,
+    /// The slabs; slab `k`'s motion is `motions[bases.len() + k]`.
+    slabs: Vec<Slab>,
+    /// A BVH over the slabs' tiles (leaves: their indices), for the queries that need them.
+    tiles: Bvh,
+    /// By index: the ground's collider (the motions are lent to the step while it runs).
+    handles: Vec<ColliderHandle>,
+}
+
+/// A ground's entry in the hooks' table, and the slab it is a tile of (the slab's index and
+/// the handle standing for its tiles).
+#[derive(Clone, Copy)]
+struct Slot {
+    handle: ColliderHandle,
+    entry: GroundEntry,
+    slab: Option<(u32, ColliderHandle)>,
 }
 
 type Registry = HashMap<ColliderHandle, GroundEntry, BuildHasherDefault<HandleHasher>>;
@@ -198,43 +254,82 @@ impl GroundIndex {
             return Err(());
         }
         Ok(match self.by_slot.get(slot_of(c)) {
-            Some(Some((h, entry))) if *h == c => Some(entry),
+            Some(Some(slot)) if slot.handle == c => Some(&slot.entry),
             _ => None,
         })
     }
 
+    /// The handle that stands for a collider in the plugin's tables: a slab's first tile for
+    /// each of its tiles, else the collider itself.
+    #[inline]
+    pub fn stand_in(&self, c: ColliderHandle) -> ColliderHandle {
+        match self.by_slot.get(slot_of(c)) {
+            Some(Some(Slot {
+                handle,
+                slab: Some((_, first)),
+                ..
+            })) if *handle == c => *first,
+            _ => c,
+        }
+    }
+
+    /// The ground an event at the world point `point` names: for the handle standing for a
+    /// slab's tiles, the tile under the point (`Slab::tile_at`); else `c` itself.
+    pub fn tile_at(&self, c: ColliderHandle, point: &Vector3<f64>) -> ColliderHandle {
+        match self.by_slot.get(slot_of(c)) {
+            Some(Some(Slot {
+                handle,
+                slab: Some((k, first)),
+                ..
+            })) if *handle == c && *first == c => {
+                let tile = self.slabs[*k as usize].tile_at(point);
+                self.bases
+                    .get(tile)
+                    .and_then(|b| b.as_ref())
+                    .map_or(c, |_| self.handles[tile])
+            }
+            _ => c,
+        }
+    }
+
     /// A ground's entry changed (its material): the hooks' table follows, if it holds the
-    /// ground (else it is rebuilt from the registry at the next refresh anyway).
+    /// ground (else it is rebuilt from the registry at the next refresh anyway). A tile of a
+    /// slab may no longer share its slab's material: the index is rebuilt.
     pub fn set_entry(&mut self, c: ColliderHandle, entry: GroundEntry) {
-        if let Some(Some((h, e))) = self.by_slot.get_mut(slot_of(c)) {
-            if *h == c {
-                *e = entry;
+        if let Some(Some(slot)) = self.by_slot.get_mut(slot_of(c)) {
+            if slot.handle == c {
+                slot.entry = entry;
+                if slot.slab.is_some() {
+                    self.stale = true;
+                }
             }
         }
     }
 
-    /// Brings every ground's motion to this step (see the module's contract).
+    /// Brings every ground's motion to this step (see the module's contract). `lone` says
+    /// which grounds may not be a slab's tile whatever their shape (a restitution curve of
+    /// their own, hook flags the user set: what a tile's stand-in would not carry).
     pub fn refresh(
         &mut self,
         registry: &Registry,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
-        dt: f64,
-        gap: f64,
+        (dt, gap): (f64, f64),
+        lone: &dyn Fn(ColliderHandle) -> bool,
     ) {
-        let complete = self.motions.len() == self.bases.len();
+        let complete = self.motions.len() == self.bases.len() + self.slabs.len();
         if self.stale || !complete || dt != self.dt || gap != self.gap {
-            self.rebuild(registry, bodies, colliders, dt, gap);
+            self.rebuild(registry, bodies, colliders, (dt, gap), lone);
             return;
         }
         for i in 0..self.bases.len() {
-            let handle = self.motions[i].handle;
+            let handle = self.handles[i];
             let now = colliders.get(handle).map(|co| Basis::of(co, bodies));
             let before = self.bases[i];
             if now.map(|b| b.class) != before.map(|b| b.class) {
                 // Another place, or out: rare (a body type switched, a collider disabled,
                 // removed or given a new shape).
-                self.rebuild(registry, bodies, colliders, dt, gap);
+                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
                 return;
             }
             // Moving grounds are computed below; absent ones have nothing to compute.
@@ -244,12 +339,18 @@ impl GroundIndex {
             if now == before || self.places[i] == Place::Absent || !self.motions[i].is_still() {
                 continue;
             }
-            // A still ground moved, or changed its skin: computed again in place.
+            // A tile moved or changed: its slab, if any, is no longer what it was.
+            if self.places[i] == Place::Tile {
+                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
+                return;
+            }
+            // A still ground moved, or changed its skin or coefficients: computed again in
+            // place.
             let Some(m) = colliders
                 .get(handle)
                 .and_then(|co| motion_of(handle, co, bodies, dt, gap))
             else {
-                self.rebuild(registry, bodies, colliders, dt, gap);
+                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
                 return;
             };
             self.motions[i] = m;
@@ -261,14 +362,14 @@ impl GroundIndex {
         }
         for k in 0..self.moving.len() {
             let i = self.moving[k];
-            let handle = self.motions[i].handle;
+            let handle = self.handles[i];
             match colliders
                 .get(handle)
                 .and_then(|co| motion_of(handle, co, bodies, dt, gap))
             {
                 Some(m) if !m.is_still() => self.motions[i] = m,
                 _ => {
-                    self.rebuild(registry, bodies, colliders, dt, gap);
+                    self.rebuild(registry, bodies, colliders, (dt, gap), lone);
                     return;
                 }
             }
@@ -280,8 +381,8 @@ impl GroundIndex {
         registry: &Registry,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
-        dt: f64,
-        gap: f64,
+        (dt, gap): (f64, f64),
+        lone: &dyn Fn(ColliderHandle) -> bool,
     ) {
         let mut handles: Vec<ColliderHandle> = registry.keys().copied().collect();
         // Deterministic order, whatever the hash map's.
@@ -292,7 +393,7 @@ impl GroundIndex {
         self.listed.clear();
         self.moving.clear();
         let mut leaves = Vec::new();
-        for handle in handles {
+        for &handle in &handles {
             let co = colliders.get(handle);
             let motion = co.and_then(|co| motion_of(handle, co, bodies, dt, gap));
             let i = self.motions.len();
@@ -316,16 +417,107 @@ impl GroundIndex {
             // collider enabled again) is seen.
             self.bases.push(co.map(|co| Basis::of(co, bodies)));
         }
+        self.slabs = self.find_slabs(registry, colliders, &handles, lone);
+        let mut tiles = Vec::new();
+        for slab in &self.slabs {
+            let s = self.motions.len();
+            let first = self.motions[slab.members[0]];
+            let cuboid = Cuboid::new(vec_from_na(&slab.half));
+            let mut aabb = cuboid.aabb(&pose_from_na(&slab.pose));
+            // Loosened as each tile's box is (the same skin, by the slab's rule).
+            let skin = self.bases[slab.members[0]].map_or(0.0, |b| to_f64(b.skin));
+            aabb = aabb.loosened(to_real(gap + skin));
+            self.motions.push(GroundMotion {
+                com0: slab.pose.translation.vector,
+                rot0: slab.pose.rotation,
+                local: Isometry3::identity(),
+                pose0: slab.pose,
+                aabb,
+                slab: Some(cuboid),
+                ..first
+            });
+            self.places.push(Place::Tree);
+            leaves.push((s, aabb));
+            for &m in &slab.members {
+                self.places[m] = Place::Tile;
+                tiles.push((m, self.motions[m].aabb));
+            }
+        }
+        leaves.retain(|(i, _)| self.places[*i] == Place::Tree);
         self.tree = build_bvh(leaves);
+        self.tiles = build_bvh(tiles);
         let len = registry.keys().map(|h| slot_of(*h) + 1).max().unwrap_or(0);
         self.by_slot.clear();
         self.by_slot.resize(len, None);
         for (h, entry) in registry {
-            self.by_slot[slot_of(*h)] = Some((*h, *entry));
+            self.by_slot[slot_of(*h)] = Some(Slot {
+                handle: *h,
+                entry: *entry,
+                slab: None,
+            });
         }
+        for (k, slab) in self.slabs.iter().enumerate() {
+            let first = handles[slab.members[0]];
+            for &m in &slab.members {
+                if let Some(Some(slot)) = self.by_slot.get_mut(slot_of(handles[m])) {
+                    slot.slab = Some((k as u32, first));
+                }
+            }
+        }
+        self.handles = handles;
         self.stale = false;
         self.dt = dt;
         self.gap = gap;
+    }
+
+    /// The slabs among the still cuboid grounds just placed in the BVH (`slabs.rs`): tiles
+    /// with the same entry, coefficients, filtering, skin and parent, not `lone`.
+    fn find_slabs(
+        &self,
+        registry: &Registry,
+        colliders: &ColliderSet,
+        handles: &[ColliderHandle],
+        lone: &dyn Fn(ColliderHandle) -> bool,
+    ) -> Vec<Slab> {
+        // Each distinct (entry, coefficients and filtering, skin) gets a class number: the
+        // tiles' key.
+        let mut classes: Vec<(GroundEntry, Props, Real)> = Vec::new();
+        let mut tiles = Vec::new();
+        for (i, handle) in handles.iter().enumerate() {
+            let (Some(Some(basis)), Some(co), Some(entry)) = (
+                self.bases.get(i),
+                colliders.get(*handle),
+                registry.get(handle),
+            ) else {
+                continue;
+            };
+            let Some(cuboid) = co.shape().as_cuboid() else {
+                continue;
+            };
+            if self.places[i] != Place::Tree || lone(*handle) {
+                continue;
+            }
+            let mut entry = *entry;
+            entry.automatic = false;
+            let class = (entry, basis.props, basis.skin);
+            let id = match classes.iter().position(|c| *c == class) {
+                Some(id) => id,
+                None => {
+                    classes.push(class);
+                    classes.len() - 1
+                }
+            };
+            tiles.push(Tile {
+                index: i,
+                pose: self.motions[i].pose0,
+                half: vec_to_na(cuboid.half_extents),
+                key: vec![id as u64],
+            });
+        }
+        if tiles.len() < 2 {
+            return Vec::new();
+        }
+        find_slabs(&tiles)
     }
 
     /// The grounds on kinematic bodies (their motion is measured again after the step).
@@ -361,6 +553,42 @@ impl GroundIndex {
             list.retain(|i| !motions[*i].misses_ball(centre, radius));
         }
         near
+    }
+
+    /// [`Self::near_ball`] with each slab's tiles in place of the slab.
+    pub fn near_ball_tiles(
+        &self,
+        motions: &[GroundMotion],
+        centre: Vector,
+        radius: Real,
+    ) -> SmallList<usize> {
+        let grounds = self.bases.len();
+        let cube = Aabb::from_half_extents(centre, Vector::splat(radius));
+        let mut near: SmallList<usize> = self
+            .near(motions, centre, radius)
+            .iter()
+            .copied()
+            .filter(|i| *i < grounds)
+            .collect();
+        if !self.tiles.is_empty() {
+            for leaf in self.tiles.intersect_aabb(&cube) {
+                near.push(leaf as usize);
+            }
+        }
+        let mut near: SmallList<usize> = near
+            .iter()
+            .copied()
+            .filter(|i| !motions[*i].misses_ball(centre, radius))
+            .collect();
+        if near.len() > 1 {
+            near.sort_unstable();
+        }
+        near
+    }
+
+    /// Are some grounds tiles of a slab?
+    pub fn has_slabs(&self) -> bool {
+        !self.slabs.is_empty()
     }
 
     /// The indices of the grounds whose swept AABB meets the cube `centre ± half`, in
@@ -427,6 +655,7 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
         w: Vector3::zeros(),
         aabb: Aabb::new_invalid(),
         plane: None,
+        slab: None,
     }
 }
 
@@ -496,6 +725,7 @@ fn motion_of(
                 w,
                 aabb,
                 plane,
+                slab: None,
             })
         }
         _ => {
@@ -516,6 +746,7 @@ fn motion_of(
                 w: Vector3::zeros(),
                 aabb,
                 plane: plane_at(co.position()),
+                slab: None,
             })
         }
     }
@@ -569,7 +800,7 @@ mod tests {
             .collect();
         let reg = registry(&tiles);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         let handles = |list: &[usize]| -> Vec<ColliderHandle> {
             list.iter().map(|i| index.motions[*i].handle).collect()
         };
@@ -601,6 +832,65 @@ mod tests {
     }
 
     #[test]
+    fn flush_tiles_are_one_slab_until_one_moves_or_stands_alone() {
+        // Four tiles 0.2 m wide meeting at the origin, tops at y = 0.
+        let mut world = PhysicsWorld::default();
+        let tiles: Vec<ColliderHandle> = [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)]
+            .iter()
+            .map(|(x, z)| {
+                world.colliders.insert(
+                    ColliderBuilder::cuboid(0.1, 0.1, 0.1).translation(Vector::new(*x, -0.1, *z)),
+                )
+            })
+            .collect();
+        let reg = registry(&tiles);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
+        // A ball over the corner where the four meet meets one ground: their box.
+        let at = Vector::new(0.0, 0.05, 0.0);
+        let near = index.near_ball(&index.motions, at, 0.06);
+        assert_eq!(near.len(), 1);
+        let slab = index.motions[near[0]];
+        let cuboid = slab.slab.expect("a slab");
+        assert_eq!(cuboid.half_extents, Vector::new(0.2, 0.1, 0.2));
+        assert_eq!(slab.handle, tiles[0]);
+        assert!(tiles.iter().all(|t| index.stand_in(*t) == tiles[0]));
+        // The tiles on demand, and the tile under a point.
+        let each: Vec<ColliderHandle> = index
+            .near_ball_tiles(&index.motions, at, 0.06)
+            .iter()
+            .map(|i| index.motions[*i].handle)
+            .collect();
+        assert_eq!(each, tiles);
+        for (k, (x, z)) in [(-0.05, -0.15), (0.15, -0.05), (-0.15, 0.05), (0.05, 0.15)]
+            .iter()
+            .enumerate()
+        {
+            let p = Vector3::new(*x, 0.0, *z);
+            assert_eq!(index.tile_at(tiles[0], &p), tiles[k]);
+            // Only the stand-in is renamed.
+            assert_eq!(index.tile_at(tiles[1], &p), tiles[1]);
+        }
+        // One tile moved away: it is a ground of its own again, and the others no longer
+        // form a box with it.
+        world.colliders[tiles[3]].set_translation(Vector::new(5.0, -0.1, 5.0));
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
+        assert_eq!(index.stand_in(tiles[3]), tiles[3]);
+        let near = index.near_ball(&index.motions, Vector::new(5.0, 0.05, 5.0), 0.06);
+        assert_eq!(near.len(), 1);
+        assert_eq!(index.motions[near[0]].handle, tiles[3]);
+        assert!(index.motions[near[0]].slab.is_none());
+        // Put back, but one tile must stand alone (the caller's rule): it is not merged.
+        world.colliders[tiles[3]].set_translation(Vector::new(0.1, -0.1, 0.1));
+        index.invalidate();
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|c| {
+            c == tiles[1]
+        });
+        assert_eq!(index.stand_in(tiles[1]), tiles[1]);
+        assert!(index.has_slabs());
+    }
+
+    #[test]
     fn a_moved_still_ground_is_found_where_it_now_is() {
         let mut world = PhysicsWorld::default();
         let a = world
@@ -611,10 +901,10 @@ mod tests {
             .insert(ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(3.0, 0.0, 0.0)));
         let reg = registry(&[a, b]);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![b]);
         world.colliders[b].set_translation(Vector::new(10.0, 0.0, 0.0));
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![]);
         assert_eq!(near_at(&index, Vector::new(10.0, 0.2, 0.0)), vec![b]);
         assert_eq!(near_at(&index, Vector::new(0.0, 0.2, 0.0)), vec![a]);
@@ -629,14 +919,14 @@ mod tests {
         );
         let reg = registry(&[platform]);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         let above = Vector::new(0.0, 0.2, 0.0);
         assert_eq!(near_at(&index, above), vec![platform]);
         world.colliders[platform].set_enabled(false);
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, above), vec![]);
         world.colliders[platform].set_enabled(true);
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, above), vec![platform]);
         assert_eq!(index.moving(), &[0]);
     }
@@ -649,7 +939,7 @@ mod tests {
         ));
         let reg = registry(&[ground]);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         // A half-space is everywhere below its plane.
         assert_eq!(
             near_at(&index, Vector::new(50.0, 0.05, -40.0)),
@@ -657,7 +947,7 @@ mod tests {
         );
         world.colliders[ground]
             .set_shape(crate::rapier::prelude::SharedShape::cuboid(1.0, 0.1, 1.0));
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, Vector::new(50.0, 0.05, -40.0)), vec![]);
         assert_eq!(near_at(&index, Vector::new(0.0, 0.15, 0.0)), vec![ground]);
     }
@@ -674,11 +964,11 @@ mod tests {
             .insert(ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(3.0, 0.0, 0.0)));
         let reg = registry(&[ground, other]);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         let above = Vector::new(0.0, 0.2, 0.0);
         assert_eq!(near_at(&index, above), vec![ground]);
         world.bodies[body].set_body_type(RigidBodyType::Dynamic, true);
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, above), vec![]);
         world.colliders.remove(
             other,
@@ -687,7 +977,7 @@ mod tests {
             &mut world.soft_bodies,
             true,
         );
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, Vector::new(3.0, 0.2, 0.0)), vec![]);
     }
 
@@ -725,7 +1015,7 @@ mod tests {
         );
         let reg = registry(&[bar, far]);
         let mut index = GroundIndex::default();
-        index.refresh(&reg, &world.bodies, &world.colliders, DT, GAP);
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         let geoms: Vec<GroundGeom> = index
             .motions
             .iter()

@@ -1,6 +1,6 @@
 //! Read-only questions the stages share: contact geometry along a flight and the time of
 //! impact (`geometry.rs`), between two moving bodies (`body_contact.rs`), which grounds a body
-//! may meet (`ground_index.rs`), rapier's own pair filtering (`filter.rs`), and what the step
+//! may meet (`ground_index.rs`) and the tiled floors that are one box to it (`slabs.rs`), rapier's own pair filtering (`filter.rs`), and what the step
 //! reads of rapier (`observe.rs`). Nothing here writes.
 
 pub(crate) mod body_contact;
@@ -8,3 +8,4 @@ pub(crate) mod filter;
 pub(crate) mod geometry;
 pub(crate) mod ground_index;
 pub(crate) mod observe;
+pub(crate) mod slabs;

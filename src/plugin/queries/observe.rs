@@ -213,7 +213,8 @@ pub(crate) fn centred(offset: &Vector3<f64>, radius: f64) -> bool {
     offset.norm() <= CENTRED_TOLERANCE * radius
 }
 
-/// A ground's geometry for the queries, if its collider still exists.
+/// A ground's geometry for the queries, if its collider still exists (a slab's: the box of
+/// its tiles, with its first tile's skin).
 pub(crate) fn ground_geom<'a>(
     gm: &'a GroundMotion,
     colliders: &'a ColliderSet,
@@ -221,7 +222,10 @@ pub(crate) fn ground_geom<'a>(
     let co = colliders.get(gm.handle)?;
     Some(GroundGeom {
         handle: gm.handle,
-        shape: co.shape(),
+        shape: match &gm.slab {
+            Some(slab) => slab,
+            None => co.shape(),
+        },
         skin: to_f64(co.contact_skin()),
         motion: gm,
         skip: Vec::new(),

@@ -52,6 +52,7 @@ mod steer;
 mod view;
 mod woken;
 
+use crate::plugin::bridge::convert::vec_to_na;
 use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::{ImpactPlugin, StepSets};
 use crate::plugin::policy::Role;
@@ -162,6 +163,17 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.put_back_held(&step, bodies);
         self.stopwatch.lap(Stage::Holds);
         self.commit(bodies, Some(colliders));
+        // The stages name a slab by its stand-in tile; an event names the tile under its point.
+        if self.registry.index.has_slabs() {
+            for event in self.reports.events.iter_mut() {
+                if event.body2.is_none() {
+                    event.ground = self
+                        .registry
+                        .index
+                        .tile_at(event.ground, &vec_to_na(event.point));
+                }
+            }
+        }
         let events = self.reports.events.len();
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);

@@ -11,7 +11,7 @@
 //! grounds went. Nothing here writes into rapier.
 
 use crate::plugin::bridge::convert::{pose_to_na, to_f64, to_real, vec_to_na};
-use crate::plugin::config::TimingMode;
+use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
@@ -20,7 +20,9 @@ use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderSet, IntegrationParameters, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{
+    ColliderHandle, ColliderSet, IntegrationParameters, RigidBodyHandle, RigidBodySet,
+};
 use nalgebra::Vector3;
 
 /// The managed bodies as the survey sorted them.
@@ -72,12 +74,23 @@ impl<H> ImpactPlugin<H> {
         if !step.active {
             return step;
         }
+        // A tile whose contacts its slab's stand-in would not carry stays a ground of its own:
+        // a restitution curve of its own, hook flags of the user's (the user's filter or
+        // contact modification is asked about each tile), coefficients the plan refuses
+        // (diagnosed per collider).
+        let lone = |c: ColliderHandle| {
+            self.registry.ground_curves.contains_key(&c)
+                || !self.flags.recorded_user_flags(colliders, c).is_empty()
+                || colliders.get(c).is_some_and(|co| {
+                    !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
+                })
+        };
         self.registry.index.refresh(
             &self.registry.grounds,
             bodies,
             colliders,
-            dt,
-            step.policy.resting_gap,
+            (dt, step.policy.resting_gap),
+            &lone,
         );
         // Lent to the step; given back at its end (`Self::after_step`).
         step.grounds = std::mem::take(&mut self.registry.index.motions);

@@ -15,7 +15,7 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
-use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBodyHandle};
+use crate::rapier::prelude::{ActiveHooks, ColliderHandle, PhysicsHooks, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// A ground's contact with a body part at the step's start, as `contact_checked` answers.
@@ -152,10 +152,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             vec_from_na(&start.com),
             Vector::splat(to_real(geom.radius + reach)),
         );
-        let near =
-            self.registry
-                .index
-                .near_ball(scene.grounds, sphere.center(), sphere.half_extents().x);
+        let index = &self.registry.index;
+        let (centre, radius) = (sphere.center(), sphere.half_extents().x);
+        // A joint may disable its contacts with one tile's body, or the user's filter refuse
+        // its pair with one tile: such a body meets the tiles, not their slab.
+        let slabs = index.has_slabs();
+        let jointed = slabs.then(|| scene.sets.jointed(handle));
+        let near = if slabs && (jointed == Some(true) || self.filters_each_pair(scene, &geom)) {
+            index.near_ball_tiles(scene.grounds, centre, radius)
+        } else {
+            index.near_ball(scene.grounds, centre, radius)
+        };
         let member = step.pairs.members.contains(&handle);
         if near.is_empty() {
             if self.config.timing == TimingMode::Exact || member {
@@ -165,7 +172,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-        let jointed = scene.sets.jointed(handle);
+        let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
@@ -191,6 +198,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
         }
         Some(body)
+    }
+
+    /// Does the user's filter decide the body's contact pairs (a collider of it asks for
+    /// it)? Then each of its pairs with a slab's tiles is asked, and the body meets the tiles
+    /// rather than their slab.
+    fn filters_each_pair(&self, scene: &Scene, geom: &BodyGeom) -> bool {
+        geom.parts.iter().any(|part| {
+            self.flags
+                .recorded_user_flags(scene.colliders, part.handle)
+                .contains(ActiveHooks::FILTER_CONTACT_PAIRS)
+        })
     }
 
     /// The body's candidate for the stages after rapier's step, pushed to `step.candidates`
