@@ -1,7 +1,8 @@
 //! A state-machine stress test (proptest): random sequences of what users do to a simulation
-//! with the plugin (insert and remove bodies and grounds, opt bodies in and out of impacts
-//! between bodies, exclude them, change materials and collider coefficients, teleport, set
-//! velocities, change gravity and dt, switch timing modes and laws, save and restore, step),
+//! with the plugin (insert and remove bodies and grounds, now and then flush ones that form a
+//! slab, opt bodies in and out of impacts between bodies, exclude them, change materials and
+//! collider coefficients, teleport, set velocities, change gravity and dt, switch timing
+//! modes and laws, save and restore, step),
 //! checked after every step: no panic, every body finite, every event finite with its
 //! after-state what was written, no impact gaining energy under `Consistent` and `Guarded`,
 //! friction in the cone, no event for a pair rapier filters, and no body below a ground it
@@ -61,6 +62,12 @@ fn place() -> impl Strategy<Value = [f64; 3]> {
     (-2.0f64..2.0, 0.0f64..2.0, -2.0f64..2.0).prop_map(|(x, y, z)| [x, y, z])
 }
 
+/// A ground's `x` or `z`: anywhere, or now and then on a 2 m grid, where two grounds of the
+/// same kind (2 m square) lie flush and become one slab.
+fn ground_at() -> impl Strategy<Value = f64> {
+    prop_oneof![3 => -2.0f64..2.0, 1 => prop::sample::select(&[-2.0, 0.0, 2.0][..])]
+}
+
 fn vel(max: f64) -> impl Strategy<Value = [f64; 3]> {
     prop::array::uniform3(-max..max)
 }
@@ -89,7 +96,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (0.01f64..0.2, 0.004f64..0.1, 0.0f64..=1.0, place(), vel(40.0), vel(60.0))
             .prop_map(|(h, r, e, p, v, w)| Op::Capsule(h, r, e, p, v, w)),
         1 => k.clone().prop_map(Op::RemoveBody),
-        2 => (0u8..4, -2.0f64..2.0, -2.0f64..2.0).prop_map(|(kind, x, z)| Op::Ground(kind, x, z)),
+        2 => (0u8..4, ground_at(), ground_at()).prop_map(|(kind, x, z)| Op::Ground(kind, x, z)),
         1 => k.clone().prop_map(Op::RemoveGround),
         2 => k.clone().prop_map(Op::OptIn),
         1 => k.clone().prop_map(Op::OptOut),

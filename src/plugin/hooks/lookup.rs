@@ -40,6 +40,9 @@ pub(crate) struct RoleSlot {
     pub user: ActiveHooks,
     /// The hook flags the user set on the body collider alone.
     pub body_user: ActiveHooks,
+    /// Its pairs with a slab's tiles are by tile (`StepData::by_tile`), not under the slab's
+    /// stand-in.
+    pub by_tile: bool,
     /// Its other pairs: `Lookup::rest[rest.0..rest.1]`.
     pub rest: (u32, u32),
 }
@@ -59,7 +62,7 @@ impl Lookup {
     /// `user_flags`: the hook flags the user set on a collider; `far`: the colliders of the
     /// bodies with no ground in reach (no roles).
     pub fn build(
-        roles: &HandleMap<PairKey, Role>,
+        (roles, by_tile): (&HandleMap<PairKey, Role>, &[ColliderHandle]),
         far: &[ColliderHandle],
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
         user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
@@ -89,6 +92,7 @@ impl Lookup {
                 role: Role::Resting,
                 user,
                 body_user: user,
+                by_tile: false,
                 rest: (0, 0),
             });
         }
@@ -119,9 +123,15 @@ impl Lookup {
                         role: *role,
                         user: body_user | ground_flags(*ground),
                         body_user,
+                        by_tile: false,
                         rest: (0, 0),
                     })
                 }
+            }
+        }
+        for body in by_tile {
+            if let Some(Some(slot)) = out.roles.get_mut(slot_of(*body)) {
+                slot.by_tile |= slot.body == *body;
             }
         }
         rest.sort_unstable_by_key(|(slot, _)| *slot);
@@ -164,18 +174,31 @@ impl Lookup {
 
     /// The pair `(c1, c2)` in either order (body collider, ground collider): as the table
     /// holds it, or `Far` for a body collider the table knows with a ground it does not hold;
-    /// `None` when neither collider is a body collider of the table.
+    /// `None` when neither collider is a body collider of the table. A slab's tile is looked
+    /// up as `stand_in` names it, unless the body's pairs are by tile.
     #[inline]
-    pub fn pair(&self, c1: ColliderHandle, c2: ColliderHandle) -> Option<Looked> {
+    pub fn pair(
+        &self,
+        c1: ColliderHandle,
+        c2: ColliderHandle,
+        stand_in: impl Fn(ColliderHandle) -> ColliderHandle,
+    ) -> Option<Looked> {
         if !self.roles_built {
             return None;
         }
         [(c1, c2), (c2, c1)].into_iter().find_map(|(body, ground)| {
             match self.roles.get(slot_of(body)) {
-                Some(Some(slot)) if slot.body == body => Some(match self.held(slot, ground) {
-                    Some((role, user)) => Looked::Pair((body, ground), role, user),
-                    None => Looked::Far((body, ground), slot.body_user),
-                }),
+                Some(Some(slot)) if slot.body == body => {
+                    let ground = if slot.by_tile {
+                        ground
+                    } else {
+                        stand_in(ground)
+                    };
+                    Some(match self.held(slot, ground) {
+                        Some((role, user)) => Looked::Pair((body, ground), role, user),
+                        None => Looked::Far((body, ground), slot.body_user),
+                    })
+                }
                 _ => None,
             }
         })

@@ -181,16 +181,12 @@ impl<H> ImpactPlugin<H> {
             }
         }
         let current = self.registry.index.entry(c1).is_ok();
-        let mut looked = current.then(|| self.lookup.pair(c1, c2)).flatten();
         // A slab's tile: the plan gave the pair's role to the slab's stand-in (a ball meets
-        // the slab), unless the body met the tiles one by one (then the tile has it).
-        if let Some(Looked::Far(..)) = looked {
-            let index = &self.registry.index;
-            let (s1, s2) = (index.stand_in(c1), index.stand_in(c2));
-            if (s1, s2) != (c1, c2) {
-                looked = self.lookup.pair(s1, s2);
-            }
-        }
+        // the slab), unless the body met the tiles one by one.
+        let index = &self.registry.index;
+        let looked = current
+            .then(|| self.lookup.pair(c1, c2, |c| index.stand_in(c)))
+            .flatten();
         match looked {
             Some(Looked::Pair(key, role, user)) => {
                 // A body collider that is itself marked as ground (its body turned dynamic

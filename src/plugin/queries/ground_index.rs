@@ -3,11 +3,12 @@
 //! Contract:
 //! - reads the registry (which colliders are ground) and rapier's bodies and colliders;
 //!   writes nothing of rapier's;
-//! - [`GroundIndex::refresh`], once per step before anything asks: every ground's pose over
-//!   the step ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless
-//!   or on a fixed body) is computed once and kept until its collider's pose, shape or flags
-//!   change (one comparison per ground and step); a ground on a kinematic body is computed
-//!   afresh each step;
+//! - [`GroundIndex::update`] (else [`GroundIndex::rebuild`]; `Registry::refresh_index` calls
+//!   them), once per step before anything asks: every ground's pose over the step
+//!   ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless or on
+//!   a fixed body) is computed once and kept until its collider's pose, shape, flags,
+//!   coefficients or filtering change (one comparison per ground and step); a ground on a
+//!   kinematic body is computed afresh each step;
 //! - [`GroundIndex::near`]: the grounds whose swept AABB meets a cube, from a BVH over the
 //!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
 //!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
@@ -241,7 +242,7 @@ type Registry = HashMap<ColliderHandle, GroundEntry, BuildHasherDefault<HandleHa
 
 impl GroundIndex {
     /// The registry changed (a ground marked, unmarked, or given a material): rebuilt at the
-    /// next [`Self::refresh`]; until then [`Self::entry`] answers `None` (ask the registry).
+    /// next [`Self::rebuild`]; until then [`Self::entry`] answers `None` (ask the registry).
     pub fn invalidate(&mut self) {
         self.stale = true;
     }
@@ -263,6 +264,9 @@ impl GroundIndex {
     /// each of its tiles, else the collider itself.
     #[inline]
     pub fn stand_in(&self, c: ColliderHandle) -> ColliderHandle {
+        if self.slabs.is_empty() {
+            return c;
+        }
         match self.by_slot.get(slot_of(c)) {
             Some(Some(Slot {
                 handle,
@@ -306,9 +310,12 @@ impl GroundIndex {
         }
     }
 
-    /// Brings every ground's motion to this step (see the module's contract). `lone` says
-    /// which grounds may not be a slab's tile whatever their shape (a restitution curve of
-    /// their own, hook flags the user set: what a tile's stand-in would not carry).
+    /// Brings every ground's motion to this step (see the module's contract): [`Self::update`],
+    /// else [`Self::rebuild`] (the step's own call is `Registry::refresh_index`, which forgets
+    /// removed colliders before a rebuild). `lone` says which grounds may not be a slab's tile whatever
+    /// their shape (a restitution curve of their own, hook flags the user set: what a tile's
+    /// stand-in would not carry).
+    #[cfg(test)]
     pub fn refresh(
         &mut self,
         registry: &Registry,
@@ -317,41 +324,49 @@ impl GroundIndex {
         (dt, gap): (f64, f64),
         lone: &dyn Fn(ColliderHandle) -> bool,
     ) {
+        if !self.update(bodies, colliders, (dt, gap)) {
+            self.rebuild(registry, bodies, colliders, (dt, gap), lone);
+        }
+    }
+
+    /// Brings every ground's motion to this step in place, if it can: `false` when the index
+    /// must be rebuilt instead (the registry changed, or a ground changed its place: its
+    /// collider removed, disabled, given a new shape, its body's type switched, a tile of a
+    /// slab moved or changed). One comparison per ground: what its motion was computed from.
+    pub fn update(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        (dt, gap): (f64, f64),
+    ) -> bool {
         let complete = self.motions.len() == self.bases.len() + self.slabs.len();
         if self.stale || !complete || dt != self.dt || gap != self.gap {
-            self.rebuild(registry, bodies, colliders, (dt, gap), lone);
-            return;
+            return false;
         }
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
-            let now = colliders.get(handle).map(|co| Basis::of(co, bodies));
-            let before = self.bases[i];
-            if now.map(|b| b.class) != before.map(|b| b.class) {
-                // Another place, or out: rare (a body type switched, a collider disabled,
-                // removed or given a new shape).
-                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
-                return;
+            let (before, co) = match (&self.bases[i], colliders.get(handle)) {
+                (Some(before), Some(co)) => (before, co),
+                // Gone when the index was built, and still gone.
+                (None, None) => continue,
+                // Removed, or back.
+                _ => return false,
+            };
+            let now = Basis::of(co, bodies);
+            if now == *before {
+                continue;
+            }
+            if now.class != before.class || self.places[i] == Place::Tile {
+                return false;
             }
             // Moving grounds are computed below; absent ones have nothing to compute.
-            let (Some(now), Some(before)) = (now, before) else {
+            if self.places[i] == Place::Absent || !self.motions[i].is_still() {
                 continue;
-            };
-            if now == before || self.places[i] == Place::Absent || !self.motions[i].is_still() {
-                continue;
-            }
-            // A tile moved or changed: its slab, if any, is no longer what it was.
-            if self.places[i] == Place::Tile {
-                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
-                return;
             }
             // A still ground moved, or changed its skin or coefficients: computed again in
             // place.
-            let Some(m) = colliders
-                .get(handle)
-                .and_then(|co| motion_of(handle, co, bodies, dt, gap))
-            else {
-                self.rebuild(registry, bodies, colliders, (dt, gap), lone);
-                return;
+            let Some(m) = motion_of(handle, co, bodies, dt, gap) else {
+                return false;
             };
             self.motions[i] = m;
             self.bases[i] = Some(now);
@@ -368,15 +383,14 @@ impl GroundIndex {
                 .and_then(|co| motion_of(handle, co, bodies, dt, gap))
             {
                 Some(m) if !m.is_still() => self.motions[i] = m,
-                _ => {
-                    self.rebuild(registry, bodies, colliders, (dt, gap), lone);
-                    return;
-                }
+                _ => return false,
             }
         }
+        true
     }
 
-    fn rebuild(
+    /// Builds the index afresh from the registry (see the module's contract).
+    pub fn rebuild(
         &mut self,
         registry: &Registry,
         bodies: &RigidBodySet,

@@ -39,9 +39,12 @@ impl<H> ImpactPlugin<H> {
             .filter_map(|h| bodies.get(*h))
             .flat_map(|rb| rb.colliders().iter().copied())
             .collect();
-        self.lookup = Lookup::build(&step.roles, &far_colliders, flags.hooked(), |c| {
-            flags.recorded_user_flags(colliders, c)
-        });
+        self.lookup = Lookup::build(
+            (&step.roles, &step.by_tile),
+            &far_colliders,
+            flags.hooked(),
+            |c| flags.recorded_user_flags(colliders, c),
+        );
     }
 
     /// The bodies whose colliders carry the hook flags of the planned pairs that need the

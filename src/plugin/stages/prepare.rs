@@ -75,23 +75,18 @@ impl<H> ImpactPlugin<H> {
             return step;
         }
         // A tile whose contacts its slab's stand-in would not carry stays a ground of its own:
-        // a restitution curve of its own, hook flags of the user's (the user's filter or
-        // contact modification is asked about each tile), coefficients the plan refuses
-        // (diagnosed per collider).
+        // hook flags of the user's (the user's filter or contact modification is asked about
+        // each tile), coefficients the plan refuses (diagnosed per collider); and a
+        // restitution curve of its own (the registry's).
+        let flags = &self.flags;
         let lone = |c: ColliderHandle| {
-            self.registry.ground_curves.contains_key(&c)
-                || !self.flags.recorded_user_flags(colliders, c).is_empty()
+            !flags.recorded_user_flags(colliders, c).is_empty()
                 || colliders.get(c).is_some_and(|co| {
                     !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
                 })
         };
-        self.registry.index.refresh(
-            &self.registry.grounds,
-            bodies,
-            colliders,
-            (dt, step.policy.resting_gap),
-            &lone,
-        );
+        self.registry
+            .refresh_index(bodies, colliders, (dt, step.policy.resting_gap), &lone);
         // Lent to the step; given back at its end (`Self::after_step`).
         step.grounds = std::mem::take(&mut self.registry.index.motions);
         step

@@ -168,15 +168,37 @@ impl Registry {
         Ok(())
     }
 
-    /// Keeps the registry in step with the sets: forgets removed colliders, marks new fixed
-    /// colliders in all-fixed mode.
-    pub fn sync(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
+    /// Brings the ground index to this step (`GroundIndex::refresh`). A removed ground
+    /// collider is seen by the index's pass over the grounds, which then has to be rebuilt:
+    /// the registry forgets removed colliders first, so it never loops over its grounds in a
+    /// step where none changed. `lone`: the grounds the caller keeps out of slabs (besides
+    /// those with a restitution curve of their own).
+    pub fn refresh_index(
+        &mut self,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+        (dt, gap): (f64, f64),
+        lone: &dyn Fn(ColliderHandle) -> bool,
+    ) {
+        if self.index.update(bodies, colliders, (dt, gap)) {
+            return;
+        }
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
         if !self.ground_curves.is_empty() {
             self.ground_curves
                 .retain(|h, _| colliders.get(*h).is_some());
         }
         self.unmarked.retain(|h| colliders.get(*h).is_some());
+        let curves = &self.ground_curves;
+        self.index
+            .rebuild(&self.grounds, bodies, colliders, (dt, gap), &|c| {
+                curves.contains_key(&c) || lone(c)
+            });
+    }
+
+    /// Marks new fixed colliders in all-fixed mode (removed ones are forgotten by
+    /// [`Self::refresh_index`]).
+    pub fn sync(&mut self, bodies: &RigidBodySet, colliders: &ColliderSet) {
         if self.all_fixed {
             let new: Vec<ColliderHandle> = colliders
                 .iter()

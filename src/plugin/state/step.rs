@@ -121,6 +121,10 @@ pub(crate) struct StepData {
     /// at least 1).
     pub substeps: usize,
     pub roles: HandleMap<PairKey, Role>,
+    /// The colliders of the bodies planned against a slab's tiles one by one (a jointed body,
+    /// or one whose pairs the user's filter decides): their roles are by tile; every other
+    /// body's pair with a tile is its slab's, under the stand-in (`GroundIndex::stand_in`).
+    pub by_tile: Vec<ColliderHandle>,
     /// `Resting` pairs of a ball the closed form holds at rest on a slope (`OnPlane::Held`):
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
     /// where the normal force holds the ball (`hooks/mod.rs`).

@@ -154,12 +154,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         );
         let index = &self.registry.index;
         let (centre, radius) = (sphere.center(), sphere.half_extents().x);
-        // A joint may disable its contacts with one tile's body, or the user's filter refuse
-        // its pair with one tile: such a body meets the tiles, not their slab.
-        let slabs = index.has_slabs();
-        let jointed = slabs.then(|| scene.sets.jointed(handle));
-        let near = if slabs && (jointed == Some(true) || self.filters_each_pair(scene, &geom)) {
-            index.near_ball_tiles(scene.grounds, centre, radius)
+        let near = if index.has_slabs() {
+            self.near_slabs(handle, scene, &geom, (centre, radius), step)
         } else {
             index.near_ball(scene.grounds, centre, radius)
         };
@@ -172,7 +168,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-        let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
+        let jointed = scene.sets.jointed(handle);
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
@@ -200,15 +196,32 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         Some(body)
     }
 
-    /// Does the user's filter decide the body's contact pairs (a collider of it asks for
-    /// it)? Then each of its pairs with a slab's tiles is asked, and the body meets the tiles
-    /// rather than their slab.
-    fn filters_each_pair(&self, scene: &Scene, geom: &BodyGeom) -> bool {
-        geom.parts.iter().any(|part| {
+    /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
+    /// tiles for a body with a joint (which may disable its contacts with one tile's body) or
+    /// whose collider asks for the user's filter (which may refuse its pair with one tile).
+    /// Such a body's colliders are noted in `step.by_tile` (the hooks look their pairs up by
+    /// tile).
+    fn near_slabs(
+        &self,
+        handle: RigidBodyHandle,
+        scene: &Scene,
+        geom: &BodyGeom,
+        (centre, radius): (Vector, crate::rapier::math::Real),
+        step: &mut StepData,
+    ) -> SmallList<usize> {
+        let index = &self.registry.index;
+        let filtered = geom.parts.iter().any(|part| {
             self.flags
                 .recorded_user_flags(scene.colliders, part.handle)
                 .contains(ActiveHooks::FILTER_CONTACT_PAIRS)
-        })
+        });
+        if filtered || scene.sets.jointed(handle) {
+            step.by_tile
+                .extend(geom.parts.iter().map(|part| part.handle));
+            index.near_ball_tiles(scene.grounds, centre, radius)
+        } else {
+            index.near_ball(scene.grounds, centre, radius)
+        }
     }
 
     /// The body's candidate for the stages after rapier's step, pushed to `step.candidates`
