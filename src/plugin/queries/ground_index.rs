@@ -185,6 +185,30 @@ impl Basis {
             },
         }
     }
+
+    /// Is `co` still what this was taken from (`Basis::of(co, bodies) == *self`)? Field by
+    /// field from the collider, without building a second basis: the index's pass asks it of
+    /// every ground every step.
+    #[inline]
+    fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
+        let (class, props) = (&self.class, &self.props);
+        *co.position() == self.pose
+            && co.contact_skin() == self.skin
+            && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
+            && co.is_enabled() == class.enabled
+            && co.is_sensor() == class.sensor
+            && co.friction() == props.friction
+            && co.restitution() == props.restitution
+            && (co.friction_combine_rule(), co.restitution_combine_rule()) == props.combine
+            && (co.collision_groups(), co.solver_groups()) == props.groups
+            && co.active_collision_types() == props.types
+            && co.active_hooks() == props.hooks
+            && co
+                .parent()
+                .and_then(|p| bodies.get(p))
+                .map(|rb| (rb.body_type(), rb.is_enabled()))
+                == class.parent
+    }
 }
 
 /// Where a ground sits in the index.
@@ -352,10 +376,10 @@ impl GroundIndex {
                 // Removed, or back.
                 _ => return false,
             };
-            let now = Basis::of(co, bodies);
-            if now == *before {
+            if before.matches(co, bodies) {
                 continue;
             }
+            let now = Basis::of(co, bodies);
             if now.class != before.class || self.places[i] == Place::Tile {
                 return false;
             }
@@ -902,6 +926,62 @@ mod tests {
         });
         assert_eq!(index.stand_in(tiles[1]), tiles[1]);
         assert!(index.has_slabs());
+    }
+
+    #[test]
+    fn the_pass_over_the_grounds_sees_every_change_a_basis_holds() {
+        use crate::rapier::prelude::{Group, SharedShape};
+        let mut world = PhysicsWorld::default();
+        let (_, c) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+        );
+        type Change = (&'static str, fn(&mut Collider));
+        let changes: Vec<Change> = vec![
+            ("pose", |co| co.set_translation(Vector::new(0.0, 1e-6, 0.0))),
+            ("skin", |co| co.set_contact_skin(0.01)),
+            ("shape", |co| {
+                co.set_shape(SharedShape::cuboid(0.5, 0.1, 0.5))
+            }),
+            ("enabled", |co| co.set_enabled(false)),
+            ("sensor", |co| co.set_sensor(true)),
+            ("friction", |co| co.set_friction(0.3)),
+            ("restitution", |co| co.set_restitution(0.3)),
+            ("combine", |co| {
+                co.set_friction_combine_rule(CoefficientCombineRule::Max)
+            }),
+            ("groups", |co| {
+                co.set_collision_groups(InteractionGroups::new(
+                    Group::GROUP_2,
+                    Group::ALL,
+                    Default::default(),
+                ))
+            }),
+            ("types", |co| {
+                co.set_active_collision_types(ActiveCollisionTypes::all())
+            }),
+            ("hooks", |co| {
+                co.set_active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS)
+            }),
+        ];
+        for (what, change) in changes {
+            let mut w = PhysicsWorld::default();
+            let (_, c) = w.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+            );
+            let before = Basis::of(&w.colliders[c], &w.bodies);
+            assert!(before.matches(&w.colliders[c], &w.bodies), "{what}");
+            change(&mut w.colliders[c]);
+            let co = &w.colliders[c];
+            assert!(!before.matches(co, &w.bodies), "{what} not seen");
+            assert!(Basis::of(co, &w.bodies) != before, "{what}");
+        }
+        // The parent's type.
+        let before = Basis::of(&world.colliders[c], &world.bodies);
+        let parent = world.colliders[c].parent().unwrap();
+        world.bodies[parent].set_body_type(RigidBodyType::KinematicPositionBased, true);
+        assert!(!before.matches(&world.colliders[c], &world.bodies));
     }
 
     #[test]
