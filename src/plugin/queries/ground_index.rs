@@ -348,7 +348,7 @@ impl GroundIndex {
         (dt, gap): (f64, f64),
         lone: &dyn Fn(ColliderHandle) -> bool,
     ) {
-        if !self.update(bodies, colliders, (dt, gap)) {
+        if !self.update(bodies, colliders, (dt, gap), lone) {
             self.rebuild(registry, bodies, colliders, (dt, gap), lone);
         }
     }
@@ -362,6 +362,7 @@ impl GroundIndex {
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
         (dt, gap): (f64, f64),
+        lone: &dyn Fn(ColliderHandle) -> bool,
     ) -> bool {
         let complete = self.motions.len() == self.bases.len() + self.slabs.len();
         if self.stale || !complete || dt != self.dt || gap != self.gap {
@@ -380,7 +381,23 @@ impl GroundIndex {
                 continue;
             }
             let now = Basis::of(co, bodies);
-            if now.class != before.class || self.places[i] == Place::Tile {
+            if now.class != before.class {
+                return false;
+            }
+            if self.places[i] == Place::Tile {
+                // The plugin's own hook flags put on or taken off (idle grounds lose them): the
+                // tile stays its slab's while the user's flags on it stay none.
+                let hooks_only = Basis {
+                    props: Props {
+                        hooks: before.props.hooks,
+                        ..now.props
+                    },
+                    ..now
+                } == *before;
+                if hooks_only && !lone(handle) {
+                    self.bases[i] = Some(now);
+                    continue;
+                }
                 return false;
             }
             // Moving grounds are computed below; absent ones have nothing to compute.
@@ -909,6 +926,19 @@ mod tests {
             // Only the stand-in is renamed.
             assert_eq!(index.tile_at(tiles[1], &p), tiles[1]);
         }
+        // The plugin's hook flags put on the tiles (as on grounds near a body): updated in
+        // place, the slab kept; a tile whose flags are the user's leaves it.
+        for t in &tiles {
+            world.colliders[*t].set_active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS);
+        }
+        assert!(index.update(&world.bodies, &world.colliders, (DT, GAP), &|_| false));
+        assert!(tiles.iter().all(|t| index.stand_in(*t) == tiles[0]));
+        world.colliders[tiles[1]].set_active_hooks(ActiveHooks::empty());
+        assert!(
+            !index.update(&world.bodies, &world.colliders, (DT, GAP), &|c| c
+                == tiles[1])
+        );
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
         // One tile moved away: it is a ground of its own again, and the others no longer
         // form a box with it.
         world.colliders[tiles[3]].set_translation(Vector::new(5.0, -0.1, 5.0));

@@ -180,7 +180,10 @@ impl Registry {
         (dt, gap): (f64, f64),
         lone: &dyn Fn(ColliderHandle) -> bool,
     ) {
-        if self.index.update(bodies, colliders, (dt, gap)) {
+        let curves = &self.ground_curves;
+        if self.index.update(bodies, colliders, (dt, gap), &|c| {
+            curves.contains_key(&c) || lone(c)
+        }) {
             return;
         }
         self.grounds.retain(|h, _| colliders.get(*h).is_some());
