@@ -27,8 +27,10 @@
 //!
 //! The ground is a half-space at y = 0, or with `--tiles N` (N > 0) an N x N floor of fixed
 //! cuboid tiles (0.5 m thick, top at y = 0) covering 8 m x 8 m about the origin, marked with
-//! `set_all_fixed_colliders_ground(true)` (the pile's walls are then ground too). Timing covers
-//! the steps only, not the set-up; whole-process figures (`/usr/bin/time`) cover everything.
+//! `set_all_fixed_colliders_ground(true)` (the pile's walls are then ground too). The tiles
+//! are flush and of one material: the plugin takes them as one box (a slab), and rapier
+//! pairs each ball with every tile its box overlaps. Timing covers the steps only, not the
+//! set-up; whole-process figures (`/usr/bin/time`) cover everything.
 
 mod common;
 
