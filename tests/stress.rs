@@ -1,8 +1,8 @@
 //! A state-machine stress test (proptest): random sequences of what users do to a simulation
-//! with the plugin (insert and remove bodies and grounds, now and then flush ones that form a
-//! slab, opt bodies in and out of impacts between bodies, exclude them, change materials and
-//! collider coefficients, teleport, set velocities, change gravity and dt, switch timing
-//! modes and laws, save and restore, step),
+//! with the plugin (insert and remove bodies and grounds, a floor of flush tiles among them,
+//! which is one slab, opt bodies in and out of impacts between bodies, exclude them, change
+//! materials and collider coefficients, teleport, set velocities, change gravity and dt,
+//! switch timing modes and laws, save and restore, step),
 //! checked after every step: no panic, every body finite, every event finite with its
 //! after-state what was written, no impact gaining energy under `Consistent` and `Guarded`,
 //! friction in the cone, no event for a pair rapier filters, and no body below a ground it
@@ -37,6 +37,9 @@ enum Op {
     /// A ground of kind `0..4` (thick cuboid, 2 cm slab, trimesh, heightfield) around `(x, z)`,
     /// its top at `y = 0`.
     Ground(u8, f64, f64),
+    /// A floor of `n x n` flush tiles over `|x|, |z| < 2`, 10 cm thick, each on a fixed body
+    /// of its own, top at `y = 0`: one slab to the plugin.
+    Tiles(u8),
     RemoveGround(usize),
     OptIn(usize),
     OptOut(usize),
@@ -60,12 +63,6 @@ enum Op {
 
 fn place() -> impl Strategy<Value = [f64; 3]> {
     (-2.0f64..2.0, 0.0f64..2.0, -2.0f64..2.0).prop_map(|(x, y, z)| [x, y, z])
-}
-
-/// A ground's `x` or `z`: anywhere, or now and then on a 2 m grid, where two grounds of the
-/// same kind (2 m square) lie flush and become one slab.
-fn ground_at() -> impl Strategy<Value = f64> {
-    prop_oneof![3 => -2.0f64..2.0, 1 => prop::sample::select(&[-2.0, 0.0, 2.0][..])]
 }
 
 fn vel(max: f64) -> impl Strategy<Value = [f64; 3]> {
@@ -96,7 +93,8 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (0.01f64..0.2, 0.004f64..0.1, 0.0f64..=1.0, place(), vel(40.0), vel(60.0))
             .prop_map(|(h, r, e, p, v, w)| Op::Capsule(h, r, e, p, v, w)),
         1 => k.clone().prop_map(Op::RemoveBody),
-        2 => (0u8..4, ground_at(), ground_at()).prop_map(|(kind, x, z)| Op::Ground(kind, x, z)),
+        2 => (0u8..4, -2.0f64..2.0, -2.0f64..2.0).prop_map(|(kind, x, z)| Op::Ground(kind, x, z)),
+        1 => (2u8..5).prop_map(Op::Tiles),
         1 => k.clone().prop_map(Op::RemoveGround),
         2 => k.clone().prop_map(Op::OptIn),
         1 => k.clone().prop_map(Op::OptOut),
@@ -229,6 +227,27 @@ impl Sim {
                     .add_ground(bodies, &self.world.colliders, ground)
                     .unwrap();
                 self.grounds.push(ground);
+            }
+            Op::Tiles(n) => {
+                let side = 4.0 / f64::from(*n);
+                for i in 0..*n {
+                    for k in 0..*n {
+                        let at = |j: u8| -2.0 + (f64::from(j) + 0.5) * side;
+                        let rb = RigidBodyBuilder::fixed().translation(Vector::new(
+                            real(at(i)),
+                            -0.05,
+                            real(at(k)),
+                        ));
+                        let tile =
+                            ColliderBuilder::cuboid(real(side / 2.0), 0.05, real(side / 2.0));
+                        let (_, ground) =
+                            self.world.insert(rb, tile.restitution(0.6).friction(0.8));
+                        self.plugin
+                            .add_ground(&self.world.bodies, &self.world.colliders, ground)
+                            .unwrap();
+                        self.grounds.push(ground);
+                    }
+                }
             }
             Op::RemoveGround(k) => {
                 if !self.grounds.is_empty() {

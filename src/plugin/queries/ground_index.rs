@@ -554,7 +554,12 @@ impl GroundIndex {
             }
             let mut entry = *entry;
             entry.automatic = false;
-            let class = (entry, basis.props, basis.skin);
+            // Hook flags: the user's are none (not `lone`); the plugin's own come and go.
+            let props = Props {
+                hooks: ActiveHooks::empty(),
+                ..basis.props
+            };
+            let class = (entry, props, basis.skin);
             let id = match classes.iter().position(|c| *c == class) {
                 Some(id) => id,
                 None => {
@@ -898,6 +903,9 @@ mod tests {
                 )
             })
             .collect();
+        // One tile already carries the plugin's hook flags (a tile added to a floor the
+        // plugin flagged): the flags the user set are what counts (`lone`), none here.
+        world.colliders[tiles[2]].set_active_hooks(ActiveHooks::all());
         let reg = registry(&tiles);
         let mut index = GroundIndex::default();
         index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
