@@ -17,7 +17,8 @@
 //!   a conveyor ground still conveys a box resting on it;
 //! - a floor of flush tiles: one ground to the plan (balls bounce exactly as on one cuboid,
 //!   each event names the tile under its point), and the tiles one by one for a ball whose
-//!   pairs the user's filter decides (a refused tile lets it through).
+//!   pairs the user's filter decides (a refused tile lets it through, also when rapier wakes
+//!   it inside that tile).
 //!
 //! Every test prints measured against expected.
 
@@ -910,4 +911,50 @@ fn a_users_filter_refusing_one_tile_lets_a_ball_through_that_tile_only() {
         );
         assert!(wide(world.bodies[ball].translation().y) > 0.0);
     }
+}
+
+/// A body rapier wakes meets the tiles one by one when the user's filter decides its pairs:
+/// a ghost ball asleep inside a tile its filter refuses, woken by a ball dropped on it, is
+/// not pushed out of the floor (the slab's box holds it, the tile does not), and falls
+/// through that tile.
+#[test]
+fn a_woken_ghost_inside_a_refused_tile_is_left_to_fall_through_it() {
+    let mut world = PhysicsWorld::default();
+    let tiles = floor(&mut world, true);
+    let side = FLOOR / TILES as f64;
+    let (x, z) = (1.5 * side, 1.5 * side);
+    let ghost_tile = tile_under(&tiles, x, z);
+    assert_ne!(ghost_tile, tiles[0]);
+    let (ghost, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(real(x), -0.02, real(z)))
+            .sleeping(true),
+        ColliderBuilder::ball(0.05).active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS),
+    );
+    let (dropped, _) = world.insert(
+        RigidBodyBuilder::dynamic().translation(Vector::new(real(x), 0.4, real(z))),
+        ColliderBuilder::ball(0.05),
+    );
+    let mut p =
+        ImpactPlugin::with_hooks(ImpactConfig::default(), GhostFilter::new(ghost_tile)).unwrap();
+    for g in &tiles {
+        p.add_ground(&world.bodies, &world.colliders, *g).unwrap();
+    }
+    let mut woken = None;
+    for n in 0..90 {
+        p.step(&mut world);
+        if woken.is_none() && !world.bodies[ghost].is_sleeping() {
+            woken = Some(n);
+        }
+        for e in p.events() {
+            assert_ne!(e.body, ghost, "step {n}: the ghost was moved: {e:?}");
+        }
+    }
+    let y = wide(world.bodies[ghost].translation().y);
+    println!(
+        "ghost woken at step {woken:?}, ends at y = {y:.3} m; the dropped ball at y = {:.3} m",
+        wide(world.bodies[dropped].translation().y)
+    );
+    assert!(woken.is_some(), "the ghost was never woken");
+    assert!(y < -0.6, "the ghost did not fall through its tile: y = {y}");
 }

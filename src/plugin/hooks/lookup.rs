@@ -172,6 +172,19 @@ impl Lookup {
         }
     }
 
+    /// The pair `key` (body collider, ground collider) as the step's roles name it: a slab's
+    /// tile under the slab's stand-in (`stand_in`), unless the body's pairs are by tile.
+    pub fn keyed(
+        &self,
+        key: PairKey,
+        stand_in: impl Fn(ColliderHandle) -> ColliderHandle,
+    ) -> PairKey {
+        match self.roles.get(slot_of(key.0)) {
+            Some(Some(slot)) if slot.body == key.0 && slot.by_tile => key,
+            _ => (key.0, stand_in(key.1)),
+        }
+    }
+
     /// The pair `(c1, c2)` in either order (body collider, ground collider): as the table
     /// holds it, or `Far` for a body collider the table knows with a ground it does not hold;
     /// `None` when neither collider is a body collider of the table. A slab's tile is looked

@@ -212,7 +212,10 @@ impl<H> ImpactPlugin<H> {
             }
             None => {}
         }
+        // Checked against the sets (a ground marked or unmarked since `before_step`): a tile
+        // is still named as the step's roles name it.
         self.managed_pair(bodies, colliders, c1, c2).map(|key| {
+            let key = self.lookup.keyed(key, |c| index.stand_in(c));
             (
                 key,
                 self.role(&key),

@@ -526,7 +526,9 @@ impl GroundIndex {
     }
 
     /// The slabs among the still cuboid grounds just placed in the BVH (`slabs.rs`): tiles
-    /// with the same entry, coefficients, filtering, skin and parent, not `lone`.
+    /// with the same entry, coefficients, filtering and skin, not `lone`. (Their parents
+    /// may differ: a fixed body's only other say is a joint, and a jointed body meets the
+    /// tiles one by one.)
     fn find_slabs(
         &self,
         registry: &Registry,
@@ -622,10 +624,34 @@ impl GroundIndex {
         centre: Vector,
         radius: Real,
     ) -> SmallList<usize> {
+        self.near_tiles(motions, centre, radius)
+            .iter()
+            .copied()
+            .filter(|i| !motions[*i].misses_ball(centre, radius))
+            .collect()
+    }
+
+    /// [`Self::near`], or with `tiles` each slab's tiles in place of the slab (for a body
+    /// that meets the tiles one by one, `observe::meets_tiles`).
+    pub fn near_cube(
+        &self,
+        motions: &[GroundMotion],
+        centre: Vector,
+        half: Real,
+        tiles: bool,
+    ) -> SmallList<usize> {
+        match tiles && self.has_slabs() {
+            true => self.near_tiles(motions, centre, half),
+            false => self.near(motions, centre, half),
+        }
+    }
+
+    /// [`Self::near`] with each slab's tiles in place of the slab, in increasing order.
+    fn near_tiles(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
         let grounds = self.bases.len();
-        let cube = Aabb::from_half_extents(centre, Vector::splat(radius));
+        let cube = Aabb::from_half_extents(centre, Vector::splat(half));
         let mut near: SmallList<usize> = self
-            .near(motions, centre, radius)
+            .near(motions, centre, half)
             .iter()
             .copied()
             .filter(|i| *i < grounds)
@@ -635,11 +661,6 @@ impl GroundIndex {
                 near.push(leaf as usize);
             }
         }
-        let mut near: SmallList<usize> = near
-            .iter()
-            .copied()
-            .filter(|i| !motions[*i].misses_ball(centre, radius))
-            .collect();
         if near.len() > 1 {
             near.sort_unstable();
         }

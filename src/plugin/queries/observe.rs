@@ -23,9 +23,9 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::writes::{Now, Writes};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,
-    LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, RigidBodySet,
-    SolverFlags,
+    ActiveHooks, Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair,
+    ImpulseJointSet, LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle,
+    RigidBodySet, SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -211,6 +211,21 @@ pub(crate) fn centred_ball(part: &BodyPart) -> bool {
 /// on it (to rounding of the body frame's coordinates)?
 pub(crate) fn centred(offset: &Vector3<f64>, radius: f64) -> bool {
     offset.norm() <= CENTRED_TOLERANCE * radius
+}
+
+/// Does a body meet a slab's tiles one by one rather than the slab (`GroundIndex`)? When it
+/// has a joint (`jointed`: a joint may disable its contacts with one tile's body), or one of
+/// its `parts` asks for the user's contact filter (`user_flags`: the filter may refuse its
+/// pair with one tile).
+pub(crate) fn meets_tiles(
+    jointed: bool,
+    parts: &[BodyPart],
+    user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
+) -> bool {
+    jointed
+        || parts
+            .iter()
+            .any(|part| user_flags(part.handle).contains(ActiveHooks::FILTER_CONTACT_PAIRS))
 }
 
 /// A ground's geometry for the queries, if its collider still exists (a slab's: the box of

@@ -24,8 +24,8 @@ pub(crate) struct Tile {
     pub index: usize,
     pub pose: Isometry3<f64>,
     pub half: Vector3<f64>,
-    /// Everything else a contact with the tile depends on (material, filtering, parent), as
-    /// bits: tiles merge only with equal keys.
+    /// Everything else a contact with the tile depends on (material, coefficients,
+    /// filtering, skin), as numbers: tiles merge only with equal keys.
     pub key: Vec<u64>,
 }
 
@@ -150,7 +150,8 @@ fn one_box(group: &[&Tile], normal: usize) -> Option<Slab> {
     };
     let (ea, eb) = (edges_along(a), edges_along(b));
     let (na, nb) = (ea.len() - 1, eb.len() - 1);
-    if na * nb > CELLS_PER_TILE * group.len() {
+    // Tiles thinner than the tolerance along an in-plane axis have no cell there.
+    if na == 0 || nb == 0 || na * nb > CELLS_PER_TILE * group.len() {
         return None;
     }
     // The grid line an edge lies on (within the tolerance), if any.
@@ -164,6 +165,9 @@ fn one_box(group: &[&Tile], normal: usize) -> Option<Slab> {
         let a1 = line(&ea, c[a] + t.half[a])?;
         let b0 = line(&eb, c[b] - t.half[b])?;
         let b1 = line(&eb, c[b] + t.half[b])?;
+        if a0 >= a1 || b0 >= b1 {
+            return None;
+        }
         for i in a0..a1 {
             for j in b0..b1 {
                 let cell = &mut cells[i * nb + j];
@@ -325,6 +329,19 @@ mod tests {
         let slabs = find_slabs(&t);
         assert_eq!(slabs.len(), 1);
         assert_eq!(slabs[0].members, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn tiles_thinner_than_the_tolerance_are_no_box() {
+        // Two plates 2e-7 m thick, 3 m apart along x (their faces normal to y would be a
+        // box only with the gap filled; normal to x, their edges along x merge into one).
+        let plate = |index: usize, x: f64| Tile {
+            index,
+            pose: Isometry3::translation(x, 0.0, 0.0),
+            half: Vector3::new(1e-7, 0.5, 0.5),
+            key: vec![1],
+        };
+        assert!(find_slabs(&[plate(0, 0.0), plate(1, 3.0)]).is_empty());
     }
 
     #[test]

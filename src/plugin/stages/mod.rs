@@ -163,10 +163,12 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.put_back_held(&step, bodies);
         self.stopwatch.lap(Stage::Holds);
         self.commit(bodies, Some(colliders));
-        // The stages name a slab by its stand-in tile; an event names the tile under its point.
+        // The stages name a slab by its stand-in tile; an event names the tile under its point
+        // (a body that met the tiles one by one names its tile already).
         if self.registry.index.has_slabs() {
+            let by_tile = &step.data.by_tile;
             for event in self.reports.events.iter_mut() {
-                if event.body2.is_none() {
+                if event.body2.is_none() && !by_tile.contains(&event.collider) {
                     event.ground = self
                         .registry
                         .index

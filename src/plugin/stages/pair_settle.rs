@@ -300,7 +300,14 @@ impl<'v> AfterStep<'v> {
             let geom = body_geom(rb, colliders, &local_com);
             let inertia = Inertia::of(rb);
             let com = vec_from_na(&state.com);
-            let grounds = self.woken_geoms(bodies, colliders, com, &geom, step, &|_, _, _| false);
+            let grounds = self.woken_geoms(
+                bodies,
+                colliders,
+                com,
+                &geom,
+                step,
+                (false, &|_, _, _| false),
+            );
             let checked = Checked {
                 body,
                 geom: &geom,

@@ -108,6 +108,10 @@ pub(crate) struct Checked<'c> {
     pub events_from: usize,
 }
 
+/// Whether the user's filter or a joint refuses a body collider's pair with a ground (body
+/// collider, ground collider).
+pub(crate) type Refused<'f> = dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool + 'f;
+
 impl AfterStep<'_> {
     /// The one end-of-step check: the body's deepest point at `end` against `grounds`, the
     /// decision table's action for `why` ([`crate::plugin::policy::Policy::end_action`]), and that
@@ -345,7 +349,8 @@ impl AfterStep<'_> {
     }
 
     /// The geometry of the grounds near a body asleep at the step's start (it has no roles),
-    /// without the pairs rapier would not solve or the user `refused`.
+    /// without the pairs rapier would not solve or the user `refused`; a slab's tiles for a
+    /// body that meets them one by one (`tiles`, `observe::meets_tiles`).
     pub fn woken_geoms<'a>(
         &self,
         bodies: &RigidBodySet,
@@ -353,12 +358,12 @@ impl AfterStep<'_> {
         com: Vector,
         geom: &BodyGeom,
         step: &'a StepData,
-        refused: &dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool,
+        (tiles, refused): (bool, &Refused<'_>),
     ) -> SmallList<GroundGeom<'a>> {
         let half = crate::plugin::bridge::convert::to_real(geom.radius + step.policy.resting_gap);
         self.registry
             .index
-            .near(&step.grounds, com, half)
+            .near_cube(&step.grounds, com, half, tiles)
             .iter()
             .filter_map(|i| {
                 let mut gg = ground_geom(&step.grounds[*i], colliders)?;

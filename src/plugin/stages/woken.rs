@@ -11,7 +11,7 @@ use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::EndCheck;
 use crate::plugin::queries::filter;
-use crate::plugin::queries::observe::body_geom;
+use crate::plugin::queries::observe::{body_geom, meets_tiles};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
@@ -55,7 +55,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             };
             let local_com = vec_to_na(rb.local_center_of_mass());
             let geom = body_geom(rb, colliders, &local_com);
-            let grounds = view.woken_geoms(bodies, colliders, com, &geom, step, &refused);
+            let tiles = meets_tiles(step.sets.jointed(*handle), &geom.parts, |c| {
+                view.flags.recorded_user_flags(colliders, c)
+            });
+            let grounds = view.woken_geoms(bodies, colliders, com, &geom, step, (tiles, &refused));
             let inertia = Inertia::of(rb);
             let checked = Checked {
                 body: *handle,

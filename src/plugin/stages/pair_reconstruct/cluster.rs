@@ -413,9 +413,15 @@ impl Cluster<'_, '_> {
             + step.policy.contact_margin();
         let half = to_real(reach);
         let centre = vec_from_na(&s.com);
+        // A ball that met a slab's tiles one by one has tiles among its grounds.
+        let tiles = ball
+            .geom
+            .parts
+            .iter()
+            .any(|part| step.by_tile.contains(&part.handle));
         view.registry
             .index
-            .near(&step.grounds, centre, half)
+            .near_cube(&step.grounds, centre, half, tiles)
             .iter()
             .any(|i| {
                 !ball

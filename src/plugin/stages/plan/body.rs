@@ -9,13 +9,15 @@ use crate::plugin::config::TimingMode;
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, PairContact, contact_checked, part_pose,
 };
-use crate::plugin::queries::observe::{Scene, body_geom, centred_ball, ground_geom, snapshot};
+use crate::plugin::queries::observe::{
+    Scene, body_geom, centred_ball, ground_geom, meets_tiles, snapshot,
+};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
-use crate::rapier::prelude::{ActiveHooks, ColliderHandle, PhysicsHooks, RigidBodyHandle};
+use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// A ground's contact with a body part at the step's start, as `contact_checked` answers.
@@ -197,10 +199,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 
     /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
-    /// tiles for a body with a joint (which may disable its contacts with one tile's body) or
-    /// whose collider asks for the user's filter (which may refuse its pair with one tile).
-    /// Such a body's colliders are noted in `step.by_tile` (the hooks look their pairs up by
-    /// tile).
+    /// tiles for a body that meets them one by one (`meets_tiles`), whose colliders are then
+    /// noted in `step.by_tile` (the hooks look their pairs up by tile).
     fn near_slabs(
         &self,
         handle: RigidBodyHandle,
@@ -210,12 +210,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &mut StepData,
     ) -> SmallList<usize> {
         let index = &self.registry.index;
-        let filtered = geom.parts.iter().any(|part| {
-            self.flags
-                .recorded_user_flags(scene.colliders, part.handle)
-                .contains(ActiveHooks::FILTER_CONTACT_PAIRS)
-        });
-        if filtered || scene.sets.jointed(handle) {
+        let jointed = scene.sets.jointed(handle);
+        if meets_tiles(jointed, &geom.parts, |c| {
+            self.flags.recorded_user_flags(scene.colliders, c)
+        }) {
             step.by_tile
                 .extend(geom.parts.iter().map(|part| part.handle));
             index.near_ball_tiles(scene.grounds, centre, radius)
