@@ -867,18 +867,22 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn the_ball_query_leaves_out_the_tiles_in_the_cubes_corners_only() {
-        // Four tiles 0.2 m wide meeting at the origin, tops at y = 0.
-        let mut world = PhysicsWorld::default();
-        let tiles: Vec<ColliderHandle> = [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)]
+    /// Four tiles 0.2 m wide meeting at the origin, tops at y = 0.
+    fn four_tiles(world: &mut PhysicsWorld) -> Vec<ColliderHandle> {
+        [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)]
             .iter()
             .map(|(x, z)| {
                 world.colliders.insert(
                     ColliderBuilder::cuboid(0.1, 0.1, 0.1).translation(Vector::new(*x, -0.1, *z)),
                 )
             })
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn the_ball_query_leaves_out_the_tiles_in_the_cubes_corners_only() {
+        let mut world = PhysicsWorld::default();
+        let tiles = four_tiles(&mut world);
         let reg = registry(&tiles);
         let mut index = GroundIndex::default();
         index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
@@ -914,16 +918,8 @@ mod tests {
 
     #[test]
     fn flush_tiles_are_one_slab_until_one_moves_or_stands_alone() {
-        // Four tiles 0.2 m wide meeting at the origin, tops at y = 0.
         let mut world = PhysicsWorld::default();
-        let tiles: Vec<ColliderHandle> = [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)]
-            .iter()
-            .map(|(x, z)| {
-                world.colliders.insert(
-                    ColliderBuilder::cuboid(0.1, 0.1, 0.1).translation(Vector::new(*x, -0.1, *z)),
-                )
-            })
-            .collect();
+        let tiles = four_tiles(&mut world);
         // One tile already carries the plugin's hook flags (a tile added to a floor the
         // plugin flagged): the flags the user set are what counts (`lone`), none here.
         world.colliders[tiles[2]].set_active_hooks(ActiveHooks::all());
