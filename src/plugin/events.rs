@@ -84,7 +84,8 @@ pub struct ImpactEvent {
     pub body: RigidBodyHandle,
     /// The body's collider that touched.
     pub collider: ColliderHandle,
-    /// The ground collider, or in an impact between bodies the other body's collider.
+    /// The ground collider (on a floor of flush tiles the plugin takes as one box, the tile
+    /// under `point`), or in an impact between bodies the other body's collider.
     pub ground: ColliderHandle,
     /// In an impact between bodies, the other body (which has its own event for the same
     /// impact); `None` for a ground.

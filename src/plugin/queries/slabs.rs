@@ -13,7 +13,10 @@
 //!   tiles in the same order.
 //!
 //! Tiles that tile anything but a rectangle (an L-shaped floor, two floors at one height with
-//! a gap between) stay tiles: correct, and as costly as before.
+//! a gap between) are not one box, though their rows may be; nor are tiles too irregular for
+//! the grid (more than `CELLS_PER_TILE` cells a tile), at heights that straddle a bucket of
+//! the tolerance, or turned alike only to rounding. Those stay tiles: correct, and as costly
+//! as before.
 
 use crate::plugin::queries::geometry::COPLANAR_TOLERANCE;
 use nalgebra::{Isometry3, Point3, Translation3, Vector3};
