@@ -97,6 +97,7 @@ impl HookFlags {
             .since_needed
             .is_none_or(|n| n > GROUND_FLAGS_IDLE_STEPS);
         let off = unmanaged || idle_too_long;
+        let were_on = self.grounds_on;
         self.grounds_on = !off;
         let grounds = &registry.grounds;
         if off || registry.flags_stale {
@@ -109,18 +110,27 @@ impl HookFlags {
             });
         }
         if !off {
-            for c in registry.grounds.keys() {
+            let mut flag = |c: ColliderHandle| {
                 // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
                 // and narrow phase updates, which for every ground every step cost more
                 // than the rest of the plugin on a floor of 4 096 tiles.
-                let Some(flags) = colliders.get(*c).map(|co| co.active_hooks()) else {
-                    continue;
+                let Some(flags) = colliders.get(c).map(|co| co.active_hooks()) else {
+                    return;
                 };
                 if !flags.contains(PLUGIN_HOOKS) {
                     // New, or the user set the flags since the last step: theirs now.
-                    self.grounds.insert(*c, flags);
-                    set_flags(colliders, *c, flags | PLUGIN_HOOKS);
+                    self.grounds.insert(c, flags);
+                    set_flags(colliders, c, flags | PLUGIN_HOOKS);
                 }
+            };
+            // Every ground when they were off or the grounds changed; else only those whose
+            // flags the ground index's pass found changed this step (the user's doing, or
+            // the plugin's own from the last step).
+            match registry.index.hooks_changed() {
+                Some(changed) if were_on && !registry.flags_stale => {
+                    changed.iter().for_each(|c| flag(*c))
+                }
+                _ => registry.grounds.keys().for_each(|c| flag(*c)),
             }
         }
         // Bodies: flagged in the second.

@@ -251,6 +251,10 @@ pub(crate) struct GroundIndex {
     tiles: Bvh,
     /// By index: the ground's collider (the motions are lent to the step while it runs).
     handles: Vec<ColliderHandle>,
+    /// The grounds whose hook flags the last pass found changed (`hooks_known`: the pass
+    /// compared every ground; after a rebuild, any may have changed).
+    hooks_changed: Vec<ColliderHandle>,
+    hooks_known: bool,
 }
 
 /// A ground's entry in the hooks' table, and the slab it is a tile of (the slab's index and
@@ -368,6 +372,7 @@ impl GroundIndex {
         if self.stale || !complete || dt != self.dt || gap != self.gap {
             return false;
         }
+        self.hooks_changed.clear();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
             let (before, co) = match (&self.bases[i], colliders.get(handle)) {
@@ -381,6 +386,9 @@ impl GroundIndex {
                 continue;
             }
             let now = Basis::of(co, bodies);
+            if now.props.hooks != before.props.hooks {
+                self.hooks_changed.push(handle);
+            }
             if now.class != before.class {
                 return false;
             }
@@ -427,7 +435,14 @@ impl GroundIndex {
                 _ => return false,
             }
         }
+        self.hooks_known = true;
         true
+    }
+
+    /// The grounds whose hook flags (the user's or the plugin's) changed since the last
+    /// step's pass, or `None` when that is not known (the index was rebuilt since).
+    pub fn hooks_changed(&self) -> Option<&[ColliderHandle]> {
+        self.hooks_known.then_some(self.hooks_changed.as_slice())
     }
 
     /// Builds the index afresh from the registry (see the module's contract).
@@ -520,6 +535,7 @@ impl GroundIndex {
             }
         }
         self.handles = handles;
+        self.hooks_known = false;
         self.stale = false;
         self.dt = dt;
         self.gap = gap;
