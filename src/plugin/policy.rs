@@ -164,9 +164,9 @@ pub(crate) const CCD_SLACK: f64 = 1e-3;
 /// Steps in a row with no managed body near any ground and none asleep after which the
 /// grounds' hook flags come off (they go on the first step a body nears a ground, and are
 /// not put on before): no ground pair can then have a contact the plugin changes, and each
-/// hooked pair would cost a hook call every step. A flag put on or taken off costs rapier an update of the ground's
-/// collider, so a scene whose bodies near the ground now and then does not toggle it each
-/// time (half a second at 60 Hz).
+/// hooked pair would cost a hook call every step. A flag put on or taken off costs rapier an
+/// update of the ground's collider, so a scene whose bodies near the ground now and then does
+/// not toggle it each time (half a second at 60 Hz).
 pub(crate) const GROUND_FLAGS_IDLE_STEPS: u32 = 30;
 
 /// Rest versus bounce, the one rule: a contact approaching at `approach` (m/s) no faster than

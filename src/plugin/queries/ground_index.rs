@@ -314,11 +314,7 @@ impl GroundIndex {
                 slab: Some((k, first)),
                 ..
             })) if *handle == c && *first == c => {
-                let tile = self.slabs[*k as usize].tile_at(point);
-                self.bases
-                    .get(tile)
-                    .and_then(|b| b.as_ref())
-                    .map_or(c, |_| self.handles[tile])
+                self.handles[self.slabs[*k as usize].tile_at(point)]
             }
             _ => c,
         }
@@ -339,10 +335,10 @@ impl GroundIndex {
     }
 
     /// Brings every ground's motion to this step (see the module's contract): [`Self::update`],
-    /// else [`Self::rebuild`] (the step's own call is `Registry::refresh_index`, which forgets
-    /// removed colliders before a rebuild). `lone` says which grounds may not be a slab's tile whatever
-    /// their shape (a restitution curve of their own, hook flags the user set: what a tile's
-    /// stand-in would not carry).
+    /// else [`Self::rebuild`]. The step's own call is `Registry::refresh_index`, which forgets
+    /// removed colliders before a rebuild; this one is the unit tests'. `lone` says which
+    /// grounds may not be a slab's tile whatever their shape (what a tile's stand-in would not
+    /// carry: a restitution curve of their own, hook flags the user set).
     #[cfg(test)]
     pub fn refresh(
         &mut self,
@@ -589,7 +585,7 @@ impl GroundIndex {
                 index: i,
                 pose: self.motions[i].pose0,
                 half: vec_to_na(cuboid.half_extents),
-                key: vec![id as u64],
+                key: id,
             });
         }
         if tiles.len() < 2 {
@@ -640,7 +636,7 @@ impl GroundIndex {
         centre: Vector,
         radius: Real,
     ) -> SmallList<usize> {
-        self.near_tiles(motions, centre, radius)
+        self.near_in(motions, centre, radius, true)
             .iter()
             .copied()
             .filter(|i| !motions[*i].misses_ball(centre, radius))
@@ -656,31 +652,7 @@ impl GroundIndex {
         half: Real,
         tiles: bool,
     ) -> SmallList<usize> {
-        match tiles && self.has_slabs() {
-            true => self.near_tiles(motions, centre, half),
-            false => self.near(motions, centre, half),
-        }
-    }
-
-    /// [`Self::near`] with each slab's tiles in place of the slab, in increasing order.
-    fn near_tiles(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
-        let grounds = self.bases.len();
-        let cube = Aabb::from_half_extents(centre, Vector::splat(half));
-        let mut near: SmallList<usize> = self
-            .near(motions, centre, half)
-            .iter()
-            .copied()
-            .filter(|i| *i < grounds)
-            .collect();
-        if !self.tiles.is_empty() {
-            for leaf in self.tiles.intersect_aabb(&cube) {
-                near.push(leaf as usize);
-            }
-        }
-        if near.len() > 1 {
-            near.sort_unstable();
-        }
-        near
+        self.near_in(motions, centre, half, tiles && self.has_slabs())
     }
 
     /// Are some grounds tiles of a slab?
@@ -690,7 +662,20 @@ impl GroundIndex {
 
     /// The indices of the grounds whose swept AABB meets the cube `centre ± half`, in
     /// increasing order.
+    #[inline]
     pub fn near(&self, motions: &[GroundMotion], centre: Vector, half: Real) -> SmallList<usize> {
+        self.near_in(motions, centre, half, false)
+    }
+
+    /// [`Self::near`], with `tiles` each slab's tiles in place of the slab.
+    #[inline]
+    fn near_in(
+        &self,
+        motions: &[GroundMotion],
+        centre: Vector,
+        half: Real,
+        tiles: bool,
+    ) -> SmallList<usize> {
         let cube = Aabb::from_half_extents(centre, Vector::splat(half));
         // A loop, not an iterator chain collected: this runs for every body near a ground
         // every step, most often over one listed half-space.
@@ -703,7 +688,16 @@ impl GroundIndex {
         // Only a tree with leaves is traversed: its traversal state is a large value, and the
         // grounds are most often all listed (a half-space floor).
         if !self.tree.is_empty() {
+            // The slabs' leaves come after the grounds'.
+            let grounds = self.bases.len();
             for leaf in self.tree.intersect_aabb(&cube) {
+                if !(tiles && leaf as usize >= grounds) {
+                    out.push(leaf as usize);
+                }
+            }
+        }
+        if tiles && !self.tiles.is_empty() {
+            for leaf in self.tiles.intersect_aabb(&cube) {
                 out.push(leaf as usize);
             }
         }

@@ -1,7 +1,8 @@
 //! Read-only questions the stages share: contact geometry along a flight and the time of
 //! impact (`geometry.rs`), between two moving bodies (`body_contact.rs`), which grounds a body
-//! may meet (`ground_index.rs`) and the tiled floors that are one box to it (`slabs.rs`), rapier's own pair filtering (`filter.rs`), and what the step
-//! reads of rapier (`observe.rs`). Nothing here writes.
+//! may meet (`ground_index.rs`) and the tiled floors that are one box to it (`slabs.rs`),
+//! rapier's own pair filtering (`filter.rs`), and what the step reads of rapier
+//! (`observe.rs`). Nothing here writes.
 
 pub(crate) mod body_contact;
 pub(crate) mod filter;

@@ -27,9 +27,9 @@ pub(crate) struct Tile {
     pub index: usize,
     pub pose: Isometry3<f64>,
     pub half: Vector3<f64>,
-    /// Everything else a contact with the tile depends on (material, coefficients,
-    /// filtering, skin), as numbers: tiles merge only with equal keys.
-    pub key: Vec<u64>,
+    /// The class of everything else a contact with the tile depends on (material,
+    /// coefficients, filtering, skin): tiles merge only with equal keys.
+    pub key: usize,
 }
 
 /// Tiles that form one box.
@@ -84,7 +84,7 @@ fn boxes_along(tiles: &[Tile], normal: usize) -> Vec<Slab> {
     // alike), the half extent along the normal, and the height along it to within the
     // tolerance (a bucket of that width: tiles straddling a bucket's edge stay apart, which
     // is only slower).
-    type GroupKey<'k> = (&'k [u64], [u64; 4], u64, i64);
+    type GroupKey = (usize, [u64; 4], u64, i64);
     let mut keyed: Vec<(GroupKey, usize)> = tiles
         .iter()
         .enumerate()
@@ -95,7 +95,7 @@ fn boxes_along(tiles: &[Tile], normal: usize) -> Vec<Slab> {
             let rot = t.pose.rotation.coords.map(f64::to_bits);
             (
                 (
-                    t.key.as_slice(),
+                    t.key,
                     [rot[0], rot[1], rot[2], rot[3]],
                     t.half[normal].to_bits(),
                     height,
@@ -228,7 +228,7 @@ mod tests {
             index,
             pose: Isometry3::translation(x, -0.25, z),
             half: Vector3::new(half, 0.25, half),
-            key: vec![7],
+            key: 7,
         }
     }
 
@@ -320,7 +320,7 @@ mod tests {
         t[3].pose.translation.vector.y += 1e-3;
         assert!(!merged(&t, 3));
         let mut t = floor(2, 1.0);
-        t[1].key = vec![8];
+        t[1].key = 8;
         assert!(!merged(&t, 1));
         let mut t = floor(2, 1.0);
         t[0].pose.rotation = UnitQuaternion::from_euler_angles(0.0, 1e-9, 0.0);
@@ -342,7 +342,7 @@ mod tests {
             index,
             pose: Isometry3::translation(x, 0.0, 0.0),
             half: Vector3::new(1e-7, 0.5, 0.5),
-            key: vec![1],
+            key: 1,
         };
         assert!(find_slabs(&[plate(0, 0.0), plate(1, 3.0)]).is_empty());
     }

@@ -68,8 +68,8 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::StepData;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
-    ColliderSet, EventHandler, IntegrationParameters, PhysicsHooks, PhysicsWorld, RigidBodyHandle,
-    RigidBodySet,
+    ColliderHandle, ColliderSet, EventHandler, IntegrationParameters, PhysicsHooks, PhysicsWorld,
+    RigidBodyHandle, RigidBodySet,
 };
 
 /// The step: its entry points, each a list of stage calls.
@@ -163,19 +163,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.put_back_held(&step, bodies);
         self.stopwatch.lap(Stage::Holds);
         self.commit(bodies, Some(colliders));
-        // The stages name a slab by its stand-in tile; an event names the tile under its point
-        // (a body that met the tiles one by one names its tile already).
-        if self.registry.index.has_slabs() {
-            let by_tile = &step.data.by_tile;
-            for event in self.reports.events.iter_mut() {
-                if event.body2.is_none() && !by_tile.contains(&event.collider) {
-                    event.ground = self
-                        .registry
-                        .index
-                        .tile_at(event.ground, &vec_to_na(event.point));
-                }
-            }
-        }
+        self.name_tiles(&step.data.by_tile);
         let events = self.reports.events.len();
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
@@ -185,6 +173,20 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
 
 /// The stage calls that hand the plugin's state to the stages.
 impl<H> ImpactPlugin<H> {
+    /// The step's events name the tile under their point where the stages named a slab by
+    /// its stand-in tile (a body that met the tiles one by one, `by_tile`, names its own).
+    fn name_tiles(&mut self, by_tile: &[ColliderHandle]) {
+        let index = &self.registry.index;
+        if !index.has_slabs() {
+            return;
+        }
+        for event in self.reports.events.iter_mut() {
+            if event.body2.is_none() && !by_tile.contains(&event.collider) {
+                event.ground = index.tile_at(event.ground, &vec_to_na(event.point));
+            }
+        }
+    }
+
     /// The pairs of opted-in bodies first (`pair_plan.rs`): a sleeping ball a pair may reach
     /// is woken, and the bodies of `Impact` pairs are planned whatever their distance to the
     /// grounds. In `Step` mode, the impulses of the pairs that close in the step.

@@ -168,11 +168,11 @@ impl Registry {
         Ok(())
     }
 
-    /// Brings the ground index to this step (`GroundIndex::refresh`). A removed ground
-    /// collider is seen by the index's pass over the grounds, which then has to be rebuilt:
-    /// the registry forgets removed colliders first, so it never loops over its grounds in a
-    /// step where none changed. `lone`: the grounds the caller keeps out of slabs (besides
-    /// those with a restitution curve of their own).
+    /// Brings the ground index to this step (`GroundIndex::update`, else
+    /// `GroundIndex::rebuild`). A removed ground collider is seen by the index's pass over the
+    /// grounds, which then has to be rebuilt: the registry forgets removed colliders first,
+    /// so it never loops over its grounds in a step where none changed. `lone`: the grounds
+    /// the caller keeps out of slabs (besides those with a restitution curve of their own).
     pub fn refresh_index(
         &mut self,
         bodies: &RigidBodySet,

@@ -156,10 +156,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         );
         let index = &self.registry.index;
         let (centre, radius) = (sphere.center(), sphere.half_extents().x);
-        let near = if index.has_slabs() {
-            self.near_slabs(handle, scene, &geom, (centre, radius), step)
+        // Where slabs are, whether it has a joint decides which grounds it meets; asked once.
+        let (near, jointed) = if index.has_slabs() {
+            let jointed = scene.sets.jointed(handle);
+            let near = self.near_slabs(jointed, scene, &geom, (centre, radius), step);
+            (near, Some(jointed))
         } else {
-            index.near_ball(scene.grounds, centre, radius)
+            (index.near_ball(scene.grounds, centre, radius), None)
         };
         let member = step.pairs.members.contains(&handle);
         if near.is_empty() {
@@ -170,7 +173,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
-        let jointed = scene.sets.jointed(handle);
+        let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
@@ -200,17 +203,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 
     /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
     /// tiles for a body that meets them one by one (`meets_tiles`), whose colliders are then
-    /// noted in `step.by_tile` (the hooks look their pairs up by tile).
+    /// noted in `step.by_tile` (the hooks look their pairs up by tile). `jointed`: whether the
+    /// body has a joint.
     fn near_slabs(
         &self,
-        handle: RigidBodyHandle,
+        jointed: bool,
         scene: &Scene,
         geom: &BodyGeom,
         (centre, radius): (Vector, crate::rapier::math::Real),
         step: &mut StepData,
     ) -> SmallList<usize> {
         let index = &self.registry.index;
-        let jointed = scene.sets.jointed(handle);
         if meets_tiles(jointed, &geom.parts, |c| {
             self.flags.recorded_user_flags(scene.colliders, c)
         }) {
