@@ -479,3 +479,39 @@ proptest! {
         }
     }
 }
+
+/// The shrunk sequence that found a ball left inside a thin floor to be met by a face metres
+/// away: rapier alone drives the ball deep into the half-space (excluded for six steps), and
+/// a floor of 2 x 2 tiles, 0.1 m thick, is then inserted around it. The ball starts the next
+/// step overlapping the floor's underside and rising fast; when its centre entered the plate,
+/// the contact took the face the centre was furthest out of relative to the half extents
+/// (`z`, 0.31 m away, not the underside 8 mm away), resolved an impact against it, and left the ball under the floor.
+#[test]
+fn a_ball_rising_inside_a_thin_floor_is_not_met_by_a_far_face() {
+    let ops = [
+        Op::Ball(
+            0.15575137355726137,
+            0.7142362640163199,
+            0.919435596974305,
+            [0.6941331585329684, 1.3112630268025125, 1.6941970066902472],
+            [0.0, -25.189074908559682, 0.0],
+            [10.101514036132228, 0.0, 0.0],
+        ),
+        Op::Exclude(0),
+        Op::Step(6),
+        Op::Include(0),
+        Op::Tiles(2),
+    ];
+    let mut sim = Sim::new();
+    for op in &ops {
+        sim.apply(op);
+    }
+    for _ in 0..30 {
+        sim.step();
+        for ev in sim.plugin.events() {
+            if ev.body2.is_none() && ev.ground != sim.floor {
+                assert!(ev.normal.y.abs() > 0.999, "step {}: {ev:?}", sim.steps);
+            }
+        }
+    }
+}

@@ -174,12 +174,19 @@ fn ball_plane_contact(
     Some(Some((height - skins, n, support - n * part.skin)))
 }
 
-/// The face of a cuboid of half extents `half` that a point `p` (in the cuboid's frame) is
-/// furthest out of, relative to the half extents: its axis and outward unit normal.
+/// The face of a cuboid of half extents `half` that a point `p` (in the cuboid's frame)
+/// belongs to, with its outward unit normal: outside the cuboid, the face it is furthest out
+/// of relative to the half extents (over a face, the one it is over); inside, the nearest
+/// face, as parry's projection of an inner point takes it. The relative measure inside would
+/// send a point near a thin plate's underside to a side face metres away.
 pub(super) fn cuboid_face(p: &Vector3<f64>, half: &Vector3<f64>) -> (usize, Vector3<f64>) {
-    let axis = (0..3)
-        .max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
-        .unwrap_or(1);
+    let inside = (0..3).all(|i| p[i].abs() <= half[i]);
+    let axis = if inside {
+        (0..3).max_by(|i, j| (p[*i].abs() - half[*i]).total_cmp(&(p[*j].abs() - half[*j])))
+    } else {
+        (0..3).max_by(|i, j| (p[*i].abs() / half[*i]).total_cmp(&(p[*j].abs() / half[*j])))
+    }
+    .unwrap_or(1);
     let mut n = Vector3::zeros();
     n[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
     (axis, n)
@@ -419,4 +426,34 @@ pub(crate) fn closest(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cuboid_face;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn a_cuboid_face_is_the_one_a_point_is_over_outside_and_the_nearest_inside() {
+        let plate = Vector3::new(2.0, 0.05, 2.0);
+        // Over the top face, and beside the plate, beyond its side.
+        assert_eq!(
+            cuboid_face(&Vector3::new(1.9, 0.3, -1.5), &plate).1,
+            Vector3::y()
+        );
+        assert_eq!(
+            cuboid_face(&Vector3::new(0.1, 0.0, -2.5), &plate).1,
+            -Vector3::z()
+        );
+        // Inside, 8 mm over the underside and 0.31 m from the side at z = 2: relative to the
+        // half extents it is further out towards that side (0.845 against 0.84).
+        let inside = Vector3::new(0.694, -0.042, 1.69);
+        assert_eq!(cuboid_face(&inside, &plate), (1, -Vector3::y()));
+        // Inside a cube, off its centre towards one face.
+        let cube = Vector3::new(1.0, 1.0, 1.0);
+        assert_eq!(
+            cuboid_face(&Vector3::new(-0.9, 0.5, 0.2), &cube),
+            (0, -Vector3::x())
+        );
+    }
 }
