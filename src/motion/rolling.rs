@@ -135,6 +135,29 @@ impl Rolling {
             .map(|end| self.absolute(&end, dt))
     }
 
+    /// Is the ball at `s` at rest on a still ground, to the closed form's own measure: its
+    /// centre and its rolling no faster than the rounding of the speeds the closed form
+    /// compares ([`rest_scale`]), and a spin about the normal only where no spinning friction
+    /// brakes it (which is then the same whoever steps it)? An instant's test: on a slope
+    /// steeper than `mu_r` the ball rolls off.
+    pub fn at_rest(&self, s: &State) -> bool {
+        let n = self.normal;
+        let wn = s.w.dot(&n);
+        let rolls = self.radius * (s.w - n * wn).norm();
+        let at = self.accel - n * self.accel.dot(&n);
+        let scale = rest_scale(s.v.norm(), rolls, &at);
+        self.ground_velocity == Vector3::zeros()
+            && s.v.norm() <= scale
+            && rolls <= scale
+            && (wn == 0.0 || self.spinning_friction == 0.0)
+    }
+
+    /// Does the closed form bring the ball at `s` to rest ([`Self::at_rest`]) within `dt`?
+    pub fn comes_to_rest(&self, s: &State, dt: f64) -> bool {
+        self.advance_checked(s, dt)
+            .is_some_and(|end| self.at_rest(&end))
+    }
+
     /// The slope's tilt `a_t / g_n` (downhill, of length `tan(theta)`) if the ground holds a
     /// ball at rest on it, `None` if no ball stays at rest there. On a slope of angle `theta`
     /// the static friction `m |a_t|` at the contact point holds the centre, and its torque
@@ -258,7 +281,7 @@ impl Rolling {
     /// rolling needs more friction than `mu N`.
     fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64, slides: bool) -> Option<Phase> {
         let (n, r) = (self.normal, self.radius);
-        let scale = 1e-12 * (1e-3 + st.v.norm() + r * st.w.norm() + at.norm());
+        let scale = rest_scale(st.v.norm(), r * st.w.norm(), at);
         let slip = st.v - r * st.w.cross(&n);
         if slides {
             return self.slide_down(at, gn);
@@ -444,6 +467,13 @@ impl Rolling {
             w,
         }
     }
+}
+
+/// The speed (m/s) at and below which the closed form takes a ball moving at `speed`, its
+/// rolling at `rolling` (`r |w|` along the ground) under the acceleration `at` along the
+/// ground, to be at rest (or rolling without slip): the rounding of the speeds it compares.
+fn rest_scale(speed: f64, rolling: f64, at: &Vector3<f64>) -> f64 {
+    1e-12 * (1e-3 + speed + rolling + at.norm())
 }
 
 /// A spin `w0` (rad/s) slowed at `decay` (rad/s^2) to zero: the spin after `dt` and the angle
@@ -638,6 +668,44 @@ mod tests {
             assert_eq!((end.v, end.w), (Vector3::zeros(), Vector3::zeros()));
             assert!((end.com.x - d).abs() < 1e-12 * d, "{} vs {d}", end.com.x);
         }
+    }
+
+    #[test]
+    fn at_rest_is_the_closed_forms_own_rest_and_one_steps_braking_comes_to_it() {
+        let dt = 1.0 / 60.0;
+        let (level, dir) = on_slope(0.0, 0.3, 0.05, 0.0);
+        // Rolling as slowly as rounding: held at rest, its speed kept (the closed form's own
+        // rest), and so at rest; a spin about the normal that nothing brakes does not count.
+        let crawl = rolling_at(&level, dir * 6.5e-17);
+        assert!(level.at_rest(&crawl));
+        assert_eq!(level.advance_checked(&crawl, dt).unwrap().v, crawl.v);
+        let twirl = State {
+            w: crawl.w + level.normal * 2.0,
+            ..crawl
+        };
+        assert!(level.at_rest(&twirl));
+        let (braked, _) = on_slope(0.0, 0.3, 0.05, 0.02);
+        assert!(!braked.at_rest(&twirl) && braked.comes_to_rest(&twirl, 1.0));
+        // Ten times the rounding is motion.
+        assert!(!level.at_rest(&rolling_at(&level, dir * 1e-14)));
+        // One step's braking, mu_r g dt / (1 + k), stops a ball within the step; a little
+        // more does not.
+        let brake = 0.05 * G * dt / (1.0 + K);
+        assert!(!level.at_rest(&rolling_at(&level, dir * 0.99 * brake)));
+        assert!(level.comes_to_rest(&rolling_at(&level, dir * 0.99 * brake), dt));
+        assert!(!level.comes_to_rest(&rolling_at(&level, dir * 1.01 * brake), dt));
+        // Still on a slope: held below mu_r, rolling off above it. Carried by a moving
+        // ground: not at rest.
+        let still = |rolling: &Rolling| state(rolling, Vector3::zeros(), Vector3::zeros());
+        let (gentle, _) = on_slope(1.0, 0.3, 0.05, 0.0);
+        assert!(gentle.at_rest(&still(&gentle)) && gentle.comes_to_rest(&still(&gentle), dt));
+        let (steep, _) = on_slope(5.0, 0.3, 0.05, 0.0);
+        assert!(steep.at_rest(&still(&steep)) && !steep.comes_to_rest(&still(&steep), dt));
+        let conveyor = Rolling {
+            ground_velocity: Vector3::new(0.5, 0.0, 0.0),
+            ..level
+        };
+        assert!(!conveyor.at_rest(&crawl));
     }
 
     #[test]

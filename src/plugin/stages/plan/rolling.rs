@@ -37,12 +37,14 @@ pub(crate) enum OnPlane {
 
 /// A ball (the body's only collider, centred) resting on the ground `gg` with normal `n`, as
 /// `Planner::rolling_of` asks it: `on_ground` is its state put on the ground (touching it,
-/// no normal speed), `others` the other grounds near it, `user` the pair's user hook flags.
+/// no normal speed), `others` the other grounds near it, `user` the pair's user hook flags,
+/// `rested` whether the pair was rapier's resting contact last step.
 struct BallOnGround<'q, 'c> {
     handle: RigidBodyHandle,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
     user: ActiveHooks,
+    rested: bool,
     others: &'q [&'q GroundGeom<'c>],
     flight: &'q Flight,
     n: Vector3<f64>,
@@ -122,6 +124,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             part,
             gg,
             user,
+            rested: last.roles.get(&key) == Some(&Role::Resting),
             others: &others,
             flight: &body.flight,
             n,
@@ -231,6 +234,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             if let Some(tilt) = motion.holding_tilt().filter(|_| at_rest) {
                 return self.held(scene, &slide, tilt, step);
             }
+        }
+        // At rest as the closed form holds it (moving by no more than its rounding), or at rest
+        // in rapier's contact last step and moving now by less than the closed form would
+        // brake away within this step (the solver's rounding in the ground's frame, or as
+        // slight a nudge): rapier's, which sleeps it. Taken by the closed form, it would be
+        // written each step, or put back at rest each other step, and never sleep.
+        if level
+            && !member
+            && (motion.at_rest(on_ground)
+                || ball.rested && motion.comes_to_rest(on_ground, step.dt))
+        {
+            return None;
         }
         let plane = rolling_plane(&slide, step.dt);
         // On level ground the closed form reaches every state unless the rolling resistance
