@@ -239,11 +239,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // in rapier's contact last step and moving now by less than the closed form would
         // brake away within this step (the solver's rounding in the ground's frame, or as
         // slight a nudge): rapier's, which sleeps it. Taken by the closed form, it would be
-        // written each step, or put back at rest each other step, and never sleep.
+        // written each step, or put back at rest each other step, and never sleep. Only the
+        // rolling resistance and the spinning friction brake a ball on level ground.
+        let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
         if level
             && !member
             && (motion.at_rest(on_ground)
-                || ball.rested && motion.comes_to_rest(on_ground, step.dt))
+                || ball.rested && brakes && motion.comes_to_rest(on_ground, step.dt))
         {
             return None;
         }
