@@ -14,6 +14,7 @@ use crate::plugin::queries::geometry::{
     earliest_touch, flat_relative, one_plane_under, plane_piece_of,
 };
 use crate::plugin::queries::observe::{OwnMotion, Scene, within_reach_of_other};
+use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
 use crate::rapier::math::Vector;
@@ -38,17 +39,25 @@ pub(crate) enum OnPlane {
 /// A ball (the body's only collider, centred) resting on the ground `gg` with normal `n`, as
 /// `Planner::rolling_of` asks it: `on_ground` is its state put on the ground (touching it,
 /// no normal speed), `others` the other grounds near it, `user` the pair's user hook flags,
-/// `rested` whether the pair was rapier's resting contact last step.
+/// `last` what the plugin kept of the last step.
 struct BallOnGround<'q, 'c> {
     handle: RigidBodyHandle,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
     user: ActiveHooks,
-    rested: bool,
+    last: &'q LastStep,
     others: &'q [&'q GroundGeom<'c>],
     flight: &'q Flight,
     n: Vector3<f64>,
     on_ground: State,
+}
+
+impl BallOnGround<'_, '_> {
+    /// Was its pair with its ground rapier's resting contact last step?
+    fn rested(&self) -> bool {
+        let key = (self.part.handle, self.gg.handle);
+        self.last.roles.get(&key) == Some(&Role::Resting)
+    }
 }
 
 /// The ball on its ground with the terms of their contact, once the cheap refusals passed
@@ -124,7 +133,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             part,
             gg,
             user,
-            rested: last.roles.get(&key) == Some(&Role::Resting),
+            last,
             others: &others,
             flight: &body.flight,
             n,
@@ -241,11 +250,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // slight a nudge): rapier's, which sleeps it. Taken by the closed form, it would be
         // written each step, or put back at rest each other step, and never sleep. Only the
         // rolling resistance and the spinning friction brake a ball on level ground.
+        // A speed that friction (at most `mu |an|`) or the rolling resistance cannot take away
+        // within the step (twice that, for rounding) does not come to rest in it.
         let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
+        let braked_within =
+            v.norm() <= 2.0 * slide.friction.max(slide.rolling_resistance) * -slide.an * step.dt;
         if level
             && !member
+            && brakes
+            && braked_within
             && (motion.at_rest(on_ground)
-                || ball.rested && brakes && motion.comes_to_rest(on_ground, step.dt))
+                || ball.rested() && motion.comes_to_rest(on_ground, step.dt))
         {
             return None;
         }
