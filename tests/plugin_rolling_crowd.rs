@@ -225,6 +225,53 @@ fn balls_rolling_to_a_stop_on_a_tiled_floor_stop_at_the_closed_form_and_sleep() 
     assert_each_stopped_at_the_closed_form("16 balls on tiles", &w, &balls, &starts, v0, &run);
 }
 
+/// A ball at rest in rapier's contact, nudged faster than one step of the rolling resistance's
+/// braking (`mu_r g dt / (1 + k)`, 5.8 mm/s), is the closed form's: it stops where the closed
+/// form says, `v^2 (1 + k) / (2 mu_r g)`, and sleeps. Nudged slower, it is rapier's (as is the
+/// drift rapier's own resting contact gives a ball at rest): rapier, which has no rolling
+/// resistance, lets it roll on until it sleeps it, 0.5 s at its defaults.
+#[test]
+fn a_resting_ball_nudged_past_one_steps_braking_stops_at_the_closed_form() {
+    let braking = MU_R * G / (1.0 + K) / 60.0;
+    for nudge in [1.5 * braking, 0.5 * braking] {
+        let (mut w, mut p, balls) = scene(&[(0.3, 0.2)], 0.0);
+        let ball = balls[0];
+        // At rest, then three steps in rapier's resting contact.
+        for _ in 0..3 {
+            p.step(&mut w);
+        }
+        assert!(w.bodies[ball].linvel().length() < 1e-6);
+        let at = na(w.bodies[ball].translation());
+        w.bodies[ball].set_linvel(Vector::new(real(nudge), 0.0, 0.0), true);
+        w.bodies[ball].set_angvel(Vector::new(0.0, 0.0, real(-nudge / R)), true);
+        let run = run(&mut w, &mut p, steps_to_sleep(nudge));
+        let rb = &w.bodies[ball];
+        let moved = na(rb.translation()) - at;
+        let d = stopping_distance(nudge);
+        println!(
+            "nudged at {nudge:e} m/s: moved {:e} m, closed form {d:e} m, {run:?}",
+            moved.x
+        );
+        assert!(rb.is_sleeping(), "{run:?}");
+        if nudge > braking {
+            // Positions near 0.3 m round to 3e-8 m in `f32`.
+            let tol = if F64 { 1e-15 } else { 1e-7 };
+            assert!(
+                (moved.x - d).abs() <= tol,
+                "moved {} m, closed form {d} m",
+                moved.x
+            );
+        } else {
+            // rapier's: on at the nudge until it sleeps (a step's rounding of the count).
+            assert!(
+                moved.x > d && moved.x <= nudge * (0.5 + 2.0 / 60.0),
+                "{}",
+                moved.x
+            );
+        }
+    }
+}
+
 /// A ball rolling into a ball at rest is handed to rapier's contact before it can touch it
 /// (one `Released` event, at the step's start), and the other ball is pushed: rapier's
 /// collision. Nothing is rolled through the other ball.

@@ -485,7 +485,8 @@ proptest! {
 /// a floor of 2 x 2 tiles, 0.1 m thick, is then inserted around it. The ball starts the next
 /// step overlapping the floor's underside and rising fast; when its centre entered the plate,
 /// the contact took the face the centre was furthest out of relative to the half extents
-/// (`z`, 0.31 m away, not the underside 8 mm away), resolved an impact against it, and left the ball under the floor.
+/// (`z`, 0.31 m away, not the underside 8 mm away), resolved an impact against it, and left
+/// the ball under the floor.
 #[test]
 fn a_ball_rising_inside_a_thin_floor_is_not_met_by_a_far_face() {
     let ops = [
@@ -506,6 +507,11 @@ fn a_ball_rising_inside_a_thin_floor_is_not_met_by_a_far_face() {
     for op in &ops {
         sim.apply(op);
     }
+    // The case itself: the ball's centre under the floor (its bottom at y = -0.1), the ball
+    // reaching into it, and rising.
+    let ball = &sim.world.bodies[sim.bodies[0]];
+    let (y, vy) = (wide(ball.translation().y), wide(ball.linvel().y));
+    assert!((-0.1 - 0.15575..-0.1).contains(&y) && vy > 1.0, "{y} {vy}");
     for _ in 0..30 {
         sim.step();
         for ev in sim.plugin.events() {

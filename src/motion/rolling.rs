@@ -138,8 +138,9 @@ impl Rolling {
     /// Is the ball at `s` at rest on a still ground, to the closed form's own measure: its
     /// centre and its rolling no faster than the rounding of the speeds the closed form
     /// compares ([`rest_scale`]), and a spin about the normal only where no spinning friction
-    /// brakes it (which is then the same whoever steps it)? An instant's test: on a slope
-    /// steeper than `mu_r` the ball rolls off.
+    /// brakes it (which is then the same whoever steps it)? So a ball spinning in place about
+    /// the normal without spinning friction is at rest here, however fast. An instant's test:
+    /// on a slope steeper than `mu_r` a ball at rest rolls off.
     pub fn at_rest(&self, s: &State) -> bool {
         let n = self.normal;
         let wn = s.w.dot(&n);

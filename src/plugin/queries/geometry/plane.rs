@@ -48,12 +48,13 @@ pub(crate) fn flat_relative(
             let r_o = travel + 2.0 * (origin_w - s.com).norm();
             let half = vec_to_na(cb.half_extents);
             // The face plane_contact_on picks: outside the cuboid, the relative lead of
-            // `axis` over the others holds over the reach; where the reach goes inside, and
-            // the nearest face is picked, the depth under that face (at most its half extent)
-            // stays below the depth under every other.
+            // `axis` over the others holds over the reach (which stays on one side of the
+            // cuboid's mid-plane across `axis`); where the reach goes inside, and the nearest
+            // face is picked, the depth under that face stays below the depth under every
+            // other.
             let (axis, _) = cuboid_face(&origin, &half);
             let lead = (origin[axis].abs() - r_o) / half[axis];
-            let depth = (half[axis] - (origin[axis].abs() - r_o)).min(half[axis]);
+            let depth = half[axis] - (origin[axis].abs() - r_o);
             lead > 0.0
                 && (0..3).filter(|i| *i != axis).all(|i| {
                     (origin[i].abs() + r_o) / half[i] < lead

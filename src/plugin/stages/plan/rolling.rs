@@ -53,10 +53,13 @@ struct BallOnGround<'q, 'c> {
 }
 
 impl BallOnGround<'_, '_> {
-    /// Was its pair with its ground rapier's resting contact last step?
+    /// Was its pair with its ground rapier's resting contact last step, and none of its pairs
+    /// with the other grounds near it the closed form's rolling (a roll that ends on another
+    /// piece of the plane is the closed form's to its stop)?
     fn rested(&self) -> bool {
-        let key = (self.part.handle, self.gg.handle);
-        self.last.roles.get(&key) == Some(&Role::Resting)
+        let role = |g: &GroundGeom| self.last.roles.get(&(self.part.handle, g.handle));
+        role(self.gg) == Some(&Role::Resting)
+            && self.others.iter().all(|g| role(g) != Some(&Role::Rolling))
     }
 }
 
@@ -244,14 +247,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 return self.held(scene, &slide, tilt, step);
             }
         }
-        // At rest as the closed form holds it (moving by no more than its rounding), or at rest
-        // in rapier's contact last step and moving now by less than the closed form would
-        // brake away within this step (the solver's rounding in the ground's frame, or as
-        // slight a nudge): rapier's, which sleeps it. Taken by the closed form, it would be
-        // written each step, or put back at rest each other step, and never sleep. Only the
-        // rolling resistance and the spinning friction brake a ball on level ground.
-        // A speed that friction (at most `mu |an|`) or the rolling resistance cannot take away
-        // within the step (twice that, for rounding) does not come to rest in it.
+        // On level ground, at rest as the closed form holds it (moving by no more than its
+        // rounding), or at rest in rapier's contact last step and now moving slower than the
+        // closed form would brake away within this step: rapier's, which sleeps it. rapier's
+        // resting contact moves a ball at rest (its solver's rounding, about 1e-7 m/s on a
+        // tile in `f32`; on the seam between two tiles, whose edge it also touches, sideways at
+        // a few mm/s); taken back, the ball would be stopped each other step and written, and
+        // never sleep. rapier has no rolling resistance: it lets such a ball drift until it
+        // sleeps it, at most the braking speed for 0.5 s at its defaults. Only the rolling
+        // resistance and the spinning friction brake a ball on level ground. A speed that
+        // friction (at most `mu |an|`) or the rolling resistance cannot take away within the
+        // step (twice that: the ground's allowed tilt) does not come to rest in it.
         let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
         let braked_within =
             v.norm() <= 2.0 * slide.friction.max(slide.rolling_resistance) * -slide.an * step.dt;
