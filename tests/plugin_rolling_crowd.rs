@@ -160,6 +160,15 @@ fn steps_to_sleep(v0: f64) -> usize {
     ((v0 * (1.0 + K) / (MU_R * G) + 2.0) * 60.0) as usize
 }
 
+/// Balls at `starts` on `floor`, rolling along +x at 1 m/s, run for `steps_to_sleep`: each
+/// stopped at its closed form and asleep ([`assert_each_stopped_at_the_closed_form`]).
+fn roll_to_their_stops(label: &str, floor: Floor, starts: &[(f64, f64)]) {
+    let v0 = 1.0;
+    let (mut w, mut p, balls) = scene_on(floor, starts, v0);
+    let run = run(&mut w, &mut p, steps_to_sleep(v0));
+    assert_each_stopped_at_the_closed_form(label, &w, &balls, starts, v0, &run);
+}
+
 #[test]
 fn two_balls_side_by_side_roll_to_their_closed_form_stops() {
     // 5 cm, 1 cm, 1 mm apart: rapier's broad phase pairs all three, and its narrow phase
@@ -169,21 +178,15 @@ fn two_balls_side_by_side_roll_to_their_closed_form_stops() {
     // it.
     for gap in [0.05, 0.01, 0.001] {
         let starts = [(0.0, 0.0), (0.0, 2.0 * R + gap)];
-        let v0 = 1.0;
-        let (mut w, mut p, balls) = scene(&starts, v0);
-        let run = run(&mut w, &mut p, steps_to_sleep(v0));
         let label = format!("side by side, {gap} m apart");
-        assert_each_stopped_at_the_closed_form(&label, &w, &balls, &starts, v0, &run);
+        roll_to_their_stops(&label, Floor::HalfSpace, &starts);
     }
 }
 
 #[test]
 fn a_row_of_ten_balls_one_behind_the_other_rolls_to_the_closed_form_stops() {
     let starts: Vec<_> = (0..10).map(|i| (0.15 * i as f64, 0.0)).collect();
-    let v0 = 1.0;
-    let (mut w, mut p, balls) = scene(&starts, v0);
-    let run = run(&mut w, &mut p, steps_to_sleep(v0));
-    assert_each_stopped_at_the_closed_form("a row of ten", &w, &balls, &starts, v0, &run);
+    roll_to_their_stops("a row of ten", Floor::HalfSpace, &starts);
 }
 
 /// `many_balls --scene rolling --count 500 --rolling-resistance 0.05`: a 23 x 23 grid, 15 cm
@@ -198,12 +201,7 @@ fn five_hundred_balls_on_a_grid_each_stop_at_the_closed_form_and_sleep() {
             (0.15 * col as f64 + jitter(), 0.15 * row as f64 + jitter())
         })
         .collect();
-    let v0 = 1.0;
-    let (mut w, mut p, balls) = scene(&starts, v0);
-    let steps = steps_to_sleep(v0);
-    let run = run(&mut w, &mut p, steps);
-    assert!(run.awake_steps < steps, "{run:?}");
-    assert_each_stopped_at_the_closed_form("500 balls", &w, &balls, &starts, v0, &run);
+    roll_to_their_stops("500 balls", Floor::HalfSpace, &starts);
 }
 
 /// On a floor of flush tiles, balls roll to their closed-form stops and sleep as on a
@@ -217,12 +215,7 @@ fn balls_rolling_to_a_stop_on_a_tiled_floor_stop_at_the_closed_form_and_sleep() 
         .iter()
         .flat_map(|x| [-1.1, -0.35, 0.4, 1.15].map(|z| (*x, z)))
         .collect();
-    let v0 = 1.0;
-    let (mut w, mut p, balls) = scene_on(Floor::Tiles, &starts, v0);
-    let steps = steps_to_sleep(v0);
-    let run = run(&mut w, &mut p, steps);
-    assert!(run.awake_steps < steps, "{run:?}");
-    assert_each_stopped_at_the_closed_form("16 balls on tiles", &w, &balls, &starts, v0, &run);
+    roll_to_their_stops("16 balls on tiles", Floor::Tiles, &starts);
 }
 
 /// A ball at rest in rapier's contact, nudged faster than one step of the rolling resistance's
