@@ -958,3 +958,45 @@ fn a_woken_ghost_inside_a_refused_tile_is_left_to_fall_through_it() {
     assert!(woken.is_some(), "the ghost was never woken");
     assert!(y < -0.6, "the ghost did not fall through its tile: y = {y}");
 }
+
+/// A ball at rest on the seam between two tiles of a floor of flush tiles stays where it is
+/// and sleeps, as on one cuboid: its resting contact with the next tile's edge is taken as
+/// its contact with the floor. Under rapier alone that contact is tilted and beside the
+/// ball's foot, and rolls it off the seam.
+#[test]
+fn a_ball_at_rest_on_a_seam_between_tiles_stays_there() {
+    let side = FLOOR / TILES as f64;
+    let (x, z) = (side + 1e-3, 0.5 * side);
+    let run = |plugin: bool| {
+        let mut world = PhysicsWorld::default();
+        let tiles = floor(&mut world, true);
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(real(x), 0.05, real(z))),
+            ColliderBuilder::ball(0.05).friction(0.4),
+        );
+        let mut p = plugin.then(|| {
+            let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+            for g in &tiles {
+                p.add_ground(&world.bodies, &world.colliders, *g).unwrap();
+            }
+            p
+        });
+        for _ in 0..120 {
+            match p.as_mut() {
+                Some(p) => p.step(&mut world),
+                None => world.step(),
+            }
+        }
+        let rb = &world.bodies[ball];
+        let (dx, dz) = (wide(rb.translation().x) - x, wide(rb.translation().z) - z);
+        ((dx * dx + dz * dz).sqrt(), rb.is_sleeping())
+    };
+    let (alone, _) = run(false);
+    let (moved, asleep) = run(true);
+    println!("on a seam: moved {moved:e} m with the plugin, {alone:e} m under rapier alone");
+    assert!(
+        alone > 1e-3,
+        "rapier alone moved it {alone} m: no seam push to take away"
+    );
+    assert!(moved < 1e-6 && asleep, "moved {moved} m, asleep {asleep}");
+}

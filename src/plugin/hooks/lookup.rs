@@ -172,6 +172,12 @@ impl Lookup {
         }
     }
 
+    /// Does the body collider `c` meet a slab's tiles one by one this step
+    /// (`StepData::by_tile`)?
+    pub fn by_tile(&self, c: ColliderHandle) -> bool {
+        matches!(self.roles.get(slot_of(c)), Some(Some(slot)) if slot.body == c && slot.by_tile)
+    }
+
     /// The pair `key` (body collider, ground collider) as the step's roles name it: a slab's
     /// tile under the slab's stand-in (`stand_in`), unless the body's pairs are by tile.
     pub fn keyed(

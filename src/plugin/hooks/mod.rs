@@ -39,6 +39,7 @@ use crate::rapier::prelude::{
     PhysicsHooks, RigidBodySet, SolverFlags,
 };
 use lookup::Looked;
+use nalgebra::Vector3;
 
 impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
     fn filter_contact_pair(&self, context: &PairFilterContext) -> Option<SolverFlags> {
@@ -102,10 +103,14 @@ impl<H: PhysicsHooks> PhysicsHooks for ImpactPlugin<H> {
                 let hold = (!self.step.holds.is_empty())
                     .then(|| Some((*self.step.holds.get(&key)?, centre()?)))
                     .flatten();
+                let slab = self.slab_contact(colliders, (c1, c2), key, context.rigid());
                 if let Some(rigid) = context.rigid_mut() {
                     *rigid.restitution = 0.0;
                     if let Some(m) = over {
                         *rigid.friction = crate::plugin::bridge::convert::to_real(m.friction);
+                    }
+                    if let Some(contact) = slab {
+                        contact.write(rigid);
                     }
                     // A ball held at rest on a slope: the normal force acts `h tan(theta)`
                     // downhill of the contact point, as the rolling resistance's contact patch
@@ -274,5 +279,82 @@ impl<H> ImpactPlugin<H> {
             Some(Some((h, user))) if *h == c => Some(*user),
             _ => None,
         }
+    }
+}
+
+/// A ball's resting contact with a slab's tile, as its contact with the slab: the slab's face
+/// normal, the ball's point nearest the face and that point's foot on the face.
+struct SlabContact {
+    /// The face's outward normal, from the first collider to the second as rapier's is.
+    normal: Vector3<f64>,
+    /// The contact's points on the first and the second collider.
+    points: (Vector3<f64>, Vector3<f64>),
+    /// Their separation along `normal`, the contact skins deducted.
+    dist: f64,
+}
+
+impl SlabContact {
+    /// Writes it over every solver contact of `rigid`.
+    fn write(&self, rigid: &mut crate::rapier::prelude::ModifiableManifold) {
+        use crate::plugin::bridge::convert::{to_real, vec_from_na};
+        *rigid.normal = vec_from_na(&self.normal);
+        for c in rigid.solver_contacts.iter_mut() {
+            c.anchor1 = vec_from_na(&self.points.0);
+            c.anchor2 = vec_from_na(&self.points.1);
+            c.dist = to_real(self.dist);
+        }
+    }
+}
+
+impl<H> ImpactPlugin<H> {
+    /// The resting contact of the pair `key` (body collider, ground) between `c1` and `c2`,
+    /// where the ground is a slab's tile, the body collider a ball, and the contact's points
+    /// on the tile and the ball's foot lie inside one face of the slab: as with the slab. Flush
+    /// tiles make one flat face, but rapier's contact with the next tile's edge, under a ball
+    /// on a seam, is tilted and beside the ball's foot, and rolls it off the seam. Not for a
+    /// body that meets the tiles one by one (a filter may refuse the next tile: its edge is
+    /// then a real one).
+    fn slab_contact(
+        &self,
+        colliders: &ColliderSet,
+        (c1, c2): (ColliderHandle, ColliderHandle),
+        key: PairKey,
+        rigid: Option<&crate::rapier::prelude::ModifiableManifold>,
+    ) -> Option<SlabContact> {
+        use crate::plugin::bridge::convert::{to_f64, vec_to_na};
+        let index = &self.registry.index;
+        if !index.has_slabs() || self.lookup.by_tile(key.0) {
+            return None;
+        }
+        let tile_first = c1 != key.0;
+        let tile = if tile_first { c1 } else { c2 };
+        let ball = colliders.get(key.0)?;
+        let radius = to_f64(ball.shape().as_ball()?.radius);
+        let on_tile = rigid?
+            .solver_contacts
+            .iter()
+            .map(|c| vec_to_na(if tile_first { c.anchor1 } else { c.anchor2 }));
+        let (n, offset) = index.slab_face_plane(tile, on_tile)?;
+        let foot_of = |p: Vector3<f64>| p - n * (n.dot(&p) - offset);
+        let under = vec_to_na(ball.position().translation) - n * radius;
+        let foot = foot_of(under);
+        if !index.on_slab_face(tile, &foot, &n) {
+            return None;
+        }
+        let skins = to_f64(ball.contact_skin()) + to_f64(colliders.get(tile)?.contact_skin());
+        let dist = n.dot(&(under - foot)) - skins;
+        Some(if tile_first {
+            SlabContact {
+                normal: n,
+                points: (foot, under),
+                dist,
+            }
+        } else {
+            SlabContact {
+                normal: -n,
+                points: (under, foot),
+                dist,
+            }
+        })
     }
 }

@@ -204,6 +204,29 @@ fn one_box(group: &[&Tile], normal: usize) -> Option<Slab> {
 }
 
 impl Slab {
+    /// The plane of the box's face whose interior holds the world point `p` (within
+    /// `COPLANAR_TOLERANCE` of that face's plane and of no other, and inside its rectangle by
+    /// more than that), as its outward unit normal `n` and offset `n.q` (`q` on the face), in
+    /// the world. Where tiles meet inside a face the box is flat, whichever tile's edge a
+    /// contact there was found on. `None` on the box's own edges and corners, and off its
+    /// faces.
+    pub fn face_plane_at(&self, p: &Vector3<f64>) -> Option<(Vector3<f64>, f64)> {
+        let local = self.pose.inverse_transform_point(&Point3::from(*p)).coords;
+        let off_plane = |i: usize| (local[i].abs() - self.half[i]).abs();
+        let mut on = (0..3).filter(|i| off_plane(*i) <= COPLANAR_TOLERANCE);
+        let (Some(axis), None) = (on.next(), on.next()) else {
+            return None;
+        };
+        let inside = (0..3)
+            .filter(|i| *i != axis)
+            .all(|i| local[i].abs() < self.half[i] - COPLANAR_TOLERANCE);
+        let mut n = Vector3::zeros();
+        n[axis] = local[axis].signum();
+        let q = self.pose * Point3::from(n * self.half[axis]);
+        let n = self.pose.rotation * n;
+        inside.then(|| (n, n.dot(&q.coords)))
+    }
+
     /// The index of the tile under the world point `p` (its projection on the faces, clamped
     /// to the box: a point beyond the box's side names the tile at that side).
     pub fn tile_at(&self, p: &Vector3<f64>) -> usize {
