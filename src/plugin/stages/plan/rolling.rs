@@ -251,8 +251,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // rounding), or at rest in rapier's contact last step and now moving slower than the
         // closed form would brake away within this step: rapier's, which sleeps it. rapier's
         // resting contact moves a ball at rest (its solver's rounding, about 1e-7 m/s on a
-        // tile in `f32`; on the seam between two tiles, whose edge it also touches, sideways at
-        // over 1 mm/s); taken back, the ball would be stopped each other step and written, and
+        // tile in `f32`; on the seam between two tiles that are not one slab, whose edge it
+        // also touches, sideways at over 1 mm/s); taken back, the ball would be stopped each
+        // other step and written, and
         // never sleep. rapier has no rolling resistance: it lets such a ball drift until it
         // sleeps it, at most the braking speed for 0.5 s at its defaults. Only the rolling
         // resistance and the spinning friction brake a ball on level ground. A speed that
