@@ -218,15 +218,17 @@ fn balls_rolling_to_a_stop_on_a_tiled_floor_stop_at_the_closed_form_and_sleep() 
     roll_to_their_stops("16 balls on tiles", Floor::Tiles, &starts);
 }
 
-/// A ball at rest in rapier's contact, nudged faster than one step of the rolling resistance's
-/// braking (`mu_r g dt / (1 + k)`, 5.8 mm/s), is the closed form's: it stops where the closed
-/// form says, `v^2 (1 + k) / (2 mu_r g)`, and sleeps. Nudged slower, it is rapier's (as is the
-/// drift rapier's own resting contact gives a ball at rest): rapier, which has no rolling
+/// A ball at rest in rapier's contact, nudged faster than the held speed (1e-4 m/s), is the
+/// closed form's: it stops where the closed form says, `v^2 (1 + k) / (2 mu_r g)`, and sleeps,
+/// whether or not one step of the rolling resistance's braking (`mu_r g dt / (1 + k)`,
+/// 5.8 mm/s) would take the nudge away. Nudged slower than the held speed, it is rapier's (as is
+/// the drift rapier's own resting contact gives a ball at rest): rapier, which has no rolling
 /// resistance, lets it roll on until it sleeps it, 0.5 s at its defaults.
 #[test]
-fn a_resting_ball_nudged_past_one_steps_braking_stops_at_the_closed_form() {
+fn a_resting_ball_nudged_past_the_held_speed_stops_at_the_closed_form() {
     let braking = MU_R * G / (1.0 + K) / 60.0;
-    for nudge in [1.5 * braking, 0.5 * braking] {
+    let held = 1e-4;
+    for nudge in [1.5 * braking, 0.5 * braking, 0.5 * held] {
         let (mut w, mut p, balls) = scene(&[(0.3, 0.2)], 0.0);
         let ball = balls[0];
         // At rest, then three steps in rapier's resting contact.
@@ -246,7 +248,7 @@ fn a_resting_ball_nudged_past_one_steps_braking_stops_at_the_closed_form() {
             moved.x
         );
         assert!(rb.is_sleeping(), "{run:?}");
-        if nudge > braking {
+        if nudge > held {
             // Positions near 0.3 m round to 3e-8 m in `f32`.
             let tol = if F64 { 1e-15 } else { 1e-7 };
             assert!(

@@ -249,23 +249,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
         // On level ground, at rest as the closed form holds it (moving by no more than its
         // rounding), or at rest in rapier's contact last step and now moving slower than the
-        // closed form would brake away within this step: rapier's, which sleeps it. rapier's
-        // resting contact moves a ball at rest (its solver's rounding, about 1e-7 m/s on a
-        // tile in `f32`; on the seam between two tiles that are not one slab, whose edge it
-        // also touches, sideways at over 1 mm/s); taken back, the ball would be stopped each
-        // other step and written, and
-        // never sleep. rapier has no rolling resistance: it lets such a ball drift until it
-        // sleeps it, at most the braking speed for 0.5 s at its defaults. Only the rolling
-        // resistance and the spinning friction brake a ball on level ground. A speed that
-        // friction (at most `mu |an|`) or the rolling resistance cannot take away within the
-        // step (twice that: the ground's allowed tilt) does not come to rest in it.
+        // held speed and than the closed form would brake away within this step (rapier's
+        // solver's rounding, about 1e-7 m/s on a tile in `f32`): rapier's, which sleeps it.
+        // Taken back, the ball would be stopped each other step and written, and never sleep.
+        // rapier has no rolling resistance: it lets such a ball drift until it sleeps it, at
+        // most the held speed for 0.5 s at its defaults. Only the rolling resistance and the
+        // spinning friction brake a ball on level ground.
         let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
-        let braked_within =
-            v.norm() <= 2.0 * slide.friction.max(slide.rolling_resistance) * -slide.an * step.dt;
+        let turning = (on_ground.w - n * on_ground.w.dot(&n)).norm() * radius;
+        let held = v.norm() <= HELD_SPEED && turning <= HELD_SPEED;
         if level
             && !member
             && brakes
-            && braked_within
+            && held
             && (motion.at_rest(on_ground)
                 || ball.rested() && motion.comes_to_rest(on_ground, step.dt))
         {
