@@ -334,11 +334,11 @@ impl<H> ImpactPlugin<H> {
             .solver_contacts
             .iter()
             .map(|c| vec_to_na(if tile_first { c.anchor1 } else { c.anchor2 }));
-        let (n, offset) = index.slab_face_plane(tile, on_tile)?;
-        let foot_of = |p: Vector3<f64>| p - n * (n.dot(&p) - offset);
+        let slab = index.slab_of(tile)?;
+        let (n, offset) = slab.face_plane_of(on_tile)?;
         let under = vec_to_na(ball.position().translation) - n * radius;
-        let foot = foot_of(under);
-        if !index.on_slab_face(tile, &foot, &n) {
+        let foot = under - n * (n.dot(&under) - offset);
+        if slab.face_plane_at(&foot).map(|(m, _)| m) != Some(n) {
             return None;
         }
         let skins = to_f64(ball.contact_skin()) + to_f64(colliders.get(tile)?.contact_skin());

@@ -320,49 +320,15 @@ impl GroundIndex {
         }
     }
 
-    /// For a tile `c` of a slab, the plane (`Slab::face_plane_at`) of the slab's face whose
-    /// interior holds every one of `points` (world, on the tile: a contact's points on the
-    /// ground), if one face does; `None` for any other collider.
-    pub fn slab_face_plane(
-        &self,
-        c: ColliderHandle,
-        points: impl IntoIterator<Item = Vector3<f64>>,
-    ) -> Option<(Vector3<f64>, f64)> {
-        let Some(Some(Slot {
-            handle,
-            slab: Some((k, _)),
-            ..
-        })) = self.by_slot.get(slot_of(c))
-        else {
-            return None;
-        };
-        if *handle != c {
-            return None;
-        }
-        let slab = &self.slabs[*k as usize];
-        let mut found: Option<(Vector3<f64>, f64)> = None;
-        for p in points {
-            let plane = slab.face_plane_at(&p)?;
-            if found.is_some_and(|f| f.0 != plane.0) {
-                return None;
-            }
-            found = Some(plane);
-        }
-        found
-    }
-
-    /// Is the world point `p` inside the face of `c`'s slab of outward normal `n`
-    /// (`Slab::face_plane_at`)?
-    pub fn on_slab_face(&self, c: ColliderHandle, p: &Vector3<f64>, n: &Vector3<f64>) -> bool {
+    /// The slab the collider `c` is a tile of, if any.
+    pub fn slab_of(&self, c: ColliderHandle) -> Option<&Slab> {
         match self.by_slot.get(slot_of(c)) {
             Some(Some(Slot {
                 handle,
                 slab: Some((k, _)),
                 ..
-            })) if *handle == c => self.slabs[*k as usize]
-                .face_plane_at(p)
-                .is_some_and(|(m, _)| m == *n),
-            _ => false,
+            })) if *handle == c => self.slabs.get(*k as usize),
+            _ => None,
         }
     }
 

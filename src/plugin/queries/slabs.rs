@@ -227,6 +227,22 @@ impl Slab {
         inside.then(|| (n, n.dot(&q.coords)))
     }
 
+    /// [`Self::face_plane_at`] of every one of `points`, if they lie inside one face.
+    pub fn face_plane_of(
+        &self,
+        points: impl IntoIterator<Item = Vector3<f64>>,
+    ) -> Option<(Vector3<f64>, f64)> {
+        let mut found: Option<(Vector3<f64>, f64)> = None;
+        for p in points {
+            let plane = self.face_plane_at(&p)?;
+            if found.is_some_and(|f| f.0 != plane.0) {
+                return None;
+            }
+            found = Some(plane);
+        }
+        found
+    }
+
     /// The index of the tile under the world point `p` (its projection on the faces, clamped
     /// to the box: a point beyond the box's side names the tile at that side).
     pub fn tile_at(&self, p: &Vector3<f64>) -> usize {
