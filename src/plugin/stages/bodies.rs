@@ -104,6 +104,21 @@ impl AfterStep<'_> {
         let Some(now) = self.commit.body(bodies, cand.body) else {
             return;
         };
+        // Something else acted on it in the step: a contact, a joint, or rapier's CCD
+        // stopping it short (against a thin body).
+        let sets = &step.sets;
+        let disturbed = sets.jointed(cand.body)
+            || pushed_by_other(now.rb(), sets.narrow_phase)
+            || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
+        // Alone over one flat face of a still ground for the whole step (the plan's proof):
+        // its closed-form end touches the face, and needs no query.
+        let on_one_face = cand.rolls_on_one_face && cand.near.len() == 1;
+        if !disturbed && on_one_face && cand.impact_grounds.is_empty() {
+            let end = motion.advance(&cand.start, step.dt);
+            self.commit
+                .state(cand.body, &end, &cand.local_com, Origin::Model);
+            return;
+        }
         let geom = body_geom(now.rb(), colliders, &cand.local_com);
         let Some(gg) = self.pair_geom(&step.grounds[ground], &geom, colliders) else {
             return;
@@ -119,12 +134,6 @@ impl AfterStep<'_> {
             )
             .collect();
         let subject = Subject::new(cand, &geom, &grounds, step);
-        // Something else acted on it in the step: a contact, a joint, or rapier's CCD
-        // stopping it short (against a thin body).
-        let sets = &step.sets;
-        let disturbed = sets.jointed(cand.body)
-            || pushed_by_other(now.rb(), sets.narrow_phase)
-            || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
         if !disturbed && !cand.impact_grounds.is_empty() {
             // A ground it may roll into: where it does, that impact, and on from there.
             let obstacles = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);

@@ -57,6 +57,12 @@ pub(crate) struct Candidate {
     /// A ball sliding on a level ground (`Role::Rolling`): the ground's index (in
     /// `StepData::grounds`) and the motion. `start` then touches the ground.
     pub rolling: Option<(usize, Rolling)>,
+    /// With `rolling`: the plan found the ball on level ground, over one flat face of a
+    /// ground that does not move (a half-space, or a cuboid's face it stays well inside of
+    /// for its whole travel in the step), with no other ground near it. Its closed-form end
+    /// then touches that face by construction, and is written without a contact query
+    /// (`AfterStep::roll`).
+    pub rolls_on_one_face: bool,
     /// A ball that rolled in closed form last step and is handed to rapier's resting contact
     /// at this step's start (`EventKind::Released`, something else within reach): the
     /// ground's index (in `StepData::grounds`). rapier's end state is checked against it
@@ -95,6 +101,7 @@ impl Candidate {
             turning_resting: SmallList::Empty,
             turns_surface: false,
             rolling: None,
+            rolls_on_one_face: false,
             released: None,
             steer: None,
         }

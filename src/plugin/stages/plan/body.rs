@@ -77,6 +77,8 @@ pub(super) struct BodyPlan {
     pub turning_resting: SmallList<(usize, Vector3<f64>)>,
     /// The closed-form rolling on the ground of this index.
     pub rolling: Option<(usize, Rolling)>,
+    /// The rolling stays over its ground's one flat face (`Candidate::rolls_on_one_face`).
+    pub rolls_on_one_face: bool,
     /// Held at rest on a slope (`OnPlane::Held`): its pairs are rapier's.
     pub held: bool,
     /// The grounds of the plane it rolls on (`rolling_of`): their pairs are the rolling's.
@@ -95,6 +97,7 @@ impl BodyNear<'_> {
             closing: false,
             turning_resting: SmallList::Empty,
             rolling: None,
+            rolls_on_one_face: false,
             held: false,
             rolling_pieces: None,
             released: None,
@@ -256,6 +259,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             turning_resting: std::mem::take(&mut plan.turning_resting),
             turns_surface: body.turns_surface,
             rolling: plan.rolling.take(),
+            rolls_on_one_face: plan.rolls_on_one_face,
             released: plan.released,
             steer: None,
         });

@@ -23,8 +23,14 @@ use nalgebra::Vector3;
 
 /// What the closed form makes of a ball resting on a plane ground (`Planner::rolling_of`).
 pub(crate) enum OnPlane {
-    /// It moves (`Role::Rolling`), on the plane of these grounds.
-    Rolls(Rolling, SmallList<ColliderHandle>),
+    /// It moves (`Role::Rolling`), on the plane of these grounds (`pieces`). `on_one_face`:
+    /// on level ground, over one flat face of a still ground for the whole step, the only
+    /// ground near it (see `Candidate::rolls_on_one_face`).
+    Rolls {
+        motion: Rolling,
+        pieces: SmallList<ColliderHandle>,
+        on_one_face: bool,
+    },
     /// It stays at rest on a slope of this tilt (`Rolling::holding_tilt`): rapier's resting
     /// contact (`Role::Resting`) with these grounds, their normal force acting downhill of the
     /// contact point so that rapier holds the ball still and sleeps it. (The closed form
@@ -143,9 +149,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             on_ground,
         };
         match self.rolling_of(scene, &ball, step) {
-            Some(OnPlane::Rolls(motion, pieces)) => {
+            Some(OnPlane::Rolls {
+                motion,
+                pieces,
+                on_one_face,
+            }) => {
                 plan.rolling_pieces = Some(pieces);
                 plan.rolling = Some((*gi, motion));
+                plan.rolls_on_one_face = on_one_face;
                 plan.state = on_ground;
                 return Role::Rolling;
             }
@@ -267,7 +278,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         {
             return None;
         }
-        let plane = rolling_plane(&slide, step.dt);
         // On level ground the closed form reaches every state unless the rolling resistance
         // needs more friction than `mu N` (`mu_r / (1 + k) > mu`): then it is asked.
         if level
@@ -275,8 +285,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && (slide.rolling_resistance <= slide.friction
                 || motion.advance_checked(on_ground, step.dt).is_some())
         {
-            return Some(OnPlane::Rolls(motion, SmallList::One(gg.handle)));
+            // Its centre moves in the plane and travels no farther than `flat_relative`'s
+            // bound (on level ground no force along the plane speeds it up): its end touches
+            // the same face, where the ground stays put.
+            return Some(OnPlane::Rolls {
+                motion,
+                pieces: SmallList::One(gg.handle),
+                on_one_face: gg.motion.is_still(),
+            });
         }
+        let plane = rolling_plane(&slide, step.dt);
         // Only where the closed form reaches (on a slope, the band where a ball can neither
         // roll nor slide is not).
         let end = motion.advance_checked(on_ground, step.dt)?;
@@ -285,7 +303,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } else {
             self.pieces_under(scene, &slide, &motion, &plane, &end, step.dt)?
         };
-        Some(OnPlane::Rolls(motion, piece_handles))
+        Some(OnPlane::Rolls {
+            motion,
+            pieces: piece_handles,
+            on_one_face: false,
+        })
     }
 
     /// The terms of the ball's contact with its ground, or `None` where the closed form does
