@@ -4,7 +4,9 @@
 //! Contract: for each candidate, in the plan's order, one route, decided from the plan (its
 //! role: rolling, turning while resting, with `Impact` grounds or none) and from what rapier's
 //! step did to it (a contact, a joint, a torque, rapier's CCD stopping it short):
-//! - a rolling ball nothing else acted on: its closed form (`reconstruct::rolled`), or, if it
+//! - a rolling ball nothing else acted on: its closed form, written as it ends where the plan
+//!   proved it stays over one flat face of a still ground (`Candidate::rolls_on_one_face`),
+//!   else once a contact query finds it still on its plane (`reconstruct::rolled`); or, if it
 //!   rolls into another ground, that impact and on (`rolled_into`); one something else acted
 //!   on: rapier's end state, checked (`EndCheck::DisturbedRolling`), with a `Released` event;
 //! - a body that flew alone with a closing ground: the in-step impacts from its start state

@@ -59,9 +59,10 @@ pub(crate) struct Candidate {
     pub rolling: Option<(usize, Rolling)>,
     /// With `rolling`: the plan found the ball on level ground, over one flat face of a
     /// ground that does not move (a half-space, or a cuboid's face it stays well inside of
-    /// for its whole travel in the step), with no other ground near it. Its closed-form end
-    /// then touches that face by construction, and is written without a contact query
-    /// (`AfterStep::roll`).
+    /// for its whole travel in the step), with no other ground near it, its collider exactly
+    /// at its centre and its coordinates within `policy::on_plane_through_rounding`. Its
+    /// closed-form end then touches that face to `policy::on_plane`'s measure, and is written
+    /// without a contact query (`AfterStep::roll`, when nothing else acted on it).
     pub rolls_on_one_face: bool,
     /// A ball that rolled in closed form last step and is handed to rapier's resting contact
     /// at this step's start (`EventKind::Released`, something else within reach): the

@@ -7,8 +7,8 @@ use super::body::{BodyPlan, BodyReads};
 use super::role::Pair;
 use crate::motion::{Flight, Rolling, State};
 use crate::plugin::bridge::resolve::{Inertia, Site, released};
-use crate::plugin::policy::LEVEL_TOLERANCE;
 use crate::plugin::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, ROLLING_MIN_SLIP, Role};
+use crate::plugin::policy::{LEVEL_TOLERANCE, on_plane_through_rounding};
 use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, contact_checked,
     earliest_touch, flat_relative, one_plane_under, plane_piece_of,
@@ -285,13 +285,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && (slide.rolling_resistance <= slide.friction
                 || motion.advance_checked(on_ground, step.dt).is_some())
         {
-            // Its centre moves in the plane and travels no farther than `flat_relative`'s
-            // bound (on level ground no force along the plane speeds it up): its end touches
-            // the same face, where the ground stays put.
+            // Its centre moves in the plane, no farther than `flat_relative`'s bound: on level
+            // ground the rolling resistance and spinning friction only slow it, and while it
+            // slides its speed stays between `|v0|` and `|v0 + k r w0 x n| / (1 + k)`, both at
+            // most `|v0| + r |w0|`. So its end touches the same face where the ground stays
+            // put, to `on_plane`'s measure where its collider sits exactly at its centre (one
+            // within `CENTRED_TOLERANCE` turns its centre up to twice that off the plane) and
+            // its coordinates round finely enough.
+            let centred = part.local.translation.vector == Vector3::zeros();
             return Some(OnPlane::Rolls {
                 motion,
                 pieces: SmallList::One(gg.handle),
-                on_one_face: gg.motion.is_still(),
+                on_one_face: gg.motion.is_still()
+                    && centred
+                    && on_plane_through_rounding(&on_ground.com, radius),
             });
         }
         let plane = rolling_plane(&slide, step.dt);
