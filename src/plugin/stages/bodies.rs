@@ -114,8 +114,7 @@ impl AfterStep<'_> {
             || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
         // Alone over one flat face of a still ground for the whole step (the plan's proof):
         // its closed-form end touches the face, and needs no query.
-        let on_one_face = cand.rolls_on_one_face && cand.near.len() == 1;
-        if !disturbed && on_one_face && cand.impact_grounds.is_empty() {
+        if !disturbed && cand.rolls_on_one_face {
             let end = motion.advance(&cand.start, step.dt);
             self.commit
                 .state(cand.body, &end, &cand.local_com, Origin::Model);

@@ -285,20 +285,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             && (slide.rolling_resistance <= slide.friction
                 || motion.advance_checked(on_ground, step.dt).is_some())
         {
-            // Its centre moves in the plane, no farther than `flat_relative`'s bound: on level
-            // ground the rolling resistance and spinning friction only slow it, and while it
-            // slides its speed stays between `|v0|` and `|v0 + k r w0 x n| / (1 + k)`, both at
-            // most `|v0| + r |w0|`. So its end touches the same face where the ground stays
-            // put, to `on_plane`'s measure where its collider sits exactly at its centre (one
-            // within `CENTRED_TOLERANCE` turns its centre up to twice that off the plane) and
-            // its coordinates round finely enough.
-            let centred = part.local.translation.vector == Vector3::zeros();
             return Some(OnPlane::Rolls {
                 motion,
                 pieces: SmallList::One(gg.handle),
-                on_one_face: gg.motion.is_still()
-                    && centred
-                    && on_plane_through_rounding(&on_ground.com, radius),
+                on_one_face: ends_on_its_face(part, gg, on_ground, radius),
             });
         }
         let plane = rolling_plane(&slide, step.dt);
@@ -578,6 +568,21 @@ fn accel_bound(slide: &Slide) -> f64 {
     let ball = slide.ball;
     let at = ball.flight.accel - ball.n * slide.an;
     at.norm() - slide.friction * slide.an
+}
+
+/// Does a ball of radius `radius` rolling on level ground over one flat face of `gg` for its
+/// whole travel (`flat_relative`, from `on_ground`) end the step touching that face to
+/// `on_plane`'s measure, so that no query need confirm it (`Candidate::rolls_on_one_face`)?
+/// Its centre moves in the plane, no farther than `flat_relative`'s bound: the rolling
+/// resistance and spinning friction only slow it, and while it slides its speed stays between
+/// `|v0|` and `|v0 + k r w0 x n| / (1 + k)`, both at most `|v0| + r |w0|`. So it does where
+/// the ground stays put, its collider sits exactly at its centre (one within
+/// `CENTRED_TOLERANCE` turns its centre up to twice that off the plane) and its coordinates
+/// round finely enough. Pure.
+fn ends_on_its_face(part: &BodyPart, gg: &GroundGeom, on_ground: &State, radius: f64) -> bool {
+    gg.motion.is_still()
+        && part.local.translation.vector == Vector3::zeros()
+        && on_plane_through_rounding(&on_ground.com, radius)
 }
 
 /// The plane under the rolling ball and how far a point of it can get in the step `dt`: its
