@@ -11,6 +11,7 @@ use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::profile::{StepProfile, Stopwatch};
 use crate::plugin::queries::observe::Sets;
+use crate::plugin::queries::reach::Neighbours;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
@@ -115,6 +116,9 @@ pub struct ImpactPlugin<H = ()> {
     /// The writes recorded in the current half of the step, for the commit stage
     /// (`state/writes.rs`).
     pub(crate) writes: Writes,
+    /// What the plan read of the colliders next to its rolling balls (`queries/reach.rs`),
+    /// kept for its storage.
+    pub(crate) neighbours: Neighbours,
 }
 
 /// The sets of a rapier world that [`ImpactPlugin::before_step`] and
@@ -207,6 +211,7 @@ impl<H> ImpactPlugin<H> {
             reports: Reports::default(),
             stopwatch: Stopwatch::default(),
             writes: Writes::default(),
+            neighbours: Neighbours::default(),
         })
     }
 
@@ -250,6 +255,7 @@ impl<H> ImpactPlugin<H> {
             reports,
             stopwatch,
             writes,
+            neighbours,
         } = self;
         let plugin = ImpactPlugin {
             config,
@@ -263,6 +269,7 @@ impl<H> ImpactPlugin<H> {
             reports,
             stopwatch,
             writes,
+            neighbours,
         };
         (plugin, old)
     }

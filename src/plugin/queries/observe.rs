@@ -8,7 +8,6 @@
 //! ([`non_ground_contacts`], [`touches_other`]).
 
 use crate::motion::{Flight, Gyro, State};
-use crate::parry::query;
 use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, to_real, vec_to_na};
 use crate::plugin::policy::LOADED_COS;
 use crate::plugin::policy::{
@@ -23,9 +22,9 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::writes::{Now, Writes};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ActiveHooks, Collider, ColliderHandle, ColliderSet, ContactManifold, ContactPair,
-    ImpulseJointSet, LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle,
-    RigidBodySet, SolverFlags,
+    ActiveHooks, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,
+    LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, RigidBodySet,
+    SolverFlags,
 };
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -458,27 +457,6 @@ pub(crate) fn neighbours(
     )
 }
 
-/// A centred ball's motion over the step `dt` as [`within_reach_of_other`] bounds it: its
-/// velocity (m/s), its acceleration in flight (`accel`: gravity and the user's force over its
-/// mass), and what its ground adds to that: a push along the ground's `normal` of `pressed`
-/// (m/s^2), and a drag of at most `dragged` (m/s^2) against one of the unit directions
-/// `drag_along` (on level ground: friction against the slip, whose direction stays, then
-/// rolling resistance against the motion), or in any direction (`None`: on a slope the ball's
-/// path curves).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct OwnMotion {
-    pub v: Vector3<f64>,
-    pub accel: Vector3<f64>,
-    pub normal: Vector3<f64>,
-    pub pressed: f64,
-    pub dragged: f64,
-    pub drag_along: Option<[Vector3<f64>; 2]>,
-    /// The world's gravity (m/s^2), which the other body feels times its gravity scale.
-    pub gravity: Vector3<f64>,
-    /// The step (s).
-    pub dt: f64,
-}
-
 /// What a decision before rapier's step reads of the world: rapier's bodies, colliders,
 /// contact graph and joints, and the plugin's registry (which colliders are grounds). Read
 /// only.
@@ -492,163 +470,4 @@ pub(crate) struct Scene<'s> {
     pub grounds: &'s [GroundMotion],
     /// The writes recorded so far in the step (a body is read as they leave it).
     pub writes: &'s Writes,
-}
-
-/// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
-/// pairs a body with everything whose fattened bounding box overlaps its own (up to about
-/// 10 cm apart at rapier's default length unit), and its narrow phase makes speculative
-/// solver contacts up to its prediction distance (2 cm) apart, which push nothing unless the
-/// two close: neither says the two touch. For each such pair: the gap between the two
-/// colliders now, against how far the two can close in the step ([`closing_bound`]). The
-/// pairs are rapier's as its last step's start found them: a body more than about 10 cm away
-/// then, that closes that much in two steps, is not seen (it meets the ball as it would
-/// under rapier alone, a step late, and the ball is rapier's from the next step). What a third
-/// body does to the other one during the step is not bounded either: the reconstruct stage
-/// reads rapier's contact impulses after the step ([`pushed_by_other`]). For a centred ball
-/// (`body` must be one: its own spin is not counted); a pair parry cannot measure, and any
-/// joint, is within reach.
-pub(crate) fn within_reach_of_other(
-    body: RigidBodyHandle,
-    rb: &RigidBody,
-    own: &OwnMotion,
-    scene: &Scene,
-) -> bool {
-    let Scene {
-        bodies,
-        colliders,
-        sets,
-        registry,
-        writes,
-        ..
-    } = *scene;
-    if sets.jointed(body) {
-        return true;
-    }
-    let index = &registry.index;
-    let is_ground = |c: &ColliderHandle| {
-        index
-            .entry(*c)
-            .map_or_else(|()| registry.grounds.contains_key(c), |e| e.is_some())
-    };
-    for ch in rb.colliders() {
-        let Some(co) = colliders.get(*ch) else {
-            continue;
-        };
-        let ball = co.shape().as_ball();
-        for pair in sets.narrow_phase.contact_pairs_with(*ch) {
-            let other = if pair.collider1 == *ch {
-                pair.collider2
-            } else {
-                pair.collider1
-            };
-            let Some(oc) = colliders.get(other) else {
-                continue;
-            };
-            if !oc.is_enabled() {
-                continue;
-            }
-            let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
-            let gap = match (ball, oc.shape().as_ball()) {
-                // Two balls (most neighbours in a crowd): their centres, without parry; the
-                // ground lookup only for one within reach (a ball marked as ground).
-                (Some(a), Some(b)) => {
-                    let d = vec_to_na(oc.position().translation - co.position().translation);
-                    let len = d.norm();
-                    let gap = len - to_f64(a.radius) - to_f64(b.radius) - skins;
-                    // Two centres close no faster than along their line now:
-                    // |d + x| >= |d| + x.d/|d| for any relative displacement x.
-                    let line = (len > 0.0).then(|| d / len);
-                    if gap > closing_bound(own, oc, true, line, (bodies, writes))
-                        || is_ground(&other)
-                    {
-                        continue;
-                    }
-                    return true;
-                }
-                // Its own grounds (a half-space under every ball) before parry's distance.
-                _ if is_ground(&other) => continue,
-                _ => match query::distance(co.position(), co.shape(), oc.position(), oc.shape()) {
-                    Ok(found) => to_f64(found.distance) - skins,
-                    Err(_) => return true,
-                },
-            };
-            let other_ball = oc.shape().as_ball().is_some();
-            if gap <= closing_bound(own, oc, other_ball, None, (bodies, writes)) {
-                return true;
-            }
-        }
-    }
-    false
-}
-
-/// How much a body of motion `own` (a centred ball) and the collider `other` can close in the step
-/// `own.dt` (see [`within_reach_of_other`]), along `line` (the unit line of centres of two balls)
-/// or in any direction; infinite when the other's motion cannot be read. The relative speed of the
-/// centres of mass, the other's spin times how far its surface lies from its centre of mass, and
-/// the step squared times the accelerations' difference and what `own`'s ground adds: rapier's
-/// substeps move a body by `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`.
-fn closing_bound(
-    own: &OwnMotion,
-    other: &Collider,
-    other_ball: bool,
-    line: Option<Vector3<f64>>,
-    (bodies, writes): (&RigidBodySet, &Writes),
-) -> f64 {
-    let dt = own.dt;
-    // Along the line, the part of a vector that closes the gap; else its length.
-    let closing = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).max(0.0));
-    let across = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).abs());
-    let pushed = match line {
-        Some(l) => {
-            let drag = own
-                .drag_along
-                .map_or(1.0, |[a, b]| a.dot(&l).abs().max(b.dot(&l).abs()));
-            own.pressed * own.normal.dot(&l).abs() + own.dragged * drag
-        }
-        None => own.pressed + own.dragged,
-    };
-    let Some((handle, ob)) = other.parent().and_then(|p| Some((p, bodies.get(p)?))) else {
-        // A collider without a body: it stays where it is.
-        return closing(own.v) * dt + (across(own.accel) + pushed) * dt * dt;
-    };
-    let (com, linvel, angvel) = writes.motion(handle, ob);
-    // How far its surface lies from its centre of mass: a ball turning about its centre does
-    // not move its surface.
-    let arm = if other_ball {
-        to_f64((other.position().translation - com).length())
-    } else {
-        let bs = other.shape().compute_local_bounding_sphere();
-        to_f64((other.position().transform_point(bs.center) - com).length() + bs.radius)
-    };
-    let mut approach = closing(own.v - vec_to_na(linvel));
-    let mut turn = to_f64(angvel.length()) * arm;
-    let mut accel = across(own.accel);
-    if ob.is_dynamic() {
-        let theirs = own.gravity * to_f64(ob.gravity_scale())
-            + vec_to_na(ob.user_force()) / to_f64(ob.mass());
-        accel = across(own.accel - theirs);
-        // Torque-free, an anisotropic body's spin grows by at most I_max / I_min; a user
-        // torque adds at most |tau| / I_min over the step.
-        let inv = ob.mass_properties().local_mprops.inv_principal_inertia;
-        if !other_ball && inv.min_element() > 0.0 {
-            let spin_up = inv.max_element() / inv.min_element();
-            let torque = to_f64(ob.user_torque().length() * inv.max_element());
-            turn = (turn * to_f64(spin_up) + torque * dt * arm) * SPIN_UP_ALLOWANCE;
-        }
-    } else if ob.is_kinematic() {
-        // A position-based kinematic body is moved to its next pose whatever its velocity:
-        // its centre of mass's shift, and its turn.
-        let local = ob.local_center_of_mass();
-        let next = ob.next_position();
-        let shift = vec_to_na(next.transform_point(local) - ob.position().transform_point(local));
-        approach = approach.max(own.v.norm() + shift.norm() / dt);
-        let turned = to_f64(next.rotation.angle_between(ob.position().rotation));
-        turn = turn.max(turned / dt * arm);
-    }
-    let bound = (approach + turn) * dt + (accel + pushed) * dt * dt;
-    if bound.is_finite() {
-        bound
-    } else {
-        f64::INFINITY
-    }
 }

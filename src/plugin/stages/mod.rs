@@ -262,6 +262,7 @@ impl<H> ImpactPlugin<H> {
         let exact = self.config.timing == TimingMode::Exact;
         let grounds = std::mem::take(&mut step.grounds);
         let mut reports = PlanReports::default();
+        self.neighbours.begin_plan();
         for handle in to_plan {
             let mut planner = Planner {
                 config: &self.config,
@@ -272,6 +273,7 @@ impl<H> ImpactPlugin<H> {
                 grounds: &grounds,
                 writes: &self.writes,
                 reports: &mut reports,
+                neighbours: &mut self.neighbours,
             };
             let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
             if !reports.is_empty() {

@@ -162,6 +162,14 @@ impl Writes {
         }
     }
 
+    /// A mark of `body`'s writes so far: it changes whenever a write to the body is
+    /// recorded (0 while it has none), so a value read through the writes stays good while
+    /// the mark stays.
+    #[inline]
+    pub fn mark(&self, body: RigidBodyHandle) -> u32 {
+        self.last_of(body).map_or(0, |k| k as u32 + 1)
+    }
+
     /// `body` (`rb`, as rapier holds it now) as it will be once the writes so far are
     /// applied.
     #[inline]

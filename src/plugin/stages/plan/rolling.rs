@@ -13,7 +13,8 @@ use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, contact_checked,
     earliest_touch, flat_relative, one_plane_under, plane_piece_of,
 };
-use crate::plugin::queries::observe::{OwnMotion, Scene, within_reach_of_other};
+use crate::plugin::queries::observe::Scene;
+use crate::plugin::queries::reach::{OwnMotion, within_reach_of_other};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
@@ -38,7 +39,7 @@ pub(crate) enum OnPlane {
     /// the body of every collider moved by hand.)
     Held(Vector3<f64>, SmallList<ColliderHandle>),
     /// It would move, but something besides its grounds can touch it within the step
-    /// (`observe::within_reach_of_other`): rapier's resting contact, as any resting pair.
+    /// (`reach::within_reach_of_other`): rapier's resting contact, as any resting pair.
     Reached,
 }
 
@@ -210,12 +211,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// touches one of the others (a crease, a wall: not touching it at the start), gravity
     /// (and any constant force) along `-n`, no damping, torque or contact modification by
     /// the user, isotropic inertia with no locked axis, nothing besides its grounds able to
-    /// touch it within the step (`observe::within_reach_of_other`; else `OnPlane::Reached`),
+    /// touch it within the step (`reach::within_reach_of_other`; else `OnPlane::Reached`),
     /// and a ball that slips (faster than `ROLLING_MIN_SLIP`) or rolls faster than the
     /// resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or, at
     /// rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
     /// Reads only.
-    fn rolling_of(&self, scene: &Scene, ball: &BallOnGround, step: &StepData) -> Option<OnPlane> {
+    fn rolling_of(
+        &mut self,
+        scene: &Scene,
+        ball: &BallOnGround,
+        step: &StepData,
+    ) -> Option<OnPlane> {
         let BallOnGround {
             handle,
             part,
@@ -394,11 +400,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 
     /// Can something besides its grounds touch the ball within the step
-    /// (`observe::within_reach_of_other`)? Asked after the cheap refusals (most resting balls
+    /// (`reach::within_reach_of_other`)? Asked after the cheap refusals (most resting balls
     /// are at rest). Its ground holds it (`|an|` along `n`) and pulls it along the plane by at
     /// most `mu |an|` (slip) or `mu_r |an|` (rolling resistance). Reads rapier's contact
     /// graph.
-    fn reached_by_other(&self, scene: &Scene, slide: &Slide, step: &StepData) -> bool {
+    fn reached_by_other(&mut self, scene: &Scene, slide: &Slide, step: &StepData) -> bool {
         let ball = slide.ball;
         let (an, slip, v) = (slide.an, slide.slip, slide.v);
         let own = OwnMotion {
@@ -416,7 +422,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             gravity: step.gravity,
             dt: step.dt,
         };
-        within_reach_of_other(ball.handle, &scene.bodies[ball.handle], &own, scene)
+        within_reach_of_other(
+            ball.handle,
+            &scene.bodies[ball.handle],
+            &own,
+            scene,
+            self.neighbours,
+        )
     }
 
     /// At rest on a slope of `tilt` that holds it: `OnPlane::Held` with the grounds holding

@@ -1,0 +1,410 @@
+//! Reach: can anything besides a rolling ball's grounds touch it within the step?
+//!
+//! Contract: [`within_reach_of_other`] reads rapier's contact graph, colliders and bodies (each
+//! body as the step's writes so far leave it) and writes nothing of rapier's or the plugin's
+//! state. What it reads of each neighbouring collider ([`Neighbour`]: its place, its shape's
+//! size, how fast its body can close on anything) is the same for every ball it neighbours,
+//! so it is read once a plan and kept in [`Neighbours`] until the plan ends or its body is
+//! written again (a `Step` impulse of an earlier body's plan); the bound each ball then
+//! draws from it is the one read afresh would give, to the bit.
+
+use crate::parry::query;
+use crate::plugin::bridge::convert::{to_f64, vec_to_na};
+use crate::plugin::policy::SPIN_UP_ALLOWANCE;
+use crate::plugin::queries::observe::Scene;
+use crate::plugin::state::writes::Writes;
+use crate::rapier::math::{Real, Vector};
+use crate::rapier::prelude::{Collider, ColliderHandle, RigidBody, RigidBodyHandle};
+use nalgebra::Vector3;
+
+/// A centred ball's motion over the step `dt` as [`within_reach_of_other`] bounds it: its
+/// velocity (m/s), its acceleration in flight (`accel`: gravity and the user's force over its
+/// mass), and what its ground adds to that: a push along the ground's `normal` of `pressed`
+/// (m/s^2), and a drag of at most `dragged` (m/s^2) against one of the unit directions
+/// `drag_along` (on level ground: friction against the slip, whose direction stays, then
+/// rolling resistance against the motion), or in any direction (`None`: on a slope the ball's
+/// path curves).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct OwnMotion {
+    pub v: Vector3<f64>,
+    pub accel: Vector3<f64>,
+    pub normal: Vector3<f64>,
+    pub pressed: f64,
+    pub dragged: f64,
+    pub drag_along: Option<[Vector3<f64>; 2]>,
+    /// The world's gravity (m/s^2), which the other body feels times its gravity scale.
+    pub gravity: Vector3<f64>,
+    /// The step (s).
+    pub dt: f64,
+}
+
+/// How fast a collider's surface can move over the step, from its body's motion: what
+/// [`closing_bound`] needs of the other side of a pair, whoever the ball on this side is.
+#[derive(Clone, Copy, Debug)]
+enum OtherMotion {
+    /// A collider without a body: it stays where it is.
+    Still,
+    /// A collider of a body, or one whose motion cannot be read (`bound` then infinite).
+    Body {
+        /// Its body's linear velocity (m/s).
+        linvel: Vector3<f64>,
+        /// How fast turning moves its surface (m/s): spin times the surface's distance from
+        /// the centre of mass, grown for an anisotropic body's spin-up and a user torque.
+        turn: f64,
+        /// A dynamic body's acceleration in flight (gravity times its scale and the user's
+        /// force over its mass; m/s^2); `None` for a body that does not fall.
+        accel: Option<Vector3<f64>>,
+        /// A position-based kinematic body's centre-of-mass shift to its next pose over the
+        /// step (m/s), whatever its velocity.
+        kinematic_shift: Option<f64>,
+    },
+}
+
+/// One collider of rapier's contact graph as the reach test reads it.
+#[derive(Clone, Copy, Debug)]
+struct Neighbour {
+    handle: ColliderHandle,
+    /// The plan it was read in (`Neighbours::plan`).
+    plan: u32,
+    /// Its body, if it has one that exists.
+    body: Option<RigidBodyHandle>,
+    /// Its body's write mark when it was read (`Writes::mark`; 0 without a body).
+    mark: u32,
+    enabled: bool,
+    skin: Real,
+    translation: Vector,
+    /// Its radius, if it is a ball.
+    ball: Option<Real>,
+    motion: OtherMotion,
+}
+
+/// The neighbours read in this plan, by collider slot (see the module's contract). Kept by
+/// the plugin across steps for its storage only: every entry of an earlier plan is stale.
+#[derive(Default)]
+pub(crate) struct Neighbours {
+    by_slot: Vec<Option<Neighbour>>,
+    /// The current plan, counted from 1.
+    plan: u32,
+}
+
+impl Neighbours {
+    /// A new plan: every neighbour is read afresh.
+    pub fn begin_plan(&mut self) {
+        self.plan = self.plan.wrapping_add(1);
+        if self.plan == 0 {
+            self.by_slot.clear();
+            self.plan = 1;
+        }
+    }
+
+    /// The collider `handle` as this plan reads it, its motion as the writes so far leave
+    /// its body; `None` if it no longer exists. A neighbour read earlier in the plan is
+    /// looked up by slot, without rapier's sets.
+    fn get(
+        &mut self,
+        handle: ColliderHandle,
+        own: &OwnMotion,
+        scene: &Scene,
+    ) -> Option<&Neighbour> {
+        let slot = handle.into_raw_parts().0 as usize;
+        if slot >= self.by_slot.len() {
+            self.by_slot.resize(slot + 1, None);
+        }
+        let plan = self.plan;
+        let entry = &mut self.by_slot[slot];
+        let fresh = entry.as_ref().is_some_and(|n| {
+            n.handle == handle
+                && n.plan == plan
+                && n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
+        });
+        if !fresh {
+            let oc = scene.colliders.get(handle)?;
+            let body = oc.parent().and_then(|p| Some((p, scene.bodies.get(p)?)));
+            let ball = oc.shape().as_ball().map(|b| b.radius);
+            *entry = Some(Neighbour {
+                handle,
+                plan,
+                body: body.map(|(p, _)| p),
+                mark: body.map_or(0, |(p, _)| scene.writes.mark(p)),
+                enabled: oc.is_enabled(),
+                skin: oc.contact_skin(),
+                translation: oc.position().translation,
+                ball,
+                motion: other_motion(oc, ball.is_some(), body, own, scene.writes),
+            });
+        }
+        entry.as_ref()
+    }
+}
+
+/// Can a collider besides the body's grounds touch it within the step? rapier's broad phase
+/// pairs a body with everything whose fattened bounding box overlaps its own (up to about
+/// 10 cm apart at rapier's default length unit), and its narrow phase makes speculative
+/// solver contacts up to its prediction distance (2 cm) apart, which push nothing unless the
+/// two close: neither says the two touch. For each such pair: the gap between the two
+/// colliders now, against how far the two can close in the step ([`closing_bound`]). The
+/// pairs are rapier's as its last step's start found them: a body more than about 10 cm away
+/// then, that closes that much in two steps, is not seen (it meets the ball as it would
+/// under rapier alone, a step late, and the ball is rapier's from the next step). What a third
+/// body does to the other one during the step is not bounded either: the reconstruct stage
+/// reads rapier's contact impulses after the step
+/// ([`pushed_by_other`](crate::plugin::queries::observe::pushed_by_other)). For a centred ball
+/// (`body` must be one: its own spin is not counted); a pair parry cannot measure, and any
+/// joint, is within reach.
+pub(crate) fn within_reach_of_other(
+    body: RigidBodyHandle,
+    rb: &RigidBody,
+    own: &OwnMotion,
+    scene: &Scene,
+    neighbours: &mut Neighbours,
+) -> bool {
+    let Scene {
+        colliders,
+        sets,
+        registry,
+        ..
+    } = *scene;
+    if sets.jointed(body) {
+        return true;
+    }
+    let index = &registry.index;
+    let is_ground = |c: &ColliderHandle| {
+        index
+            .entry(*c)
+            .map_or_else(|()| registry.grounds.contains_key(c), |e| e.is_some())
+    };
+    for ch in rb.colliders() {
+        let Some(co) = colliders.get(*ch) else {
+            continue;
+        };
+        let ball = co.shape().as_ball();
+        for pair in sets.narrow_phase.contact_pairs_with(*ch) {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            let Some(near) = neighbours.get(other, own, scene) else {
+                continue;
+            };
+            if !near.enabled {
+                continue;
+            }
+            let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
+            let gap = match (ball, near.ball) {
+                // Two balls (most neighbours in a crowd): their centres, without parry; the
+                // ground lookup only for one within reach (a ball marked as ground).
+                (Some(a), Some(b)) => {
+                    let d = vec_to_na(near.translation - co.position().translation);
+                    let len = d.norm();
+                    let gap = len - to_f64(a.radius) - to_f64(b) - skins;
+                    // Two centres close no faster than along their line now:
+                    // |d + x| >= |d| + x.d/|d| for any relative displacement x.
+                    let line = (len > 0.0).then(|| d / len);
+                    if gap > closing_bound(own, &near.motion, line) || is_ground(&other) {
+                        continue;
+                    }
+                    return true;
+                }
+                // Its own grounds (a half-space under every ball) before parry's distance.
+                _ if is_ground(&other) => continue,
+                _ => {
+                    let Some(oc) = colliders.get(other) else {
+                        continue;
+                    };
+                    match query::distance(co.position(), co.shape(), oc.position(), oc.shape()) {
+                        Ok(found) => to_f64(found.distance) - skins,
+                        Err(_) => return true,
+                    }
+                }
+            };
+            if gap <= closing_bound(own, &near.motion, None) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// What [`closing_bound`] needs of the collider `other` (`other_ball`: it is a ball) and its
+/// body, if it has one (`body`, its handle and rapier's body), read through the writes so
+/// far. `own` gives the world's gravity and the step, the same for every ball of the plan.
+fn other_motion(
+    other: &Collider,
+    other_ball: bool,
+    body: Option<(RigidBodyHandle, &RigidBody)>,
+    own: &OwnMotion,
+    writes: &Writes,
+) -> OtherMotion {
+    let Some((handle, ob)) = body else {
+        return OtherMotion::Still;
+    };
+    let dt = own.dt;
+    let (com, linvel, angvel) = writes.motion(handle, ob);
+    // How far its surface lies from its centre of mass: a ball turning about its centre does
+    // not move its surface.
+    let arm = if other_ball {
+        to_f64((other.position().translation - com).length())
+    } else {
+        let bs = other.shape().compute_local_bounding_sphere();
+        to_f64((other.position().transform_point(bs.center) - com).length() + bs.radius)
+    };
+    let mut turn = to_f64(angvel.length()) * arm;
+    let mut accel = None;
+    let mut kinematic_shift = None;
+    if ob.is_dynamic() {
+        accel = Some(
+            own.gravity * to_f64(ob.gravity_scale())
+                + vec_to_na(ob.user_force()) / to_f64(ob.mass()),
+        );
+        // Torque-free, an anisotropic body's spin grows by at most I_max / I_min; a user
+        // torque adds at most |tau| / I_min over the step.
+        let inv = ob.mass_properties().local_mprops.inv_principal_inertia;
+        if !other_ball && inv.min_element() > 0.0 {
+            let spin_up = inv.max_element() / inv.min_element();
+            let torque = to_f64(ob.user_torque().length() * inv.max_element());
+            turn = (turn * to_f64(spin_up) + torque * dt * arm) * SPIN_UP_ALLOWANCE;
+        }
+    } else if ob.is_kinematic() {
+        // A position-based kinematic body is moved to its next pose whatever its velocity:
+        // its centre of mass's shift, and its turn.
+        let local = ob.local_center_of_mass();
+        let next = ob.next_position();
+        let shift = vec_to_na(next.transform_point(local) - ob.position().transform_point(local));
+        kinematic_shift = Some(shift.norm() / dt);
+        let turned = to_f64(next.rotation.angle_between(ob.position().rotation));
+        turn = turn.max(turned / dt * arm);
+    }
+    OtherMotion::Body {
+        linvel: vec_to_na(linvel),
+        turn,
+        accel,
+        kinematic_shift,
+    }
+}
+
+/// How much a body of motion `own` (a centred ball) and a collider whose surface moves as
+/// `other` can close in the step `own.dt` (see [`within_reach_of_other`]), along `line` (the
+/// unit line of centres of two balls) or in any direction; infinite when the other's motion
+/// cannot be read. The relative speed of the centres of mass, the other's spin times how far
+/// its surface lies from its centre of mass, and the step squared times the accelerations'
+/// difference and what `own`'s ground adds: rapier's substeps move a body by
+/// `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`. Pure.
+fn closing_bound(own: &OwnMotion, other: &OtherMotion, line: Option<Vector3<f64>>) -> f64 {
+    let dt = own.dt;
+    // Along the line, the part of a vector that closes the gap; else its length.
+    let closing = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).max(0.0));
+    let across = |x: Vector3<f64>| line.map_or(x.norm(), |l| x.dot(&l).abs());
+    let pushed = match line {
+        Some(l) => {
+            let drag = own
+                .drag_along
+                .map_or(1.0, |[a, b]| a.dot(&l).abs().max(b.dot(&l).abs()));
+            own.pressed * own.normal.dot(&l).abs() + own.dragged * drag
+        }
+        None => own.pressed + own.dragged,
+    };
+    let OtherMotion::Body {
+        linvel,
+        turn,
+        accel,
+        kinematic_shift,
+    } = *other
+    else {
+        return closing(own.v) * dt + (across(own.accel) + pushed) * dt * dt;
+    };
+    let mut approach = closing(own.v - linvel);
+    if let Some(shift) = kinematic_shift {
+        approach = approach.max(own.v.norm() + shift);
+    }
+    let accel = across(accel.map_or(own.accel, |theirs| own.accel - theirs));
+    let bound = (approach + turn) * dt + (accel + pushed) * dt * dt;
+    if bound.is_finite() {
+        bound
+    } else {
+        f64::INFINITY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plugin::queries::observe::Sets;
+    use crate::plugin::state::registry::Registry;
+    use crate::plugin::state::writes::Write;
+    use crate::rapier::prelude::{
+        ColliderBuilder, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase,
+        RigidBodyBuilder, RigidBodySet,
+    };
+
+    fn own() -> OwnMotion {
+        OwnMotion {
+            v: Vector3::zeros(),
+            accel: Vector3::new(0.0, -9.81, 0.0),
+            normal: Vector3::y(),
+            pressed: 9.81,
+            dragged: 0.0,
+            drag_along: None,
+            gravity: Vector3::new(0.0, -9.81, 0.0),
+            dt: 1.0 / 60.0,
+        }
+    }
+
+    fn linvel(n: &Neighbour) -> Vector3<f64> {
+        match n.motion {
+            OtherMotion::Body { linvel, .. } => linvel,
+            OtherMotion::Still => panic!("a ball of a body read as still"),
+        }
+    }
+
+    /// A neighbour is read once a plan, and read again once its body is written: what a ball
+    /// planned after a `Step` impulse of its neighbour sees is the neighbour after it.
+    #[test]
+    fn a_neighbour_is_read_once_a_plan_and_again_after_a_write_to_its_body() {
+        let mut bodies = RigidBodySet::new();
+        let mut colliders = ColliderSet::new();
+        let body =
+            bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.1, 0.0, 0.0)));
+        let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
+        let (narrow_phase, joints, multibody) = (
+            NarrowPhase::new(),
+            ImpulseJointSet::new(),
+            MultibodyJointSet::new(),
+        );
+        let sets = Sets::new(&narrow_phase, &joints, &multibody);
+        let registry = Registry::default();
+        let mut writes = Writes::default();
+        let mut neighbours = Neighbours::default();
+        let read = |neighbours: &mut Neighbours, bodies: &RigidBodySet, writes: &Writes| {
+            let scene = Scene {
+                bodies,
+                colliders: &colliders,
+                sets: &sets,
+                registry: &registry,
+                grounds: &[],
+                writes,
+            };
+            linvel(
+                neighbours
+                    .get(ball, &own(), &scene)
+                    .expect("the ball exists"),
+            )
+        };
+
+        neighbours.begin_plan();
+        assert_eq!(read(&mut neighbours, &bodies, &writes), Vector3::zeros());
+        // rapier's body changed behind the plan's back (nothing does so within a plan): the
+        // plan's first reading stands.
+        bodies[body].set_linvel(Vector::new(-1.0, 0.0, 0.0), true);
+        assert_eq!(read(&mut neighbours, &bodies, &writes), Vector3::zeros());
+        // A write recorded in the plan: read again, as the writes leave it.
+        writes.record(body, Write::Velocity(Vector::new(-3.0, 0.0, 0.0)));
+        assert_eq!(read(&mut neighbours, &bodies, &writes), -3.0 * Vector3::x());
+        writes.record(body, Write::Velocity(Vector::new(-5.0, 0.0, 0.0)));
+        assert_eq!(read(&mut neighbours, &bodies, &writes), -5.0 * Vector3::x());
+        // The next plan reads rapier's body afresh.
+        let writes = Writes::default();
+        neighbours.begin_plan();
+        assert_eq!(read(&mut neighbours, &bodies, &writes), -Vector3::x());
+    }
+}
