@@ -116,7 +116,7 @@ pub struct ImpactPlugin<H = ()> {
     /// The writes recorded in the current half of the step, for the commit stage
     /// (`state/writes.rs`).
     pub(crate) writes: Writes,
-    /// What the plan read of the colliders next to its rolling balls (`queries/reach.rs`),
+    /// What the plan read of the balls next to its rolling balls (`queries/reach.rs`),
     /// kept for its storage.
     pub(crate) neighbours: Neighbours,
 }

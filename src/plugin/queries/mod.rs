@@ -3,7 +3,7 @@
 //! may meet (`ground_index.rs`) and the tiled floors that are one box to it (`slabs.rs`),
 //! rapier's own pair filtering (`filter.rs`), what the step reads of rapier (`observe.rs`),
 //! and whether anything besides its grounds can reach a rolling ball (`reach.rs`, which keeps
-//! what it read of each neighbour for the rest of the plan). Nothing here writes rapier or the
+//! what it read of each neighbouring ball for the rest of the plan). Nothing here writes rapier or the
 //! plugin's state.
 
 pub(crate) mod body_contact;

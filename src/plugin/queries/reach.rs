@@ -2,11 +2,12 @@
 //!
 //! Contract: [`within_reach_of_other`] reads rapier's contact graph, colliders and bodies (each
 //! body as the step's writes so far leave it) and writes nothing of rapier's or the plugin's
-//! state. What it reads of each neighbouring collider ([`Neighbour`]: its place, its shape's
-//! size, how fast its body can close on anything) is the same for every ball it neighbours,
-//! so it is read once a plan and kept in [`Neighbours`] until the plan ends or its body is
-//! written again (a `Step` impulse of an earlier body's plan); the bound each ball then
-//! draws from it is the one read afresh would give, to the bit.
+//! state. What it reads of a neighbouring ball ([`Neighbour`]: its place, its size, how fast
+//! its body can close on anything) is the same for every ball it neighbours, so it is read
+//! once a plan and kept in [`Neighbours`] until the plan ends or its body is written again (a
+//! `Step` impulse of an earlier body's plan); the bound each ball then draws from it is the
+//! one read afresh would give, to the bit. Any other shape (a ground under every ball, which
+//! the test skips, a wall) is read afresh each time.
 
 use crate::parry::query;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
@@ -60,7 +61,7 @@ enum OtherMotion {
     },
 }
 
-/// One collider of rapier's contact graph as the reach test reads it.
+/// A ball of rapier's contact graph as the reach test reads it.
 #[derive(Clone, Copy, Debug)]
 struct Neighbour {
     handle: ColliderHandle,
@@ -73,13 +74,20 @@ struct Neighbour {
     enabled: bool,
     skin: Real,
     translation: Vector,
-    /// Its radius, if it is a ball.
-    ball: Option<Real>,
+    radius: Real,
     motion: OtherMotion,
 }
 
-/// The neighbours read in this plan, by collider slot (see the module's contract). Kept by
-/// the plugin across steps for its storage only: every entry of an earlier plan is stale.
+/// A collider of rapier's contact graph, as [`Neighbours::read`] gives it.
+enum Read<'n, 'c> {
+    /// A ball, as this plan reads it.
+    Ball(&'n Neighbour),
+    /// Any other shape (most often a ground, which the test skips), read afresh and not kept.
+    Other(&'c Collider),
+}
+
+/// The balls read in this plan, by collider slot (see the module's contract). Kept by the
+/// plugin across steps for its storage only: every entry of an earlier plan is stale.
 #[derive(Default)]
 pub(crate) struct Neighbours {
     by_slot: Vec<Option<Neighbour>>,
@@ -97,31 +105,34 @@ impl Neighbours {
         }
     }
 
-    /// The collider `handle` as this plan reads it, its motion as the writes so far leave
-    /// its body; `None` if it no longer exists. A neighbour read earlier in the plan is
-    /// looked up by slot, without rapier's sets.
-    fn get(
-        &mut self,
+    /// The collider `handle`: a ball as this plan reads it (its motion as the writes so far
+    /// leave its body), looked up by slot once read; any other shape from rapier's set;
+    /// `None` if it no longer exists.
+    fn read<'n, 'c>(
+        &'n mut self,
         handle: ColliderHandle,
         own: &OwnMotion,
-        scene: &Scene,
-    ) -> Option<&Neighbour> {
+        scene: &Scene<'c>,
+    ) -> Option<Read<'n, 'c>> {
         let slot = handle.into_raw_parts().0 as usize;
-        if slot >= self.by_slot.len() {
-            self.by_slot.resize(slot + 1, None);
-        }
         let plan = self.plan;
-        let entry = &mut self.by_slot[slot];
-        let fresh = entry.as_ref().is_some_and(|n| {
-            n.handle == handle
-                && n.plan == plan
-                && n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
+        let fresh = self.by_slot.get(slot).is_some_and(|entry| {
+            entry.as_ref().is_some_and(|n| {
+                n.handle == handle
+                    && n.plan == plan
+                    && n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
+            })
         });
         if !fresh {
             let oc = scene.colliders.get(handle)?;
+            let Some(radius) = oc.shape().as_ball().map(|b| b.radius) else {
+                return Some(Read::Other(oc));
+            };
             let body = oc.parent().and_then(|p| Some((p, scene.bodies.get(p)?)));
-            let ball = oc.shape().as_ball().map(|b| b.radius);
-            *entry = Some(Neighbour {
+            if slot >= self.by_slot.len() {
+                self.by_slot.resize(slot + 1, None);
+            }
+            self.by_slot[slot] = Some(Neighbour {
                 handle,
                 plan,
                 body: body.map(|(p, _)| p),
@@ -129,11 +140,11 @@ impl Neighbours {
                 enabled: oc.is_enabled(),
                 skin: oc.contact_skin(),
                 translation: oc.position().translation,
-                ball,
-                motion: other_motion(oc, ball.is_some(), body, own, scene.writes),
+                radius,
+                motion: other_motion(oc, true, body, own, scene.writes),
             });
         }
-        entry.as_ref()
+        self.by_slot[slot].as_ref().map(Read::Ball)
     }
 }
 
@@ -159,9 +170,11 @@ pub(crate) fn within_reach_of_other(
     neighbours: &mut Neighbours,
 ) -> bool {
     let Scene {
+        bodies,
         colliders,
         sets,
         registry,
+        writes,
         ..
     } = *scene;
     if sets.jointed(body) {
@@ -184,20 +197,30 @@ pub(crate) fn within_reach_of_other(
             } else {
                 pair.collider1
             };
-            let Some(near) = neighbours.get(other, own, scene) else {
-                continue;
-            };
-            if !near.enabled {
-                continue;
-            }
-            let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
-            let gap = match (ball, near.ball) {
-                // Two balls (most neighbours in a crowd): their centres, without parry; the
-                // ground lookup only for one within reach (a ball marked as ground).
-                (Some(a), Some(b)) => {
+            match neighbours.read(other, own, scene) {
+                None => {}
+                Some(Read::Ball(near)) => {
+                    if !near.enabled {
+                        continue;
+                    }
+                    let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
+                    let Some(a) = ball else {
+                        if is_ground(&other) {
+                            continue;
+                        }
+                        let Some(oc) = colliders.get(other) else {
+                            continue;
+                        };
+                        if reached_through_parry(co, oc, skins, own, &near.motion) {
+                            return true;
+                        }
+                        continue;
+                    };
+                    // Two balls (most neighbours in a crowd): their centres, without parry; the
+                    // ground lookup only for one within reach (a ball marked as ground).
                     let d = vec_to_na(near.translation - co.position().translation);
                     let len = d.norm();
-                    let gap = len - to_f64(a.radius) - to_f64(b) - skins;
+                    let gap = len - to_f64(a.radius) - to_f64(near.radius) - skins;
                     // Two centres close no faster than along their line now:
                     // |d + x| >= |d| + x.d/|d| for any relative displacement x.
                     let line = (len > 0.0).then(|| d / len);
@@ -206,24 +229,38 @@ pub(crate) fn within_reach_of_other(
                     }
                     return true;
                 }
-                // Its own grounds (a half-space under every ball) before parry's distance.
-                _ if is_ground(&other) => continue,
-                _ => {
-                    let Some(oc) = colliders.get(other) else {
+                Some(Read::Other(oc)) => {
+                    // Its own grounds (a half-space under every ball) before parry's distance.
+                    if !oc.is_enabled() || is_ground(&other) {
                         continue;
-                    };
-                    match query::distance(co.position(), co.shape(), oc.position(), oc.shape()) {
-                        Ok(found) => to_f64(found.distance) - skins,
-                        Err(_) => return true,
+                    }
+                    let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
+                    let body = oc.parent().and_then(|p| Some((p, bodies.get(p)?)));
+                    let motion = other_motion(oc, false, body, own, writes);
+                    if reached_through_parry(co, oc, skins, own, &motion) {
+                        return true;
                     }
                 }
-            };
-            if gap <= closing_bound(own, &near.motion, None) {
-                return true;
             }
         }
     }
     false
+}
+
+/// parry's distance between the collider `co` (of the ball) and `other`, less their `skins`
+/// (m), against how far the two can close in any direction ([`closing_bound`]); a pair parry
+/// cannot measure is within reach.
+fn reached_through_parry(
+    co: &Collider,
+    other: &Collider,
+    skins: f64,
+    own: &OwnMotion,
+    motion: &OtherMotion,
+) -> bool {
+    match query::distance(co.position(), co.shape(), other.position(), other.shape()) {
+        Ok(found) => to_f64(found.distance) - skins <= closing_bound(own, motion, None),
+        Err(_) => true,
+    }
 }
 
 /// What [`closing_bound`] needs of the collider `other` (`other_ball`: it is a ball) and its
@@ -384,11 +421,10 @@ mod tests {
                 grounds: &[],
                 writes,
             };
-            linvel(
-                neighbours
-                    .get(ball, &own(), &scene)
-                    .expect("the ball exists"),
-            )
+            match neighbours.read(ball, &own(), &scene) {
+                Some(Read::Ball(n)) => linvel(n),
+                _ => panic!("the ball is not read as one"),
+            }
         };
 
         neighbours.begin_plan();

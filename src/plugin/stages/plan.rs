@@ -69,7 +69,7 @@ pub(crate) struct Planner<'a, H> {
     pub writes: &'a Writes,
     /// The events and diagnostics of the body being planned, committed after its plan.
     pub reports: &'a mut PlanReports,
-    /// What the plan read so far of the colliders next to its rolling balls.
+    /// What the plan read so far of the balls next to its rolling balls.
     pub neighbours: &'a mut Neighbours,
 }
 
