@@ -11,7 +11,7 @@ use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::profile::{StepProfile, Stopwatch};
 use crate::plugin::queries::observe::Sets;
-use crate::plugin::queries::reach::Neighbours;
+use crate::plugin::queries::reach::NeighbourReads;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
@@ -118,7 +118,7 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) writes: Writes,
     /// What the plan read of the balls next to its rolling balls (`queries/reach.rs`),
     /// kept for its storage.
-    pub(crate) neighbours: Neighbours,
+    pub(crate) neighbours: NeighbourReads,
 }
 
 /// The sets of a rapier world that [`ImpactPlugin::before_step`] and
@@ -211,7 +211,7 @@ impl<H> ImpactPlugin<H> {
             reports: Reports::default(),
             stopwatch: Stopwatch::default(),
             writes: Writes::default(),
-            neighbours: Neighbours::default(),
+            neighbours: NeighbourReads::default(),
         })
     }
 

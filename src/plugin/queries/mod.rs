@@ -4,7 +4,7 @@
 //! rapier's own pair filtering (`filter.rs`), what the step reads of rapier (`observe.rs`),
 //! and whether anything besides its grounds can reach a rolling ball (`reach.rs`, which keeps
 //! what it read of each neighbouring ball for the rest of the plan). Nothing here writes rapier or the
-//! plugin's state.
+//! plugin's state (the reach test keeps its memo).
 
 pub(crate) mod body_contact;
 pub(crate) mod filter;

@@ -2,9 +2,9 @@
 //!
 //! Contract: [`within_reach_of_other`] reads rapier's contact graph, colliders and bodies (each
 //! body as the step's writes so far leave it) and writes nothing of rapier's or the plugin's
-//! state. What it reads of a neighbouring ball ([`Neighbour`]: its place, its size, how fast
+//! state besides its own memo. What it reads of a neighbouring ball ([`Neighbour`]: its place, its size, how fast
 //! its body can close on anything) is the same for every ball it neighbours, so it is read
-//! once a plan and kept in [`Neighbours`] until the plan ends or its body is written again (a
+//! once a plan and kept in [`NeighbourReads`] until the plan ends or its body is written again (a
 //! `Step` impulse of an earlier body's plan); the bound each ball then draws from it is the
 //! one read afresh would give, to the bit. Any other shape (a ground under every ball, which
 //! the test skips, a wall) is read afresh each time.
@@ -45,7 +45,7 @@ pub(crate) struct OwnMotion {
 enum OtherMotion {
     /// A collider without a body: it stays where it is.
     Still,
-    /// A collider of a body, or one whose motion cannot be read (`bound` then infinite).
+    /// A collider of a body (a value that is not finite makes the bound infinite).
     Body {
         /// Its body's linear velocity (m/s).
         linvel: Vector3<f64>,
@@ -65,7 +65,7 @@ enum OtherMotion {
 #[derive(Clone, Copy, Debug)]
 struct Neighbour {
     handle: ColliderHandle,
-    /// The plan it was read in (`Neighbours::plan`).
+    /// The plan it was read in (`NeighbourReads::plan`).
     plan: u32,
     /// Its body, if it has one that exists.
     body: Option<RigidBodyHandle>,
@@ -78,7 +78,7 @@ struct Neighbour {
     motion: OtherMotion,
 }
 
-/// A collider of rapier's contact graph, as [`Neighbours::read`] gives it.
+/// A collider of rapier's contact graph, as [`NeighbourReads::read`] gives it.
 enum Read<'n, 'c> {
     /// A ball, as this plan reads it.
     Ball(&'n Neighbour),
@@ -89,15 +89,20 @@ enum Read<'n, 'c> {
 /// The balls read in this plan, by collider slot (see the module's contract). Kept by the
 /// plugin across steps for its storage only: every entry of an earlier plan is stale.
 #[derive(Default)]
-pub(crate) struct Neighbours {
+pub(crate) struct NeighbourReads {
     by_slot: Vec<Option<Neighbour>>,
     /// The current plan, counted from 1.
     plan: u32,
+    /// The plan's world gravity (m/s^2) and step (s), which a neighbour's motion is read with.
+    gravity: Vector3<f64>,
+    dt: f64,
 }
 
-impl Neighbours {
-    /// A new plan: every neighbour is read afresh.
-    pub fn begin_plan(&mut self) {
+impl NeighbourReads {
+    /// A new plan, of a step of `dt` (s) under the world's `gravity` (m/s^2): every neighbour
+    /// is read afresh.
+    pub fn begin_plan(&mut self, gravity: Vector3<f64>, dt: f64) {
+        (self.gravity, self.dt) = (gravity, dt);
         self.plan = self.plan.wrapping_add(1);
         if self.plan == 0 {
             self.by_slot.clear();
@@ -111,7 +116,6 @@ impl Neighbours {
     fn read<'n, 'c>(
         &'n mut self,
         handle: ColliderHandle,
-        own: &OwnMotion,
         scene: &Scene<'c>,
     ) -> Option<Read<'n, 'c>> {
         let slot = handle.into_raw_parts().0 as usize;
@@ -141,7 +145,7 @@ impl Neighbours {
                 skin: oc.contact_skin(),
                 translation: oc.position().translation,
                 radius,
-                motion: other_motion(oc, true, body, own, scene.writes),
+                motion: other_motion(oc, true, body, (self.gravity, self.dt), scene.writes),
             });
         }
         self.by_slot[slot].as_ref().map(Read::Ball)
@@ -167,7 +171,7 @@ pub(crate) fn within_reach_of_other(
     rb: &RigidBody,
     own: &OwnMotion,
     scene: &Scene,
-    neighbours: &mut Neighbours,
+    neighbours: &mut NeighbourReads,
 ) -> bool {
     let Scene {
         bodies,
@@ -177,6 +181,8 @@ pub(crate) fn within_reach_of_other(
         writes,
         ..
     } = *scene;
+    // The memo's motions are read with the plan's gravity and step, which every ball shares.
+    debug_assert!(own.gravity == neighbours.gravity && own.dt == neighbours.dt);
     if sets.jointed(body) {
         return true;
     }
@@ -197,7 +203,7 @@ pub(crate) fn within_reach_of_other(
             } else {
                 pair.collider1
             };
-            match neighbours.read(other, own, scene) {
+            match neighbours.read(other, scene) {
                 None => {}
                 Some(Read::Ball(near)) => {
                     if !near.enabled {
@@ -236,7 +242,7 @@ pub(crate) fn within_reach_of_other(
                     }
                     let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
                     let body = oc.parent().and_then(|p| Some((p, bodies.get(p)?)));
-                    let motion = other_motion(oc, false, body, own, writes);
+                    let motion = other_motion(oc, false, body, (own.gravity, own.dt), writes);
                     if reached_through_parry(co, oc, skins, own, &motion) {
                         return true;
                     }
@@ -265,18 +271,17 @@ fn reached_through_parry(
 
 /// What [`closing_bound`] needs of the collider `other` (`other_ball`: it is a ball) and its
 /// body, if it has one (`body`, its handle and rapier's body), read through the writes so
-/// far. `own` gives the world's gravity and the step, the same for every ball of the plan.
+/// far, in a step of `dt` (s) under the world's `gravity` (m/s^2).
 fn other_motion(
     other: &Collider,
     other_ball: bool,
     body: Option<(RigidBodyHandle, &RigidBody)>,
-    own: &OwnMotion,
+    (gravity, dt): (Vector3<f64>, f64),
     writes: &Writes,
 ) -> OtherMotion {
     let Some((handle, ob)) = body else {
         return OtherMotion::Still;
     };
-    let dt = own.dt;
     let (com, linvel, angvel) = writes.motion(handle, ob);
     // How far its surface lies from its centre of mass: a ball turning about its centre does
     // not move its surface.
@@ -291,8 +296,7 @@ fn other_motion(
     let mut kinematic_shift = None;
     if ob.is_dynamic() {
         accel = Some(
-            own.gravity * to_f64(ob.gravity_scale())
-                + vec_to_na(ob.user_force()) / to_f64(ob.mass()),
+            gravity * to_f64(ob.gravity_scale()) + vec_to_na(ob.user_force()) / to_f64(ob.mass()),
         );
         // Torque-free, an anisotropic body's spin grows by at most I_max / I_min; a user
         // torque adds at most |tau| / I_min over the step.
@@ -323,7 +327,7 @@ fn other_motion(
 /// How much a body of motion `own` (a centred ball) and a collider whose surface moves as
 /// `other` can close in the step `own.dt` (see [`within_reach_of_other`]), along `line` (the
 /// unit line of centres of two balls) or in any direction; infinite when the other's motion
-/// cannot be read. The relative speed of the centres of mass, the other's spin times how far
+/// is not finite. The relative speed of the centres of mass, the other's spin times how far
 /// its surface lies from its centre of mass, and the step squared times the accelerations'
 /// difference and what `own`'s ground adds: rapier's substeps move a body by
 /// `(N + 1) / 2N a dt^2` in a step, at most `a dt^2`. Pure.
@@ -370,8 +374,8 @@ mod tests {
     use crate::plugin::state::registry::Registry;
     use crate::plugin::state::writes::Write;
     use crate::rapier::prelude::{
-        ColliderBuilder, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase,
-        RigidBodyBuilder, RigidBodySet,
+        ColliderBuilder, ColliderSet, ImpulseJointSet, IslandManager, MultibodyJointSet,
+        NarrowPhase, RigidBodyBuilder, RigidBodySet, SoftBodySet,
     };
 
     fn own() -> OwnMotion {
@@ -394,8 +398,9 @@ mod tests {
         }
     }
 
-    /// A neighbour is read once a plan, and read again once its body is written: what a ball
-    /// planned after a `Step` impulse of its neighbour sees is the neighbour after it.
+    /// A neighbouring ball is read once a plan, read again once its body is written (what a
+    /// ball planned after a `Step` impulse of its neighbour sees is the neighbour after it),
+    /// read afresh in the next plan, and never taken for another collider in its slot.
     #[test]
     fn a_neighbour_is_read_once_a_plan_and_again_after_a_write_to_its_body() {
         let mut bodies = RigidBodySet::new();
@@ -410,37 +415,66 @@ mod tests {
         );
         let sets = Sets::new(&narrow_phase, &joints, &multibody);
         let registry = Registry::default();
-        let mut writes = Writes::default();
-        let mut neighbours = Neighbours::default();
-        let read = |neighbours: &mut Neighbours, bodies: &RigidBodySet, writes: &Writes| {
+        let mut neighbours = NeighbourReads::default();
+        let (gravity, dt) = (own().gravity, own().dt);
+        // The ball `handle` as the plan reads it: its linear velocity and radius.
+        let read = |neighbours: &mut NeighbourReads,
+                    handle: ColliderHandle,
+                    bodies: &RigidBodySet,
+                    colliders: &ColliderSet,
+                    writes: &Writes| {
             let scene = Scene {
                 bodies,
-                colliders: &colliders,
+                colliders,
                 sets: &sets,
                 registry: &registry,
                 grounds: &[],
                 writes,
             };
-            match neighbours.read(ball, &own(), &scene) {
-                Some(Read::Ball(n)) => linvel(n),
+            match neighbours.read(handle, &scene) {
+                Some(Read::Ball(n)) => (linvel(n), n.radius),
                 _ => panic!("the ball is not read as one"),
             }
         };
+        let v = |x: f64| x * Vector3::x();
 
-        neighbours.begin_plan();
-        assert_eq!(read(&mut neighbours, &bodies, &writes), Vector3::zeros());
+        let mut writes = Writes::default();
+        neighbours.begin_plan(gravity, dt);
+        assert_eq!(
+            read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
+            v(0.0)
+        );
         // rapier's body changed behind the plan's back (nothing does so within a plan): the
-        // plan's first reading stands.
+        // plan's first reading stands until the next plan.
         bodies[body].set_linvel(Vector::new(-1.0, 0.0, 0.0), true);
-        assert_eq!(read(&mut neighbours, &bodies, &writes), Vector3::zeros());
+        assert_eq!(
+            read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
+            v(0.0)
+        );
+        neighbours.begin_plan(gravity, dt);
+        assert_eq!(
+            read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
+            v(-1.0)
+        );
         // A write recorded in the plan: read again, as the writes leave it.
         writes.record(body, Write::Velocity(Vector::new(-3.0, 0.0, 0.0)));
-        assert_eq!(read(&mut neighbours, &bodies, &writes), -3.0 * Vector3::x());
+        assert_eq!(
+            read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
+            v(-3.0)
+        );
         writes.record(body, Write::Velocity(Vector::new(-5.0, 0.0, 0.0)));
-        assert_eq!(read(&mut neighbours, &bodies, &writes), -5.0 * Vector3::x());
-        // The next plan reads rapier's body afresh.
-        let writes = Writes::default();
-        neighbours.begin_plan();
-        assert_eq!(read(&mut neighbours, &bodies, &writes), -Vector3::x());
+        assert_eq!(
+            read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
+            v(-5.0)
+        );
+        // Another ball in the removed one's slot, within the same plan: read as itself.
+        let (mut islands, mut soft) = (IslandManager::new(), SoftBodySet::new());
+        colliders.remove(ball, &mut islands, &mut bodies, &mut soft, false);
+        let other = colliders.insert_with_parent(ColliderBuilder::ball(0.05), body, &mut bodies);
+        assert_eq!(other.into_raw_parts().0, ball.into_raw_parts().0);
+        assert_eq!(
+            read(&mut neighbours, other, &bodies, &colliders, &writes).1,
+            0.05
+        );
     }
 }

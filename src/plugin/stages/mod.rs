@@ -262,7 +262,7 @@ impl<H> ImpactPlugin<H> {
         let exact = self.config.timing == TimingMode::Exact;
         let grounds = std::mem::take(&mut step.grounds);
         let mut reports = PlanReports::default();
-        self.neighbours.begin_plan();
+        self.neighbours.begin_plan(step.gravity, step.dt);
         for handle in to_plan {
             let mut planner = Planner {
                 config: &self.config,

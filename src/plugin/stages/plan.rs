@@ -29,7 +29,7 @@ use crate::plugin::events::{Diagnostic, ImpactEvent};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{Scene, Sets};
-use crate::plugin::queries::reach::Neighbours;
+use crate::plugin::queries::reach::NeighbourReads;
 use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::registry::Registry;
@@ -70,7 +70,7 @@ pub(crate) struct Planner<'a, H> {
     /// The events and diagnostics of the body being planned, committed after its plan.
     pub reports: &'a mut PlanReports,
     /// What the plan read so far of the balls next to its rolling balls.
-    pub neighbours: &'a mut Neighbours,
+    pub neighbours: &'a mut NeighbourReads,
 }
 
 /// What one body's plan leaves to be recorded through the commit, in order, once it is done:

@@ -215,7 +215,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// and a ball that slips (faster than `ROLLING_MIN_SLIP`) or rolls faster than the
     /// resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or, at
     /// rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
-    /// Reads only.
+    /// Reads only, besides the reach test's memo (`Planner::neighbours`).
     fn rolling_of(
         &mut self,
         scene: &Scene,
@@ -403,7 +403,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// (`reach::within_reach_of_other`)? Asked after the cheap refusals (most resting balls
     /// are at rest). Its ground holds it (`|an|` along `n`) and pulls it along the plane by at
     /// most `mu |an|` (slip) or `mu_r |an|` (rolling resistance). Reads rapier's contact
-    /// graph.
+    /// graph, and keeps what it read of each neighbouring ball for the rest of the plan.
     fn reached_by_other(&mut self, scene: &Scene, slide: &Slide, step: &StepData) -> bool {
         let ball = slide.ball;
         let (an, slip, v) = (slide.an, slide.slip, slide.v);
