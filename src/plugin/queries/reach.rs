@@ -2,12 +2,12 @@
 //!
 //! Contract: [`within_reach_of_other`] reads rapier's contact graph, colliders and bodies (each
 //! body as the step's writes so far leave it) and writes nothing of rapier's or the plugin's
-//! state besides its own memo. What it reads of a neighbouring ball ([`Neighbour`]: its place, its size, how fast
-//! its body can close on anything) is the same for every ball it neighbours, so it is read
-//! once a plan and kept in [`NeighbourReads`] until the plan ends or its body is written again (a
-//! `Step` impulse of an earlier body's plan); the bound each ball then draws from it is the
-//! one read afresh would give, to the bit. Any other shape (a ground under every ball, which
-//! the test skips, a wall) is read afresh each time.
+//! state besides its own memo. What it reads of a neighbouring ball ([`Neighbour`]: its place,
+//! its size, how fast its body can close on anything) is the same for every ball it
+//! neighbours, so it is read once a plan and kept in [`NeighbourReads`] until the plan ends or
+//! its body is written again (a `Step` impulse of an earlier body's plan); the bound each ball
+//! then draws from it is the one read afresh would give, to the bit. Any other shape (a ground
+//! under every ball, which the test skips, a wall) is read afresh each time.
 
 use crate::parry::query;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
