@@ -65,8 +65,6 @@ enum OtherMotion {
 #[derive(Clone, Copy, Debug)]
 struct Neighbour {
     handle: ColliderHandle,
-    /// The plan it was read in (`NeighbourReads::plan`).
-    plan: u32,
     /// Its body, if it has one that exists.
     body: Option<RigidBodyHandle>,
     /// Its body's write mark when it was read (`Writes::mark`; 0 without a body).
@@ -86,13 +84,15 @@ enum Read<'n, 'c> {
     Other(&'c Collider),
 }
 
-/// The balls read in this plan, by collider slot (see the module's contract). Kept by the
-/// plugin across steps for its storage only: every entry of an earlier plan is stale.
+/// The balls read in this plan (see the module's contract), found by collider slot. Kept by
+/// the plugin across steps for its storage only: each plan starts empty. Its size follows the
+/// balls read in a plan, and 4 bytes a collider slot.
 #[derive(Default)]
 pub(crate) struct NeighbourReads {
-    by_slot: Vec<Option<Neighbour>>,
-    /// The current plan, counted from 1.
-    plan: u32,
+    /// The balls read in this plan, in the order read.
+    read: Vec<Neighbour>,
+    /// By collider slot: where in `read` that slot's ball is, if it was read in this plan.
+    by_slot: Vec<u32>,
     /// The plan's world gravity (m/s^2) and step (s), which a neighbour's motion is read with.
     gravity: Vector3<f64>,
     dt: f64,
@@ -103,11 +103,7 @@ impl NeighbourReads {
     /// is read afresh.
     pub fn begin_plan(&mut self, gravity: Vector3<f64>, dt: f64) {
         (self.gravity, self.dt) = (gravity, dt);
-        self.plan = self.plan.wrapping_add(1);
-        if self.plan == 0 {
-            self.by_slot.clear();
-            self.plan = 1;
-        }
+        self.read.clear();
     }
 
     /// The collider `handle`: a ball as this plan reads it (its motion as the writes so far
@@ -119,36 +115,51 @@ impl NeighbourReads {
         scene: &Scene<'c>,
     ) -> Option<Read<'n, 'c>> {
         let slot = handle.into_raw_parts().0 as usize;
-        let plan = self.plan;
-        let fresh = self.by_slot.get(slot).is_some_and(|entry| {
-            entry.as_ref().is_some_and(|n| {
-                n.handle == handle
-                    && n.plan == plan
-                    && n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
-            })
+        // Its entry in this plan, if it has one (an index left from an earlier plan points
+        // past `read`'s end or to another collider).
+        let entry = self
+            .by_slot
+            .get(slot)
+            .map(|k| *k as usize)
+            .filter(|k| self.read.get(*k).is_some_and(|n| n.handle == handle));
+        let fresh = entry.filter(|k| {
+            let n = &self.read[*k];
+            n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
         });
-        if !fresh {
-            let oc = scene.colliders.get(handle)?;
-            let Some(radius) = oc.shape().as_ball().map(|b| b.radius) else {
-                return Some(Read::Other(oc));
-            };
-            let body = oc.parent().and_then(|p| Some((p, scene.bodies.get(p)?)));
-            if slot >= self.by_slot.len() {
-                self.by_slot.resize(slot + 1, None);
-            }
-            self.by_slot[slot] = Some(Neighbour {
-                handle,
-                plan,
-                body: body.map(|(p, _)| p),
-                mark: body.map_or(0, |(p, _)| scene.writes.mark(p)),
-                enabled: oc.is_enabled(),
-                skin: oc.contact_skin(),
-                translation: oc.position().translation,
-                radius,
-                motion: other_motion(oc, true, body, (self.gravity, self.dt), scene.writes),
-            });
+        if let Some(k) = fresh {
+            return Some(Read::Ball(&self.read[k]));
         }
-        self.by_slot[slot].as_ref().map(Read::Ball)
+        let oc = scene.colliders.get(handle)?;
+        let Some(radius) = oc.shape().as_ball().map(|b| b.radius) else {
+            return Some(Read::Other(oc));
+        };
+        let body = oc.parent().and_then(|p| Some((p, scene.bodies.get(p)?)));
+        let neighbour = Neighbour {
+            handle,
+            body: body.map(|(p, _)| p),
+            mark: body.map_or(0, |(p, _)| scene.writes.mark(p)),
+            enabled: oc.is_enabled(),
+            skin: oc.contact_skin(),
+            translation: oc.position().translation,
+            radius,
+            motion: other_motion(oc, true, body, (self.gravity, self.dt), scene.writes),
+        };
+        // Read again after a write to its body: in place.
+        let k = match entry {
+            Some(k) => {
+                self.read[k] = neighbour;
+                k
+            }
+            None => {
+                if slot >= self.by_slot.len() {
+                    self.by_slot.resize(slot + 1, u32::MAX);
+                }
+                self.by_slot[slot] = self.read.len() as u32;
+                self.read.push(neighbour);
+                self.read.len() - 1
+            }
+        };
+        Some(Read::Ball(&self.read[k]))
     }
 }
 
