@@ -260,7 +260,8 @@ pub(crate) enum EndCheck {
     /// integrator ends lower than that flight (`TimeOfImpact` mode, `StepData::integrator_lag`).
     Lagged,
     /// rapier's end state of a rolling ball something else acted on, in which it flew
-    /// without its ground; `fall` (m/s) is the step's fall, `|a.n| dt`.
+    /// without its ground (a roll steered in `Exact` mode ends on its plane, with the
+    /// velocities of one that flew); `fall` (m/s) is the step's fall, `|a.n| dt`.
     DisturbedRolling { fall: f64 },
     /// rapier's end state of a ball handed from its closed-form rolling to rapier's resting
     /// contact at the step's start (something else within reach): rapier keeps its resting
@@ -308,6 +309,21 @@ pub(crate) const STEERED_DRIFT_ROUNDINGS: f64 = 2.0;
 pub(crate) fn carries(held: &nalgebra::Vector3<f64>, exact: &nalgebra::Vector3<f64>) -> bool {
     let rounding = STEERED_DRIFT_ROUNDINGS * to_f64(Real::EPSILON);
     (0..3).all(|i| (held[i] - exact[i]).abs() <= rounding * exact[i].abs())
+}
+
+/// How many of rapier's roundings (its precision's epsilon, in radians) a steered roll's
+/// rotation may turn from the closed form's before the closed form's is written
+/// ([`carries_turn`]). rapier turns a body by a normalised linear quaternion step in each
+/// substep, each rounded in its precision.
+pub(crate) const STEERED_TURN_ROUNDINGS: f64 = 4.0;
+
+/// Does rapier's rotation `held` of a steered roll (`stages/steer.rs`) stand for the closed
+/// form's `exact` without a write: within [`STEERED_TURN_ROUNDINGS`] roundings of it?
+pub(crate) fn carries_turn(
+    held: &nalgebra::UnitQuaternion<f64>,
+    exact: &nalgebra::UnitQuaternion<f64>,
+) -> bool {
+    held.angle_to(exact) <= STEERED_TURN_ROUNDINGS * to_f64(Real::EPSILON)
 }
 
 impl Policy {

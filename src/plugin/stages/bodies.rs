@@ -5,10 +5,13 @@
 //! role: rolling, turning while resting, with `Impact` grounds or none) and from what rapier's
 //! step did to it (a contact, a joint, a torque, rapier's CCD stopping it short):
 //! - a rolling ball nothing else acted on: its closed form, written as it ends where the plan
-//!   proved it stays over one flat face of a still ground (`Candidate::rolls_on_one_face`),
-//!   else once a contact query finds it still on its plane (`reconstruct::rolled`); or, if it
-//!   rolls into another ground, that impact and on (`rolled_into`); one something else acted
-//!   on: rapier's end state, checked (`EndCheck::DisturbedRolling`), with a `Released` event;
+//!   proved it stays over one flat face of a still ground (`Candidate::rolls_on_one_face`;
+//!   in `Exact` mode steered there by rapier's integrator, and only its velocities written
+//!   where rapier's pose carries the end: `Commit::rolled`), else once a contact query finds
+//!   it still on its plane (`reconstruct::rolled`); or, if it rolls into another ground, that
+//!   impact and on (`rolled_into`); one something else acted on: rapier's end state (a
+//!   steered ball's velocities given back the steering's offsets), checked
+//!   (`EndCheck::DisturbedRolling`), with a `Released` event;
 //! - a body that flew alone with a closing ground: the in-step impacts from its start state
 //!   (`reconstruct::through_impacts`), the end state checked (`EndCheck::Flown`);
 //! - a body that flew alone with the step clear: `Exact` mode's exact flight
@@ -36,7 +39,9 @@ use crate::plugin::queries::observe::{
     body_geom, pushed_by_other, touched_besides_grounds, touches_other,
 };
 use crate::plugin::stages::commit::Origin;
-use crate::plugin::stages::reconstruct::{self, FlownEnd, Subject, ccd_consistent};
+use crate::plugin::stages::reconstruct::{
+    self, FlownEnd, Subject, ccd_consistent, ccd_consistent_steered,
+};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -109,9 +114,26 @@ impl AfterStep<'_> {
         // Something else acted on it in the step: a contact, a joint, or rapier's CCD
         // stopping it short (against a thin body).
         let sets = &step.sets;
-        let disturbed = sets.jointed(cand.body)
-            || pushed_by_other(now.rb(), sets.narrow_phase)
-            || !ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step);
+        let ccd_left_it = match &cand.steered_roll {
+            Some(steered) => ccd_consistent_steered(&now, cand, steered, step),
+            None => ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step),
+        };
+        let disturbed =
+            sets.jointed(cand.body) || pushed_by_other(now.rb(), sets.narrow_phase) || !ccd_left_it;
+        if let Some(steered) = &cand.steered_roll {
+            if !disturbed {
+                // rapier's integrator carried it to the roll's end (`steer.rs`).
+                let body = (cand.body, &now);
+                self.commit.rolled(body, &steered.end, &cand.local_com);
+                return;
+            }
+            // rapier's end state stands (checked below): its velocities get the steering's
+            // offsets back, as an unsteered ball's that flew without its ground.
+            let (dv, dw) = steered.offsets;
+            let linvel = vec_from_na(&(vec_to_na(now.linvel()) + dv));
+            let angvel = vec_from_na(&(vec_to_na(now.angvel()) + dw));
+            let _ = self.commit.velocities(cand.body, linvel, angvel);
+        }
         // Alone over one flat face of a still ground for the whole step (the plan's proof):
         // its closed-form end touches the face, and needs no query.
         if !disturbed && cand.rolls_on_one_face {
@@ -151,7 +173,8 @@ impl AfterStep<'_> {
                 .state(cand.body, &end, &cand.local_com, Origin::Model);
             return;
         }
-        // rapier's end state stands, in which the ball flew without its ground.
+        // rapier's end state stands, in which the ball flew without its ground (a steered
+        // ball's pose rolled on it; its velocities are an unsteered one's).
         if let (true, Some(part)) = (disturbed, geom.parts.first()) {
             let key = (part.handle, grounds[0].handle);
             let Some(now) = self.commit.body(bodies, cand.body) else {

@@ -8,6 +8,8 @@
 //! [`apply`] alone (the stages take rapier's bodies read-only), and the only code that
 //! appends to the step's events. [`Commit::state`] records a body's pose and velocities
 //! (woken up) from an `f64` state, [`Commit::flight`] what free flight changes,
+//! [`Commit::rolled`] a steered roll's end (its velocities, or its state where rapier's pose
+//! drifted), [`Commit::velocity`] and [`Commit::velocities`] a steering's velocities,
 //! [`Commit::wake`] a wake-up of a sleeping body a step must plan; a stage reads a body the
 //! step may already have written through [`Commit::body`], which gives what rapier will hold
 //! once the writes so far are applied (`state/writes.rs`). In `Exact`
@@ -19,7 +21,7 @@
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
-use crate::plugin::policy::carries;
+use crate::plugin::policy::{carries, carries_turn};
 use crate::plugin::state::handles::HandleMap;
 use crate::plugin::state::memory::Shadow;
 use crate::plugin::state::writes::{Now, Place, Write, Writes};
@@ -61,6 +63,11 @@ fn apply_one(write: &Write, rb: &mut RigidBody) {
         Write::Move { to, linvel, angvel } => (to, linvel, angvel),
         Write::Velocity(linvel) => {
             rb.set_linvel(linvel, true);
+            return;
+        }
+        Write::Velocities { linvel, angvel } => {
+            rb.set_linvel(linvel, true);
+            rb.set_angvel(angvel, true);
             return;
         }
         Write::Wake => {
@@ -234,6 +241,57 @@ impl<'a> Commit<'a> {
             }
         } else {
             self.diagnose(Diagnostic::NonFiniteState { body });
+        }
+    }
+
+    /// Sets `body`'s two velocities (woken up): a closed-form roll steered (`steer.rs`), or a
+    /// steered roll something else acted on given the roll's end velocities back. Returns
+    /// whether it was recorded (velocities that are not finite in rapier's precision are
+    /// refused, and diagnosed).
+    pub fn velocities(&mut self, body: RigidBodyHandle, linvel: Vector, angvel: Vector) -> bool {
+        if !(linvel.is_finite() && angvel.is_finite()) {
+            self.diagnose(Diagnostic::NonFiniteState { body });
+            return false;
+        }
+        self.writes
+            .record(body, Write::Velocities { linvel, angvel });
+        // No state of the step's is then what rapier holds.
+        if self.exact {
+            self.shadows.remove(&body);
+        }
+        true
+    }
+
+    /// Writes a steered roll's closed-form end `s` into `body` (`before`: as the writes so far
+    /// leave it): its velocities alone where rapier's integrator carried its pose (the
+    /// translation by `policy::carries`, the rotation by `policy::carries_turn`), else the
+    /// whole state. In `Exact` mode the state is remembered either way.
+    pub fn rolled(
+        &mut self,
+        (body, before): (RigidBodyHandle, &Now),
+        s: &State,
+        local_com: &Vector3<f64>,
+    ) {
+        if !fits(s) {
+            self.diagnose(Diagnostic::NonFiniteState { body });
+            return;
+        }
+        let exact = s.com - s.rot * local_com;
+        let held = before.translation();
+        let carried = carries(&vec_to_na(held), &exact)
+            && carries_turn(&rot_to_na(before.rotation()), &s.rot);
+        if !carried {
+            self.state(body, s, local_com, Origin::Model);
+            return;
+        }
+        let (linvel, angvel) = (vec_from_na(&s.v), vec_from_na(&s.w));
+        if (before.linvel(), before.angvel()) != (linvel, angvel) {
+            self.writes
+                .record(body, Write::Velocities { linvel, angvel });
+        }
+        if self.exact {
+            self.shadows
+                .insert(body, Shadow::of(s, (held, linvel, angvel)));
         }
     }
 

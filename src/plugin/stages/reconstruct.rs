@@ -24,10 +24,11 @@ use crate::plugin::queries::geometry::{
 };
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::StepData;
+use crate::plugin::state::step::{Candidate, SteeredRoll};
 use crate::plugin::state::writes::Now;
 use crate::rapier::prelude::ColliderSet;
+use nalgebra::Vector3;
 
 /// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
 /// grounds it is checked against, and the step.
@@ -283,17 +284,45 @@ pub(crate) fn ccd_consistent(body: &Now, flown: &FlownEnd, t_first: f64, step: &
     if !body.rb().is_ccd_active() {
         return true;
     }
-    let free_end = flown.get().com;
-    let exact = free_end - cand.start.com;
+    let path = (&cand.start.com, &flown.get().com);
+    ccd_reached(body, path, t_first / dt, cand.flight.accel.norm(), step)
+}
+
+/// A steered roll's [`ccd_consistent`]: did rapier's CCD leave the ball where the steering
+/// took it, its roll's end (`steer.rs`)?
+pub(crate) fn ccd_consistent_steered(
+    body: &Now,
+    cand: &Candidate,
+    steered: &SteeredRoll,
+    step: &StepData,
+) -> bool {
+    if !body.rb().is_ccd_active() {
+        return true;
+    }
+    let path = (&steered.from, &steered.end.com);
+    ccd_reached(body, path, 1.0, cand.flight.accel.norm(), step)
+}
+
+/// Did the body (`body`, at the step's end) get at least the fraction `reached` of the way
+/// from `from` to `to`, its path in the step, under an acceleration of magnitude `accel`? A
+/// path shorter than rounding always does.
+fn ccd_reached(
+    body: &Now,
+    (from, to): (&Vector3<f64>, &Vector3<f64>),
+    reached: f64,
+    accel: f64,
+    step: &StepData,
+) -> bool {
+    let exact = to - from;
     let len2 = exact.norm_squared();
     if len2 < STILL_TRAVEL_SQUARED {
         return true;
     }
-    let actual = vec_to_na(body.center_of_mass()) - cand.start.com;
+    let dt = step.dt;
+    let actual = vec_to_na(body.center_of_mass()) - from;
     let fraction = actual.dot(&exact) / len2;
     // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
     // body up to about a prediction distance before the contact.
-    let slack =
-        (cand.flight.accel.norm() * dt * dt + step.policy.prediction) / len2.sqrt() + CCD_SLACK;
-    fraction >= t_first / dt - slack
+    let slack = (accel * dt * dt + step.policy.prediction) / len2.sqrt() + CCD_SLACK;
+    fraction >= reached - slack
 }

@@ -1,32 +1,57 @@
-//! Steer: in `Exact` mode, before rapier's step, the free flights that rapier's own integrator
-//! can carry onto the exact positions, so that a body flying far from every ground has its
-//! velocity set, and not its pose.
+//! Steer: in `Exact` mode, before rapier's step, the free flights and the closed-form rolls
+//! that rapier's own integrator can carry onto the exact poses, so that such a body has its
+//! velocities set, and not its pose (a pose write makes rapier update the body's colliders and
+//! wake every body they have a contact pair with).
 //!
 //! Contract: rapier's substepped integrator moves a body of velocity `v0` under a constant
 //! acceleration `a` by `v0 dt + (N + 1) / 2N a dt^2` in `N` substeps (velocity first, then
-//! position, in each), where the exact flight moves it `v0 dt + a dt^2 / 2`. Started from
-//! `v0 - a dt / 2N` instead, it lands on the exact position. This stage records that velocity
-//! (`Candidate::steer`) for every flying candidate that rapier integrates so: a dynamic body
-//! with no ground within reach, no linear damping, no locked axis and no joint, not a ball of
-//! an impact between bodies, whose last step's end was the plugin's (its `f64` shadow still
-//! held: a body whose end rapier's contacts decided, a ball resting on others, is left
-//! alone). After rapier's step the bodies stage gives the body its own velocity back, and
-//! writes its exact translation only where rapier's drifted beyond a few roundings
-//! (`bodies.rs`, `fly_exactly`; `policy::carries`); a steered body that something else
-//! touched in the step gets the offset back on rapier's end velocity. Between steps rapier
-//! holds the body's own velocity, always.
+//! position, in each), and turns it in each substep by the normalised quaternion step
+//! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
+//! - A free flight: started from `v0 - a dt / 2N` instead of `v0`, it lands on the exact
+//!   position. This stage records that velocity (`Candidate::steer`) for every flying
+//!   candidate that rapier integrates so: a dynamic body with no ground within reach, no
+//!   linear damping, no locked axis and no joint, not a ball of an impact between bodies,
+//!   whose last step's end was the plugin's (its `f64` shadow still held: a body whose end
+//!   rapier's contacts decided, a ball resting on others, is left alone). After rapier's step
+//!   the bodies stage gives the body its own velocity back, and writes its exact translation
+//!   only where rapier's drifted beyond a few roundings (`bodies.rs`, `fly_exactly`;
+//!   `policy::carries`); a steered body that something else touched gets the offset back on
+//!   rapier's end velocity.
+//! - A closed-form roll alone over one flat face of a still ground
+//!   (`Candidate::rolls_on_one_face`), of a ball rapier integrates as above (also no angular
+//!   damping and no user torque): the roll's end of the step is computed here, and rapier's
+//!   step starts the ball from where rapier holds it with the linear velocity that lands on
+//!   the end's centre, `(c1 - c0) / dt - (N + 1) / 2N a dt`, and the spin that turns it onto
+//!   the end's rotation, `(2N / dt) tan(theta / 2N)` about the axis of the turn `theta`.
+//!   Starting from rapier's pose, not the plan's, keeps rapier's rounding from adding up over
+//!   the steps. Not steered: a ball with more substeps of its own
+//!   (`additional_solver_iterations`), or whose spin rapier would cap (a quarter turn a step,
+//!   unless it allows fast rotation). The bodies stage writes the end's velocities, and its
+//!   pose only where rapier's drifted beyond a few roundings (`policy::carries`,
+//!   `policy::carries_turn`); a ball something else acted on keeps rapier's end state, the
+//!   steering's offsets given back on its velocities (`Candidate::steered_roll`): its
+//!   velocities are then an unsteered ball's, which flew without its ground, and the bodies
+//!   stage's check (`EndCheck::DisturbedRolling`) gives it the ground's support and friction
+//!   over the step as for one, though it ends on its plane rather than below it.
+//!
+//! Between steps rapier holds the body's own velocities, always.
 
+use crate::motion::State;
+use crate::plugin::bridge::convert::{rot_to_na, to_real, vec_from_na, vec_to_na};
 use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::memory::LastStep;
-use crate::plugin::state::step::{Candidate, StepData};
+use crate::plugin::state::step::{Candidate, SteeredRoll, StepData};
+use crate::plugin::state::writes::Now;
+use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{LockedAxes, RigidBody, RigidBodySet};
+use nalgebra::Vector3;
 
 impl<H> ImpactPlugin<H> {
     /// The steer stage (see the module's contract): records the steering velocities of this
-    /// step's free flights.
+    /// step's free flights and closed-form rolls.
     pub(super) fn steer(
         &mut self,
         step: &mut StepData,
@@ -43,9 +68,11 @@ impl<H> ImpactPlugin<H> {
             &mut self.memory.shadows,
             true,
         );
-        let lag = step.dt / (2.0 * step.substeps as f64);
+        let (dt, substeps) = (step.dt, step.substeps as f64);
+        let lag = dt / (2.0 * substeps);
         for cand in step.candidates.iter_mut() {
-            if !flying(cand) || step.pairs.members.contains(&cand.body) {
+            let rolls = cand.rolls_on_one_face;
+            if !(rolls || flying(cand)) || step.pairs.members.contains(&cand.body) {
                 continue;
             }
             let Some(rb) = bodies
@@ -55,6 +82,23 @@ impl<H> ImpactPlugin<H> {
                 continue;
             };
             let now = commit.now(cand.body, rb);
+            if rolls {
+                let integrated = rb.angular_damping() == 0.0
+                    && rb.user_torque() == Vector::ZERO
+                    && rb.additional_solver_iterations() == 0;
+                let steered = integrated
+                    .then(|| steered_roll(cand, &now, (dt, substeps)))
+                    .flatten()
+                    .filter(|s| rb.is_fast_rotation_allowed() || within_spin_cap(s, dt));
+                if let Some(steered) = steered {
+                    let (linvel, angvel) = steered.velocities;
+                    let (linvel, angvel) = (vec_from_na(&linvel), vec_from_na(&angvel));
+                    if commit.velocities(cand.body, linvel, angvel) {
+                        cand.steered_roll = Some(steered);
+                    }
+                }
+                continue;
+            }
             if !last
                 .shadows
                 .get(&cand.body)
@@ -68,6 +112,47 @@ impl<H> ImpactPlugin<H> {
             }
         }
     }
+}
+
+/// The steering of a closed-form roll (see the module's contract) for the ball as rapier holds
+/// it (`now`), in a step of `dt` seconds and `substeps` substeps; `None` without a roll or
+/// where the turn is a quarter turn a substep or more (one linear quaternion step cannot
+/// reach it). Pure.
+fn steered_roll(cand: &Candidate, now: &Now, (dt, substeps): (f64, f64)) -> Option<SteeredRoll> {
+    let (_, motion) = cand.rolling.as_ref()?;
+    let end: State = motion.advance(&cand.start, dt);
+    let from = vec_to_na(now.center_of_mass());
+    let linvel =
+        (end.com - from) / dt - cand.flight.accel * dt * (substeps + 1.0) / (2.0 * substeps);
+    let turn = (end.rot * rot_to_na(now.rotation()).inverse()).scaled_axis();
+    let angle = turn.norm();
+    let per_substep = angle / (2.0 * substeps);
+    if per_substep >= std::f64::consts::FRAC_PI_4 {
+        return None;
+    }
+    let angvel = if angle > 0.0 {
+        turn / angle * (2.0 * substeps / dt) * per_substep.tan()
+    } else {
+        Vector3::zeros()
+    };
+    let offsets = (
+        vec_to_na(now.linvel()) - linvel,
+        vec_to_na(now.angvel()) - angvel,
+    );
+    Some(SteeredRoll {
+        end,
+        from,
+        velocities: (linvel, angvel),
+        offsets,
+    })
+}
+
+/// Does rapier leave the steered spin as it is? rapier caps a body's spin at a quarter turn
+/// a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the body allows
+/// fast rotation; a faster roll is written as before.
+fn within_spin_cap(steered: &SteeredRoll, dt: f64) -> bool {
+    let cap = (std::f64::consts::FRAC_PI_4 as Real) * (1.0 / to_real(dt));
+    vec_from_na(&steered.velocities.1).length() <= cap
 }
 
 /// A candidate that no ground can reach in the step.

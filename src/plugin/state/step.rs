@@ -72,6 +72,24 @@ pub(crate) struct Candidate {
     /// `Exact` mode's steering of a free flight (`stages/steer.rs`): how much lower than its
     /// own velocity rapier's step started it (m/s), `a dt / 2N`; `None` for a body not steered.
     pub steer: Option<Vector3<f64>>,
+    /// `Exact` mode's steering of a closed-form roll (`stages/steer.rs`); `None` for a ball
+    /// not steered.
+    pub steered_roll: Option<SteeredRoll>,
+}
+
+/// A closed-form roll that rapier's integrator carries (`stages/steer.rs`): rapier's step
+/// starts the ball with the velocities under which it lands on the roll's end.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SteeredRoll {
+    /// The closed form's end of the step (from `Candidate::start`).
+    pub end: State,
+    /// The centre of mass rapier's step starts from (m).
+    pub from: Vector3<f64>,
+    /// The velocities rapier's step starts it with (m/s, rad/s).
+    pub velocities: (Vector3<f64>, Vector3<f64>),
+    /// The velocities rapier held less the ones the steering started it with (m/s, rad/s):
+    /// given back to a ball something else acted on, whose end state is rapier's.
+    pub offsets: (Vector3<f64>, Vector3<f64>),
 }
 
 impl Candidate {
@@ -105,6 +123,7 @@ impl Candidate {
             rolls_on_one_face: false,
             released: None,
             steer: None,
+            steered_roll: None,
         }
     }
 }

@@ -27,6 +27,9 @@ pub(crate) enum Write {
     /// The linear velocity alone (woken up): `Exact` mode's steering of a free flight
     /// (`stages/steer.rs`).
     Velocity(Vector),
+    /// Both velocities (woken up): `Exact` mode's steering of a closed-form roll, and its end
+    /// where rapier's integrator carried the pose (`stages/steer.rs`).
+    Velocities { linvel: Vector, angvel: Vector },
     /// `wake_up`.
     Wake,
 }
@@ -73,6 +76,7 @@ impl Held {
         let (to, linvel, angvel) = match *write {
             Write::Move { to, linvel, angvel } => (Some(to), linvel, angvel),
             Write::Velocity(linvel) => (None, linvel, None),
+            Write::Velocities { linvel, angvel } => (None, linvel, Some(angvel)),
             Write::Wake => {
                 self.sleeping = false;
                 return;

@@ -262,6 +262,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             rolls_on_one_face: plan.rolls_on_one_face,
             released: plan.released,
             steer: None,
+            steered_roll: None,
         });
     }
 }
