@@ -1217,7 +1217,7 @@ fn exact_rolling_is_steered_not_moved() {
     // Rolling without slip, rolling resistance brakes it by mu_r g / (1 + k) until it stops.
     let brake = mu_r * G / (1.0 + k);
     let stop = v0 / brake;
-    let eps = f64::from(Real::EPSILON);
+    let eps = wide(Real::EPSILON);
     let (mut moves, mut worst_x, mut worst_v) = (0, 0.0f64, 0.0f64);
     let steps = 120;
     for n in 1..=steps {

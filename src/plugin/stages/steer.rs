@@ -45,7 +45,7 @@ use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, SteeredRoll, StepData};
 use crate::plugin::state::writes::Now;
-use crate::rapier::math::{Real, Vector};
+use crate::rapier::math::Vector;
 use crate::rapier::prelude::{LockedAxes, RigidBody, RigidBodySet};
 use nalgebra::Vector3;
 
@@ -151,7 +151,7 @@ fn steered_roll(cand: &Candidate, now: &Now, (dt, substeps): (f64, f64)) -> Opti
 /// a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the body allows
 /// fast rotation; a faster roll is written as before.
 fn within_spin_cap(steered: &SteeredRoll, dt: f64) -> bool {
-    let cap = (std::f64::consts::FRAC_PI_4 as Real) * (1.0 / to_real(dt));
+    let cap = to_real(std::f64::consts::FRAC_PI_4) * (1.0 / to_real(dt));
     vec_from_na(&steered.velocities.1).length() <= cap
 }
 
