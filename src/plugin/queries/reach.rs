@@ -381,6 +381,7 @@ fn closing_bound(own: &OwnMotion, other: &OtherMotion, line: Option<Vector3<f64>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plugin::bridge::convert::to_real;
     use crate::plugin::queries::observe::Sets;
     use crate::plugin::state::registry::Registry;
     use crate::plugin::state::writes::Write;
@@ -414,11 +415,19 @@ mod tests {
     /// read afresh in the next plan, and never taken for another collider in its slot.
     #[test]
     fn a_neighbour_is_read_once_a_plan_and_again_after_a_write_to_its_body() {
-        let mut bodies = RigidBodySet::new();
-        let mut colliders = ColliderSet::new();
-        let body =
-            bodies.insert(RigidBodyBuilder::dynamic().translation(Vector::new(0.1, 0.0, 0.0)));
-        let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
+        // One ball moving along x at `vx`: the same handles in every set built so.
+        let world = |vx: f64| {
+            let mut bodies = RigidBodySet::new();
+            let mut colliders = ColliderSet::new();
+            let body = bodies.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.1, 0.0, 0.0))
+                    .linvel(Vector::new(to_real(vx), 0.0, 0.0)),
+            );
+            let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
+            (bodies, colliders, body, ball)
+        };
+        let (bodies, colliders, body, ball) = world(0.0);
         let (narrow_phase, joints, multibody) = (
             NarrowPhase::new(),
             ImpulseJointSet::new(),
@@ -457,7 +466,7 @@ mod tests {
         );
         // rapier's body changed behind the plan's back (nothing does so within a plan): the
         // plan's first reading stands until the next plan.
-        bodies[body].set_linvel(Vector::new(-1.0, 0.0, 0.0), true);
+        let (mut bodies, mut colliders, _, _) = world(-1.0);
         assert_eq!(
             read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
             v(0.0)
