@@ -245,7 +245,7 @@ impl<'a> Commit<'a> {
     }
 
     /// Sets `body`'s two velocities (woken up): a closed-form roll steered (`steer.rs`), or a
-    /// steered roll something else acted on given the roll's end velocities back. Returns
+    /// steered roll something else acted on given the steering's offsets back. Returns
     /// whether it was recorded (velocities that are not finite in rapier's precision are
     /// refused, and diagnosed).
     pub fn velocities(&mut self, body: RigidBodyHandle, linvel: Vector, angvel: Vector) -> bool {
