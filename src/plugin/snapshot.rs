@@ -2,7 +2,7 @@
 //! by [`ImpactPlugin::restore`].
 //!
 //! Contract: a snapshot holds everything one step leaves for the next (the configuration,
-//! the registrations, `Exact` mode's `f64` shadows, the roles and holds of last step's pairs,
+//! the registrations, the `f64` shadows, the roles and holds of last step's pairs,
 //! where the plugin's hook flags are and the user's flags they replaced, the colliders already
 //! reported out of range, and the last step's events), and nothing that is built again from it and the world (the ground index, the
 //! pair index, the hooks' tables, the step's own tables): a plugin restored from it, stepping

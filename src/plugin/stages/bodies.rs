@@ -6,7 +6,7 @@
 //! step did to it (a contact, a joint, a torque, rapier's CCD stopping it short):
 //! - a rolling ball nothing else acted on: its closed form, written as it ends where the plan
 //!   proved it stays over one flat face of a still ground (`Candidate::rolls_on_one_face`;
-//!   in `Exact` mode steered there by rapier's integrator, and only its velocities written
+//!   steered there by rapier's integrator, and only its velocities written
 //!   where rapier's pose carries the end: `Commit::rolled`), else once a contact query finds
 //!   it still on its plane (`reconstruct::rolled`); or, if it rolls into another ground, that
 //!   impact and on (`rolled_into`); one something else acted on: rapier's end state (a

@@ -13,10 +13,11 @@
 //! [`Commit::wake`] a wake-up of a sleeping body a step must plan; a stage reads a body the
 //! step may already have written through [`Commit::body`], which gives what rapier will hold
 //! once the writes so far are applied (`state/writes.rs`). In `Exact`
-//! mode a state the model reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], so
-//! that the next step continues from the `f64` state rather than from its rounding to
-//! rapier's precision, as long as rapier still holds exactly what was written; a correction of
-//! rapier's own end state ([`Origin::Correction`]) is not: rapier's precision is its truth.
+//! mode a state the model reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], and
+//! in every mode a steered roll's end ([`Commit::rolled`]), so that the next step continues
+//! from the `f64` state rather than from its rounding to rapier's precision, as long as
+//! rapier still holds exactly what was written; a correction of rapier's own end state
+//! ([`Origin::Correction`]) is not: rapier's precision is its truth.
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
@@ -86,12 +87,13 @@ fn apply_one(write: &Write, rb: &mut RigidBody) {
 }
 
 /// The step's writer: records the writes (applied by [`apply`]), reports the events and
-/// diagnostics of the step, and keeps `Exact` mode's shadows.
+/// diagnostics of the step, and keeps the shadows of the states it writes.
 pub(crate) struct Commit<'a> {
     writes: &'a mut Writes,
     reports: &'a mut Reports,
     shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
-    /// `Exact` mode: states of [`Origin::Model`] are remembered.
+    /// `Exact` mode: states of [`Origin::Model`] are remembered (a steered roll's end is in
+    /// every mode).
     exact: bool,
 }
 
@@ -166,6 +168,17 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         origin: Origin,
     ) {
+        self.write_state(body, s, local_com, self.exact && origin == Origin::Model);
+    }
+
+    /// [`Self::state`], remembering the state as a [`Shadow`] where `keep`.
+    fn write_state(
+        &mut self,
+        body: RigidBodyHandle,
+        s: &State,
+        local_com: &Vector3<f64>,
+        keep: bool,
+    ) {
         if !fits(s) {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
@@ -183,7 +196,7 @@ impl<'a> Commit<'a> {
             angvel: spin,
         };
         self.writes.record(body, write);
-        if self.exact && origin == Origin::Model {
+        if keep {
             let written = (pose.translation, linvel, angvel);
             self.shadows.insert(body, Shadow::of(s, written));
         }
@@ -236,9 +249,7 @@ impl<'a> Commit<'a> {
         if linvel.is_finite() {
             self.writes.record(body, Write::Velocity(linvel));
             // No state of the step's is then what rapier holds.
-            if self.exact {
-                self.shadows.remove(&body);
-            }
+            self.shadows.remove(&body);
         } else {
             self.diagnose(Diagnostic::NonFiniteState { body });
         }
@@ -256,16 +267,16 @@ impl<'a> Commit<'a> {
         self.writes
             .record(body, Write::Velocities { linvel, angvel });
         // No state of the step's is then what rapier holds.
-        if self.exact {
-            self.shadows.remove(&body);
-        }
+        self.shadows.remove(&body);
         true
     }
 
     /// Writes a steered roll's closed-form end `s` into `body` (`before`: as the writes so far
     /// leave it): its velocities alone where rapier's integrator carried its pose (the
     /// translation by `policy::carries`, the rotation by `policy::carries_turn`), else the
-    /// whole state. In `Exact` mode the state is remembered either way.
+    /// whole state. The state is remembered either way, in every mode: rapier's integrator
+    /// carries the pose within a few roundings, and the roll's next step continues from the
+    /// `f64` end rather than from that, so that the roundings do not add up over the steps.
     pub fn rolled(
         &mut self,
         (body, before): (RigidBodyHandle, &Now),
@@ -281,7 +292,7 @@ impl<'a> Commit<'a> {
         let carried = carries(&vec_to_na(held), &exact)
             && carries_turn(&rot_to_na(before.rotation()), &s.rot);
         if !carried {
-            self.state(body, s, local_com, Origin::Model);
+            self.write_state(body, s, local_com, true);
             return;
         }
         let (linvel, angvel) = (vec_from_na(&s.v), vec_from_na(&s.w));
@@ -289,10 +300,8 @@ impl<'a> Commit<'a> {
             self.writes
                 .record(body, Write::Velocities { linvel, angvel });
         }
-        if self.exact {
-            self.shadows
-                .insert(body, Shadow::of(s, (held, linvel, angvel)));
-        }
+        self.shadows
+            .insert(body, Shadow::of(s, (held, linvel, angvel)));
     }
 
     /// Wakes a sleeping body the step must plan.

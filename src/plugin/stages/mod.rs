@@ -9,9 +9,9 @@
 //!    `Exact` mode a flying candidate each), or to be planned.
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
 //!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
-//! 5. steer (`steer.rs`): in `Exact` mode, the free flights far from the grounds given the
-//!    velocity under which rapier's integrator lands on the exact positions, and the balls
-//!    rolling alone over one flat face the velocities that land them on the roll's end.
+//! 5. steer (`steer.rs`): the balls rolling alone over one flat face given the velocities
+//!    under which rapier's integrator lands them on the roll's end, and in `Exact` mode the
+//!    free flights far from the grounds the velocity that lands them on the exact positions.
 //! 6. commit (`commit.rs`): the writes recorded so far (the wake-ups, the steering velocities
 //!    and, in `Step` mode, the impulses) applied to rapier's bodies.
 //! 7. install (`install.rs`): the hook flags and the tables rapier's hook calls read.

@@ -1,13 +1,13 @@
-//! Steer: in `Exact` mode, before rapier's step, the free flights and the closed-form rolls
-//! that rapier's own integrator can carry onto the exact poses, so that such a body has its
-//! velocities set, and not its pose (a pose write makes rapier update the body's colliders and
-//! wake every body they have a contact pair with).
+//! Steer: before rapier's step, the closed-form rolls (in every mode) and, in `Exact` mode,
+//! the free flights that rapier's own integrator can carry onto the exact poses, so that such
+//! a body has its velocities set, and not its pose (a pose write makes rapier update the
+//! body's colliders and wake every body they have a contact pair with).
 //!
 //! Contract: rapier's substepped integrator moves a body of velocity `v0` under a constant
 //! acceleration `a` by `v0 dt + (N + 1) / 2N a dt^2` in `N` substeps (velocity first, then
 //! position, in each), and turns it in each substep by the normalised quaternion step
 //! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
-//! - A free flight: started from `v0 - a dt / 2N` instead of `v0`, it lands on the exact
+//! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands on the exact
 //!   position. This stage records that velocity (`Candidate::steer`) for every flying
 //!   candidate that rapier integrates so: a dynamic body with no ground within reach, no
 //!   linear damping, no locked axis and no joint, not a ball of an impact between bodies,
@@ -17,7 +17,7 @@
 //!   only where rapier's drifted beyond a few roundings (`bodies.rs`, `fly_exactly`;
 //!   `policy::carries`); a steered body that something else touched gets the offset back on
 //!   rapier's end velocity.
-//! - A closed-form roll alone over one flat face of a still ground
+//! - A closed-form roll (every mode) alone over one flat face of a still ground
 //!   (`Candidate::rolls_on_one_face`), of a ball rapier integrates as above (also no angular
 //!   damping and no user torque): the roll's end of the step is computed here, and rapier's
 //!   step starts the ball from where rapier holds it with the linear velocity that lands on
@@ -28,7 +28,8 @@
 //!   (`additional_solver_iterations`), or whose spin rapier would cap (a quarter turn a step,
 //!   unless it allows fast rotation). The bodies stage writes the end's velocities, and its
 //!   pose only where rapier's drifted beyond a few roundings (`policy::carries`,
-//!   `policy::carries_turn`); a ball something else acted on keeps rapier's end state, the
+//!   `policy::carries_turn`), and keeps the end's `f64` state as the ball's shadow in every
+//!   mode, from which its next step continues (`Commit::rolled`); a ball something else acted on keeps rapier's end state, the
 //!   steering's offsets given back on its velocities (`Candidate::steered_roll`): its
 //!   velocities are then an unsteered ball's, which flew without its ground, and the bodies
 //!   stage's check (`EndCheck::DisturbedRolling`) gives it the ground's support and friction
@@ -59,20 +60,20 @@ impl<H> ImpactPlugin<H> {
         sets: &Sets,
         last: &LastStep,
     ) {
-        if self.config.timing != TimingMode::Exact {
-            return;
-        }
+        // Flights are steered in `Exact` mode only: the other modes leave them to rapier's
+        // integrator.
+        let exact = self.config.timing == TimingMode::Exact;
         let mut commit = Commit::new(
             &mut self.writes,
             &mut self.reports,
             &mut self.memory.shadows,
-            true,
+            exact,
         );
         let (dt, substeps) = (step.dt, step.substeps as f64);
         let lag = dt / (2.0 * substeps);
         for cand in step.candidates.iter_mut() {
             let rolls = cand.rolls_on_one_face;
-            if !(rolls || flying(cand)) || step.pairs.members.contains(&cand.body) {
+            if !(rolls || exact && flying(cand)) || step.pairs.members.contains(&cand.body) {
                 continue;
             }
             let Some(rb) = bodies

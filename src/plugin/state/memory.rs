@@ -12,8 +12,9 @@ use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
-/// Exact-mode `f64` state of a body as last written, so the next step continues from it
-/// rather than from its rounding.
+/// The `f64` state of a body as last written (`Exact` mode's states of the model, and in
+/// every mode a steered roll's end), so the next step continues from it rather than from its
+/// rounding.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
@@ -65,7 +66,7 @@ impl Shadow {
     }
 }
 
-/// What one step leaves for the next: `Exact` mode's shadows and the roles and holds of its
+/// What one step leaves for the next: the shadows and the roles and holds of its
 /// pairs (the hysteresis of the resting and rolling decisions), and the step's tables kept for
 /// their allocations.
 #[derive(Default)]

@@ -72,7 +72,7 @@ pub(crate) struct Candidate {
     /// `Exact` mode's steering of a free flight (`stages/steer.rs`): how much lower than its
     /// own velocity rapier's step started it (m/s), `a dt / 2N`; `None` for a body not steered.
     pub steer: Option<Vector3<f64>>,
-    /// `Exact` mode's steering of a closed-form roll (`stages/steer.rs`); `None` for a ball
+    /// The steering of a closed-form roll (`stages/steer.rs`, every mode); `None` for a ball
     /// not steered.
     pub steered_roll: Option<SteeredRoll>,
 }

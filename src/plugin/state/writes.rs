@@ -27,8 +27,8 @@ pub(crate) enum Write {
     /// The linear velocity alone (woken up): `Exact` mode's steering of a free flight
     /// (`stages/steer.rs`).
     Velocity(Vector),
-    /// Both velocities (woken up): `Exact` mode's steering of a closed-form roll, and its end
-    /// where rapier's integrator carried the pose (`stages/steer.rs`).
+    /// Both velocities (woken up): the steering of a closed-form roll, and its end where
+    /// rapier's integrator carried the pose (`stages/steer.rs`).
     Velocities { linvel: Vector, angvel: Vector },
     /// `wake_up`.
     Wake,
