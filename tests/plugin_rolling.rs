@@ -16,22 +16,9 @@ use rapier_impact::{
 
 const R: f64 = 0.05;
 
-/// The goal on stopping distances in `Exact` mode (measured: 2.9e-7 in `f32`,
-/// 9.7e-15 in `f64`).
+/// The goal on stopping distances, met in every mode: each continues a roll from its
+/// `f64` end (measured: up to 3.9e-7 in `f32`, 9.7e-15 in `f64`).
 const X_TOL: f64 = if F64 { 1e-12 } else { 1e-6 };
-
-/// The tolerance on a distance, time or speed in `mode`: the goal (`X_TOL`) in
-/// `Exact` and in `f64`. `Step` and `TimeOfImpact` keep an `f64` state between steps only for
-/// a roll rapier's integrator carries over one flat face of level ground (`stages/steer.rs`);
-/// otherwise each step starts from rapier's `f32` state, which loses up to half an ulp of the
-/// position a step, over `steps` steps of motion (and at least 1e-5).
-fn tolerance(mode: TimingMode, steps: f64) -> f64 {
-    match mode {
-        TimingMode::Exact => X_TOL,
-        _ if F64 => X_TOL,
-        _ => (steps * f64::from(f32::EPSILON) / 2.0).max(1e-5),
-    }
-}
 
 fn config(mode: TimingMode, mu_r: f64, mu_sp: f64) -> ImpactConfig {
     ImpactConfig::default()
@@ -255,7 +242,7 @@ fn a_held_ball_set_rolling_again_stops_where_the_closed_form_says_and_is_held_ag
             let run = ToRest::run(&mut p, &mut w, ball, ((t_stop + 1.5) * hz) as usize);
             let travelled = (run.stop(&at) - from).dot(&down);
             let expected = v1 * v1 / (2.0 * a);
-            let tol = tolerance(mode, t_stop * hz);
+            let tol = X_TOL;
             assert!(
                 abs_diff_eq!(travelled, expected, epsilon = tol * expected),
                 "{at}: {travelled} vs {expected}"
@@ -351,10 +338,10 @@ fn up_and_down_a_slope_it_stops_where_the_closed_form_says() {
                 let at = format!("{mode:?} at {hz} Hz, uphill {uphill}");
                 let travelled = (run.stop(&at) - start).dot(&down).abs();
                 let expected = v0 * v0 / (2.0 * a);
-                // `Step` and `TimeOfImpact` start each step from rapier's `f32` state: up to
-                // half an ulp of the position is lost per step moving (measured: down the
-                // slope at 240 Hz, 1 865 steps, 2.2e-5; `Exact` 5.5e-9).
-                let tol = tolerance(mode, t_stop * hz);
+                // Every mode continues a roll from its `f64` end (measured in `f32`: 2.9e-8;
+                // continued from rapier's `f32` state instead, down the slope at 240 Hz, 1 865
+                // steps, 2.2e-5).
+                let tol = X_TOL;
                 assert!(
                     abs_diff_eq!(travelled, expected, epsilon = tol * expected),
                     "{at}: {travelled} vs {expected}"
@@ -387,7 +374,7 @@ fn the_spin_about_the_normal_decays_at_the_closed_form_rate() {
             }
             let t = half as f64 / hz;
             let wy = wide(w.bodies[ball].angvel().y);
-            let tol = tolerance(mode, half as f64);
+            let tol = X_TOL;
             assert!(
                 abs_diff_eq!(wy, w0 - rate * t, epsilon = tol * w0),
                 "{mode:?} at {hz} Hz: {wy} at {t} s"
@@ -434,7 +421,7 @@ fn rolling_across_a_slope_it_curves_down_and_stops_where_the_pursuit_curve_says(
             let run = ToRest::run(&mut p, &mut w, ball, ((stop + 1.0) * hz) as usize);
             let at = format!("{mode:?} at {hz} Hz");
             let moved = run.stop(&at) - start;
-            let tol = tolerance(mode, 0.0);
+            let tol = X_TOL;
             assert!(
                 abs_diff_eq!(moved.dot(&down), along, epsilon = tol * along),
                 "{mode:?} at {hz} Hz: down {} vs {along}",
@@ -503,9 +490,8 @@ fn across_a_seam_between_two_tiles_it_stops_as_on_one_plane() {
             }
             let x = na(w.bodies[ball].center_of_mass()).x;
             // As on one plane (`a_rolling_ball_stops_at_the_closed_form_distance_and_sleeps`):
-            // `Step` and `TimeOfImpact` keep no `f64` state between steps (measured 3.1e-6
-            // in `f32`); `Exact` 9.4e-9.
-            let tol = tolerance(mode, 0.0);
+            // measured in `f32`, 7.9e-8 in every mode.
+            let tol = X_TOL;
             assert!(
                 abs_diff_eq!(x, distance, epsilon = tol * distance),
                 "{mode:?} at {hz} Hz: stopped at {x}, closed form {distance}"
@@ -615,10 +601,9 @@ fn down_a_slope_onto_level_ground_it_meets_the_crease_and_stops_where_the_closed
                 }
             }
             let x = na(w.bodies[ball].center_of_mass()).x;
-            // Measured in `f32`: stopping point 2.8e-7 (`Exact`), 3.5e-6 (`Step` and
-            // `TimeOfImpact` keep no `f64` state between steps); the impact's time 1.8e-7,
-            // its speed 1.3e-6. In `f64`: all below 1e-12.
-            let tol = tolerance(mode, 0.0);
+            // Measured in `f32`, every mode alike: stopping point 3.9e-7, the impact's time
+            // 1.5e-7, its speed 1.1e-7. In `f64`: all below 1e-12.
+            let tol = X_TOL;
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
                 abs_diff_eq!(x, x_end, epsilon = tol * x_end),
@@ -819,10 +804,8 @@ fn down_a_flat_mesh_or_heightfield_it_stops_as_on_one_plane() {
                 let run = ToRest::run(&mut p, &mut w, ball, ((t_stop + 2.0) * hz) as usize);
                 let at = format!("{name}, {mode:?} at {hz} Hz");
                 let moved = (run.stop(&at) - start).dot(&down);
-                // Measured in `f32`: `Exact` 7.3e-8 (mesh) and 7.9e-9 (heightfield); `Step`
-                // and `TimeOfImpact` up to 1.1e-5 at 240 Hz (rapier's `f32` state each step).
-                // In `f64`: 3.8e-14.
-                let tol = tolerance(mode, t_stop * hz);
+                // Measured in `f32`: 7.3e-8 in every mode. In `f64`: 3.8e-14.
+                let tol = X_TOL;
                 assert!(
                     abs_diff_eq!(moved, distance, epsilon = tol * distance),
                     "{at}: stopped after {moved} m, closed form {distance}"
@@ -981,9 +964,8 @@ fn set_on_a_conveyor_it_is_dragged_to_rolling_and_then_carried_as_the_closed_for
             let x1 = 0.5 * mu * G * t1 * t1;
             let expected = x1 + u * (t - t1) - rel * t2 / 2.0;
             let x = na(w.bodies[ball].center_of_mass()).x;
-            // Measured in `f32`: `Exact` 2.4e-8, `Step` and `TimeOfImpact` up to 2.7e-6 (at
-            // 240 Hz); in `f64` 1.9e-14.
-            let tol = tolerance(mode, 0.0);
+            // Measured in `f32`: 2.4e-8 in every mode; in `f64` 1.9e-14.
+            let tol = X_TOL;
             let at = format!("{mode:?} at {hz} Hz");
             assert!(
                 abs_diff_eq!(x, expected, epsilon = tol * expected),
@@ -1084,9 +1066,9 @@ impl AlongCase {
 /// in the roll and after the stop: the slide-to-roll time and speed, the stop's time and
 /// distance), a ball at rest on a slope steeper than `mu_r` rolling down, and one on a slope
 /// too steep to roll sliding down it; and the energy never rises from one step to the next.
-/// Measured in `f32`: `Exact` within 1.9e-7 (the same at every rate: each phase is exact,
-/// whatever the step), `Step` and `TimeOfImpact` within 1.4e-5 (rapier's `f32` state each
-/// step, over up to 2 000 steps); in `f64` 7.6e-14. The energy rose at no step.
+/// Measured in `f32`: within 2.3e-7 in every mode (the same at every rate: each phase is
+/// exact, whatever the step, and every mode continues a roll from its `f64` end); in `f64`
+/// 7.6e-14. The energy rose at no step.
 #[test]
 fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
     let (mu, mu_r, solid, hollow) = (0.3, 0.02, 0.4, 2.0 / 3.0);
@@ -1162,8 +1144,7 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
                 let mut done = 0;
                 for t in case.times() {
                     let steps = (t * hz).round() as usize;
-                    // `Step` and `TimeOfImpact` start each step from rapier's `f32` state.
-                    let tol = tolerance(mode, steps as f64);
+                    let tol = X_TOL;
                     let at = |t: f64| format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
                     for i in done..steps {
                         p.step(&mut w);

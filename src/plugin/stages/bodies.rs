@@ -139,7 +139,7 @@ impl AfterStep<'_> {
         if !disturbed && cand.rolls_on_one_face {
             let end = motion.advance(&cand.start, step.dt);
             self.commit
-                .state(cand.body, &end, &cand.local_com, Origin::Model);
+                .state(cand.body, &end, &cand.local_com, Origin::Roll);
             return;
         }
         let geom = body_geom(now.rb(), colliders, &cand.local_com);
@@ -170,7 +170,7 @@ impl AfterStep<'_> {
             .flatten();
         if let Some(end) = rolled {
             self.commit
-                .state(cand.body, &end, &cand.local_com, Origin::Model);
+                .state(cand.body, &end, &cand.local_com, Origin::Roll);
             return;
         }
         // rapier's end state stands, in which the ball flew without its ground (a steered
@@ -405,7 +405,7 @@ impl AfterStep<'_> {
         if let Some((end, event)) = rolls_on {
             self.commit.event(event);
             self.commit
-                .state(cand.body, &end, &cand.local_com, Origin::Model);
+                .state(cand.body, &end, &cand.local_com, Origin::Roll);
             return;
         }
         let Some(index) = subject.grounds.iter().position(|g| g.handle == og.handle) else {

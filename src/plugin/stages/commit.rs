@@ -14,7 +14,7 @@
 //! step may already have written through [`Commit::body`], which gives what rapier will hold
 //! once the writes so far are applied (`state/writes.rs`). In `Exact`
 //! mode a state the model reconstructed ([`Origin::Model`]) is remembered as a [`Shadow`], and
-//! in every mode a steered roll's end ([`Commit::rolled`]), so that the next step continues
+//! in every mode a closed-form roll's end ([`Origin::Roll`]), so that the next step continues
 //! from the `f64` state rather than from its rounding to rapier's precision, as long as
 //! rapier still holds exactly what was written; a correction of rapier's own end state
 //! ([`Origin::Correction`]) is not: rapier's precision is its truth.
@@ -30,12 +30,17 @@ use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 
-/// Where a written state comes from, which decides whether `Exact` mode keeps it.
+/// Where a written state comes from, which decides whether it is kept as the next step's
+/// start (a [`Shadow`]).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 pub(crate) enum Origin {
-    /// A state the plugin computed in `f64` (the model's reconstruction: a flight, a rolling
-    /// ball, the impacts of the step; or a start state put back, `EventKind::Hold`): it is the
-    /// next step's start in `Exact` mode.
+    /// A closed-form roll's end (the bodies stage's rolls, steered or not): the next step's
+    /// start in every mode, as long as the ball rolls on. Continued from rapier's rounding
+    /// instead, a long roll would add up a rounding of its position each step.
+    Roll,
+    /// Any other state the plugin computed in `f64` (the model's reconstruction: a flight,
+    /// the impacts of the step; or a start state put back, `EventKind::Hold`): the next
+    /// step's start in `Exact` mode.
     Model,
     /// A correction of rapier's end state (a push-out, a step-end impact, a step-start
     /// impulse): the next step starts from what rapier holds.
@@ -92,8 +97,8 @@ pub(crate) struct Commit<'a> {
     writes: &'a mut Writes,
     reports: &'a mut Reports,
     shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
-    /// `Exact` mode: states of [`Origin::Model`] are remembered (a steered roll's end is in
-    /// every mode).
+    /// `Exact` mode: states of [`Origin::Model`] are remembered (of [`Origin::Roll`], in every
+    /// mode).
     exact: bool,
 }
 
@@ -168,17 +173,6 @@ impl<'a> Commit<'a> {
         local_com: &Vector3<f64>,
         origin: Origin,
     ) {
-        self.write_state(body, s, local_com, self.exact && origin == Origin::Model);
-    }
-
-    /// [`Self::state`], remembering the state as a [`Shadow`] where `keep`.
-    fn write_state(
-        &mut self,
-        body: RigidBodyHandle,
-        s: &State,
-        local_com: &Vector3<f64>,
-        keep: bool,
-    ) {
         if !fits(s) {
             self.diagnose(Diagnostic::NonFiniteState { body });
             return;
@@ -196,7 +190,12 @@ impl<'a> Commit<'a> {
             angvel: spin,
         };
         self.writes.record(body, write);
-        if keep {
+        let kept = match origin {
+            Origin::Roll => true,
+            Origin::Model => self.exact,
+            Origin::Correction => false,
+        };
+        if kept {
             let written = (pose.translation, linvel, angvel);
             self.shadows.insert(body, Shadow::of(s, written));
         }
@@ -292,7 +291,7 @@ impl<'a> Commit<'a> {
         let carried = carries(&vec_to_na(held), &exact)
             && carries_turn(&rot_to_na(before.rotation()), &s.rot);
         if !carried {
-            self.write_state(body, s, local_com, true);
+            self.state(body, s, local_com, Origin::Roll);
             return;
         }
         let (linvel, angvel) = (vec_from_na(&s.v), vec_from_na(&s.w));

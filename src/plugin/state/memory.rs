@@ -13,8 +13,8 @@ use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// The `f64` state of a body as last written (`Exact` mode's states of the model, and in
-/// every mode a steered roll's end), so the next step continues from it rather than from its
-/// rounding.
+/// every mode a closed-form roll's end), so the next step continues from it rather than from
+/// its rounding.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",
