@@ -260,8 +260,8 @@ pub(crate) enum EndCheck {
     /// integrator ends lower than that flight (`TimeOfImpact` mode, `StepData::integrator_lag`).
     Lagged,
     /// rapier's end state of a rolling ball something else acted on, in which it flew
-    /// without its ground (a roll steered in `Exact` mode ends on its plane, with the
-    /// velocities of one that flew); `fall` (m/s) is the step's fall, `|a.n| dt`.
+    /// without its ground (a steered roll ends on its plane, with the velocities of one that
+    /// flew); `fall` (m/s) is the step's fall, `|a.n| dt`.
     DisturbedRolling { fall: f64 },
     /// rapier's end state of a ball handed from its closed-form rolling to rapier's resting
     /// contact at the step's start (something else within reach): rapier keeps its resting
