@@ -7,33 +7,34 @@
 //! acceleration `a` by `v0 dt + (N + 1) / 2N a dt^2` in `N` substeps (velocity first, then
 //! position, in each), and turns it in each substep by the normalised quaternion step
 //! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
-//! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands on the exact
-//!   position. This stage records that velocity (`Candidate::steer`) for every flying
-//!   candidate that rapier integrates so: a dynamic body with no ground within reach, no
-//!   linear damping, no locked axis and no joint, not a ball of an impact between bodies,
-//!   whose last step's end was the plugin's (its `f64` shadow still held: a body whose end
-//!   rapier's contacts decided, a ball resting on others, is left alone). After rapier's step
-//!   the bodies stage gives the body its own velocity back, and writes its exact translation
-//!   only where rapier's drifted beyond a few roundings (`bodies.rs`, `fly_exactly`;
-//!   `policy::carries`); a steered body that something else touched gets the offset back on
-//!   rapier's end velocity.
+//! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands
+//!   on the exact position. This stage records that velocity (`Candidate::steer`) for every
+//!   flying candidate that rapier integrates so: a dynamic body with no ground within
+//!   reach, no linear damping, no locked axis and no joint, not a ball of an impact between
+//!   bodies, whose last step's end was the plugin's (its `f64` shadow still held: a body
+//!   whose end rapier's contacts decided, a ball resting on others, is left alone). After
+//!   rapier's step the bodies stage gives the body its own velocity back, and writes its
+//!   exact translation only where rapier's drifted beyond a few roundings (`bodies.rs`,
+//!   `fly_exactly`; `policy::carries`); a steered body that something else touched gets the
+//!   offset back on rapier's end velocity.
 //! - A closed-form roll (every mode) alone over one flat face of a still ground
-//!   (`Candidate::rolls_on_one_face`), of a ball rapier integrates as above (also no angular
-//!   damping and no user torque): the roll's end of the step is computed here, and rapier's
-//!   step starts the ball from where rapier holds it with the linear velocity that lands on
-//!   the end's centre, `(c1 - c0) / dt - (N + 1) / 2N a dt`, and the spin that turns it onto
-//!   the end's rotation, `(2N / dt) tan(theta / 2N)` about the axis of the turn `theta`.
-//!   Starting from rapier's pose, not the plan's, keeps rapier's rounding from adding up over
-//!   the steps. Not steered: a ball with more substeps of its own
-//!   (`additional_solver_iterations`), or whose spin rapier would cap (a quarter turn a step,
-//!   unless it allows fast rotation). The bodies stage writes the end's velocities, and its
-//!   pose only where rapier's drifted beyond a few roundings (`policy::carries`,
+//!   (`Candidate::rolls_on_one_face`), of a ball rapier integrates as above (also no
+//!   angular damping and no user torque): the roll's end of the step is computed here, and
+//!   rapier's step starts the ball from where rapier holds it with the linear velocity that
+//!   lands on the end's centre, `(c1 - c0) / dt - (N + 1) / 2N a dt`, and the spin that
+//!   turns it onto the end's rotation, `(2N / dt) tan(theta / 2N)` about the axis of the
+//!   turn `theta`. Starting from rapier's pose, not the plan's, keeps rapier's rounding
+//!   from adding up over the steps. Not steered: a ball with more substeps of its own
+//!   (`additional_solver_iterations`), or whose spin rapier would cap (a quarter turn a
+//!   step, unless it allows fast rotation). The bodies stage writes the end's velocities,
+//!   and its pose only where rapier's drifted beyond a few roundings (`policy::carries`,
 //!   `policy::carries_turn`), and keeps the end's `f64` state as the ball's shadow in every
-//!   mode, from which its next step continues (`Commit::rolled`); a ball something else acted on keeps rapier's end state, the
-//!   steering's offsets given back on its velocities (`Candidate::steered_roll`): its
-//!   velocities are then an unsteered ball's, which flew without its ground, and the bodies
-//!   stage's check (`EndCheck::DisturbedRolling`) gives it the ground's support and friction
-//!   over the step as for one, though it ends on its plane rather than below it.
+//!   mode, from which its next step continues (`Commit::rolled`); a ball something else
+//!   acted on keeps rapier's end state, the steering's offsets given back on its velocities
+//!   (`Candidate::steered_roll`): its velocities are then an unsteered ball's, which flew
+//!   without its ground, and the bodies stage's check (`EndCheck::DisturbedRolling`) gives
+//!   it the ground's support and friction over the step as for one, though it ends on its
+//!   plane rather than below it.
 //!
 //! Between steps rapier holds the body's own velocities, always.
 
