@@ -154,11 +154,10 @@ fn a_rolling_ball_stops_at_the_closed_form_distance_and_sleeps() {
             }
             let rb = &w.bodies[ball];
             let x = na(rb.center_of_mass()).x;
-            // Every mode steers the roll and continues it from its `f64` end
-            // (`stages/steer.rs`). Measured in `f32`: within 7.9e-8 of the distance, but
-            // 2.9e-7 in `Step` and `TimeOfImpact` at 30 Hz, whose first steps turn the ball
-            // faster than rapier's spin cap: those are written, not steered, and continue
-            // from rapier's state.
+            // Every mode continues a roll from its `f64` end (`Origin::Roll`), steered or not:
+            // at 30 Hz the first steps turn the ball faster than rapier's spin cap and are
+            // written, not steered. Measured in `f32`: within 7.9e-8 of the distance in every
+            // mode and rate.
             let tol = X_TOL;
             assert!(
                 abs_diff_eq!(x, distance, epsilon = tol * distance),
