@@ -245,7 +245,8 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Plans each body of `to_plan` (`plan/`) and records what its plan wrote and reported;
-    /// returns those with a ground near them and the others, each in the order planned.
+    /// returns those with a ground near them (marked for the next step's survey, `NearMarks`)
+    /// and the others but those without a collider to query, each in the order planned.
     fn plan_bodies(
         &mut self,
         step: &mut StepData,
@@ -276,7 +277,7 @@ impl<H> ImpactPlugin<H> {
                 reports: &mut reports,
                 neighbours: &mut self.neighbours,
             };
-            let is_near = planner.plan_body(handle, bodies, colliders, sets, last, step);
+            let found = planner.plan_body(handle, bodies, colliders, sets, last, step);
             if !reports.is_empty() {
                 let mut commit = Commit::new(
                     &mut self.writes,
@@ -292,10 +293,13 @@ impl<H> ImpactPlugin<H> {
                     commit.state(handle, &state, &local_com, Origin::Correction);
                 }
             }
-            if is_near {
-                near.push(handle);
-            } else {
-                not_near.push(handle);
+            match found {
+                Some(true) => {
+                    near.push(handle);
+                    self.memory.near.mark(handle);
+                }
+                Some(false) => not_near.push(handle),
+                None => {}
             }
         }
         step.grounds = grounds;

@@ -98,8 +98,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// `step.candidates`), and in `Step` mode the impulses of the contacts that close in the
     /// step (written, with their events). The step's gravity and length are `step.gravity`
     /// and `step.dt`. Returns whether a ground is near it (its colliders then need the
-    /// plugin's hook flags in the bodies arrangement); its state to write, if touched, is in
-    /// `self.reports`.
+    /// plugin's hook flags in the bodies arrangement), `None` for a body without a collider
+    /// to query; its state to write, if touched, is in `self.reports`.
     pub fn plan_body(
         &mut self,
         handle: RigidBodyHandle,
@@ -108,7 +108,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         sets: &Sets,
         last: &LastStep,
         step: &mut StepData,
-    ) -> bool {
+    ) -> Option<bool> {
         let scene = Scene {
             bodies,
             colliders,
@@ -119,8 +119,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         // Used in place: a body's start is a large value, and every move of it a copy.
         let mut started = None;
-        let Some(body) = self.start_body(handle, &scene, last, step, &mut started) else {
-            return false;
+        let Some(body) = self.start_body(handle, &scene, last, step, &mut started)? else {
+            return Some(false);
         };
         let mut plan = body.plan();
         let reads = BodyReads {
@@ -135,6 +135,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.reports.touched = Some((plan.state, body.local_com));
         }
         self.push_candidate(body, &mut plan, step);
-        true
+        Some(true)
     }
 }

@@ -95,7 +95,9 @@ impl<H> ImpactPlugin<H> {
     /// Sorts the managed bodies (see [`Survey`]). A body surely far from every ground needs
     /// no snapshot, inertia or geometry: in `Exact` mode it gets a flying candidate; a body
     /// without collider is skipped. The members of the step's pairs are planned whatever
-    /// their distance to the grounds. `gravity` and `dt` are rapier's, in its precision, as
+    /// their distance to the grounds, and outside `Exact` mode and slabs so is a body the last
+    /// step's plan found near a ground, without the test (the plan sorts it as the test would:
+    /// not near, or without collider). `gravity` and `dt` are rapier's, in its precision, as
     /// the bound on a body's travel is taken in it.
     pub(super) fn survey(
         &self,
@@ -107,6 +109,8 @@ impl<H> ImpactPlugin<H> {
     ) -> Survey {
         let margin = to_real(step.policy.contact_margin());
         let g_len = gravity.length();
+        let plan_near_again =
+            self.config.timing != TimingMode::Exact && !self.registry.index.has_slabs();
         let mut survey = Survey {
             to_plan: Vec::new(),
             far: Vec::new(),
@@ -127,6 +131,14 @@ impl<H> ImpactPlugin<H> {
                 continue;
             }
             let index = &self.registry.index;
+            // Near a ground last step: planned without the test (`NearMarks`). Not in `Exact`
+            // mode, whose far bodies get their candidates here, in the survey's order; nor
+            // where slabs are, as a body that meets tiles one by one lists its colliders for
+            // the hooks once planned.
+            if plan_near_again && self.memory.near.was_near(handle) {
+                survey.to_plan.push(handle);
+                continue;
+            }
             match surely_far(rb, colliders, g_len, dt, margin, index, &step.grounds) {
                 Some(true) => {
                     survey.far.push(handle);

@@ -86,6 +86,46 @@ pub(crate) struct Memory {
     pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
     /// Tables a step fills again, kept from the step before so that their allocations are.
     pub spare: Spare,
+    /// The bodies the last step's plan found near a ground (`NearMarks`).
+    pub near: NearMarks,
+}
+
+/// The bodies a step's plan found near a ground, by body slot, for the next step's survey: a
+/// body near a ground is most often near still, and the survey plans it without its test of
+/// being far (a filter only: a body that is far after all is found so by its plan). Saved
+/// nowhere: a restored plugin surveys every body afresh, to the same result.
+#[derive(Default)]
+pub(crate) struct NearMarks {
+    /// By body slot: the body and the step it was last found near a ground in.
+    marks: Vec<Option<(RigidBodyHandle, u64)>>,
+    /// The current step's number.
+    step: u64,
+}
+
+impl NearMarks {
+    /// A new step: the marks made so far are the last step's.
+    pub fn begin_step(&mut self) {
+        self.step = self.step.wrapping_add(1);
+    }
+
+    /// Did the last step's plan find `body` near a ground?
+    #[inline]
+    pub fn was_near(&self, body: RigidBodyHandle) -> bool {
+        let slot = body.into_raw_parts().0 as usize;
+        matches!(
+            self.marks.get(slot),
+            Some(Some((b, step))) if *b == body && step.wrapping_add(1) == self.step
+        )
+    }
+
+    /// This step's plan found `body` near a ground.
+    pub fn mark(&mut self, body: RigidBodyHandle) {
+        let slot = body.into_raw_parts().0 as usize;
+        if slot >= self.marks.len() {
+            self.marks.resize(slot + 1, None);
+        }
+        self.marks[slot] = Some((body, self.step));
+    }
 }
 
 /// Last step's memory, read by this step's plan while this step's is written.
@@ -105,9 +145,11 @@ pub(crate) struct Spare {
 }
 
 impl Memory {
-    /// Opens a step's plan: hands over last step's shadows and roles to be read, and gives
-    /// `step` the cleared tables to fill (the roles, the candidates).
+    /// Opens a step's plan: hands over last step's shadows and roles to be read (and its
+    /// near marks, `NearMarks::was_near`), and gives `step` the cleared tables to fill (the
+    /// roles, the candidates).
     pub fn begin_step(&mut self, step: &mut StepData) -> LastStep {
+        self.near.begin_step();
         let shadows = std::mem::replace(&mut self.shadows, std::mem::take(&mut self.spare.shadows));
         self.shadows.clear();
         let roles = std::mem::take(&mut self.roles);
@@ -197,6 +239,33 @@ impl Memory {
             reported: saved.reported.iter().copied().collect(),
             mesh_sides: saved.mesh_sides.iter().copied().collect(),
             spare: Spare::default(),
+            near: NearMarks::default(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::NearMarks;
+    use crate::rapier::prelude::RigidBodyHandle;
+
+    /// A mark answers for the next step only, and only for its own body: not for a body
+    /// that took its slot, not two steps on, not before the plan made it.
+    #[test]
+    fn a_near_mark_holds_for_the_next_step_and_its_own_body() {
+        let (a, b) = (
+            RigidBodyHandle::from_raw_parts(3, 0),
+            RigidBodyHandle::from_raw_parts(3, 1),
+        );
+        let mut near = NearMarks::default();
+        near.begin_step();
+        near.mark(a);
+        assert!(!near.was_near(a), "marked this step, not the last");
+        near.begin_step();
+        assert!(near.was_near(a));
+        assert!(!near.was_near(b), "another body in the same slot");
+        assert!(!near.was_near(RigidBodyHandle::from_raw_parts(7, 0)));
+        near.begin_step();
+        assert!(!near.was_near(a), "two steps on");
     }
 }

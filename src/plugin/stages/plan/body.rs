@@ -131,8 +131,8 @@ impl BodyNear<'_> {
 impl<H: PhysicsHooks> Planner<'_, H> {
     /// The body's snapshot and the grounds near it (the cheap test: its bounding sphere
     /// swept over the step against the grounds' boxes). `None` when it has no collider to
-    /// query or no ground is near it; then, in `Exact` mode or for a ball of an impact
-    /// between bodies, its flying candidate is pushed. Reads rapier; writes only
+    /// query; `Some(None)` when no ground is near it, and then, in `Exact` mode or for a ball
+    /// of an impact between bodies, its flying candidate is pushed. Reads rapier; writes only
     /// `step.candidates`.
     pub(super) fn start_body<'c, 'o>(
         &self,
@@ -141,7 +141,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         last: &LastStep,
         step: &mut StepData,
         out: &'o mut Option<BodyNear<'c>>,
-    ) -> Option<&'o mut BodyNear<'c>> {
+    ) -> Option<Option<&'o mut BodyNear<'c>>> {
         let rb = &scene.bodies[handle];
         let now = scene.writes.now(handle, rb);
         let (start, flight, local_com) =
@@ -173,7 +173,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 step.candidates
                     .push(Candidate::flying(handle, start, flight, local_com));
             }
-            return None;
+            return Some(None);
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
         let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
@@ -201,7 +201,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         if !turns_surface && body.grounds.len() > 1 {
             body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
         }
-        Some(body)
+        Some(Some(body))
     }
 
     /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
