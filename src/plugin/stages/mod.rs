@@ -6,7 +6,9 @@
 //! 2. pair plan (`pair_plan/`): the pairs of opted-in bodies that may meet and their roles;
 //!    their sleeping bodies woken, and in `Step` mode their impulses at the step's start.
 //! 3. survey (`prepare.rs`): which managed bodies are asleep, far from every ground (in
-//!    `Exact` mode a flying candidate each), or to be planned.
+//!    `Exact` mode a flying candidate each), or to be planned (outside `Exact` mode and
+//!    slabs, a body the last step's plan found near a ground without the far test:
+//!    `NearMarks`).
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
 //!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
 //! 5. steer (`steer.rs`): the balls rolling alone over one flat face given the velocities

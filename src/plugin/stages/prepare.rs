@@ -7,7 +7,9 @@
 //! ground's pose over the step (the ground index, lent to the step until its end).
 //! [`ImpactPlugin::survey`] sorts the managed bodies: asleep (checked at the step's end if
 //! rapier wakes them), surely far from every ground (no plan; only their flight in `Exact`
-//! mode), or to be planned. [`ImpactPlugin::measure_ground_motion`] reads where the moving
+//! mode), or to be planned (outside `Exact` mode and slabs, a body the last step's plan found
+//! near a ground without the far test: most often it is near still, and the plan finds one
+//! that is not as the test would). [`ImpactPlugin::measure_ground_motion`] reads where the moving
 //! grounds went. Nothing here writes into rapier.
 
 use crate::plugin::bridge::convert::{pose_to_na, to_f64, to_real, vec_to_na};
