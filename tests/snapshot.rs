@@ -311,3 +311,69 @@ fn rapier_alone_resumes_bit_for_bit() {
         assert_eq!(state_hash(&world), *expected, "step {}", k + 1);
     }
 }
+
+/// A body the last step's plan found near a ground is planned without the survey's test that
+/// it is far (outside `Exact` mode and slabs). Lifted far above the floor, or left without a
+/// collider to query (made a sensor, or disabled) between steps, it steps exactly as a
+/// restored plugin steps it, whose survey tests every body afresh (a snapshot carries no such
+/// marks); the profile's counts say that the two took different paths.
+#[test]
+fn a_body_near_a_ground_last_step_steps_as_after_a_restore() {
+    for timing in [TimingMode::Step, TimingMode::TimeOfImpact] {
+        let mut world = PhysicsWorld::default();
+        let (_, floor) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(20.0, 0.5, 20.0).translation(Vector::new(0.0, -0.5, 0.0)),
+        );
+        let mut plugin = ImpactPlugin::new(ImpactConfig::default().with_timing(timing)).unwrap();
+        plugin
+            .add_ground(&world.bodies, &world.colliders, floor)
+            .unwrap();
+        // Five balls rolling on the floor: three to be changed, two left as they are.
+        let balls: Vec<(RigidBodyHandle, ColliderHandle)> = (0..5)
+            .map(|i| {
+                let (body, collider) = world.insert(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(real(-2.0 + i as f64), 0.1, 0.0))
+                        .linvel(Vector::new(1.0, 0.0, 0.0))
+                        .angvel(Vector::new(0.0, 0.0, -10.0)),
+                    ColliderBuilder::ball(0.1).restitution(0.7),
+                );
+                plugin.add_impact_body(&world.bodies, body).unwrap();
+                (body, collider)
+            })
+            .collect();
+        for _ in 0..10 {
+            plugin.step(&mut world);
+        }
+        let mut restored = fresh(timing);
+        restored.restore(&plugin.snapshot()).unwrap();
+        let mut copy = saved_world(&world);
+        let edit = |world: &mut PhysicsWorld| {
+            world.bodies[balls[0].0].set_translation(Vector::new(-2.0, 50.0, 0.0), true);
+            world.colliders[balls[1].1].set_sensor(true);
+            world.colliders[balls[2].1].set_enabled(false);
+        };
+        edit(&mut world);
+        edit(&mut copy);
+        plugin.set_profiling(true);
+        restored.set_profiling(true);
+        for k in 0..30 {
+            let (a, b) = (
+                step(&mut world, &mut plugin),
+                step(&mut copy, &mut restored),
+            );
+            assert_eq!(a, b, "{timing:?}: step {k} after the change");
+            if k == 0 {
+                let (marked, surveyed) = (
+                    plugin.profile().unwrap().counts,
+                    restored.profile().unwrap().counts,
+                );
+                // Lifted: planned, not near; without a collider to query: planned, no more.
+                assert_eq!(marked.planned, surveyed.planned + 3, "{timing:?}");
+                assert_eq!(marked.far + 1, surveyed.far, "{timing:?}");
+                assert_eq!(marked.near, surveyed.near, "{timing:?}");
+            }
+        }
+    }
+}

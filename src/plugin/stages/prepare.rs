@@ -8,9 +8,10 @@
 //! [`ImpactPlugin::survey`] sorts the managed bodies: asleep (checked at the step's end if
 //! rapier wakes them), surely far from every ground (no plan; only their flight in `Exact`
 //! mode), or to be planned (outside `Exact` mode and slabs, a body the last step's plan found
-//! near a ground without the far test: most often it is near still, and the plan finds one
-//! that is not as the test would). [`ImpactPlugin::measure_ground_motion`] reads where the moving
-//! grounds went. Nothing here writes into rapier.
+//! near a ground, without the far test: most often it is near still, and the plan finds one
+//! that is not near, as the test would have found it far).
+//! [`ImpactPlugin::measure_ground_motion`] reads where the moving grounds went. Nothing here
+//! writes into rapier.
 
 use crate::plugin::bridge::convert::{pose_to_na, to_f64, to_real, vec_to_na};
 use crate::plugin::config::{TimingMode, coefficients_in_range};
@@ -29,9 +30,11 @@ use nalgebra::Vector3;
 
 /// The managed bodies as the survey sorted them.
 pub(super) struct Survey {
-    /// Awake bodies that may reach a ground (or a pair of opted-in bodies): planned.
+    /// Awake bodies that may reach a ground (or a pair of opted-in bodies), and those the last
+    /// step's plan found near a ground, untested (`NearMarks`): planned.
     pub to_plan: Vec<RigidBodyHandle>,
-    /// Awake bodies with no ground in reach: no roles (see `Lookup::roles`).
+    /// Awake bodies with no ground in reach: no roles (see `Lookup::roles`). The survey's;
+    /// `ImpactPlugin::before_step` adds those the plan found not near.
     pub far: Vec<RigidBodyHandle>,
     /// A dynamic body the plugin does not manage: it decides where the hook flags go.
     pub unmanaged: bool,
@@ -98,9 +101,10 @@ impl<H> ImpactPlugin<H> {
     /// no snapshot, inertia or geometry: in `Exact` mode it gets a flying candidate; a body
     /// without collider is skipped. The members of the step's pairs are planned whatever
     /// their distance to the grounds, and outside `Exact` mode and slabs so is a body the last
-    /// step's plan found near a ground, without the test (the plan sorts it as the test would:
-    /// not near, or without collider). `gravity` and `dt` are rapier's, in its precision, as
-    /// the bound on a body's travel is taken in it.
+    /// step's plan found near a ground, untested: if it is far after all, its plan finds it not
+    /// near and it joins the far bodies, or it has no collider to query and is skipped, as
+    /// after the test. `gravity` and `dt` are rapier's, in its precision, as the bound on a
+    /// body's travel is taken in it.
     pub(super) fn survey(
         &self,
         step: &mut StepData,

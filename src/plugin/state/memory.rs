@@ -90,10 +90,11 @@ pub(crate) struct Memory {
     pub near: NearMarks,
 }
 
-/// The bodies a step's plan found near a ground, by body slot, for the next step's survey: a
-/// body near a ground is most often near still, and the survey plans it without its test of
-/// being far (a filter only: a body that is far after all is found so by its plan). Saved
-/// nowhere: a restored plugin surveys every body afresh, to the same result.
+/// The bodies a step's plan found near a ground, by body slot, for the next step's survey (the
+/// next that runs: a step with `dt == 0` plans nothing and keeps the marks): a body near a
+/// ground is most often near still, and the survey plans it without its test of being far (a
+/// filter only: a body that is far after all is found not near by its plan). Saved nowhere: a
+/// restored plugin surveys every body afresh, to the same results (`tests/snapshot.rs`).
 #[derive(Default)]
 pub(crate) struct NearMarks {
     /// By body slot: the body and the step it was last found near a ground in.
