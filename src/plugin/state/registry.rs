@@ -275,6 +275,16 @@ impl Registry {
         self.all_impact || !self.impact_bodies.is_empty()
     }
 
+    /// At most how many of a world's `bodies` bodies take impacts between bodies: every body
+    /// where all are opted in, else those opted in one by one.
+    pub fn pairs_capacity(&self, bodies: usize) -> usize {
+        if self.all_impact {
+            bodies
+        } else {
+            self.impact_bodies.len().min(bodies)
+        }
+    }
+
     /// The rolling resistance and spinning friction of a ball on a ground: each the ground's
     /// override, else the ball's, else the configuration's `default`.
     pub fn rolling_of(

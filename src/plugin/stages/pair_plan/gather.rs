@@ -77,11 +77,15 @@ impl<'a> Members<'a> {
         {
             return None;
         }
-        let balls: Vec<Ball> = bodies
-            .iter()
-            .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
-            .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders, refused))
-            .collect();
+        // Sized for every opted-in body at once: grown ball by ball, the list (rebuilt each
+        // step) was copied about as many times as it doubled.
+        let mut balls: Vec<Ball> = Vec::with_capacity(registry.pairs_capacity(bodies.len()));
+        balls.extend(
+            bodies
+                .iter()
+                .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
+                .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders, refused)),
+        );
         if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
             return None;
         }

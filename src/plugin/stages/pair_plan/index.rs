@@ -154,11 +154,13 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
     let balls = members.balls.len();
     if members.any_elastic || 3 * members.movers > balls {
         let all = index.overlapping();
-        let pairs = all
-            .iter()
-            .copied()
-            .filter(|(i, j)| members.any_elastic || mover(*i) || mover(*j))
-            .collect();
+        // At most every overlapping pair: sized once rather than grown.
+        let mut pairs = Vec::with_capacity(all.len());
+        pairs.extend(
+            all.iter()
+                .copied()
+                .filter(|(i, j)| members.any_elastic || mover(*i) || mover(*j)),
+        );
         return Candidates {
             pairs,
             traversed: Some(all),
