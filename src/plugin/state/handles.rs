@@ -37,7 +37,7 @@ pub(crate) type HandleMap<K, V> = HashMap<K, V, BuildHasherDefault<HandleHasher>
 /// Hash set of rapier handles.
 pub(crate) type HandleSet<K> = HashSet<K, BuildHasherDefault<HandleHasher>>;
 
-use crate::rapier::prelude::ColliderHandle;
+use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 
 /// A collider handle's index in its arena.
 #[inline]
@@ -94,6 +94,50 @@ impl<V: Copy> SlotTable<V> {
     }
 }
 
+/// A set of rigid bodies as a table by arena slot: a lookup is an index and a handle compare,
+/// for a set asked of every body in several stages of a step.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BodySlots {
+    slots: Vec<Option<RigidBodyHandle>>,
+    len: usize,
+}
+
+impl BodySlots {
+    /// Adds `body`; `false` if it was in the set already. A body of another generation in
+    /// the same slot is replaced (the set outlives no body removal: it is rebuilt each step).
+    pub fn insert(&mut self, body: RigidBodyHandle) -> bool {
+        let i = body.into_raw_parts().0 as usize;
+        if i >= self.slots.len() {
+            self.slots.resize(i + 1, None);
+        }
+        let slot = &mut self.slots[i];
+        if *slot == Some(body) {
+            return false;
+        }
+        if slot.is_none() {
+            self.len += 1;
+        }
+        *slot = Some(body);
+        true
+    }
+
+    /// Is `body` in the set?
+    #[inline]
+    pub fn contains(&self, body: &RigidBodyHandle) -> bool {
+        matches!(self.slots.get(body.into_raw_parts().0 as usize), Some(Some(b)) if b == body)
+    }
+
+    /// How many bodies the set holds.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Is the set empty?
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
 /// The collider handle pair key of a body collider and a ground collider.
 pub(crate) type PairKey = (ColliderHandle, ColliderHandle);
 
@@ -111,7 +155,7 @@ impl ArenaOrder for ColliderHandle {
     }
 }
 
-impl ArenaOrder for crate::rapier::prelude::RigidBodyHandle {
+impl ArenaOrder for RigidBodyHandle {
     fn arena_order(&self) -> [u32; 4] {
         let (i, g) = self.into_raw_parts();
         [i, g, 0, 0]
@@ -137,4 +181,29 @@ pub(crate) fn sorted_members<K: ArenaOrder + Copy>(set: &HandleSet<K>) -> Vec<K>
     let mut members: Vec<K> = set.iter().copied().collect();
     members.sort_unstable_by_key(ArenaOrder::arena_order);
     members
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BodySlots;
+    use crate::rapier::prelude::RigidBodyHandle;
+
+    /// A body is in the set once, by its whole handle: not another generation in its slot.
+    #[test]
+    fn body_slots_hold_each_body_once_by_its_handle() {
+        let (a, a_next, b) = (
+            RigidBodyHandle::from_raw_parts(4, 0),
+            RigidBodyHandle::from_raw_parts(4, 1),
+            RigidBodyHandle::from_raw_parts(9, 0),
+        );
+        let mut set = BodySlots::default();
+        assert!(set.is_empty() && !set.contains(&a));
+        assert!(set.insert(a));
+        assert!(!set.insert(a), "a second insert finds it there");
+        assert!(set.insert(b));
+        assert_eq!(set.len(), 2);
+        assert!(set.contains(&a) && set.contains(&b));
+        assert!(!set.contains(&a_next));
+        assert!(!set.contains(&RigidBodyHandle::from_raw_parts(40, 0)));
+    }
 }
