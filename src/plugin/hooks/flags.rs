@@ -52,7 +52,7 @@ pub(crate) struct HookFlags {
     /// Managed bodies whose colliders carry the plugin's hook flags.
     hooked: HandleMap<RigidBodyHandle, HookedBody>,
     /// Grounds carrying the plugin's hook flags, with the flags the user had set.
-    grounds: SlotTable<ActiveHooks>,
+    grounds: SlotTable<ColliderHandle, ActiveHooks>,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     stamp: u64,
     /// Steps since one needed the grounds' flags (a managed body near a ground or asleep),

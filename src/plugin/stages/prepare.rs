@@ -132,7 +132,7 @@ impl<H> ImpactPlugin<H> {
                 step.asleep.push(handle);
                 continue;
             }
-            if step.pairs.members.contains(&handle) {
+            if step.pairs.members.contains(handle) {
                 survey.to_plan.push(handle);
                 continue;
             }

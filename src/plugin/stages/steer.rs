@@ -74,7 +74,7 @@ impl<H> ImpactPlugin<H> {
         let lag = dt / (2.0 * substeps);
         for cand in step.candidates.iter_mut() {
             let rolls = cand.rolls_on_one_face;
-            if !(rolls || exact && flying(cand)) || step.pairs.members.contains(&cand.body) {
+            if !(rolls || exact && flying(cand)) || step.pairs.members.contains(cand.body) {
                 continue;
             }
             let Some(rb) = bodies

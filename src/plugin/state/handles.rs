@@ -45,94 +45,98 @@ pub(crate) fn slot_of(c: ColliderHandle) -> usize {
     c.into_raw_parts().0 as usize
 }
 
-/// Values by collider, in a vector indexed by the handle's arena slot: a lookup is an index
-/// and a handle compare, for the tables asked in every hook call.
-#[derive(Clone, Debug)]
-pub(crate) struct SlotTable<V> {
-    slots: Vec<Option<(ColliderHandle, V)>>,
+/// A rapier handle's arena slot and generation, as [`SlotTable`] keys its entries.
+pub(crate) trait Slotted: Copy + Eq {
+    /// The handle's index in its arena.
+    fn slot(self) -> usize;
 }
 
-impl<V> Default for SlotTable<V> {
-    fn default() -> Self {
-        Self { slots: Vec::new() }
+impl Slotted for ColliderHandle {
+    #[inline]
+    fn slot(self) -> usize {
+        slot_of(self)
     }
 }
 
-impl<V: Copy> SlotTable<V> {
-    /// The value of `c`, if it has one.
+impl Slotted for RigidBodyHandle {
     #[inline]
-    pub fn get(&self, c: ColliderHandle) -> Option<&V> {
-        match self.slots.get(slot_of(c)) {
-            Some(Some((h, v))) if *h == c => Some(v),
+    fn slot(self) -> usize {
+        self.into_raw_parts().0 as usize
+    }
+}
+
+/// Values by handle, in a vector indexed by the handle's arena slot: a lookup is an index and
+/// a handle compare, for the tables asked in every hook call or of every body in a step.
+#[derive(Clone, Debug)]
+pub(crate) struct SlotTable<K, V> {
+    slots: Vec<Option<(K, V)>>,
+    len: usize,
+}
+
+impl<K, V> Default for SlotTable<K, V> {
+    fn default() -> Self {
+        Self {
+            slots: Vec::new(),
+            len: 0,
+        }
+    }
+}
+
+impl<K: Slotted, V: Copy> SlotTable<K, V> {
+    /// The value of `k`, if it has one.
+    #[inline]
+    pub fn get(&self, k: K) -> Option<&V> {
+        match self.slots.get(k.slot()) {
+            Some(Some((h, v))) if *h == k => Some(v),
             _ => None,
         }
     }
 
-    /// Sets the value of `c` (a handle of the same slot and another generation is replaced).
-    pub fn insert(&mut self, c: ColliderHandle, v: V) {
-        let i = slot_of(c);
+    /// Does `k` have a value?
+    #[inline]
+    pub fn contains(&self, k: K) -> bool {
+        self.get(k).is_some()
+    }
+
+    /// Sets the value of `k` (a handle of the same slot and another generation is replaced);
+    /// `true` if `k` had none.
+    pub fn insert(&mut self, k: K, v: V) -> bool {
+        let i = k.slot();
         if i >= self.slots.len() {
             self.slots.resize(i + 1, None);
         }
-        self.slots[i] = Some((c, v));
+        let slot = &mut self.slots[i];
+        let new = !matches!(slot, Some((h, _)) if *h == k);
+        if slot.is_none() {
+            self.len += 1;
+        }
+        *slot = Some((k, v));
+        new
     }
 
     /// Keeps the entries for which `keep` answers `true`.
-    pub fn retain(&mut self, mut keep: impl FnMut(&ColliderHandle, &mut V) -> bool) {
+    pub fn retain(&mut self, mut keep: impl FnMut(&K, &mut V) -> bool) {
         for slot in &mut self.slots {
             if let Some((h, v)) = slot {
                 if !keep(h, v) {
                     *slot = None;
+                    self.len -= 1;
                 }
             }
         }
     }
 
     /// Every entry, by slot.
-    pub fn iter(&self) -> impl Iterator<Item = (&ColliderHandle, &V)> {
+    pub fn iter(&self) -> impl Iterator<Item = (&K, &V)> {
         self.slots.iter().flatten().map(|(h, v)| (h, v))
     }
-}
 
-/// A set of rigid bodies as a table by arena slot: a lookup is an index and a handle compare,
-/// for a set asked of every body in several stages of a step.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct BodySlots {
-    slots: Vec<Option<RigidBodyHandle>>,
-    len: usize,
-}
-
-impl BodySlots {
-    /// Adds `body`; `false` if it was in the set already. A body of another generation in
-    /// the same slot is replaced (the set outlives no body removal: it is rebuilt each step).
-    pub fn insert(&mut self, body: RigidBodyHandle) -> bool {
-        let i = body.into_raw_parts().0 as usize;
-        if i >= self.slots.len() {
-            self.slots.resize(i + 1, None);
-        }
-        let slot = &mut self.slots[i];
-        if *slot == Some(body) {
-            return false;
-        }
-        if slot.is_none() {
-            self.len += 1;
-        }
-        *slot = Some(body);
-        true
-    }
-
-    /// Is `body` in the set?
-    #[inline]
-    pub fn contains(&self, body: &RigidBodyHandle) -> bool {
-        matches!(self.slots.get(body.into_raw_parts().0 as usize), Some(Some(b)) if b == body)
-    }
-
-    /// How many bodies the set holds.
+    /// How many handles have a value.
     pub fn len(&self) -> usize {
         self.len
     }
 
-    /// Is the set empty?
+    /// Is the table empty?
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -185,25 +189,30 @@ pub(crate) fn sorted_members<K: ArenaOrder + Copy>(set: &HandleSet<K>) -> Vec<K>
 
 #[cfg(test)]
 mod tests {
-    use super::BodySlots;
+    use super::SlotTable;
     use crate::rapier::prelude::RigidBodyHandle;
 
-    /// A body is in the set once, by its whole handle: not another generation in its slot.
+    /// A handle has one entry, by its whole handle: not another generation in its slot, which
+    /// replaces it; the count follows inserts, replacements and removals.
     #[test]
-    fn body_slots_hold_each_body_once_by_its_handle() {
+    fn a_slot_table_keeps_one_entry_a_handle() {
         let (a, a_next, b) = (
             RigidBodyHandle::from_raw_parts(4, 0),
             RigidBodyHandle::from_raw_parts(4, 1),
             RigidBodyHandle::from_raw_parts(9, 0),
         );
-        let mut set = BodySlots::default();
-        assert!(set.is_empty() && !set.contains(&a));
-        assert!(set.insert(a));
-        assert!(!set.insert(a), "a second insert finds it there");
-        assert!(set.insert(b));
-        assert_eq!(set.len(), 2);
-        assert!(set.contains(&a) && set.contains(&b));
-        assert!(!set.contains(&a_next));
-        assert!(!set.contains(&RigidBodyHandle::from_raw_parts(40, 0)));
+        let mut table = SlotTable::default();
+        assert!(table.is_empty() && !table.contains(a));
+        assert!(table.insert(a, 1));
+        assert!(!table.insert(a, 2), "a second insert finds it there");
+        assert_eq!(table.get(a), Some(&2));
+        assert!(table.insert(b, 3));
+        assert_eq!(table.len(), 2);
+        assert!(!table.contains(a_next));
+        assert!(!table.contains(RigidBodyHandle::from_raw_parts(40, 0)));
+        assert!(table.insert(a_next, 4), "another generation is new");
+        assert!(!table.contains(a) && table.len() == 2);
+        table.retain(|h, _| *h != b);
+        assert_eq!((table.len(), table.contains(b)), (1, false));
     }
 }

@@ -4,7 +4,7 @@ use crate::motion::State;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
-    HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
+    HandleMap, HandleSet, PairKey, SlotTable, sorted_entries, sorted_members,
 };
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::plugin::state::writes::Now;
@@ -97,8 +97,8 @@ pub(crate) struct Memory {
 /// restored plugin surveys every body afresh, to the same results (`tests/snapshot.rs`).
 #[derive(Default)]
 pub(crate) struct NearMarks {
-    /// By body slot: the body and the step it was last found near a ground in.
-    marks: Vec<Option<(RigidBodyHandle, u64)>>,
+    /// The step each body was last found near a ground in.
+    marks: SlotTable<RigidBodyHandle, u64>,
     /// The current step's number.
     step: u64,
 }
@@ -112,20 +112,14 @@ impl NearMarks {
     /// Did the last step's plan find `body` near a ground?
     #[inline]
     pub fn was_near(&self, body: RigidBodyHandle) -> bool {
-        let slot = body.into_raw_parts().0 as usize;
-        matches!(
-            self.marks.get(slot),
-            Some(Some((b, step))) if *b == body && step.wrapping_add(1) == self.step
-        )
+        self.marks
+            .get(body)
+            .is_some_and(|step| step.wrapping_add(1) == self.step)
     }
 
     /// This step's plan found `body` near a ground.
     pub fn mark(&mut self, body: RigidBodyHandle) {
-        let slot = body.into_raw_parts().0 as usize;
-        if slot >= self.marks.len() {
-            self.marks.resize(slot + 1, None);
-        }
-        self.marks[slot] = Some((body, self.step));
+        self.marks.insert(body, self.step);
     }
 }
 

@@ -6,7 +6,7 @@ use crate::plugin::bridge::convert::vec_from_na;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
-use crate::plugin::state::handles::{BodySlots, HandleMap, PairKey};
+use crate::plugin::state::handles::{HandleMap, PairKey, SlotTable};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
@@ -204,7 +204,7 @@ pub(crate) struct PairPlan {
     /// Each pair's role by [`pair_key`].
     pub roles: HandleMap<PairKey, Role>,
     /// The bodies of the `Impact` pairs: the reconstruct stage moves them together.
-    pub members: BodySlots,
+    pub members: SlotTable<RigidBodyHandle, ()>,
     /// The opted-in bodies' colliders whose coefficients are out of range: no members.
     pub refused: Vec<Diagnostic>,
 }

@@ -318,7 +318,7 @@ impl Planned {
     /// Makes `body` a member of the plan's `Impact` pairs; the first time, a sleeping body
     /// is listed to be woken. Reads the bodies only.
     pub(super) fn join(&mut self, bodies: &RigidBodySet, body: RigidBodyHandle) {
-        if self.plan.members.insert(body) && bodies[body].is_sleeping() {
+        if self.plan.members.insert(body, ()) && bodies[body].is_sleeping() {
             self.woken.push(body);
         }
     }

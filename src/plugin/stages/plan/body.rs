@@ -167,7 +167,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } else {
             (index.near_ball(scene.grounds, centre, radius), None)
         };
-        let member = step.pairs.members.contains(&handle);
+        let member = step.pairs.members.contains(handle);
         if near.is_empty() {
             if self.config.timing == TimingMode::Exact || member {
                 step.candidates

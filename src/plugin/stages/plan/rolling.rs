@@ -230,7 +230,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             ref on_ground,
             ..
         } = *ball;
-        let member = step.pairs.members.contains(&handle);
+        let member = step.pairs.members.contains(handle);
         let slide = self.slide_of(scene, ball, step)?;
         if !member && self.reached_by_other(scene, &slide, step) {
             return Some(OnPlane::Reached);
@@ -336,7 +336,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } = *ball;
         let colliders = scene.colliders;
         let rb = &scene.bodies[handle];
-        let member = step.pairs.members.contains(&handle);
+        let member = step.pairs.members.contains(handle);
         let b = part.shape.as_ball()?;
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
