@@ -8,9 +8,10 @@
 //! its body is written again (a `Step` impulse of an earlier body's plan); the bound each ball
 //! then draws from it is the one read afresh would give, to the bit. Any other shape (a ground
 //! under every ball, which the test skips, a wall) is read afresh each time. Two balls are
-//! first held to a bound from their speeds alone ([`closing_bound_of_speeds`], never below the
-//! exact one along any line): a neighbour beyond it is beyond the exact bound too, so the
-//! answer is the exact test's, and most neighbours of a rolling ball are settled so.
+//! first held to the sum of how far each can move in the step in any direction
+//! ([`closing_bound_of_reaches`], never below the exact bound along their line of centres): a
+//! neighbour beyond it is beyond the exact bound too, so the answer is the exact test's, and
+//! most neighbours of a rolling ball are settled so.
 
 use crate::parry::query;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
@@ -77,7 +78,7 @@ struct Neighbour {
     translation: Vector,
     radius: Real,
     motion: OtherMotion,
-    /// Its side of [`closing_bound_of_speeds`]: how far its surface can move in the step,
+    /// Its side of [`closing_bound_of_reaches`]: how far its surface can move in the step,
     /// whatever the direction.
     reach: f64,
 }
@@ -205,7 +206,12 @@ pub(crate) fn within_reach_of_other(
     if sets.jointed(body) {
         return true;
     }
-    let own_reach = own.reach();
+    // Each side's reach is drawn with the plan's step, which a neighbour's was read with.
+    let own_reach = if own.dt == neighbours.dt {
+        own.reach()
+    } else {
+        f64::INFINITY
+    };
     let index = &registry.index;
     let is_ground = |c: &ColliderHandle| {
         index
@@ -247,9 +253,12 @@ pub(crate) fn within_reach_of_other(
                     let d = vec_to_na(near.translation - co.position().translation);
                     let len = d.norm();
                     let gap = len - to_f64(a.radius) - to_f64(near.radius) - skins;
-                    // Most neighbours are out of reach by the speeds alone, which spares the
-                    // exact bound (the same answer: it is never larger).
-                    if gap > closing_bound_of_speeds(own_reach, near.reach) {
+                    // Most neighbours are out of reach by the two reaches alone, which spares
+                    // the exact bound (the same answer: the exact bound never exceeds this one
+                    // along a line of unit length, which `len` gives unless tiny or infinite).
+                    if (UNDERFLOW_LENGTH..f64::INFINITY).contains(&len)
+                        && gap > closing_bound_of_reaches(own_reach, near.reach)
+                    {
                         continue;
                     }
                     // Two centres close no faster than along their line now:
@@ -349,17 +358,39 @@ fn other_motion(
     }
 }
 
+/// A length (m) far above what `norm` can lose to its squares' underflow: a coordinate's square
+/// below `f64::MIN_POSITIVE` loses up to 2^-1075, so a length computed falls short of the true
+/// one by at most `sqrt(3 * 2^-1075)`, below 3e-162, besides its rounding. A line of centres at
+/// least this long is of unit length to within rounding, and a length computed plus this one
+/// is never below the true length.
+const UNDERFLOW_LENGTH: f64 = 1e-150;
+
+/// A vector's length as [`closing_bound_of_reaches`] counts it: never below its dot product
+/// with a unit vector, whatever its size (`UNDERFLOW_LENGTH`).
+fn size(x: Vector3<f64>) -> f64 {
+    x.norm() + UNDERFLOW_LENGTH
+}
+
 impl OwnMotion {
-    /// Its side of [`closing_bound_of_speeds`]: how far the ball can move in the step, in any
-    /// direction. `pressed` and `dragged` are taken at their size.
+    /// Its side of [`closing_bound_of_reaches`]: how far the ball can move in the step, in any
+    /// direction. `pressed` and `dragged` are taken at their size, which bounds them only
+    /// along the unit directions `normal` and `drag_along` the exact bound takes them along:
+    /// a direction longer than that (not finite, or normalised from a vector too short for
+    /// its square), or a step that is not a non-negative number, gives no bound.
     fn reach(&self) -> f64 {
+        let unit = |u: &Vector3<f64>| u.norm_squared() <= 1.0 + 1e-12;
+        let directions =
+            unit(&self.normal) && self.drag_along.is_none_or(|[a, b]| unit(&a) && unit(&b));
         let dt = self.dt;
-        self.v.norm() * dt + (self.accel.norm() + self.pressed.abs() + self.dragged.abs()) * dt * dt
+        if !directions || dt.is_nan() || dt < 0.0 {
+            return f64::INFINITY;
+        }
+        size(self.v) * dt + (size(self.accel) + self.pressed.abs() + self.dragged.abs()) * dt * dt
     }
 }
 
 impl OtherMotion {
-    /// Its side of [`closing_bound_of_speeds`] over a step of `dt` (s): how far the collider's
+    /// Its side of [`closing_bound_of_reaches`] over a step of `dt` (s): how far the collider's
     /// surface can move in the step, in any direction (zero for a still one).
     fn reach(&self, dt: f64) -> f64 {
         match *self {
@@ -370,21 +401,23 @@ impl OtherMotion {
                 accel,
                 kinematic_shift,
             } => {
-                (linvel.norm() + turn.abs() + kinematic_shift.map_or(0.0, f64::abs)) * dt
-                    + accel.map_or(0.0, |a| a.norm()) * dt * dt
+                (size(linvel) + turn.abs() + kinematic_shift.map_or(0.0, f64::abs)) * dt
+                    + accel.map_or(0.0, size) * dt * dt
             }
         }
     }
 }
 
-/// A bound that [`closing_bound`] never exceeds, whatever the line, from each side's
-/// `reach` alone: every term of the exact bound is a dot product with a unit vector (at
-/// most the vector's length) or a length, of a difference (at most the sum of the lengths),
-/// and the kinematic shift and the ground's push and drag enter at their size. The room
-/// covers the two computations' rounding (a few `f64::EPSILON` of the operands' sizes, which
-/// `own` and `other` bound) and an underflow to zero: where `gap` exceeds it, it exceeds the
-/// exact bound too. NaN or infinite sides give a bound no gap exceeds.
-fn closing_bound_of_speeds(own: f64, other: f64) -> f64 {
+/// A bound that [`closing_bound`] never exceeds along a line of unit length (or none), from
+/// each side's reach alone (`OwnMotion::reach`, `OtherMotion::reach` with the same step):
+/// every term of the exact bound is a dot product with a unit vector (at most the vector's
+/// length) or a length, of a difference (at most the sum of the lengths), and the kinematic
+/// shift and the ground's push and drag enter at their size (`pressed` and `dragged` along
+/// unit directions). The room covers the two computations' rounding, a few `f64::EPSILON` of
+/// the operands' sizes, which the reaches bound. So where a gap exceeds it, the gap exceeds the
+/// exact bound too. A side that is NaN or infinite (a motion that is not finite, or
+/// directions the reach cannot vouch for) gives a bound no gap exceeds.
+fn closing_bound_of_reaches(own: f64, other: f64) -> f64 {
     const ROUNDING_ROOM: f64 = 1e-9;
     (own + other) * (1.0 + ROUNDING_ROOM) + 1e-300
 }
@@ -458,47 +491,73 @@ mod tests {
         }
     }
 
-    /// A vector of each coordinate in `[-scale, scale]`.
-    fn vector(scale: f64) -> impl Strategy<Value = Vector3<f64>> {
-        prop::array::uniform3(-scale..=scale).prop_map(|[x, y, z]| Vector3::new(x, y, z))
+    /// A number of any size and sign, now and then zero, infinite, NaN or subnormal.
+    fn number() -> impl Strategy<Value = f64> {
+        let special = prop::sample::select(vec![
+            0.0,
+            -0.0,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+        ]);
+        prop_oneof![
+            8 => (-1.0..=1.0, -330..=310).prop_map(|(m, k): (f64, i32)| m * 10f64.powi(k)),
+            4 => -30.0..30.0,
+            1 => special,
+        ]
+    }
+
+    /// A vector of such numbers, or of one size in any direction.
+    fn vector() -> impl Strategy<Value = Vector3<f64>> {
+        prop_oneof![
+            prop::array::uniform3(number()).prop_map(Vector3::from),
+            (prop::array::uniform3(-1.0..=1.0), -330..=310)
+                .prop_map(|(v, k): ([f64; 3], i32)| Vector3::from(v) * 10f64.powi(k)),
+        ]
     }
 
     /// A unit vector (a fixed one where the draw is too short to normalise).
     fn unit() -> impl Strategy<Value = Vector3<f64>> {
-        vector(1.0).prop_map(|v| v.try_normalize(1e-3).unwrap_or_else(Vector3::x))
+        prop::array::uniform3(-1.0..=1.0).prop_map(|v: [f64; 3]| {
+            Vector3::from(v)
+                .try_normalize(1e-3)
+                .unwrap_or_else(Vector3::x)
+        })
+    }
+
+    /// A direction as the rolling plan makes one of a slip or a velocity: normalised however
+    /// short (so not always of unit length), zero where it cannot be.
+    fn direction() -> impl Strategy<Value = Vector3<f64>> {
+        vector().prop_map(|v| v.try_normalize(0.0).unwrap_or_else(Vector3::zeros))
     }
 
     fn own_motion() -> impl Strategy<Value = OwnMotion> {
-        let drag = prop::option::of((unit(), unit()).prop_map(|(a, b)| [a, b]));
-        (
-            vector(20.0),
-            vector(30.0),
-            unit(),
-            0.0..30.0,
-            0.0..30.0,
-            drag,
-            1e-4..0.5,
+        let drag = prop::option::of((direction(), direction()).prop_map(|(a, b)| [a, b]));
+        let dt = prop_oneof![1e-4..0.5, (-12..=3).prop_map(|k: i32| 10f64.powi(k))];
+        let normal = prop_oneof![4 => unit(), 1 => direction()];
+        ((vector(), vector(), normal, number(), number()), drag, dt).prop_map(
+            |((v, accel, normal, pressed, dragged), drag_along, dt)| OwnMotion {
+                v,
+                accel,
+                normal,
+                pressed,
+                dragged,
+                drag_along,
+                gravity: Vector3::new(0.0, -9.81, 0.0),
+                dt,
+            },
         )
-            .prop_map(
-                |(v, accel, normal, pressed, dragged, drag_along, dt)| OwnMotion {
-                    v,
-                    accel,
-                    normal,
-                    pressed,
-                    dragged,
-                    drag_along,
-                    gravity: Vector3::new(0.0, -9.81, 0.0),
-                    dt,
-                },
-            )
     }
 
     fn other_motion_of_any_kind() -> impl Strategy<Value = OtherMotion> {
         let body = (
-            vector(20.0),
-            0.0..20.0,
-            prop::option::of(vector(30.0)),
-            prop::option::of(0.0..20.0),
+            vector(),
+            number(),
+            prop::option::of(vector()),
+            prop::option::of(number()),
         )
             .prop_map(|(linvel, turn, accel, kinematic_shift)| OtherMotion::Body {
                 linvel,
@@ -506,40 +565,133 @@ mod tests {
                 accel,
                 kinematic_shift,
             });
-        prop_oneof![Just(OtherMotion::Still), body]
+        prop_oneof![1 => Just(OtherMotion::Still), 4 => body]
+    }
+
+    /// What the reach test relies on: where a gap exceeds the reaches' bound, it exceeds the
+    /// exact bound (so a finite reaches' bound must not be below the exact bound, nor face an
+    /// exact bound that is NaN).
+    fn skips_as_the_exact_bound(
+        own: &OwnMotion,
+        other: &OtherMotion,
+        line: Option<Vector3<f64>>,
+    ) -> Result<(), String> {
+        let exact = closing_bound(own, other, line);
+        let reaches = closing_bound_of_reaches(own.reach(), other.reach(own.dt));
+        if !reaches.is_finite() || exact <= reaches {
+            Ok(())
+        } else {
+            Err(format!("exact {exact:e} > reaches {reaches:e}"))
+        }
     }
 
     proptest! {
         #![proptest_config(ProptestConfig {
-            cases: 20_000,
+            cases: 40_000,
             rng_algorithm: prop::test_runner::RngAlgorithm::ChaCha,
             rng_seed: prop::test_runner::RngSeed::Fixed(0x5eed_0031),
             failure_persistence: None,
             ..ProptestConfig::default()
         })]
 
-        /// The reach test skips the exact bound where the gap exceeds the speeds' bound: that
-        /// is the same answer only if the speeds' bound is never below the exact one, along
-        /// any line of centres or none, for every kind of neighbour.
+        /// The reach test skips the exact bound where the gap exceeds the reaches' bound: the
+        /// same answer for every motion, of any size, NaN and infinity included, along any
+        /// line of centres of unit length or none.
         #[test]
-        fn the_bound_of_speeds_is_never_below_the_exact_bound(
+        fn the_bound_of_reaches_skips_only_what_the_exact_bound_does(
             own in own_motion(),
             other in other_motion_of_any_kind(),
             line in prop::option::of(unit()),
         ) {
-            let exact = closing_bound(&own, &other, line);
-            let speeds = closing_bound_of_speeds(own.reach(), other.reach(own.dt));
-            prop_assert!(exact <= speeds, "exact {exact} > speeds {speeds}");
+            prop_assert!(skips_as_the_exact_bound(&own, &other, line).is_ok(), "{:?}",
+                skips_as_the_exact_bound(&own, &other, line));
+        }
+    }
+
+    /// The cases the reaches must vouch for by hand: a ground whose velocity is not finite
+    /// (the ball's drag directions NaN, the exact bound NaN), a drag direction normalised from
+    /// a slip too short for its square (longer than 1), and speeds too small for theirs (their
+    /// `norm` zero).
+    #[test]
+    fn the_reaches_vouch_for_degenerate_directions_and_tiny_speeds() {
+        let x = Vector3::x();
+        let ball = |v: Vector3<f64>, drag_along| OwnMotion {
+            v,
+            accel: Vector3::new(0.0, -9.81, 0.0),
+            normal: Vector3::y(),
+            pressed: 9.81,
+            dragged: 98.1,
+            drag_along,
+            gravity: Vector3::new(0.0, -9.81, 0.0),
+            dt: 1.0 / 60.0,
+        };
+        let nan = (x - Vector3::new(f64::NAN, 0.0, 0.0))
+            .try_normalize(0.0)
+            .unwrap_or_else(Vector3::zeros);
+        let long = Vector3::new(2.72e-162, 0.0, 0.0)
+            .try_normalize(0.0)
+            .unwrap_or_else(Vector3::zeros);
+        assert!(long.norm() > 1.1, "a direction of length {}", long.norm());
+        let tiny = Vector3::new(1e-170, 0.0, 0.0);
+        let still = OtherMotion::Still;
+        let moving = OtherMotion::Body {
+            linvel: -tiny,
+            turn: 0.0,
+            accel: Some(-tiny),
+            kinematic_shift: None,
+        };
+        let lines = (0..=100).map(|k| {
+            let a = k as f64 / 100.0 * std::f64::consts::PI;
+            Vector3::new(a.cos(), a.sin(), 0.0)
+        });
+        for line in lines {
+            for (own, other) in [
+                (ball(x, Some([nan, nan])), still),
+                (ball(x, Some([nan, nan])), moving),
+                (
+                    ball(Vector3::zeros(), Some([long, Vector3::zeros()])),
+                    still,
+                ),
+                (
+                    OwnMotion {
+                        accel: Vector3::zeros(),
+                        pressed: 0.0,
+                        dragged: 0.0,
+                        ..ball(tiny, None)
+                    },
+                    still,
+                ),
+                (
+                    OwnMotion {
+                        v: Vector3::zeros(),
+                        accel: Vector3::zeros(),
+                        pressed: 0.0,
+                        dragged: 0.0,
+                        ..ball(tiny, None)
+                    },
+                    moving,
+                ),
+            ] {
+                if let Err(e) = skips_as_the_exact_bound(&own, &other, Some(line)) {
+                    panic!("{own:?} against {other:?} along {line:?}: {e}");
+                }
+            }
         }
     }
 
     /// Where every term lines up (the ball and its neighbour moving, turning, falling and
-    /// pushed straight at each other along the line of centres), the exact bound reaches the
-    /// speeds' bound: it stays within its rounding room.
+    /// pushed straight at each other along the line of centres, the neighbour also shifted
+    /// as a kinematic body), the exact bound reaches the reaches' bound: it stays within its
+    /// rounding room.
     #[test]
     fn where_every_term_lines_up_the_bounds_meet() {
         let x = Vector3::x();
-        for dt in [1.0 / 60.0, 1.0 / 240.0, 0.1] {
+        for (dt, shift) in [
+            (1.0 / 60.0, None),
+            (1.0 / 240.0, None),
+            (0.1, None),
+            (1.0 / 60.0, Some(7.0)),
+        ] {
             let own = OwnMotion {
                 v: x * 5.0,
                 accel: x * 4.0,
@@ -550,16 +702,21 @@ mod tests {
                 gravity: Vector3::new(0.0, -9.81, 0.0),
                 dt,
             };
+            // The shift counts in full where the body has no velocity of its own.
             let other = OtherMotion::Body {
-                linvel: -x * 3.0,
+                linvel: if shift.is_some() {
+                    Vector3::zeros()
+                } else {
+                    -x * 3.0
+                },
                 turn: 2.0,
                 accel: Some(-x * 6.0),
-                kinematic_shift: None,
+                kinematic_shift: shift,
             };
             let exact = closing_bound(&own, &other, Some(x));
-            let speeds = closing_bound_of_speeds(own.reach(), other.reach(dt));
+            let reaches = closing_bound_of_reaches(own.reach(), other.reach(dt));
             let sum = own.reach() + other.reach(dt);
-            assert!(exact <= speeds, "exact {exact} > speeds {speeds}");
+            assert!(exact <= reaches, "exact {exact} > reaches {reaches}");
             assert!(
                 (exact - sum).abs() <= 1e-12 * sum,
                 "exact {exact}, sides {sum}"
