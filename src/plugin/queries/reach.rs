@@ -413,9 +413,10 @@ impl OtherMotion {
 /// every term of the exact bound is a dot product with a unit vector (at most the vector's
 /// length) or a length, of a difference (at most the sum of the lengths), and the kinematic
 /// shift and the ground's push and drag enter at their size (`pressed` and `dragged` along
-/// unit directions). The room covers the two computations' rounding, a few `f64::EPSILON` of
-/// the operands' sizes, which the reaches bound. So where a gap exceeds it, the gap exceeds the
-/// exact bound too. A side that is NaN or infinite (a motion that is not finite, or
+/// unit directions). The room covers the two computations' rounding: a few `f64::EPSILON` of
+/// the operands' sizes, which the reaches bound, and near the smallest numbers, where terms
+/// round to subnormals, a few of those. So where a gap exceeds it, the gap exceeds the exact
+/// bound too. A side that is NaN or infinite (a motion that is not finite, or
 /// directions the reach cannot vouch for) gives a bound no gap exceeds.
 fn closing_bound_of_reaches(own: f64, other: f64) -> f64 {
     const ROUNDING_ROOM: f64 = 1e-9;
