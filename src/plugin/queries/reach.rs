@@ -611,8 +611,8 @@ mod tests {
 
     /// The cases the reaches must vouch for by hand: a ground whose velocity is not finite
     /// (the ball's drag directions NaN, the exact bound NaN), a drag direction normalised from
-    /// a slip too short for its square (longer than 1), and speeds too small for theirs (their
-    /// `norm` zero).
+    /// a slip too short for its square (longer than 1), speeds too small for theirs (their
+    /// `norm` zero), and a step that is negative or NaN.
     #[test]
     fn the_reaches_vouch_for_degenerate_directions_and_tiny_speeds() {
         let x = Vector3::x();
@@ -641,6 +641,17 @@ mod tests {
             accel: Some(-tiny),
             kinematic_shift: None,
         };
+        // A step that is not a non-negative number: no bound at all.
+        for dt in [-1.0 / 60.0, f64::NAN] {
+            assert_eq!(
+                OwnMotion {
+                    dt,
+                    ..ball(x, None)
+                }
+                .reach(),
+                f64::INFINITY
+            );
+        }
         let lines = (0..=100).map(|k| {
             let a = k as f64 / 100.0 * std::f64::consts::PI;
             Vector3::new(a.cos(), a.sin(), 0.0)
