@@ -17,6 +17,7 @@ use crate::parry::query;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
 use crate::plugin::policy::SPIN_UP_ALLOWANCE;
 use crate::plugin::queries::observe::Scene;
+use crate::plugin::state::handles::slot_of;
 use crate::plugin::state::writes::Writes;
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{Collider, ColliderHandle, RigidBody, RigidBodyHandle};
@@ -121,7 +122,7 @@ impl NeighbourReads {
         handle: ColliderHandle,
         scene: &Scene<'c>,
     ) -> Option<Read<'n, 'c>> {
-        let slot = handle.into_raw_parts().0 as usize;
+        let slot = slot_of(handle);
         // Its entry in this plan, if it has one (an index left from an earlier plan points
         // past `read`'s end or to another collider).
         let entry = self

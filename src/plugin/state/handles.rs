@@ -45,7 +45,8 @@ pub(crate) fn slot_of(c: ColliderHandle) -> usize {
     c.into_raw_parts().0 as usize
 }
 
-/// A rapier handle's arena slot and generation, as [`SlotTable`] keys its entries.
+/// A rapier handle's arena slot: what the plugin's tables by handle index (a [`SlotTable`], the
+/// writes' log, the pair index's leaves), the generation told apart by the handle itself.
 pub(crate) trait Slotted: Copy + Eq {
     /// The handle's index in its arena.
     fn slot(self) -> usize;

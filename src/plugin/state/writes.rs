@@ -10,6 +10,7 @@
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_to_na, vec_to_na};
+use crate::plugin::state::handles::Slotted;
 use crate::rapier::math::{Pose, Rotation, Vector};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet, RigidBodyType};
 
@@ -145,7 +146,7 @@ struct Entry {
 impl Writes {
     /// Records `write` to `body`.
     pub fn record(&mut self, body: RigidBodyHandle, write: Write) {
-        let slot = body.into_raw_parts().0 as usize;
+        let slot = body.slot();
         if slot >= self.slots.len() {
             self.slots.resize(slot + 1, 0);
         }
@@ -160,7 +161,7 @@ impl Writes {
         if self.log.is_empty() {
             return None;
         }
-        match self.slots.get(body.into_raw_parts().0 as usize) {
+        match self.slots.get(body.slot()) {
             Some(&k) if k > 0 && self.log[k as usize - 1].body == body => Some(k as usize - 1),
             _ => None,
         }
@@ -238,7 +239,7 @@ impl Writes {
     /// Hands each write to `apply`, in the order recorded, and empties the table.
     pub fn apply_all(&mut self, mut apply: impl FnMut(RigidBodyHandle, &Write)) {
         for e in &self.log {
-            if let Some(k) = self.slots.get_mut(e.body.into_raw_parts().0 as usize) {
+            if let Some(k) = self.slots.get_mut(e.body.slot()) {
                 *k = 0;
             }
             apply(e.body, &e.write);

@@ -3,13 +3,13 @@
 //! its sphere swept over the step, its leaf in the pair index).
 
 use super::PairInputs;
-use super::index::slot_of_body;
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use crate::plugin::config::coefficients_in_range;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::queries::geometry::BodyGeom;
 use crate::plugin::queries::observe::{body_geom, centred, rapier_state};
+use crate::plugin::state::handles::Slotted;
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{
@@ -112,7 +112,8 @@ impl<'a> Members<'a> {
             .map(|(b, swept)| {
                 let half = to_real(*swept);
                 (
-                    slot_of_body(b.body),
+                    // A leaf is keyed by its body's arena slot (an arena index is a `u32`).
+                    b.body.slot() as u32,
                     Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
                 )
             })

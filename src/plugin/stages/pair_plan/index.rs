@@ -6,6 +6,7 @@
 //! index in the list; outside that window the list is empty and only the tree is kept.
 
 use super::gather::Members;
+use crate::plugin::state::handles::Slotted;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::parry::partitioning::{Bvh, BvhWorkspace};
 use crate::rapier::prelude::RigidBodyHandle;
@@ -73,7 +74,7 @@ impl PairIndex {
 
     /// This step's ball (index in its list) of a body in it.
     pub(super) fn ball_of_body(&self, body: RigidBodyHandle) -> usize {
-        self.ball_of[slot_of_body(body) as usize] as usize
+        self.ball_of[body.slot()] as usize
     }
 
     /// The balls (indices in this step's list) whose boxes meet `aabb`.
@@ -89,11 +90,6 @@ impl PairIndex {
             self.ball_of[*slot as usize] = u32::MAX;
         }
     }
-}
-
-/// A body's slot in the body set, the key of its leaf in the `PairIndex`.
-pub(super) fn slot_of_body(handle: RigidBodyHandle) -> u32 {
-    handle.into_raw_parts().0
 }
 
 /// The pairs whose swept boxes overlap, as each ball's list of the others (both ways).
