@@ -38,6 +38,8 @@ mod plugin_events;
 mod plugin_filtering;
 #[path = "plugin_grounds.rs"]
 mod plugin_grounds;
+#[path = "plugin_hook_flags.rs"]
+mod plugin_hook_flags;
 #[path = "plugin_pair_shapes.rs"]
 mod plugin_pair_shapes;
 #[path = "plugin_pairs.rs"]

@@ -28,7 +28,11 @@
 //! would bounce above the resting gap (`pair_plan.rs`, `PlannedPair::hooked`), is flagged
 //! too (rapier hooks a pair when either collider asks): the plugin takes the impact pairs
 //! from rapier's solver and zeroes the others' restitution. The flags the user had set are
-//! recorded and handed back: the wrapped hook is called exactly when they ask for it.
+//! recorded and handed back: the wrapped hook is called exactly when they ask for it. Flags
+//! the user sets on a collider while it carries the plugin's are theirs from then on (told
+//! from the plugin's by comparing with what the plugin wrote), whatever bits they hold, and
+//! a ground's new flags reach the ground index, which knows what the plugin wrote
+//! (`GroundIndex::noted_hooks`): its next pass reports them, and the ground is flagged again.
 
 use crate::plugin::policy::GROUND_FLAGS_IDLE_STEPS;
 use crate::plugin::state::handles::{ArenaOrder, HandleMap, PairKey, SlotTable};
@@ -45,19 +49,53 @@ pub(crate) const PLUGIN_HOOKS: ActiveHooks =
 /// A body whose colliders carry the plugin's flags.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct HookedBody {
-    /// Each flagged collider with the flags the user had set on it.
-    pub colliders: SmallList<(ColliderHandle, ActiveHooks)>,
+    /// The colliders it holds flagged: exactly those whose [`Carried::body`] it is.
+    pub colliders: SmallList<ColliderHandle>,
     /// The step (`HookFlags::stamp`) that last needed the flags.
     stamp: u64,
 }
 
+/// A collider carrying the plugin's flags: the user's flags they replaced, and who holds
+/// them there (the grounds' arrangement, a hooked body, or both: a body's collider marked
+/// as ground).
+#[derive(Clone, Copy, Debug)]
+struct Carried {
+    /// The flags the user set on the collider (what rapier would see without the plugin).
+    user: ActiveHooks,
+    /// Held as a ground.
+    ground: bool,
+    /// The hooked body that lists it, if any.
+    body: Option<RigidBodyHandle>,
+}
+
+impl Carried {
+    /// What the plugin last wrote on the collider: the user's flags and its own.
+    fn written(&self) -> ActiveHooks {
+        self.user | PLUGIN_HOOKS
+    }
+}
+
+/// Who asks a collider to carry the plugin's flags.
+#[derive(Clone, Copy, PartialEq)]
+enum Holder {
+    Ground,
+    Body(RigidBodyHandle),
+}
+
 /// Where the plugin's hook flags are, and the user's flags they replaced.
+///
+/// Invariant: a collider carries flags written by the plugin exactly while `carried` holds
+/// it, and then its flags are [`Carried::written`] unless the user set others since (found
+/// by comparing with that value: theirs, then, and kept as the user's). A collider the user
+/// sets to exactly that value is taken as unchanged.
 #[derive(Default)]
 pub(crate) struct HookFlags {
     /// Managed bodies whose colliders carry the plugin's hook flags.
     hooked: HandleMap<RigidBodyHandle, HookedBody>,
-    /// Grounds carrying the plugin's hook flags, with the flags the user had set.
-    grounds: SlotTable<ColliderHandle, ActiveHooks>,
+    /// Every collider carrying the plugin's flags.
+    carried: SlotTable<ColliderHandle, Carried>,
+    /// How many of `carried` are held as grounds.
+    grounds: usize,
     /// Counts the steps, to find the hooked bodies no step needs any more.
     stamp: u64,
     /// Steps since one needed the grounds' flags (a managed body near a ground or asleep),
@@ -79,10 +117,12 @@ impl HookFlags {
     /// each of the step's hooked pairs between bodies (`PlannedPair::hooked`: flagged in either
     /// arrangement), `unmanaged` whether the world holds a dynamic, enabled body the plugin
     /// does not manage, `idle` whether no managed body is near a ground or asleep this step.
-    /// `registry.flags_stale` is read here and cleared by the caller.
+    /// `registry.flags_stale` is read here and cleared by the caller; the ground index is told
+    /// every ground's flags written (`GroundIndex::noted_hooks`), so that its next pass finds
+    /// whatever the user sets after this step.
     pub fn update(
         &mut self,
-        registry: &Registry,
+        registry: &mut Registry,
         (near, pairs): (&[RigidBodyHandle], &[RigidBodyHandle]),
         (unmanaged, idle): (bool, bool),
         bodies: &RigidBodySet,
@@ -104,38 +144,27 @@ impl HookFlags {
         let off = unmanaged || idle_too_long;
         let were_on = self.grounds_on;
         self.grounds_on = !off;
-        let grounds = &registry.grounds;
-        if off || registry.flags_stale {
-            self.grounds.retain(|c, user| {
-                let keep = !off && grounds.contains_key(c);
-                if !keep {
-                    restore(colliders, *c, *user);
+        if (off || registry.flags_stale) && self.grounds > 0 {
+            let mut dropped = Vec::new();
+            for (c, carried) in self.carried.iter() {
+                if carried.ground && (off || !registry.grounds.contains_key(c)) {
+                    dropped.push(*c);
                 }
-                keep
-            });
+            }
+            for c in dropped {
+                self.release(colliders, registry, c, Holder::Ground);
+            }
         }
         if !off {
-            let mut flag = |c: ColliderHandle| {
-                // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad
-                // and narrow phase updates, which for every ground every step cost more
-                // than the rest of the plugin on a floor of 4 096 tiles.
-                let Some(flags) = colliders.get(c).map(|co| co.active_hooks()) else {
-                    return;
-                };
-                if !flags.contains(PLUGIN_HOOKS) {
-                    // New, or the user set the flags since the last step: theirs now.
-                    self.grounds.insert(c, flags);
-                    set_flags(colliders, c, flags | PLUGIN_HOOKS);
-                }
-            };
             // Every ground when they were off or the grounds changed; else only those whose
-            // flags the ground index's pass found changed this step (the user's doing, or
-            // the plugin's own from the last step).
-            match registry.index.hooks_changed() {
-                Some(changed) if were_on && !registry.flags_stale => {
-                    changed.iter().for_each(|c| flag(*c))
-                }
-                _ => registry.grounds.keys().for_each(|c| flag(*c)),
+            // flags the ground index's pass found changed this step (the user's doing: the
+            // index knows the flags the plugin wrote).
+            let changed = match registry.index.hooks_changed() {
+                Some(changed) if were_on && !registry.flags_stale => changed.to_vec(),
+                _ => registry.grounds.keys().copied().collect(),
+            };
+            for c in changed {
+                self.hold(colliders, registry, c, Holder::Ground);
             }
         }
         // Bodies: flagged in the second.
@@ -146,17 +175,16 @@ impl HookFlags {
             let Some(rb) = bodies.get(*handle) else {
                 continue;
             };
-            let entry = self.hooked.entry(*handle).or_default();
-            entry.stamp = stamp;
-            flag_body(entry, rb, colliders);
+            self.hooked.entry(*handle).or_default().stamp = stamp;
+            self.flag_body(*handle, rb, registry, colliders);
         }
         if self.hooked.is_empty() {
             return;
         }
-        let mut hooked = std::mem::take(&mut self.hooked);
-        hooked.retain(|handle, entry| {
+        let mut gone = Vec::new();
+        for (handle, entry) in self.hooked.iter_mut() {
             if entry.stamp == stamp {
-                return true;
+                continue;
             }
             if unmanaged
                 && bodies
@@ -164,14 +192,17 @@ impl HookFlags {
                     .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
             {
                 entry.stamp = stamp;
-                return true;
+                continue;
             }
-            for (c, user) in entry.colliders.iter() {
-                restore(colliders, *c, *user);
+            gone.push(*handle);
+        }
+        for handle in gone {
+            if let Some(entry) = self.hooked.remove(&handle) {
+                for c in entry.colliders.iter() {
+                    self.release(colliders, registry, *c, Holder::Body(handle));
+                }
             }
-            false
-        });
-        self.hooked = hooked;
+        }
     }
 
     /// Do grounds carry the plugin's flags this step (the first arrangement, not idle)?
@@ -186,17 +217,11 @@ impl HookFlags {
             return ActiveHooks::empty();
         };
         let flags = co.active_hooks();
-        if !flags.contains(PLUGIN_HOOKS) {
+        match self.carried.get(c) {
+            Some(carried) if flags == carried.written() => carried.user,
             // Not flagged by the plugin, or the user has set new flags since.
-            return flags;
+            _ => flags,
         }
-        if let Some(user) = self.grounds.get(c) {
-            return *user;
-        }
-        co.parent()
-            .and_then(|p| self.hooked.get(&p))
-            .and_then(|e| e.colliders.iter().find(|(h, _)| *h == c))
-            .map_or(flags, |(_, user)| *user)
     }
 
     /// The hook flags the user set on either collider of the pair `key` (what rapier would
@@ -205,57 +230,155 @@ impl HookFlags {
         self.recorded_user_flags(colliders, key.0) | self.recorded_user_flags(colliders, key.1)
     }
 
-    /// Takes the plugin's hook flags off every collider: the user's flags back.
+    /// Takes the plugin's hook flags off every collider: the user's flags back (where the
+    /// user has not set others since).
     pub fn restore_all(&mut self, colliders: &mut ColliderSet) {
-        for (c, user) in self.grounds.iter() {
-            restore(colliders, *c, *user);
+        for (c, carried) in self.carried.iter() {
+            give_back(colliders, *c, carried);
         }
-        for entry in self.hooked.values() {
-            for (c, user) in entry.colliders.iter() {
-                restore(colliders, *c, *user);
+        *self = Self::default();
+    }
+
+    /// `holder` asks `c` to carry the plugin's flags: recorded with the user's flags (those
+    /// found on it, unless they are what the plugin wrote) and flagged.
+    fn hold(
+        &mut self,
+        colliders: &mut ColliderSet,
+        registry: &mut Registry,
+        c: ColliderHandle,
+        holder: Holder,
+    ) {
+        // Read first: `ColliderSet::get_mut` queues the collider for rapier's broad and
+        // narrow phase updates, which for every ground every step cost more than the rest of
+        // the plugin on a floor of 4 096 tiles.
+        let Some(flags) = colliders.get(c).map(|co| co.active_hooks()) else {
+            return;
+        };
+        let mut carried = match self.carried.get(c) {
+            // The user set new flags since the plugin wrote them: theirs now.
+            Some(carried) if flags != carried.written() => Carried {
+                user: flags,
+                ..*carried
+            },
+            Some(carried) => *carried,
+            None => Carried {
+                user: flags,
+                ground: false,
+                body: None,
+            },
+        };
+        match holder {
+            Holder::Ground => {
+                if !carried.ground {
+                    self.grounds += 1;
+                }
+                carried.ground = true;
+            }
+            Holder::Body(body) => {
+                // A collider moved to this body from another hooked body: that one no
+                // longer lists it.
+                if let Some(other) = carried.body.filter(|b| *b != body) {
+                    if let Some(entry) = self.hooked.get_mut(&other) {
+                        entry.colliders = entry
+                            .colliders
+                            .iter()
+                            .copied()
+                            .filter(|h| *h != c)
+                            .collect();
+                    }
+                }
+                carried.body = Some(body);
             }
         }
-        self.hooked.clear();
-        self.grounds = SlotTable::default();
+        self.carried.insert(c, carried);
+        let written = carried.written();
+        if flags != written {
+            set_flags(colliders, c, written);
+        }
+        if carried.ground {
+            registry.index.noted_hooks(c, written);
+        }
+    }
+
+    /// `holder` no longer asks `c` for the plugin's flags: once nothing does, the user's
+    /// flags are given back.
+    fn release(
+        &mut self,
+        colliders: &mut ColliderSet,
+        registry: &mut Registry,
+        c: ColliderHandle,
+        holder: Holder,
+    ) {
+        let Some(mut carried) = self.carried.get(c).copied() else {
+            return;
+        };
+        match holder {
+            Holder::Ground if carried.ground => {
+                carried.ground = false;
+                self.grounds -= 1;
+            }
+            Holder::Body(body) if carried.body == Some(body) => carried.body = None,
+            // Not held so (a collider another body has taken over).
+            _ => return,
+        }
+        if carried.ground || carried.body.is_some() {
+            self.carried.insert(c, carried);
+            return;
+        }
+        self.carried.remove(c);
+        if let Some(flags) = give_back(colliders, c, &carried) {
+            registry.index.noted_hooks(c, flags);
+        }
+    }
+
+    /// Flags the body's colliders (new ones included) and gives back those detached from it.
+    fn flag_body(
+        &mut self,
+        handle: RigidBodyHandle,
+        rb: &RigidBody,
+        registry: &mut Registry,
+        colliders: &mut ColliderSet,
+    ) {
+        let attached = rb.colliders();
+        let listed = &self.hooked[&handle].colliders;
+        let same =
+            listed.len() == attached.len() && listed.iter().zip(attached).all(|(h, a)| h == a);
+        if !same {
+            let old = std::mem::replace(
+                &mut self
+                    .hooked
+                    .get_mut(&handle)
+                    .expect("entry made by the caller")
+                    .colliders,
+                attached
+                    .iter()
+                    .copied()
+                    .filter(|c| colliders.get(*c).is_some())
+                    .collect(),
+            );
+            for c in old.iter().filter(|c| !attached.contains(c)) {
+                self.release(colliders, registry, *c, Holder::Body(handle));
+            }
+        }
+        for c in attached {
+            self.hold(colliders, registry, *c, Holder::Body(handle));
+        }
     }
 }
 
-/// Flags the body's colliders (new ones included) and gives back those detached from it.
-fn flag_body(entry: &mut HookedBody, rb: &RigidBody, colliders: &mut ColliderSet) {
-    let attached = rb.colliders();
-    let same = entry.colliders.len() == attached.len()
-        && entry
-            .colliders
-            .iter()
-            .zip(attached)
-            .all(|((h, _), a)| h == a);
-    if !same {
-        for (c, user) in entry.colliders.iter() {
-            if !attached.contains(c) {
-                restore(colliders, *c, *user);
-            }
-        }
-        let old = std::mem::take(&mut entry.colliders);
-        for c in attached {
-            let user = old
-                .iter()
-                .find(|(h, _)| h == c)
-                .map(|(_, u)| *u)
-                .or_else(|| colliders.get(*c).map(|co| co.active_hooks()));
-            if let Some(user) = user {
-                entry.colliders.push((*c, user));
-            }
-        }
-    }
-    for (c, user) in entry.colliders.iter_mut() {
-        let Some(flags) = colliders.get(*c).map(|co| co.active_hooks()) else {
-            continue;
-        };
-        if !flags.contains(PLUGIN_HOOKS) {
-            // New, or the user set the flags since the last step: theirs now.
-            *user = flags;
-            set_flags(colliders, *c, flags | PLUGIN_HOOKS);
-        }
+/// The user's flags back on a collider that still carries what the plugin wrote (others are
+/// the user's, set since, and stay); the flags it is left with, if it still exists.
+fn give_back(
+    colliders: &mut ColliderSet,
+    c: ColliderHandle,
+    carried: &Carried,
+) -> Option<ActiveHooks> {
+    let flags = colliders.get(c)?.active_hooks();
+    if flags == carried.written() {
+        set_flags(colliders, c, carried.user);
+        Some(carried.user)
+    } else {
+        Some(flags)
     }
 }
 
@@ -281,25 +404,28 @@ type SavedHookedBody = (RigidBodyHandle, Vec<(ColliderHandle, u32)>, u64);
 impl HookFlags {
     /// Where the flags are and whose they replaced.
     pub fn save(&self) -> SavedFlags {
+        let user = |c: &ColliderHandle| self.carried.get(*c).map_or(0, |k| k.user.bits());
         let mut hooked: Vec<_> = self
             .hooked
             .iter()
             .map(|(body, entry)| {
-                let colliders = entry.colliders.iter().map(|(c, u)| (*c, u.bits()));
+                let colliders = entry.colliders.iter().map(|c| (*c, user(c)));
                 (*body, colliders.collect(), entry.stamp)
             })
             .collect();
         hooked.sort_unstable_by_key(|(body, ..)| body.arena_order());
+        let grounds = self.carried.iter().filter(|(_, k)| k.ground);
         SavedFlags {
             hooked,
-            grounds: self.grounds.iter().map(|(c, u)| (*c, u.bits())).collect(),
+            grounds: grounds.map(|(c, k)| (*c, k.user.bits())).collect(),
             stamp: self.stamp,
             since_needed: self.since_needed,
         }
     }
 
     /// The record `saved` was taken from: the plugin's flags on a restored world's colliders
-    /// are known as the plugin's again, and the user's handed back as before.
+    /// are known as the plugin's again, and the user's handed back as before. (A collider
+    /// listed twice, which only an earlier version could save, keeps its first record.)
     pub fn from_saved(saved: &SavedFlags) -> Self {
         let user = ActiveHooks::from_bits_retain;
         let mut flags = Self {
@@ -307,24 +433,41 @@ impl HookFlags {
             since_needed: saved.since_needed,
             ..Self::default()
         };
+        for (c, u) in &saved.grounds {
+            let carried = Carried {
+                user: user(*u),
+                ground: true,
+                body: None,
+            };
+            if flags.carried.insert(*c, carried) {
+                flags.grounds += 1;
+            }
+        }
         for (body, colliders, stamp) in &saved.hooked {
-            let colliders = colliders.iter().map(|(c, u)| (*c, user(*u))).collect();
-            let entry = HookedBody {
-                colliders,
+            let mut entry = HookedBody {
+                colliders: SmallList::default(),
                 stamp: *stamp,
             };
+            for (c, u) in colliders {
+                let carried = match flags.carried.get(*c) {
+                    Some(k) if k.body.is_some() => continue,
+                    Some(k) => Carried {
+                        body: Some(*body),
+                        ..*k
+                    },
+                    None => Carried {
+                        user: user(*u),
+                        ground: false,
+                        body: Some(*body),
+                    },
+                };
+                flags.carried.insert(*c, carried);
+                entry.colliders.push(*c);
+            }
             flags.hooked.insert(*body, entry);
-        }
-        for (c, u) in &saved.grounds {
-            flags.grounds.insert(*c, user(*u));
         }
         flags
     }
-}
-
-/// The user's flags back on a collider, if it still exists.
-fn restore(colliders: &mut ColliderSet, c: ColliderHandle, user: ActiveHooks) {
-    set_flags(colliders, c, user);
 }
 
 /// Sets a collider's hook flags where they differ (a mutable access queues the collider for

@@ -76,13 +76,11 @@ impl Lookup {
             rest: Vec::new(),
             user_flags: vec![
                 None;
-                len(&mut hooked
-                    .values()
-                    .flat_map(|e| e.colliders.iter().map(|(c, _)| *c)))
+                len(&mut hooked.values().flat_map(|e| e.colliders.iter().copied()))
             ],
         };
-        for (c, user) in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
-            out.user_flags[slot_of(c)] = Some((c, user));
+        for c in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
+            out.user_flags[slot_of(c)] = Some((c, user_flags(c)));
         }
         for body in far {
             let user = user_flags(*body);

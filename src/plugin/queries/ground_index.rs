@@ -264,6 +264,8 @@ struct Slot {
     handle: ColliderHandle,
     entry: GroundEntry,
     slab: Option<(u32, ColliderHandle)>,
+    /// The ground's index (in `handles`, `bases`), `u32::MAX` for none.
+    index: u32,
 }
 
 type Registry = HashMap<ColliderHandle, GroundEntry, BuildHasherDefault<HandleHasher>>;
@@ -447,8 +449,24 @@ impl GroundIndex {
         true
     }
 
-    /// The grounds whose hook flags (the user's or the plugin's) changed since the last
-    /// step's pass, or `None` when that is not known (the index was rebuilt since).
+    /// The plugin wrote `hooks` as a ground's flags (after this step's pass): the next pass
+    /// compares the ground's flags with them, so that it finds any the user sets since, even
+    /// the flags the ground had before the plugin's.
+    pub fn noted_hooks(&mut self, c: ColliderHandle, hooks: ActiveHooks) {
+        let Some(Some(slot)) = self.by_slot.get(slot_of(c)) else {
+            return;
+        };
+        if slot.handle != c {
+            return;
+        }
+        if let Some(Some(base)) = self.bases.get_mut(slot.index as usize) {
+            base.props.hooks = hooks;
+        }
+    }
+
+    /// The grounds whose hook flags the user changed since the plugin last wrote them (or,
+    /// for a ground the plugin has not written, since the last step's pass), or `None` when
+    /// that is not known (the index was rebuilt since).
     pub fn hooks_changed(&self) -> Option<&[ColliderHandle]> {
         self.hooks_known.then_some(self.hooks_changed.as_slice())
     }
@@ -532,7 +550,15 @@ impl GroundIndex {
                 handle: *h,
                 entry: *entry,
                 slab: None,
+                index: u32::MAX,
             });
+        }
+        for (i, h) in handles.iter().enumerate() {
+            if let Some(Some(slot)) = self.by_slot.get_mut(slot_of(*h)) {
+                if slot.handle == *h {
+                    slot.index = i as u32;
+                }
+            }
         }
         for (k, slab) in self.slabs.iter().enumerate() {
             let first = handles[slab.members[0]];

@@ -29,7 +29,7 @@ impl<H> ImpactPlugin<H> {
         let idle = near.is_empty() && step.asleep.is_empty();
         let (flagged, arrangement) = ((near, members.as_slice()), (unmanaged, idle));
         self.flags
-            .update(&self.registry, flagged, arrangement, bodies, colliders);
+            .update(&mut self.registry, flagged, arrangement, bodies, colliders);
         self.registry.flags_stale = false;
         let flags = &self.flags;
         // The far bodies' ground pairs are hooked only through flagged grounds.

@@ -115,14 +115,12 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
         new
     }
 
-    /// Keeps the entries for which `keep` answers `true`.
-    pub fn retain(&mut self, mut keep: impl FnMut(&K, &mut V) -> bool) {
-        for slot in &mut self.slots {
-            if let Some((h, v)) = slot {
-                if !keep(h, v) {
-                    *slot = None;
-                    self.len -= 1;
-                }
+    /// Removes the value of `k`, if it has one.
+    pub fn remove(&mut self, k: K) {
+        if let Some(slot) = self.slots.get_mut(k.slot()) {
+            if matches!(slot, Some((h, _)) if *h == k) {
+                *slot = None;
+                self.len -= 1;
             }
         }
     }
@@ -213,7 +211,14 @@ mod tests {
         assert!(!table.contains(RigidBodyHandle::from_raw_parts(40, 0)));
         assert!(table.insert(a_next, 4), "another generation is new");
         assert!(!table.contains(a) && table.len() == 2);
-        table.retain(|h, _| *h != b);
+        table.remove(a);
+        assert!(
+            table.contains(a_next),
+            "another generation's removal leaves it"
+        );
+        table.remove(b);
         assert_eq!((table.len(), table.contains(b)), (1, false));
+        table.remove(b);
+        assert_eq!(table.len(), 1, "removing what is not there changes nothing");
     }
 }
