@@ -1000,3 +1000,113 @@ fn a_ball_at_rest_on_a_seam_between_tiles_stays_there() {
     );
     assert!(moved < 1e-6 && asleep, "moved {moved} m, asleep {asleep}");
 }
+
+/// A ball dropped from 0.3 m (radius 5 cm) towards `(x, z)`; before step `moved_at`, `move_it`
+/// moves the ground (rapier moves a fixed body's colliders only inside its next step). The
+/// events (step, kind, ground, approach speed's bits) and the ball's height after each step.
+fn dropped_while_a_ground_moves(
+    world: &mut PhysicsWorld,
+    grounds: &[ColliderHandle],
+    (x, z): (f64, f64),
+    moved_at: usize,
+    move_it: &dyn Fn(&mut PhysicsWorld),
+) -> (Vec<(usize, EventKind, ColliderHandle, u64)>, Vec<f64>) {
+    let ball = world
+        .insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(real(x), 0.3, real(z))),
+            ColliderBuilder::ball(0.05).friction(0.4).restitution(0.6),
+        )
+        .0;
+    let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+    for g in grounds {
+        p.add_ground(&world.bodies, &world.colliders, *g).unwrap();
+    }
+    let (mut events, mut heights) = (Vec::new(), Vec::new());
+    for step in 0..40 {
+        if step == moved_at {
+            move_it(world);
+        }
+        p.step(world);
+        let log = p.events().iter();
+        events.extend(log.map(|e| (step, e.kind, e.ground, e.approach_speed.to_bits())));
+        heights.push(wide(world.bodies[ball].translation().y));
+    }
+    (events, heights)
+}
+
+/// A ground on a fixed body moved between two steps is met where rapier will have it,
+/// though its collider still says where it was: moved in under a falling ball just before
+/// the landing, it is met exactly as a collider without a body moved there; a floor's tile
+/// moved away from under a landing ball (a trapdoor) lets the ball through, as under rapier
+/// alone.
+#[test]
+fn a_ground_whose_fixed_body_moved_between_steps_is_met_where_it_now_is() {
+    // The ball lands in step 13 (a fall of 0.25 m takes 13.5 steps).
+    let landing = 13;
+    let slab = |w: &mut PhysicsWorld, on_body: bool| {
+        let shape = ColliderBuilder::cuboid(0.5, 0.25, 0.5)
+            .translation(Vector::new(5.0, -0.25, 0.0))
+            .restitution(0.6)
+            .friction(0.4);
+        if on_body {
+            w.insert(RigidBodyBuilder::fixed(), shape).1
+        } else {
+            w.colliders.insert(shape)
+        }
+    };
+    let mut runs = Vec::new();
+    for on_body in [false, true] {
+        let mut w = PhysicsWorld::default();
+        let g = slab(&mut w, on_body);
+        let move_in = move |w: &mut PhysicsWorld| match w.colliders[g].parent() {
+            Some(body) => w.bodies[body].set_translation(Vector::new(-5.0, 0.0, 0.0), true),
+            None => w.colliders[g].set_translation(Vector::new(0.0, -0.25, 0.0)),
+        };
+        runs.push(dropped_while_a_ground_moves(
+            &mut w,
+            &[g],
+            (0.0, 0.0),
+            landing,
+            &move_in,
+        ));
+    }
+    let (parentless, on_body) = (&runs[0], &runs[1]);
+    println!("moved in: events {:?} / {:?}", parentless.0, on_body.0);
+    assert!(
+        parentless
+            .0
+            .first()
+            .is_some_and(|e| e.0 == landing && e.1 == EventKind::Impact),
+        "the landing is an impact: {:?}",
+        parentless.0
+    );
+    let kinds = |run: &(Vec<(usize, EventKind, ColliderHandle, u64)>, Vec<f64>)| {
+        run.0.iter().map(|e| (e.0, e.1, e.3)).collect::<Vec<_>>()
+    };
+    assert_eq!(kinds(on_body), kinds(parentless), "the same impacts");
+    assert_eq!(on_body.1, parentless.1, "the same flight");
+
+    // The trapdoor: the tile under the ball, on its fixed body, moved 5 m aside.
+    let mut w = PhysicsWorld::default();
+    let tiles = floor(&mut w, true);
+    let (x, z) = (0.375, 0.125);
+    let door = tile_under(&tiles, x, z);
+    let open = move |w: &mut PhysicsWorld| {
+        let body = w.colliders[door].parent().unwrap();
+        let at = w.bodies[body].translation() + Vector::new(5.0, 0.0, 0.0);
+        w.bodies[body].set_translation(at, true);
+    };
+    let (events, heights) = dropped_while_a_ground_moves(&mut w, &tiles, (x, z), landing, &open);
+    println!(
+        "trapdoor: events {events:?}, height at the end {:?}",
+        heights.last()
+    );
+    assert!(
+        events.iter().all(|e| e.2 != door),
+        "no bounce off the moved tile: {events:?}"
+    );
+    assert!(
+        heights.last().is_some_and(|y| *y < -0.5),
+        "fell through: {heights:?}"
+    );
+}

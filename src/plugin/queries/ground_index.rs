@@ -7,8 +7,10 @@
 //!   them), once per step before anything asks: every ground's pose over the step
 //!   ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless or on
 //!   a fixed body) is computed once and kept until its collider's pose, shape, flags,
-//!   coefficients or filtering change (one comparison per ground and step); a ground on a
-//!   kinematic body is computed afresh each step;
+//!   coefficients or filtering change (one comparison per ground and step; the pose where
+//!   rapier will have it, `collider_pose`: a fixed body moved since the last step counts); a
+//!   ground on a kinematic body is computed afresh each step, and a change of the step's
+//!   length recomputes only those;
 //! - [`GroundIndex::near`]: the grounds whose swept AABB meets a cube, from a BVH over the
 //!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
 //!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
@@ -22,7 +24,10 @@
 //!   [`GroundIndex::stand_in`]). The BVH holds the slab, not its tiles, so a body over a tiled
 //!   floor meets one ground; [`GroundIndex::near_ball_tiles`] answers with the tiles instead,
 //!   for a body whose pairs the user's filter decides one by one, and
-//!   [`GroundIndex::tile_at`] names the tile under an event's point;
+//!   [`GroundIndex::tile_at`] names the tile under an event's point. The slabs never depend
+//!   on the grounds' history: a change that splits one rebuilds the index, and so does a
+//!   change of a cuboid in the BVH that meets another cuboid or a slab (which may let it
+//!   join one again);
 //! - the motions are in a deterministic order (by collider handle, then the slabs by their
 //!   first tile), and an index into [`GroundIndex::motions`] names a ground for the whole
 //!   step.
@@ -31,6 +36,7 @@ use crate::model::Material;
 use crate::plugin::bridge::convert::{
     pose_from_na, pose_to_na, to_f64, to_real, vec_from_na, vec_to_na,
 };
+use crate::plugin::queries::collider_pose;
 use crate::plugin::queries::slabs::{Slab, Tile, find_slabs};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::{Pose, Real, Vector};
@@ -163,17 +169,15 @@ unsafe impl Sync for Class {}
 
 impl Basis {
     fn of(co: &Collider, bodies: &RigidBodySet) -> Self {
+        let parent = co.parent().and_then(|p| bodies.get(p));
         Self {
             class: Class {
                 shape: co.shape() as *const _ as *const (),
                 enabled: co.is_enabled(),
                 sensor: co.is_sensor(),
-                parent: co
-                    .parent()
-                    .and_then(|p| bodies.get(p))
-                    .map(|rb| (rb.body_type(), rb.is_enabled())),
+                parent: parent.map(|rb| (rb.body_type(), rb.is_enabled())),
             },
-            pose: *co.position(),
+            pose: collider_pose(co, parent.map(|rb| rb.position())),
             skin: co.contact_skin(),
             props: Props {
                 friction: co.friction(),
@@ -192,7 +196,8 @@ impl Basis {
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
-        *co.position() == self.pose
+        let parent = co.parent().and_then(|p| bodies.get(p));
+        collider_pose(co, parent.map(|rb| rb.position())) == self.pose
             && co.contact_skin() == self.skin
             && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
             && co.is_enabled() == class.enabled
@@ -203,11 +208,7 @@ impl Basis {
             && (co.collision_groups(), co.solver_groups()) == props.groups
             && co.active_collision_types() == props.types
             && co.active_hooks() == props.hooks
-            && co
-                .parent()
-                .and_then(|p| bodies.get(p))
-                .map(|rb| (rb.body_type(), rb.is_enabled()))
-                == class.parent
+            && parent.map(|rb| (rb.body_type(), rb.is_enabled())) == class.parent
     }
 }
 
@@ -336,12 +337,16 @@ impl GroundIndex {
 
     /// A ground's entry changed (its material): the hooks' table follows, if it holds the
     /// ground (else it is rebuilt from the registry at the next refresh anyway). A tile of a
-    /// slab may no longer share its slab's material: the index is rebuilt.
+    /// slab may no longer share its slab's material, and a ground in the BVH may share a
+    /// neighbour's again: the index is rebuilt.
     pub fn set_entry(&mut self, c: ColliderHandle, entry: GroundEntry) {
         if let Some(Some(slot)) = self.by_slot.get_mut(slot_of(c)) {
             if slot.handle == c {
                 slot.entry = entry;
-                if slot.slab.is_some() {
+                // A tile may no longer share its slab's material, and a ground in the BVH may
+                // share it again (a material set, then taken off).
+                let in_tree = self.places.get(slot.index as usize) == Some(&Place::Tree);
+                if slot.slab.is_some() || in_tree {
                     self.stale = true;
                 }
             }
@@ -379,9 +384,12 @@ impl GroundIndex {
         lone: &dyn Fn(ColliderHandle) -> bool,
     ) -> bool {
         let complete = self.motions.len() == self.bases.len() + self.slabs.len();
-        if self.stale || !complete || dt != self.dt || gap != self.gap {
+        if self.stale || !complete || gap != self.gap {
             return false;
         }
+        // A still ground's motion and the slabs do not depend on the step's length (a frame
+        // time that varies): only the moving grounds', computed below with it.
+        self.dt = dt;
         self.hooks_changed.clear();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
@@ -427,6 +435,16 @@ impl GroundIndex {
             let Some(m) = motion_of(handle, co, bodies, dt, gap) else {
                 return false;
             };
+            // A cuboid that may now form a slab with a cuboid it meets (a change undone, a
+            // tile put back in line): the index is built again, as the slabs must not depend
+            // on the grounds' history.
+            if self.places[i] == Place::Tree
+                && co.shape().as_cuboid().is_some()
+                && !lone(handle)
+                && self.meets_cuboid(i, &m.aabb, colliders)
+            {
+                return false;
+            }
             self.motions[i] = m;
             self.bases[i] = Some(now);
             if self.places[i] == Place::Tree {
@@ -447,6 +465,18 @@ impl GroundIndex {
         }
         self.hooks_known = true;
         true
+    }
+
+    /// Does the box `aabb` of ground `i` meet a slab or another cuboid ground in the BVH?
+    fn meets_cuboid(&self, i: usize, aabb: &Aabb, colliders: &ColliderSet) -> bool {
+        self.tree.intersect_aabb(aabb).any(|leaf| {
+            let j = leaf as usize;
+            j != i
+                && (j >= self.bases.len()
+                    || colliders
+                        .get(self.handles[j])
+                        .is_some_and(|co| co.shape().as_cuboid().is_some()))
+        })
     }
 
     /// The plugin wrote `hooks` as a ground's flags (after this step's pass): the next pass
@@ -803,7 +833,10 @@ fn motion_of(
     }
     let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
     let loosen = to_real(gap + to_f64(co.contact_skin()));
-    let mut aabb = co.compute_aabb().loosened(loosen);
+    // Where rapier will have the collider: a fixed body moved since its last step still has
+    // its colliders where it was.
+    let at = collider_pose(co, parent.map(|(_, rb)| rb.position()));
+    let mut aabb = co.shape().compute_aabb(&at).loosened(loosen);
     // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
     let half_space = co.shape().as_halfspace();
     let plane_at = |pose: &Pose| {
@@ -839,7 +872,7 @@ fn motion_of(
             let end_pose = pose_from_na(&end);
             aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
             // A turning half-space sweeps too much for one plane: AABB only.
-            let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
+            let plane = match (plane_at(&at), plane_at(&end_pose)) {
                 (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => Some((n, d0.max(d1))),
                 _ => None,
             };
@@ -858,7 +891,7 @@ fn motion_of(
             })
         }
         _ => {
-            let pose = pose_to_na(co.position());
+            let pose = pose_to_na(&at);
             let (com0, rot0, local) = (
                 pose.translation.vector,
                 pose.rotation,
@@ -874,7 +907,7 @@ fn motion_of(
                 v: Vector3::zeros(),
                 w: Vector3::zeros(),
                 aabb,
-                plane: plane_at(co.position()),
+                plane: plane_at(&at),
                 slab: None,
             })
         }
@@ -1023,12 +1056,110 @@ mod tests {
         assert!(index.motions[near[0]].slab.is_none());
         // Put back, but one tile must stand alone (the caller's rule): it is not merged.
         world.colliders[tiles[3]].set_translation(Vector::new(0.1, -0.1, 0.1));
-        index.invalidate();
         index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|c| {
             c == tiles[1]
         });
         assert_eq!(index.stand_in(tiles[1]), tiles[1]);
         assert!(index.has_slabs());
+    }
+
+    /// Whether a floor is one slab never depends on its history: a tile moved away, given
+    /// other coefficients, flags of the user's own or a material, then put back as it was,
+    /// is one of the slab's tiles again, as in an index built afresh.
+    #[test]
+    fn a_floor_changed_and_put_back_is_one_slab_again() {
+        type Change = (&'static str, fn(&mut Collider, bool));
+        let changes: [Change; 3] = [
+            ("moved away", |co, back| {
+                let x = if back { 0.1 } else { 5.0 };
+                co.set_translation(Vector::new(x, -0.1, 0.1));
+            }),
+            ("friction", |co, back| {
+                co.set_friction(if back { 0.5 } else { 0.9 })
+            }),
+            ("user flags", |co, back| {
+                let flags = if back {
+                    ActiveHooks::empty()
+                } else {
+                    ActiveHooks::MODIFY_SOLVER_CONTACTS
+                };
+                co.set_active_hooks(flags);
+            }),
+        ];
+        for (what, change) in changes {
+            let mut world = PhysicsWorld::default();
+            let tiles = four_tiles(&mut world);
+            let reg = registry(&tiles);
+            let mut index = GroundIndex::default();
+            // `lone` as the plugin asks it: flags of the user's own.
+            let refresh = |index: &mut GroundIndex, world: &PhysicsWorld| {
+                let lone = |c: ColliderHandle| !world.colliders[c].active_hooks().is_empty();
+                index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &lone);
+            };
+            refresh(&mut index, &world);
+            assert_eq!(index.stand_in(tiles[3]), tiles[0], "{what}: one slab");
+            change(&mut world.colliders[tiles[3]], false);
+            refresh(&mut index, &world);
+            assert_eq!(index.stand_in(tiles[3]), tiles[3], "{what}: split");
+            change(&mut world.colliders[tiles[3]], true);
+            refresh(&mut index, &world);
+            assert!(
+                tiles.iter().all(|t| index.stand_in(*t) == tiles[0]),
+                "{what}: put back, one slab again"
+            );
+        }
+        // A material set on a tile, then taken off.
+        let mut world = PhysicsWorld::default();
+        let tiles = four_tiles(&mut world);
+        let mut reg = registry(&tiles);
+        let mut index = GroundIndex::default();
+        let (bodies, colliders) = (&world.bodies, &world.colliders);
+        index.refresh(&reg, bodies, colliders, (DT, GAP), &|_| false);
+        let plain = reg[&tiles[3]];
+        let own = GroundEntry {
+            material: Some(Material::new(0.2, 0.9)),
+            ..plain
+        };
+        for (entry, slab) in [(own, tiles[3]), (plain, tiles[0])] {
+            reg.insert(tiles[3], entry);
+            index.set_entry(tiles[3], entry);
+            index.refresh(&reg, bodies, colliders, (DT, GAP), &|_| false);
+            assert_eq!(index.stand_in(tiles[3]), slab);
+        }
+    }
+
+    /// A step of another length (a frame time that varies) recomputes the moving grounds
+    /// with it, in place: the still ones and the slabs do not depend on it.
+    #[test]
+    fn a_step_of_another_length_moves_only_the_moving_grounds() {
+        let mut world = PhysicsWorld::default();
+        let mut tiles = four_tiles(&mut world);
+        let (_, platform) = world.insert(
+            RigidBodyBuilder::kinematic_velocity_based()
+                .translation(Vector::new(3.0, 0.0, 0.0))
+                .linvel(Vector::new(6.0, 0.0, 0.0)),
+            ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+        );
+        tiles.push(platform);
+        let reg = registry(&tiles);
+        let mut index = GroundIndex::default();
+        let swept = |index: &GroundIndex| index.motions[4].aabb.maxs.x;
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
+        let (short, long) = (swept(&index), 2.0 * DT);
+        assert!(index.update(&world.bodies, &world.colliders, (long, GAP), &|_| false));
+        assert!(index.has_slabs());
+        assert_eq!(index.motions[4].handle, platform);
+        let grown = swept(&index) - short;
+        assert!(
+            (to_f64(grown) - 6.0 * DT).abs() < 1e-4,
+            "swept {grown} further"
+        );
+        // Another gap loosens every box: built again.
+        assert!(
+            !index.update(&world.bodies, &world.colliders, (long, 2.0 * GAP), &|_| {
+                false
+            })
+        );
     }
 
     #[test]
@@ -1041,7 +1172,9 @@ mod tests {
         );
         type Change = (&'static str, fn(&mut Collider));
         let changes: Vec<Change> = vec![
-            ("pose", |co| co.set_translation(Vector::new(0.0, 1e-6, 0.0))),
+            ("pose", |co| {
+                co.set_translation_wrt_parent(Vector::new(0.0, 1e-6, 0.0))
+            }),
             ("skin", |co| co.set_contact_skin(0.01)),
             ("shape", |co| {
                 co.set_shape(SharedShape::cuboid(0.5, 0.1, 0.5))
@@ -1080,9 +1213,15 @@ mod tests {
             assert!(!before.matches(co, &w.bodies), "{what} not seen");
             assert!(Basis::of(co, &w.bodies) != before, "{what}");
         }
-        // The parent's type.
+        // The parent moved: rapier moves the collider only in its next step, but the pass
+        // sees it now.
         let before = Basis::of(&world.colliders[c], &world.bodies);
         let parent = world.colliders[c].parent().unwrap();
+        let moved = Vector::new(0.0, 1e-6, 0.0);
+        world.bodies[parent].set_translation(moved, true);
+        assert!(!before.matches(&world.colliders[c], &world.bodies));
+        world.bodies[parent].set_translation(Vector::ZERO, true);
+        // The parent's type.
         world.bodies[parent].set_body_type(RigidBodyType::KinematicPositionBased, true);
         assert!(!before.matches(&world.colliders[c], &world.bodies));
     }

@@ -85,7 +85,8 @@ impl Registry {
         entry.material = material.as_ref().map(GroundMaterial::to_model);
         entry.rolling = rolling_of_material(material.as_ref());
         entry.tangential = material.as_ref().and_then(|m| m.tangential_restitution);
-        // Only the hooks' table holds materials: no rebuild of the index.
+        // The hooks' table holds the materials; the index is rebuilt only where the slabs
+        // may change (`GroundIndex::set_entry`).
         self.index.set_entry(collider, *entry);
         self.set_ground_curve(collider, material);
         Ok(())
