@@ -1001,16 +1001,19 @@ fn a_ball_at_rest_on_a_seam_between_tiles_stays_there() {
     assert!(moved < 1e-6 && asleep, "moved {moved} m, asleep {asleep}");
 }
 
+/// A run's events (step, kind, ground, approach speed's bits) and the ball's height after
+/// each step.
+type DropRun = (Vec<(usize, EventKind, ColliderHandle, u64)>, Vec<f64>);
+
 /// A ball dropped from 0.3 m (radius 5 cm) towards `(x, z)`; before step `moved_at`, `move_it`
-/// moves the ground (rapier moves a fixed body's colliders only inside its next step). The
-/// events (step, kind, ground, approach speed's bits) and the ball's height after each step.
+/// moves the ground (rapier moves a fixed body's colliders only inside its next step).
 fn dropped_while_a_ground_moves(
     world: &mut PhysicsWorld,
     grounds: &[ColliderHandle],
     (x, z): (f64, f64),
     moved_at: usize,
     move_it: &dyn Fn(&mut PhysicsWorld),
-) -> (Vec<(usize, EventKind, ColliderHandle, u64)>, Vec<f64>) {
+) -> DropRun {
     let ball = world
         .insert(
             RigidBodyBuilder::dynamic().translation(Vector::new(real(x), 0.3, real(z))),
@@ -1080,9 +1083,7 @@ fn a_ground_whose_fixed_body_moved_between_steps_is_met_where_it_now_is() {
         "the landing is an impact: {:?}",
         parentless.0
     );
-    let kinds = |run: &(Vec<(usize, EventKind, ColliderHandle, u64)>, Vec<f64>)| {
-        run.0.iter().map(|e| (e.0, e.1, e.3)).collect::<Vec<_>>()
-    };
+    let kinds = |run: &DropRun| run.0.iter().map(|e| (e.0, e.1, e.3)).collect::<Vec<_>>();
     assert_eq!(kinds(on_body), kinds(parentless), "the same impacts");
     assert_eq!(on_body.1, parentless.1, "the same flight");
 

@@ -7,10 +7,10 @@
 //!   them), once per step before anything asks: every ground's pose over the step
 //!   ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless or on
 //!   a fixed body) is computed once and kept until its collider's pose, shape, flags,
-//!   coefficients or filtering change (one comparison per ground and step; the pose where
-//!   rapier will have it, `collider_pose`: a fixed body moved since the last step counts); a
-//!   ground on a kinematic body is computed afresh each step, and a change of the step's
-//!   length recomputes only those;
+//!   coefficients or filtering change (one comparison per ground and step; a fixed body the
+//!   user moved since the last step has its colliders moved before this pass,
+//!   `ImpactPlugin::before_step`); a ground on a kinematic body is computed afresh each step,
+//!   and a change of the step's length recomputes only those;
 //! - [`GroundIndex::near`]: the grounds whose swept AABB meets a cube, from a BVH over the
 //!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
 //!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
@@ -36,7 +36,6 @@ use crate::model::Material;
 use crate::plugin::bridge::convert::{
     pose_from_na, pose_to_na, to_f64, to_real, vec_from_na, vec_to_na,
 };
-use crate::plugin::queries::collider_pose;
 use crate::plugin::queries::slabs::{Slab, Tile, find_slabs};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::{Pose, Real, Vector};
@@ -169,15 +168,17 @@ unsafe impl Sync for Class {}
 
 impl Basis {
     fn of(co: &Collider, bodies: &RigidBodySet) -> Self {
-        let parent = co.parent().and_then(|p| bodies.get(p));
         Self {
             class: Class {
                 shape: co.shape() as *const _ as *const (),
                 enabled: co.is_enabled(),
                 sensor: co.is_sensor(),
-                parent: parent.map(|rb| (rb.body_type(), rb.is_enabled())),
+                parent: co
+                    .parent()
+                    .and_then(|p| bodies.get(p))
+                    .map(|rb| (rb.body_type(), rb.is_enabled())),
             },
-            pose: collider_pose(co, parent.map(|rb| rb.position())),
+            pose: *co.position(),
             skin: co.contact_skin(),
             props: Props {
                 friction: co.friction(),
@@ -196,8 +197,7 @@ impl Basis {
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
-        let parent = co.parent().and_then(|p| bodies.get(p));
-        collider_pose(co, parent.map(|rb| rb.position())) == self.pose
+        *co.position() == self.pose
             && co.contact_skin() == self.skin
             && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
             && co.is_enabled() == class.enabled
@@ -208,7 +208,11 @@ impl Basis {
             && (co.collision_groups(), co.solver_groups()) == props.groups
             && co.active_collision_types() == props.types
             && co.active_hooks() == props.hooks
-            && parent.map(|rb| (rb.body_type(), rb.is_enabled())) == class.parent
+            && co
+                .parent()
+                .and_then(|p| bodies.get(p))
+                .map(|rb| (rb.body_type(), rb.is_enabled()))
+                == class.parent
     }
 }
 
@@ -833,10 +837,7 @@ fn motion_of(
     }
     let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
     let loosen = to_real(gap + to_f64(co.contact_skin()));
-    // Where rapier will have the collider: a fixed body moved since its last step still has
-    // its colliders where it was.
-    let at = collider_pose(co, parent.map(|(_, rb)| rb.position()));
-    let mut aabb = co.shape().compute_aabb(&at).loosened(loosen);
+    let mut aabb = co.compute_aabb().loosened(loosen);
     // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
     let half_space = co.shape().as_halfspace();
     let plane_at = |pose: &Pose| {
@@ -872,7 +873,7 @@ fn motion_of(
             let end_pose = pose_from_na(&end);
             aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
             // A turning half-space sweeps too much for one plane: AABB only.
-            let plane = match (plane_at(&at), plane_at(&end_pose)) {
+            let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
                 (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => Some((n, d0.max(d1))),
                 _ => None,
             };
@@ -891,7 +892,7 @@ fn motion_of(
             })
         }
         _ => {
-            let pose = pose_to_na(&at);
+            let pose = pose_to_na(co.position());
             let (com0, rot0, local) = (
                 pose.translation.vector,
                 pose.rotation,
@@ -907,7 +908,7 @@ fn motion_of(
                 v: Vector3::zeros(),
                 w: Vector3::zeros(),
                 aabb,
-                plane: plane_at(&at),
+                plane: plane_at(co.position()),
                 slab: None,
             })
         }
@@ -1172,9 +1173,7 @@ mod tests {
         );
         type Change = (&'static str, fn(&mut Collider));
         let changes: Vec<Change> = vec![
-            ("pose", |co| {
-                co.set_translation_wrt_parent(Vector::new(0.0, 1e-6, 0.0))
-            }),
+            ("pose", |co| co.set_translation(Vector::new(0.0, 1e-6, 0.0))),
             ("skin", |co| co.set_contact_skin(0.01)),
             ("shape", |co| {
                 co.set_shape(SharedShape::cuboid(0.5, 0.1, 0.5))
@@ -1213,15 +1212,9 @@ mod tests {
             assert!(!before.matches(co, &w.bodies), "{what} not seen");
             assert!(Basis::of(co, &w.bodies) != before, "{what}");
         }
-        // The parent moved: rapier moves the collider only in its next step, but the pass
-        // sees it now.
+        // The parent's type.
         let before = Basis::of(&world.colliders[c], &world.bodies);
         let parent = world.colliders[c].parent().unwrap();
-        let moved = Vector::new(0.0, 1e-6, 0.0);
-        world.bodies[parent].set_translation(moved, true);
-        assert!(!before.matches(&world.colliders[c], &world.bodies));
-        world.bodies[parent].set_translation(Vector::ZERO, true);
-        // The parent's type.
         world.bodies[parent].set_body_type(RigidBodyType::KinematicPositionBased, true);
         assert!(!before.matches(&world.colliders[c], &world.bodies));
     }

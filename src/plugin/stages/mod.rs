@@ -99,6 +99,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     pub fn before_step(&mut self, gravity: Vector, params: &IntegrationParameters, sets: StepSets) {
         self.stopwatch.start_step();
         let (bodies, colliders, sets) = sets.into_parts();
+        // rapier's step first moves the colliders of the bodies moved since the last one (a
+        // fixed body the user moved; the plugin's own writes were carried at the last step's
+        // end): the same now, so that the plan meets every collider where rapier's step will.
+        bodies.propagate_modified_body_positions_to_colliders(colliders);
         let mut step = self.prepare(gravity, params, bodies, colliders);
         self.stopwatch.lap(Stage::Prepare);
         if !step.active {
@@ -317,7 +321,8 @@ impl<H> ImpactPlugin<H> {
 
     /// The commit stage, closing each half of the step's work on bodies: the writes recorded
     /// in the half applied to rapier's bodies (`commit.rs`); after rapier's step, the
-    /// colliders moved with their bodies (before it, rapier's step moves them).
+    /// colliders moved with their bodies (before it, rapier's step moves them), as the plan
+    /// of the next step reads them.
     fn commit(&mut self, bodies: &mut RigidBodySet, colliders: Option<&mut ColliderSet>) {
         let (applied, moves) = commit::apply(&mut self.writes, bodies);
         if let Some(colliders) = colliders {
