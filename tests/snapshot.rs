@@ -377,3 +377,55 @@ fn a_body_near_a_ground_last_step_steps_as_after_a_restore() {
         }
     }
 }
+
+/// The event log across a restore: a restored plugin's log, if on, starts empty and then
+/// holds exactly the events of the steps after the restore, as the saved run's log did after
+/// it was taken at the save; so does a plugin that ran ahead, with events left in its log,
+/// and is restored back.
+#[test]
+fn a_restored_plugins_event_log_holds_only_later_steps() {
+    let timing = TimingMode::TimeOfImpact;
+    let (mut world, mut plugin) = scene(timing);
+    plugin.set_event_log(true);
+    let logs = |world: &mut PhysicsWorld, plugin: &mut ImpactPlugin| {
+        (0..20)
+            .map(|_| {
+                plugin.step(world);
+                plugin.take_event_log()
+            })
+            .collect::<Vec<_>>()
+    };
+    // Saved after the first step with events (the crowd landing), the log taken there.
+    while plugin.events().is_empty() {
+        plugin.step(&mut world);
+    }
+    plugin.take_event_log();
+    let (saved, snapshot) = (saved_world(&world), plugin.snapshot());
+    let expected = logs(&mut world, &mut plugin);
+    assert!(
+        expected.iter().any(|l| !l.is_empty()),
+        "events after the save"
+    );
+
+    let mut restored = fresh(timing);
+    restored.set_event_log(true);
+    restored.restore(&snapshot).unwrap();
+    assert!(
+        restored.take_event_log().is_empty(),
+        "a new plugin's log starts empty"
+    );
+    let mut world = saved_world(&saved);
+    assert_eq!(logs(&mut world, &mut restored), expected);
+
+    // The plugin that ran ahead, its last steps' events not taken, restored back.
+    for _ in 0..3 {
+        plugin.step(&mut world);
+    }
+    plugin.restore(&snapshot).unwrap();
+    assert!(
+        plugin.take_event_log().is_empty(),
+        "a rewound plugin's log starts empty"
+    );
+    let mut world = saved_world(&saved);
+    assert_eq!(logs(&mut world, &mut plugin), expected);
+}

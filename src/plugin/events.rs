@@ -211,6 +211,19 @@ impl Reports {
         self.diagnostics.clear();
     }
 
+    /// A restored plugin reports the saved step's `events` and no diagnostic; its event log,
+    /// if on, starts empty (the saved step's events were the saved run's to take), so that it
+    /// holds only the events of the steps after the restore.
+    pub fn restore(&mut self, events: &[ImpactEvent]) {
+        self.events.clear();
+        self.events.extend_from_slice(events);
+        self.diagnostics.clear();
+        if let Some(log) = &mut self.log {
+            log.clear();
+        }
+        self.taken = self.events.len();
+    }
+
     /// Turns the event log on (kept if it already is) or off (its events dropped).
     pub fn set_log(&mut self, on: bool) {
         match (on, &self.log) {

@@ -24,8 +24,9 @@ use crate::plugin::state::step::StepData;
 use core::fmt;
 
 /// The layout of [`ImpactSnapshot`]: a snapshot of another layout is refused by
-/// [`ImpactPlugin::restore`] rather than misread.
-const LAYOUT: u32 = 2;
+/// [`ImpactPlugin::restore`] rather than misread. (3: the hook flags' record of idle steps
+/// became `since_needed`, which a snapshot of layout 2 may lack.)
+const LAYOUT: u32 = 3;
 
 /// The plugin's state between two steps, to resume a simulation bit for bit: save it beside
 /// rapier's world, and give both back ([`ImpactPlugin::restore`] and the world as it was
@@ -33,7 +34,11 @@ const LAYOUT: u32 = 2;
 ///
 /// `Clone`, and with the `serde-serialize` feature `Serialize` and `Deserialize`. Its
 /// contents are the plugin's own and may change between versions of this crate; a snapshot
-/// of another layout is refused, not misread. rapier's world holds infinities (a fixed body's
+/// of another layout is refused, not misread: by [`ImpactPlugin::restore`]
+/// ([`RestoreError::Layout`]), or already by serde where the other layout lacks a field this
+/// one has. `restore` cannot see rapier's world: give it the world saved with the snapshot
+/// (another one is not detected, and the plugin may then take hook flags of its own left on
+/// that world's colliders for yours). rapier's world holds infinities (a fixed body's
 /// mass properties), so save it in a format that keeps them (CBOR, bincode, MessagePack; not
 /// JSON). The snapshot itself holds only finite numbers: it keeps the last step's events but
 /// not its diagnostics (they may quote a collider's NaN, and the collider is in the world).
@@ -188,8 +193,7 @@ impl<H> ImpactPlugin<H> {
         self.registry = registry;
         self.flags = HookFlags::from_saved(&snapshot.flags);
         self.memory = Memory::from_saved(&snapshot.memory);
-        self.reports.events.clone_from(&snapshot.events);
-        self.reports.diagnostics.clear();
+        self.reports.restore(&snapshot.events);
         // Built again at the next step.
         self.step = StepData::default();
         self.lookup = Lookup::default();
