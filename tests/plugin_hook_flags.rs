@@ -48,6 +48,13 @@ fn ball(
     )
 }
 
+/// The plugin with the default configuration and the ground `g`.
+fn plugin_with_ground(w: &PhysicsWorld, g: ColliderHandle) -> ImpactPlugin {
+    let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+    p.add_ground(&w.bodies, &w.colliders, g).unwrap();
+    p
+}
+
 /// Records which collider pairs reach the user's hook, and through which call.
 #[derive(Default)]
 struct Recording(Mutex<Vec<(ColliderHandle, ColliderHandle, bool)>>);
@@ -101,8 +108,7 @@ fn flags_the_user_sets_between_steps_are_the_ones_handed_back() {
         let g = ground(&mut w, NONE);
         let (far, _) = ball(&mut w, 3.0, 0.101, NONE);
         let (b, c) = ball(&mut w, 0.0, 0.101, NONE);
-        let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-        p.add_ground(&w.bodies, &w.colliders, g).unwrap();
+        let mut p = plugin_with_ground(&w, g);
         // The flags on the ball: one dynamic body unmanaged.
         let on_ball = matches!(way, GiveBack::ExcludeFlaggedBall);
         if on_ball {
@@ -205,8 +211,7 @@ fn a_ground_whose_flags_the_user_sets_again_is_flagged_again() {
             .linvel(Vector::new(0.0, 5.0, 0.0)),
         ColliderBuilder::ball(0.1).restitution(0.7),
     );
-    let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-    p.add_ground(&w.bodies, &w.colliders, g).unwrap();
+    let mut p = plugin_with_ground(&w, g);
     let mut steps = 0;
     while flags(&w, g) != PLUGINS {
         p.step(&mut w);
@@ -263,8 +268,7 @@ fn a_flagged_ball_made_a_ground_stays_flagged() {
     let g = ground(&mut w, NONE);
     let (unmanaged, _) = ball(&mut w, 5.0, 0.101, NONE);
     let (a, c) = ball(&mut w, 0.0, 0.101, MODIFY);
-    let mut p = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-    p.add_ground(&w.bodies, &w.colliders, g).unwrap();
+    let mut p = plugin_with_ground(&w, g);
     p.exclude_body(unmanaged);
     p.step(&mut w);
     assert_eq!(flags(&w, c), PLUGINS);
