@@ -282,3 +282,38 @@ fn a_flagged_ball_made_a_ground_stays_flagged() {
     p.detach(&mut w.colliders);
     assert_eq!((flags(&w, c), flags(&w, g)), (MODIFY, NONE));
 }
+
+/// `user_active_hooks` gives the user's own flags while the plugin's are on, so that a flag
+/// added to them (read, add, write) is the user's: the wrapped filter is asked for the
+/// ground's pairs; the same flag added to the collider's current flags (the plugin's
+/// included) reads as no change and is not.
+#[test]
+fn a_flag_added_to_the_users_own_flags_is_theirs() {
+    for through_getter in [true, false] {
+        let mut w = PhysicsWorld::default();
+        let g = ground(&mut w, NONE);
+        ball(&mut w, 0.0, 0.101, NONE);
+        let mut p =
+            ImpactPlugin::with_hooks(ImpactConfig::default(), Recording::default()).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, g).unwrap();
+        p.step(&mut w);
+        assert_eq!(p.user_active_hooks(&w.colliders, g), NONE);
+        let current = if through_getter {
+            p.user_active_hooks(&w.colliders, g)
+        } else {
+            flags(&w, g)
+        };
+        w.colliders[g].set_active_hooks(current | ActiveHooks::FILTER_CONTACT_PAIRS);
+        for _ in 0..5 {
+            p.step(&mut w);
+        }
+        let (filter, _) = p.user_hooks().count();
+        let theirs = p.user_active_hooks(&w.colliders, g);
+        if through_getter {
+            assert_eq!(theirs, ActiveHooks::FILTER_CONTACT_PAIRS);
+            assert!(filter > 0, "the user's filter asked");
+        } else {
+            assert_eq!((theirs, filter), (NONE, 0), "the plugin's value: no change");
+        }
+    }
+}

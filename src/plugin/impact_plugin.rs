@@ -18,8 +18,8 @@ use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
 use crate::plugin::state::writes::Writes;
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase, PhysicsWorld,
-    RigidBodyHandle, RigidBodySet,
+    ActiveHooks, ColliderHandle, ColliderSet, ImpulseJointSet, MultibodyJointSet, NarrowPhase,
+    PhysicsWorld, RigidBodyHandle, RigidBodySet,
 };
 
 /// Ground impacts resolved by the impact model inside a rapier simulation: the physics hook
@@ -235,6 +235,18 @@ impl<H> ImpactPlugin<H> {
     /// The wrapped user hook, mutably.
     pub fn user_hooks_mut(&mut self) -> &mut H {
         &mut self.user_hooks
+    }
+
+    /// The hook flags you set on `collider`: what rapier would see without the plugin, while
+    /// the collider carries the plugin's own too (empty for a collider not in `colliders`).
+    /// To add a flag to yours, set `user_active_hooks(..) | flag`: the collider's own
+    /// `active_hooks() | flag` may be exactly what the plugin wrote, which reads as no change.
+    pub fn user_active_hooks(
+        &self,
+        colliders: &ColliderSet,
+        collider: ColliderHandle,
+    ) -> ActiveHooks {
+        self.flags.recorded_user_flags(colliders, collider)
     }
 
     /// The same plugin wrapping `user_hooks` instead, and the hook it wrapped: every other
