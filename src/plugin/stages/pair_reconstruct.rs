@@ -161,25 +161,12 @@ struct Clusters {
 
 impl Clusters {
     /// The clusters of these pairs, by union-find over them; clusters are numbered in the
-    /// order the pairs first reach them, so the order is the plan's every run.
+    /// order the pairs first reach them, so the order is the plan's every run (whichever body
+    /// the union-find makes a set's root).
     fn of(impacts: &[&PlannedPair]) -> Self {
-        let mut parent: HandleMap<RigidBodyHandle, RigidBodyHandle> = HandleMap::default();
-        fn root(
-            parent: &mut HandleMap<RigidBodyHandle, RigidBodyHandle>,
-            h: RigidBodyHandle,
-        ) -> RigidBodyHandle {
-            let mut r = h;
-            while let Some(p) = parent.get(&r).copied().filter(|p| *p != r) {
-                r = p;
-            }
-            parent.insert(h, r);
-            r
-        }
+        let mut sets = Sets::default();
         for pair in impacts {
-            let (ra, rb) = (root(&mut parent, pair.a), root(&mut parent, pair.b));
-            if ra != rb {
-                parent.insert(ra, rb);
-            }
+            sets.join(pair.a, pair.b);
         }
         let mut members: Vec<Vec<RigidBodyHandle>> = Vec::new();
         let mut cluster_of: HandleMap<RigidBodyHandle, usize> = HandleMap::default();
@@ -189,7 +176,7 @@ impl Clusters {
                 if place.contains_key(&body) {
                     continue;
                 }
-                let r = root(&mut parent, body);
+                let r = sets.root(body);
                 let c = *cluster_of.entry(r).or_insert_with(|| {
                     members.push(Vec::new());
                     members.len() - 1
@@ -200,10 +187,69 @@ impl Clusters {
         }
         let mut pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); members.len()];
         for pair in impacts {
-            let c = cluster_of[&root(&mut parent, pair.a)];
+            let c = cluster_of[&sets.root(pair.a)];
             pairs[c].push((place[&pair.a], place[&pair.b]));
         }
         Clusters { members, pairs }
+    }
+}
+
+/// Disjoint sets of bodies (union-find): the smaller set joins the larger, and every walk to
+/// a root points the bodies it passed at the root, so `n` joins and finds over a cluster of
+/// `n` bodies cost about `n` steps, not `n^2` (a row of balls struck at one end lists its
+/// pairs in the order that would chain a naive union's roots).
+#[derive(Default)]
+struct Sets {
+    /// A body's parent in its set's tree (a root has none, or itself).
+    parent: HandleMap<RigidBodyHandle, RigidBodyHandle>,
+    /// A root's set size.
+    size: HandleMap<RigidBodyHandle, u32>,
+}
+
+impl Sets {
+    /// The root of `body`'s set (itself if it joined none).
+    fn root(&mut self, body: RigidBodyHandle) -> RigidBodyHandle {
+        let mut r = body;
+        while let Some(p) = self.parent.get(&r).copied().filter(|p| *p != r) {
+            r = p;
+        }
+        let mut k = body;
+        while k != r {
+            let next = self.parent.insert(k, r).unwrap_or(r);
+            k = next;
+        }
+        r
+    }
+
+    /// Joins the sets of `a` and `b`.
+    fn join(&mut self, a: RigidBodyHandle, b: RigidBodyHandle) {
+        let (ra, rb) = (self.root(a), self.root(b));
+        if ra == rb {
+            return;
+        }
+        let size = |s: &Self, r| s.size.get(&r).copied().unwrap_or(1);
+        let (small, large) = if size(self, ra) < size(self, rb) {
+            (ra, rb)
+        } else {
+            (rb, ra)
+        };
+        let joined = size(self, small) + size(self, large);
+        self.parent.insert(small, large);
+        self.size.remove(&small);
+        self.size.insert(large, joined);
+    }
+
+    /// The longest walk from a body to its root (a test's measure of the trees' height).
+    #[cfg(test)]
+    fn height(&self) -> usize {
+        let depth = |mut k: RigidBodyHandle| {
+            let mut n = 0;
+            while let Some(p) = self.parent.get(&k).copied().filter(|p| *p != k) {
+                (k, n) = (p, n + 1);
+            }
+            n
+        };
+        self.parent.keys().map(|k| depth(*k)).max().unwrap_or(0)
     }
 }
 
@@ -278,4 +324,48 @@ fn cluster_balls<'s>(
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Sets;
+    use crate::rapier::prelude::RigidBodyHandle;
+
+    /// A row of bodies joined pair by pair from one end, and from the other, and two rows
+    /// joined in a random order: one set each, whose trees stay shallow (a naive union makes
+    /// a row's tree as tall as the row, and walks it once a pair).
+    #[test]
+    fn a_row_joined_pair_by_pair_is_one_shallow_set() {
+        let n = 1024u32;
+        let body = |i: u32| RigidBodyHandle::from_raw_parts(i, 0);
+        let orders: [Vec<u32>; 2] = [(0..n - 1).collect(), (0..n - 1).rev().collect()];
+        for order in orders {
+            let mut sets = Sets::default();
+            for i in order {
+                sets.join(body(i), body(i + 1));
+            }
+            assert!(sets.height() <= 10, "height {}", sets.height());
+            let root = sets.root(body(0));
+            assert!((0..n).all(|i| sets.root(body(i)) == root));
+        }
+        // Two rows, their pairs shuffled (a fixed sequence): two sets.
+        let mut pairs: Vec<(u32, u32)> = (0..n / 2 - 1).map(|i| (i, i + 1)).collect();
+        pairs.extend((n / 2..n - 1).map(|i| (i, i + 1)));
+        let mut x = 0x9e37_79b9u64;
+        for k in (1..pairs.len()).rev() {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            pairs.swap(k, (x >> 33) as usize % (k + 1));
+        }
+        let mut sets = Sets::default();
+        for (a, b) in pairs {
+            sets.join(body(a), body(b));
+        }
+        let (first, second) = (sets.root(body(0)), sets.root(body(n - 1)));
+        assert_ne!(first, second);
+        assert!((0..n / 2).all(|i| sets.root(body(i)) == first));
+        assert!((n / 2..n).all(|i| sets.root(body(i)) == second));
+        assert!(sets.height() <= 10, "height {}", sets.height());
+    }
 }
