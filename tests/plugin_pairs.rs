@@ -847,3 +847,36 @@ fn a_pair_with_coefficients_out_of_range_is_rapiers_and_reported_once() {
         "{diagnostics:?}"
     );
 }
+
+/// Two opted-in balls of two dominance groups: rapier lets their contact push only the
+/// lower one, as if the other's mass were infinite, and the pair stays rapier's: no event,
+/// and both balls end as in rapier alone, the dominant one still at its speed (the model
+/// would have stopped it).
+#[test]
+fn a_pair_of_two_dominance_groups_is_rapiers() {
+    for mode in MODES {
+        let run = |plugin: bool| {
+            let mut w = world_with_gravity(0.0);
+            let ((a, _), (b, _)) = closing_pair(&mut w, 0.9);
+            w.bodies[a].set_dominance_group(10);
+            let mut p = self::plugin(mode);
+            p.set_all_dynamic_bodies_impact(true);
+            let mut events = 0;
+            for _ in 0..30 {
+                if plugin {
+                    p.step(&mut w);
+                    events += pair_events(&p).len();
+                } else {
+                    w.step();
+                }
+            }
+            let v = |h: RigidBodyHandle| na(w.bodies[h].linvel()).x;
+            (events, v(a), v(b))
+        };
+        let (events, va, vb) = run(true);
+        let (_, alone_a, alone_b) = run(false);
+        assert_eq!(events, 0, "{mode:?}");
+        assert_eq!((va, vb), (alone_a, alone_b), "{mode:?}: as in rapier alone");
+        assert_abs_diff_eq!(va, 2.0, epsilon = 1e-6);
+    }
+}

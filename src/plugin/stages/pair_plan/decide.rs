@@ -229,11 +229,19 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         Some((touch.dist, closing, n))
     }
 
-    /// The pair of members `i < j` with its role, or `None` when it cannot meet in the step,
-    /// it is slow and rapier's resting contact as it is (unless `chain`: side by side with a
-    /// body of an impact, it may pass the impact on), or it is hooked and rapier would not
-    /// solve it or the user's filter refuses it. Reads only; the caller adds the pair.
+    /// The pair of members `i < j` with its role, or `None` when its bodies are of two
+    /// dominance groups, when it cannot meet in the step, it is slow and rapier's resting
+    /// contact as it is (unless `chain`: side by side with a body of an impact, it may pass
+    /// the impact on), or it is hooked and rapier would not solve it or the user's filter
+    /// refuses it. Reads only; the caller adds the pair.
     pub(super) fn evaluate(&self, i: usize, j: usize, chain: bool) -> Option<PlannedPair> {
+        // rapier lets a contact between bodies of two dominance groups push only the lower
+        // one, as if the other's mass were infinite: such a pair stays rapier's.
+        let dominance =
+            |k: usize| self.bodies[self.members.balls[k].body].effective_dominance_group();
+        if dominance(i) != dominance(j) {
+            return None;
+        }
         let Approach {
             gap,
             closing,
