@@ -533,9 +533,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         );
         let colliders = scene.colliders;
         let (to_plane, friction, default) = (slide.to_plane, slide.friction, slide.default);
-        // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8.
+        // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8. On level ground
+        // the slip keeps its direction until it is gone, within tau <= |slip| / (mu g_n), and
+        // the ball then rolls straight on: its path leaves the line of its last heading by at
+        // most mu g_n tau^2 / 2 <= |slip|^2 / (2 mu g_n), and a ball rolling without slip
+        // (slowed only along its heading) keeps to its chord.
         let (p, q) = (on_ground.com - to_plane, end.com - to_plane);
-        let bow = accel_bound(slide) * dt * dt / 8.0;
+        let mut bow = accel_bound(slide) * dt * dt / 8.0;
+        let grip = -slide.friction * slide.an;
+        if slide.level && grip > 0.0 {
+            bow = bow.min(slide.slip.norm_squared() / (2.0 * grip));
+        }
         // The others are the plane's pieces, or grounds it may roll into, which must not
         // touch it yet. One it has just left (a slope behind the crease) may be nearer than
         // the resting gap: the search along the rolling finds whether it comes back. A piece
