@@ -237,9 +237,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     pub(super) fn evaluate(&self, i: usize, j: usize, chain: bool) -> Option<PlannedPair> {
         // rapier lets a contact between bodies of two dominance groups push only the lower
         // one, as if the other's mass were infinite: such a pair stays rapier's.
-        let dominance =
-            |k: usize| self.bodies[self.members.balls[k].body].effective_dominance_group();
-        if dominance(i) != dominance(j) {
+        if self.members.balls[i].dominance != self.members.balls[j].dominance {
             return None;
         }
         let Approach {

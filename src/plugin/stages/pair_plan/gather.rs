@@ -28,6 +28,8 @@ pub(super) struct Ball<'a> {
     /// sphere about the centre of mass that holds it (its rotation stays inside).
     pub radius: f64,
     pub asleep: bool,
+    /// Its body's dominance group, as rapier's contacts weigh it (`effective_dominance_group`).
+    pub dominance: i16,
     /// The acceleration of its user force (m/s^2).
     pub force_accel: f64,
     /// How fast its turning can move a surface point: the angular speed times the radius for
@@ -182,6 +184,7 @@ fn member<'a>(
         v: vec_to_na(rb.linvel()),
         radius,
         asleep: rb.is_sleeping(),
+        dominance: rb.effective_dominance_group(),
         force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
         turn_speed: match shape {
             Some(_) => to_f64(rb.angvel().length()) * radius,
