@@ -24,8 +24,8 @@ use crate::plugin::state::step::StepData;
 use core::fmt;
 
 /// The layout of [`ImpactSnapshot`]: a snapshot of another layout is refused by
-/// [`ImpactPlugin::restore`] rather than misread. (3: the hook flags' record of idle steps
-/// became `since_needed`, which a snapshot of layout 2 may lack.)
+/// [`ImpactPlugin::restore`] rather than misread: raised with every change of what the
+/// snapshot holds.
 const LAYOUT: u32 = 3;
 
 /// The plugin's state between two steps, to resume a simulation bit for bit: save it beside

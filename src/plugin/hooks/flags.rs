@@ -331,7 +331,8 @@ impl HookFlags {
         }
     }
 
-    /// Flags the body's colliders (new ones included) and gives back those detached from it.
+    /// Flags the body's colliders (new ones included) and gives back those detached from it;
+    /// its entry in `hooked` is the caller's to make.
     fn flag_body(
         &mut self,
         handle: RigidBodyHandle,
@@ -340,22 +341,16 @@ impl HookFlags {
         colliders: &mut ColliderSet,
     ) {
         let attached = rb.colliders();
-        let listed = &self.hooked[&handle].colliders;
+        let Some(entry) = self.hooked.get_mut(&handle) else {
+            return;
+        };
+        let listed = &entry.colliders;
         let same =
             listed.len() == attached.len() && listed.iter().zip(attached).all(|(h, a)| h == a);
         if !same {
-            let old = std::mem::replace(
-                &mut self
-                    .hooked
-                    .get_mut(&handle)
-                    .expect("entry made by the caller")
-                    .colliders,
-                attached
-                    .iter()
-                    .copied()
-                    .filter(|c| colliders.get(*c).is_some())
-                    .collect(),
-            );
+            let now = attached.iter().copied();
+            let now = now.filter(|c| colliders.get(*c).is_some()).collect();
+            let old = std::mem::replace(&mut entry.colliders, now);
             for c in old.iter().filter(|c| !attached.contains(c)) {
                 self.release(colliders, registry, *c, Holder::Body(handle));
             }

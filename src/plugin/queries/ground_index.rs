@@ -269,7 +269,7 @@ struct Slot {
     handle: ColliderHandle,
     entry: GroundEntry,
     slab: Option<(u32, ColliderHandle)>,
-    /// The ground's index (in `handles`, `bases`), `u32::MAX` for none.
+    /// The ground's index (in `handles`, `bases`).
     index: u32,
 }
 
@@ -579,20 +579,13 @@ impl GroundIndex {
         let len = registry.keys().map(|h| slot_of(*h) + 1).max().unwrap_or(0);
         self.by_slot.clear();
         self.by_slot.resize(len, None);
-        for (h, entry) in registry {
+        for (i, h) in handles.iter().enumerate() {
             self.by_slot[slot_of(*h)] = Some(Slot {
                 handle: *h,
-                entry: *entry,
+                entry: registry[h],
                 slab: None,
-                index: u32::MAX,
+                index: i as u32,
             });
-        }
-        for (i, h) in handles.iter().enumerate() {
-            if let Some(Some(slot)) = self.by_slot.get_mut(slot_of(*h)) {
-                if slot.handle == *h {
-                    slot.index = i as u32;
-                }
-            }
         }
         for (k, slab) in self.slabs.iter().enumerate() {
             let first = handles[slab.members[0]];
