@@ -880,3 +880,121 @@ fn a_pair_of_two_dominance_groups_is_rapiers() {
         assert_abs_diff_eq!(va, 2.0, epsilon = 1e-6);
     }
 }
+
+/// A heavy ball strikes a light one lying 3 cm in front of a second light one (e = 1, no
+/// friction), in free space and on a floor: the struck ball leaves at nearly twice the
+/// striker's speed and meets the second one inside the same step. It must hit it, never pass
+/// through it. Where the second ball has a plan to move by (in free space in `Exact` mode, a
+/// flight), the three move together: every impact is in the step, at its closed form (the
+/// second ball leaves with the struck ball's speed), and momentum and energy are kept. Where
+/// it has none (`TimeOfImpact` mode, or resting on the floor), the strike is left to the
+/// step's end, and the struck ball meets the second one in the next step.
+#[test]
+fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
+    let (r, v, m_light, m_heavy) = (0.02, 6.0, 0.17, 50.0 * 0.17);
+    let heavy = |w: &mut PhysicsWorld, y: f64| {
+        let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        w.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(real(-0.2), real(y), 0.0))
+                .linvel(Vector::new(real(v), 0.0, 0.0))
+                .can_sleep(false),
+            ColliderBuilder::ball(real(r))
+                .density(real(m_heavy / volume))
+                .restitution(1.0)
+                .friction(0.0),
+        )
+        .0
+    };
+    for on_floor in [false, true] {
+        for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+            let label = format!("{mode:?}, on the floor: {on_floor}");
+            let (gravity, y) = if on_floor { (G, r) } else { (0.0, 0.0) };
+            let mut w = world_with_gravity(gravity);
+            let mut p = plugin(mode);
+            if on_floor {
+                let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
+                let (_, floor) = w.insert(
+                    RigidBodyBuilder::fixed(),
+                    ColliderBuilder::halfspace(up)
+                        .restitution(1.0)
+                        .friction(0.0),
+                );
+                p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+            }
+            let zero = Vector3::zeros();
+            let a = heavy(&mut w, y);
+            let (b, _) = ball(&mut w, Vector3::new(0.0, y, 0.0), zero, zero, r, 1.0, 0.0);
+            let (c, _) = ball(&mut w, Vector3::new(0.07, y, 0.0), zero, zero, r, 1.0, 0.0);
+            p.set_all_dynamic_bodies_impact(true);
+            let masses = [(a, m_heavy), (b, m_light), (c, m_light)];
+            let x_momentum = |w: &PhysicsWorld| -> f64 {
+                masses
+                    .iter()
+                    .map(|(h, m)| m * na(w.bodies[*h].linvel()).x)
+                    .sum()
+            };
+            let energy = |w: &PhysicsWorld| -> f64 {
+                masses
+                    .iter()
+                    .map(|(h, m)| 0.5 * m * na(w.bodies[*h].linvel()).norm_squared())
+                    .sum()
+            };
+            let (p0, e0) = (x_momentum(&w), energy(&w));
+            let (mut first_ab, mut bc) = (None, Vec::new());
+            for n in 0..6 {
+                p.step(&mut w);
+                for ev in pair_events(&p) {
+                    if ev.body == b && ev.body2 == Some(a) && first_ab.is_none() {
+                        first_ab = Some(n);
+                    }
+                    if ev.body == c && ev.body2 == Some(b) {
+                        bc.push((n, ev));
+                    }
+                }
+                let x = |h: RigidBodyHandle| na(w.bodies[h].translation()).x;
+                assert!(
+                    x(b) < x(c),
+                    "{label}: step {n}: B at {} passed C at {}",
+                    x(b),
+                    x(c)
+                );
+                assert!(
+                    energy(&w) <= e0 * (1.0 + V_TOL),
+                    "{label}: step {n}: energy {} from {e0}",
+                    energy(&w)
+                );
+                if !on_floor {
+                    let p1 = x_momentum(&w);
+                    assert!(
+                        abs_diff_eq!(p1, p0, epsilon = V_TOL * p0),
+                        "{label}: step {n}: momentum {p1} from {p0}"
+                    );
+                }
+            }
+            let first_ab = first_ab.unwrap_or_else(|| panic!("{label}: A never hit B"));
+            let &(n, hit) = bc
+                .first()
+                .unwrap_or_else(|| panic!("{label}: B never hit C"));
+            if mode == TimingMode::Exact && !on_floor {
+                // The struck ball's speed, 2 m_A / (m_A + m_B) v, passed on whole to C.
+                let sent = 2.0 * m_heavy / (m_heavy + m_light) * v;
+                let speed = wide(hit.impulse.x) / m_light;
+                assert_eq!(n, first_ab, "{label}: B met C a step late");
+                assert_eq!(hit.timing, ImpactTiming::InStep, "{label}");
+                assert!(
+                    abs_diff_eq!(speed, sent, epsilon = V_TOL * sent),
+                    "{label}: C leaves at {speed}, the closed form {sent}"
+                );
+                assert!(
+                    abs_diff_eq!(energy(&w), e0, epsilon = V_TOL * e0),
+                    "{label}: energy {} from {e0}",
+                    energy(&w)
+                );
+            } else {
+                assert_eq!(n, first_ab + 1, "{label}");
+            }
+        }
+    }
+}
+

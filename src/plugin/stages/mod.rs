@@ -60,9 +60,11 @@ use crate::plugin::config::TimingMode;
 use crate::plugin::impact_plugin::{ImpactPlugin, StepSets};
 use crate::plugin::policy::Role;
 use crate::plugin::profile::{Stage, StepCounts};
+use crate::plugin::queries::filter;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::{Commit, Origin};
-use crate::plugin::stages::pair_plan::{PairInputs, StepStart};
+use crate::plugin::stages::pair_plan::{PairInputs, StepStart, pair_key};
+use crate::plugin::stages::pair_reconstruct::NearBodies;
 use crate::plugin::stages::plan::{PlanReports, Planner};
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -160,8 +162,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.measure_ground_motion(&mut step, bodies);
         self.check_woken(&step, bodies, colliders);
         self.stopwatch.lap(Stage::Woken);
-        step.moved_together =
-            pair_reconstruct::move_clusters(&mut self.after_view(), bodies, colliders, &step);
+        step.moved_together = self.move_clusters(&step, bodies, colliders);
         self.stopwatch.lap(Stage::PairClusters);
         self.reconstruct_bodies(&step, bodies, colliders);
         self.stopwatch.lap(Stage::Bodies);
@@ -175,6 +176,43 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.memory.spare.candidates = std::mem::take(&mut step.data.candidates);
+    }
+}
+
+impl<H: PhysicsHooks> ImpactPlugin<H> {
+    /// The clusters of `Impact` pairs between bodies (`pair_reconstruct.rs`); a pair found on
+    /// the way joins a cluster only where rapier would solve it and the user's filter
+    /// accepts it (`queries/filter.rs`, as the pair plan asks). Returns the bodies moved.
+    fn move_clusters(
+        &mut self,
+        step: &EndOfStep,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+    ) -> HandleSet<RigidBodyHandle> {
+        let (user_hooks, flags) = (&self.user_hooks, &self.flags);
+        let sets = &step.sets;
+        let refused = |a: RigidBodyHandle, b: RigidBodyHandle| {
+            let collider =
+                |h: RigidBodyHandle| bodies.get(h).and_then(|rb| rb.colliders().first().copied());
+            let (Some(ca), Some(cb)) = (collider(a), collider(b)) else {
+                return true;
+            };
+            let key = pair_key(ca, cb);
+            let user = flags.recorded_pair_flags(colliders, key);
+            !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+                || filter::joint_disables_contacts(sets.impulse_joints, sets.multibody_joints, a, b)
+                || filter::user_refuses(user_hooks, user, bodies, colliders, key)
+        };
+        let near = NearBodies {
+            index: &self.pair_index,
+            bodies,
+        };
+        let mut view = AfterStep::new(
+            (&self.config, &self.registry, &self.flags),
+            &mut self.memory,
+            (&mut self.writes, &mut self.reports),
+        );
+        pair_reconstruct::move_clusters(&mut view, bodies, colliders, &near, &refused, step)
     }
 }
 

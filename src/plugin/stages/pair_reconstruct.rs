@@ -19,8 +19,12 @@
 //! (rapier's next step). A ball rolling on its ground that an impact lifts flies from there;
 //! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
 //! on. It returns every body's state at the step's end and reports every impulse as an event,
-//! or `None` when the cluster cannot be moved alone (a search that stalls, more events than
-//! `max_impacts_per_step` per body, a rolling ball leaving its plane): its events are then
+//! or why the cluster cannot be moved alone as it is (`Unmoved`): a search that stalls, more
+//! events than `max_impacts_per_step` per body, a rolling ball leaving its plane, a body sent
+//! off by an event reaching a ground it was not planned against, or reaching a member of the
+//! pair plan it has no pair with (by that body's swept box in the pair index). In that last
+//! case [`move_clusters`] adds the pair (and the body) and moves the cluster again, where the
+//! body can be moved with it; otherwise, and in every other case, the cluster's events are
 //! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
 //! nothing into rapier.
 //!
@@ -30,7 +34,7 @@
 mod agenda;
 mod cluster;
 
-pub(crate) use cluster::through_pair_impacts;
+pub(crate) use cluster::{Unmoved, through_pair_impacts};
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -39,6 +43,7 @@ use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
 use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
 use crate::plugin::stages::commit::Origin;
+use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::stages::reconstruct::{FlownEnd, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
@@ -49,6 +54,21 @@ use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::PlannedPair;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
+use std::borrow::Cow;
+
+/// Where a cluster finds the bodies outside its pairs that a body it sends off may meet: the
+/// pair plan's members, by their swept boxes (`PairIndex`), and rapier's bodies, for the
+/// handle of a box's slot.
+pub(crate) struct NearBodies<'a> {
+    pub index: &'a PairIndex,
+    pub bodies: &'a RigidBodySet,
+}
+
+/// How many times a cluster is moved again with a pair found on the way (`Unmoved::Meets`)
+/// before it is left to the settle stage: each time moves the whole cluster again, so that
+/// a row of `n` balls lying apart, each sent into the next, would cost `n` times the row;
+/// a longer one is resolved at the step's end, and its next impacts in the next step.
+const MAX_CLUSTER_GROWTH: usize = 8;
 
 /// A body of a cluster (a ball, a die, a pin) and what its motion needs.
 pub(crate) struct ClusterBall<'a> {
@@ -71,11 +91,16 @@ pub(crate) struct ClusterBall<'a> {
 /// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
 /// `TimeOfImpact` and `Exact` modes: moved together from their start states
 /// ([`through_pair_impacts`]), checked against their grounds (`EndCheck::Flown`) and
-/// written. Returns the bodies written.
+/// written. A body an event sends towards another member of the pair plan it has no pair
+/// with grows the cluster by that pair, where rapier would solve it and the other body can
+/// be moved with the cluster (`grow`); otherwise the cluster is left to the settle stage.
+/// Returns the bodies written.
 pub(crate) fn move_clusters(
     view: &mut AfterStep,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
+    near: &NearBodies,
+    refused: &dyn Fn(RigidBodyHandle, RigidBodyHandle) -> bool,
     step: &EndOfStep,
 ) -> HandleSet<RigidBodyHandle> {
     let mut written = HandleSet::default();
@@ -90,15 +115,39 @@ pub(crate) fn move_clusters(
     }
     let cands = CandidatesByBody::new(step);
     let clusters = Clusters::of(&impacts);
-    for (members, pairs) in clusters.members.iter().zip(&clusters.pairs) {
-        if !moves_alone(view, bodies, &cands, members) {
-            continue;
-        }
-        let Some(balls) = cluster_balls(view, bodies, colliders, &cands, members) else {
-            continue;
+    for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
+        let (mut members, mut pairs) = (Cow::Borrowed(members), Cow::Borrowed(pairs));
+        let (mut grown, from) = (0, view.commit.reported().len());
+        let (balls, ends) = loop {
+            if !moves_alone(view, bodies, &cands, &members) {
+                break (Vec::new(), None);
+            }
+            let Some(balls) = cluster_balls(view, bodies, colliders, &cands, &members) else {
+                break (Vec::new(), None);
+            };
+            match through_pair_impacts(view, colliders, near, &balls, &pairs, step) {
+                Ok(ends) => break (balls, Some(ends)),
+                Err(Unmoved::Meets { member, other })
+                    if grown < MAX_CLUSTER_GROWTH
+                        && clusters.of_body.get(&other).is_none_or(|k| *k == c)
+                        && cands.get(&other).is_some()
+                        && same_dominance(bodies, members[member], other)
+                        && !refused(members[member], other) =>
+                {
+                    grown += 1;
+                    let k = match members.iter().position(|h| *h == other) {
+                        Some(k) => k,
+                        None => {
+                            members.to_mut().push(other);
+                            members.len() - 1
+                        }
+                    };
+                    pairs.to_mut().push((member, k));
+                }
+                Err(_) => break (Vec::new(), None),
+            }
         };
-        let from = view.commit.reported().len();
-        let Some(ends) = through_pair_impacts(view, colliders, &balls, pairs, step) else {
+        let Some(ends) = ends else {
             continue;
         };
         for (ball, end) in balls.iter().zip(ends) {
@@ -157,6 +206,8 @@ struct Clusters {
     members: Vec<Vec<RigidBodyHandle>>,
     /// Each cluster's pairs, in the plan's order, as indices into its members.
     pairs: Vec<Vec<(usize, usize)>>,
+    /// Each member's cluster.
+    of_body: HandleMap<RigidBodyHandle, usize>,
 }
 
 impl Clusters {
@@ -186,11 +237,18 @@ impl Clusters {
             }
         }
         let mut pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); members.len()];
+        let mut of_body = HandleMap::default();
         for pair in impacts {
             let c = cluster_of[&sets.root(pair.a)];
             pairs[c].push((place[&pair.a], place[&pair.b]));
+            of_body.insert(pair.a, c);
+            of_body.insert(pair.b, c);
         }
-        Clusters { members, pairs }
+        Clusters {
+            members,
+            pairs,
+            of_body,
+        }
     }
 }
 
@@ -277,6 +335,13 @@ fn moves_alone(
             && !cand.touched
             && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)
     })
+}
+
+/// Do rapier's contacts weigh the two bodies alike (one dominance group)? A pair of two
+/// groups is rapier's (`pair_plan`), and never joins a cluster.
+fn same_dominance(bodies: &RigidBodySet, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
+    let group = |h: RigidBodyHandle| bodies.get(h).map(|rb| rb.effective_dominance_group());
+    group(a) == group(b)
 }
 
 /// Each member's [`ClusterBall`], in the members' order: its collider, its radius if it is a

@@ -84,6 +84,19 @@ impl PairIndex {
             .map(|slot| self.ball_of[slot as usize] as usize)
     }
 
+    /// The body slots and swept boxes of this step's members whose boxes meet `aabb`, read
+    /// after the plan (the tree keeps the step's leaves until the next step's plan): each
+    /// box bounds its body's travel over the step from its start-of-step motion.
+    pub(crate) fn leaves_meeting<'a>(
+        &'a self,
+        aabb: &'a Aabb,
+    ) -> impl Iterator<Item = (u32, Aabb)> + 'a {
+        self.tree.intersect_aabb(aabb).filter_map(|slot| {
+            let node = self.tree.leaf_node(slot)?;
+            Some((slot, node.aabb()))
+        })
+    }
+
     /// Forgets this step's list (the tree stays).
     pub(super) fn clear_list(&mut self, leaves: &[(u32, Aabb)]) {
         for (slot, _) in leaves {

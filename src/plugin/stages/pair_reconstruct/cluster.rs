@@ -2,11 +2,11 @@
 //! cluster's earliest event (a ground impact or two bodies touching), resolved by the model,
 //! then on to the next (see the parent module's contract).
 
-use super::ClusterBall;
 use super::agenda::{Agenda, Next};
+use super::{ClusterBall, NearBodies};
 use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
-use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na};
 use crate::plugin::bridge::resolve::{
     BodyContactAt, GroundContactAt, ImpactInput, PairSide, Site, correction, resolve,
     resolve_balls, resolve_bodies,
@@ -20,40 +20,71 @@ use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landi
 use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::rapier::prelude::ColliderSet;
+use crate::plugin::state::handles::Slotted;
+use crate::rapier::parry::bounding_volume::Aabb;
+use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
+
+/// Why a cluster was not moved alone.
+#[derive(Debug, PartialEq)]
+pub(crate) enum Unmoved {
+    /// A search gave up, or the cluster met what it cannot move (see [`move_cluster`]).
+    GaveUp,
+    /// Member `member`, sent off by an event, may meet `other`, a member of the pair plan it
+    /// has no pair with in the cluster: moved as planned, it could pass into or through
+    /// `other`. The caller moves the cluster again with that pair, or leaves it.
+    Meets {
+        member: usize,
+        other: RigidBodyHandle,
+    },
+}
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
-/// cluster's `Impact` pairs as indices into `balls`. Pushes the cluster's events into
-/// the step's events (`view.commit`), and withdraws them all when it returns `None`; writes nothing into rapier.
+/// cluster's `Impact` pairs as indices into `balls`; `near` finds the pair plan's members
+/// a body sent off by an event may meet. Pushes the cluster's events into the step's events
+/// (`view.commit`), and withdraws them all when it returns `Err`; writes nothing into
+/// rapier.
 pub(crate) fn through_pair_impacts(
     view: &mut AfterStep,
     colliders: &ColliderSet,
+    near: &NearBodies,
     balls: &[ClusterBall],
     pairs: &[(usize, usize)],
     step: &EndOfStep,
-) -> Option<Vec<State>> {
+) -> Result<Vec<State>, Unmoved> {
     let events_from = view.commit.reported().len();
     let cluster = Cluster {
         colliders,
+        near,
         balls,
         pairs,
         step,
     };
-    let moved = move_cluster(view, cluster);
+    let mut meets = None;
+    let moved = move_cluster(view, cluster, &mut meets);
     if moved.is_none() {
         view.commit.withdraw(events_from);
     }
-    moved
+    match (moved, meets) {
+        (Some(ends), _) => Ok(ends),
+        (None, Some((member, other))) => Err(Unmoved::Meets { member, other }),
+        (None, None) => Err(Unmoved::GaveUp),
+    }
 }
 
 /// The cluster's events in time order, until the step's end or the cluster cannot be moved
 /// alone (`None`: more than `max_impacts_per_step` events per body, a search that stalls, a
-/// body reaching a ground it was not planned against, a rolling ball off its plane). Pushes
-/// events into the step's events (`view.commit`) without withdrawing them (the caller does).
-fn move_cluster(view: &mut AfterStep, cluster: Cluster) -> Option<Vec<State>> {
+/// body reaching a ground it was not planned against or, into `meets`, a member of the pair
+/// plan it has no pair with, a rolling ball off its plane). Pushes events into the step's
+/// events (`view.commit`) without withdrawing them (the caller does).
+fn move_cluster(
+    view: &mut AfterStep,
+    cluster: Cluster,
+    meets: &mut Option<(usize, RigidBodyHandle)>,
+) -> Option<Vec<State>> {
     let max_events = view.config.max_impacts_per_step * cluster.balls.len();
     let mut events = 0usize;
     let mut run = Run::start(cluster)?;
+
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
         if events > max_events {
@@ -67,6 +98,12 @@ fn move_cluster(view: &mut AfterStep, cluster: Cluster) -> Option<Vec<State>> {
             }
             Next::Touch(p, touch) => run.touch_event(view, p, touch, te)?,
         };
+        for &k in &changed[..count] {
+            if let Some(other) = run.meets_other_body(k, te) {
+                *meets = Some((k, other));
+                return None;
+            }
+        }
         run.search_again(&changed[..count], te)?;
     }
     run.ends()
@@ -77,6 +114,7 @@ fn move_cluster(view: &mut AfterStep, cluster: Cluster) -> Option<Vec<State>> {
 #[derive(Clone, Copy)]
 struct Cluster<'c, 'a> {
     colliders: &'c ColliderSet,
+    near: &'c NearBodies<'c>,
     balls: &'c [ClusterBall<'a>],
     pairs: &'c [(usize, usize)],
     step: &'c EndOfStep<'c>,
@@ -257,6 +295,35 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(())
     }
 
+    /// A member of the pair plan that body `k`, its motion changed at `t`, may reach before
+    /// the step's end and has no pair with in the cluster, if any: its motion from `t` is
+    /// bounded by a sphere about its centre there (as for its grounds, `reach`), each other
+    /// member's over the step by its swept box in the pair index. Reads only.
+    fn meets_other_body(&self, k: usize, t: f64) -> Option<RigidBodyHandle> {
+        let cluster = self.cluster;
+        let s = self.moving[k].at(t);
+        let reach = cluster.reach(k, &s, cluster.step.dt - t);
+        let slot = |b: usize| cluster.balls[b].cand.body.slot() as u32;
+        let own = slot(k);
+        let partner = |q: &usize| {
+            let (a, b) = cluster.pairs[*q];
+            slot(if a == k { b } else { a })
+        };
+        let half = to_real(reach);
+        let centre = vec_from_na(&s.com);
+        let query = Aabb::from_half_extents(centre, crate::rapier::math::Vector::splat(half));
+        cluster
+            .near
+            .index
+            .leaves_meeting(&query)
+            .filter(|(slot, _)| {
+                *slot != own && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
+            })
+            .find(|(_, aabb)| box_distance(aabb, &s.com) <= reach)
+            .and_then(|(slot, _)| cluster.near.bodies.get_unknown_gen(slot))
+            .map(|(_, handle)| handle)
+    }
+
     /// Every body's state at the step's end, or `None` when a rolling ball is no longer on
     /// its plane there (a cuboid's face it left, or a mesh, would need the ground's other
     /// faces).
@@ -406,12 +473,7 @@ impl Cluster<'_, '_> {
     /// then. Reads only.
     fn reaches_other_grounds(&self, view: &AfterStep, k: usize, s: &State, left: f64) -> bool {
         let (ball, step) = (&self.balls[k], self.step);
-        let accel = ball.cand.flight.accel.norm();
-        let reach = ball.geom.radius
-            + s.v.norm() * left
-            + accel * left * left
-            + step.policy.contact_margin();
-        let half = to_real(reach);
+        let half = to_real(self.reach(k, s, left));
         let centre = vec_from_na(&s.com);
         // A ball that met a slab's tiles one by one has tiles among its grounds.
         let tiles = ball
@@ -429,6 +491,18 @@ impl Cluster<'_, '_> {
                     .iter()
                     .any(|g| g.handle == step.grounds[*i].handle)
             })
+    }
+
+    /// How far body `k`, at `s` with `left` seconds of the step to go, can reach from its
+    /// centre (m): its bounding radius, its travel at its speed and under its acceleration
+    /// (gravity and its user force), and the contact margin.
+    fn reach(&self, k: usize, s: &State, left: f64) -> f64 {
+        let ball = &self.balls[k];
+        let accel = ball.cand.flight.accel.norm();
+        ball.geom.radius
+            + s.v.norm() * left
+            + accel * left * left
+            + self.step.policy.contact_margin()
     }
 
     /// How body `k` moves on after an impact with another body left it at `after` (time
@@ -496,6 +570,18 @@ impl Cluster<'_, '_> {
             motion: Motion::Rolling(rolling),
         })
     }
+}
+
+/// The distance from `p` to the box `aabb` (0 inside it).
+fn box_distance(aabb: &Aabb, p: &nalgebra::Vector3<f64>) -> f64 {
+    let (lo, hi) = (aabb.mins, aabb.maxs);
+    let gap = |x: f64, lo, hi| (to_f64(lo) - x).max(x - to_f64(hi)).max(0.0);
+    nalgebra::Vector3::new(
+        gap(p.x, lo.x, hi.x),
+        gap(p.y, lo.y, hi.y),
+        gap(p.z, lo.z, hi.z),
+    )
+    .norm()
 }
 
 /// The smallest time after `t` that differs from it.
