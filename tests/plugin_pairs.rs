@@ -998,3 +998,54 @@ fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
     }
 }
 
+/// Two billiard balls on a table pass each other 0.5 mm apart and never touch, the cue ball
+/// damped (so that the pair takes the step's-end path): no impact. Their centres cross the
+/// line of centres they started on, which alone does not make them meet.
+#[test]
+fn balls_passing_each_other_without_touching_get_no_impact() {
+    let (r, v) = (0.028_575, 10.0);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(G);
+        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
+        let (_, table) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(up)
+                .restitution(0.5)
+                .friction(0.2),
+        );
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, table).unwrap();
+        w.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, real(r), 0.0))
+                .linvel(Vector::new(real(v), 0.0, 0.0))
+                .angvel(Vector::new(0.0, 0.0, real(-v / r)))
+                .linear_damping(0.01),
+            ColliderBuilder::ball(real(r))
+                .restitution(0.95)
+                .friction(0.05),
+        );
+        w.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(
+                0.2,
+                real(r),
+                real(2.0 * r + 0.0005),
+            )),
+            ColliderBuilder::ball(real(r))
+                .restitution(0.95)
+                .friction(0.05),
+        );
+        p.set_all_dynamic_bodies_impact(true);
+        let mut seen = Vec::new();
+        for _ in 0..8 {
+            p.step(&mut w);
+            seen.extend(
+                p.events()
+                    .iter()
+                    .filter(|e| e.body2.is_some())
+                    .map(|e| e.kind),
+            );
+        }
+        assert!(seen.is_empty(), "{mode:?}: {seen:?}");
+    }
+}

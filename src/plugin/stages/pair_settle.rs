@@ -82,9 +82,11 @@ impl<'v> AfterStep<'v> {
         let d = sb.com - sa.com;
         let len = d.norm();
         // Out of rapier's solver, the balls may have passed into or through each other in the
-        // step: they met if they overlap now, if their centres crossed the line of centres
-        // they started on, or if their relative motion over the step (straight, as out of the
-        // solver) came within reach.
+        // step: they met if they overlap now, or if on the way their centres came within
+        // reach: by their relative motion over the step (straight, as out of the solver), or
+        // on the straight line from where one started relative to the other to where it
+        // ended (the motion changed on the way). Centres that crossed the line of centres
+        // they started on but stayed farther apart than the reach passed each other.
         let crossed = d.dot(&pair.normal) < 0.0;
         let dv = sb.v - sa.v;
         let back = dv.norm_squared();
@@ -95,7 +97,17 @@ impl<'v> AfterStep<'v> {
         } else {
             len
         };
-        let met = len < pair.reach || crossed || nearest < pair.reach;
+        let travel = d - pair.offset;
+        let along_path = match -pair.offset.dot(&travel) {
+            // The closest approach of offset + travel u for u in (0, 1]; none where the path
+            // leads apart from its start (a pair that started touching and separated).
+            closing if closing > 0.0 => {
+                let u = (closing / travel.norm_squared()).min(1.0);
+                (pair.offset + travel * u).norm()
+            }
+            _ => f64::INFINITY,
+        };
+        let met = len < pair.reach || nearest < pair.reach || along_path < pair.reach;
         if !met || pair.normal == Vector3::zeros() && len == 0.0 {
             return;
         }

@@ -307,6 +307,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             balls: balls_only,
             reach,
             normal,
+            offset: b.com - a.com,
             role: if impact { Role::Impact } else { Role::Resting },
             hooked,
         })
