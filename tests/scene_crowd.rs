@@ -137,8 +137,8 @@ fn a_crowd_of_opted_in_balls_settles_without_chatter() {
             s.last_pair_impact <= LANDED,
             "{timing:?}: impacts between resting balls: {s:?}"
         );
-        // A ball meets a few neighbours as the crowd lands and spreads (2.4 impacts a ball
-        // and 24 at most, measured); a ball chattering against its resting neighbours meets
+        // A ball meets a few neighbours as the crowd lands and spreads (3.0 impacts a ball
+        // and 27 at most, measured); a ball chattering against its resting neighbours meets
         // them every few steps (83 times in this scene when slow impacts chained through the
         // crowd).
         assert!(

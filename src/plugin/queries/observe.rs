@@ -259,9 +259,10 @@ pub(crate) fn held_besides(
     solver_contact_besides(body, rb, Some(partner), sets, |_| true)
 }
 
-/// Did the body touch, in rapier's solver after the last step, anything but a ground and
+/// Was the body pushed, by rapier's solver in the last step, by anything but a ground and
 /// the collider `partner` (a ball's pair partner), or does it have a joint? What presses a
-/// pair of balls is a third body.
+/// pair of balls is a third body; a speculative contact that stayed open (zero impulse, a
+/// ball lying a few millimetres from the next one) presses nothing.
 pub(crate) fn pressed_besides(
     body: RigidBodyHandle,
     rb: &RigidBody,
@@ -269,8 +270,18 @@ pub(crate) fn pressed_besides(
     sets: &Sets,
     registry: &Registry,
 ) -> bool {
-    solver_contact_besides(body, rb, Some(partner), sets, |other| {
-        registry.entry(other).is_none()
+    if sets.jointed(body) {
+        return true;
+    }
+    rb.colliders().iter().any(|ch| {
+        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            other != partner && registry.entry(other).is_none() && pushes(pair)
+        })
     })
 }
 
@@ -336,14 +347,18 @@ pub(crate) fn touches_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool 
 /// Did rapier's solver push the body in the step through a contact it kept (a pair the plugin
 /// did not take out of the solver)? A speculative contact that stayed open has zero impulse.
 pub(crate) fn pushed_by_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> bool {
-    rb.colliders().iter().any(|ch| {
-        narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            pair.solver_manifolds()
-                .iter()
-                .filter(|m| solved(m))
-                .any(|m| m.points.iter().any(|p| p.data.impulse != 0.0))
-        })
-    })
+    rb.colliders()
+        .iter()
+        .any(|ch| narrow_phase.contact_pairs_with(*ch).any(pushes))
+}
+
+/// Did rapier's solver push the pair apart in its last step (a solver contact with a nonzero
+/// impulse)?
+fn pushes(pair: &ContactPair) -> bool {
+    pair.solver_manifolds()
+        .iter()
+        .filter(|m| solved(m))
+        .any(|m| m.points.iter().any(|p| p.data.impulse != 0.0))
 }
 
 /// What touches a body besides its grounds, from rapier's contact graph after a step.

@@ -4,7 +4,7 @@
 //!
 //! Contract: [`move_clusters`] finds the clusters whose every body moved alone in the step and
 //! commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes a cluster
-//! each of whose bodies moved alone in the step (no contact in rapier's solver, no joint or
+//! each of whose bodies moved alone in the step (no contact rapier's solver pushed it by, no joint or
 //! torque: checked by the caller) and moves every body by its own motion (`crate::motion`: free
 //! flight, or for a ball rolling in closed form on its level ground) to the cluster's earliest
 //! event: a body's ground impact (the in-step search of `queries/geometry/impact_time.rs`) or two bodies touching
@@ -41,7 +41,7 @@ use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::config::TimingMode;
 use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
-use crate::plugin::queries::observe::{body_geom, centred_ball, touches_other};
+use crate::plugin::queries::observe::{body_geom, centred_ball, pushed_by_other};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::stages::reconstruct::{FlownEnd, ccd_consistent};
@@ -87,7 +87,7 @@ pub(crate) struct ClusterBall<'a> {
 }
 
 /// The clusters of the step's `Impact` pairs between bodies (joined through shared
-/// bodies) whose every body moved alone in the step (no contact in rapier's solver, no
+/// bodies) whose every body moved alone in the step (no contact rapier's solver pushed it by, no
 /// joint, torque or `Step` impulse, rapier's CCD consistent with its motion), in
 /// `TimeOfImpact` and `Exact` modes: moved together from their start states
 /// ([`through_pair_impacts`]), checked against their grounds (`EndCheck::Flown`) and
@@ -311,9 +311,10 @@ impl Sets {
     }
 }
 
-/// Did every body of the cluster move alone in the step: managed and awake, no contact in
-/// rapier's solver besides its grounds, no joint, no user torque, no `Step` impulse, and
-/// rapier's CCD consistent with its motion? Reads only.
+/// Did every body of the cluster move alone in the step: managed and awake, not pushed by
+/// any contact rapier's solver kept (a speculative contact that stayed open pushes nothing),
+/// no joint, no user torque, no `Step` impulse, and rapier's CCD consistent with its motion?
+/// Reads only.
 fn moves_alone(
     view: &AfterStep,
     bodies: &RigidBodySet,
@@ -329,7 +330,7 @@ fn moves_alone(
         let rb = now.rb();
         view.registry.manages(*h, rb)
             && !now.is_sleeping()
-            && !touches_other(rb, sets.narrow_phase)
+            && !pushed_by_other(rb, sets.narrow_phase)
             && !sets.jointed(*h)
             && rb.user_torque() == Vector::ZERO
             && !cand.touched

@@ -279,8 +279,8 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // Held at rest last step: planned `Resting`, or (slow pairs are not planned) touching
         // in rapier's solver.
         let was_resting = || inputs.prev.get(&key) == Some(&Role::Resting) || held_pair();
-        // Pressed, as a ground pair is: a body that touched something else after the last
-        // step is pushed by it, and rapier's solver holds the pile. (Not by each other: their
+        // Pressed, as a ground pair is: a body that rapier's solver pushed against something
+        // else in the last step, and rapier's solver holds the pile. (Not by each other: their
         // own contact does not press them together.)
         let pressed = || {
             let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
