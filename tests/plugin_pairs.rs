@@ -1103,3 +1103,146 @@ fn a_cradle_with_gaps_passes_the_whole_speed_along() {
         }
     }
 }
+
+/// A heavy ball of `m` = 50 x 0.17 kg (r = 2 cm, e = 1, frictionless) at `x` moving at `v`
+/// along x.
+fn heavy_ball(w: &mut PhysicsWorld, x: f64, v: f64) -> RigidBodyHandle {
+    let (r, m) = (0.02, 50.0 * 0.17);
+    let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    w.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(real(x), 0.0, 0.0))
+            .linvel(Vector::new(real(v), 0.0, 0.0))
+            .can_sleep(false),
+        ColliderBuilder::ball(real(r))
+            .density(real(m / volume))
+            .restitution(1.0)
+            .friction(0.0),
+    )
+    .0
+}
+
+/// Two strikes from either side send their light balls into one free ball between them in
+/// the same step, at different times (free space, e = 1, `Exact`): each joins it on its way,
+/// one after the other. Momentum is kept: the free ball moved with the first strike is
+/// never moved again from its start by the second.
+#[test]
+fn a_ball_reached_by_two_strikes_in_one_step_keeps_the_momentum() {
+    let r = 0.02;
+    let zero = Vector3::zeros();
+    let mut w = world_with_gravity(0.0);
+    let mut p = plugin(TimingMode::Exact);
+    let a1 = heavy_ball(&mut w, -0.141, 3.0);
+    let (b1, _) = ball(
+        &mut w,
+        Vector3::new(-0.1, 0.0, 0.0),
+        zero,
+        zero,
+        r,
+        1.0,
+        0.0,
+    );
+    let (x, _) = ball(&mut w, zero, zero, zero, r, 1.0, 0.0);
+    let (b2, _) = ball(
+        &mut w,
+        Vector3::new(0.125, 0.0, 0.0),
+        zero,
+        zero,
+        r,
+        1.0,
+        0.0,
+    );
+    let a2 = heavy_ball(&mut w, 0.185, -4.0);
+    p.set_all_dynamic_bodies_impact(true);
+    let mass = |h| {
+        if h == a1 || h == a2 {
+            50.0 * 0.17
+        } else {
+            0.17
+        }
+    };
+    let momentum = |w: &PhysicsWorld| -> f64 {
+        [a1, b1, x, b2, a2]
+            .iter()
+            .map(|h| mass(*h) * na(w.bodies[*h].linvel()).x)
+            .sum()
+    };
+    let before = momentum(&w);
+    let mut hit_x = 0;
+    for _ in 0..3 {
+        p.step(&mut w);
+        hit_x += pair_events(&p).iter().filter(|e| e.body == x).count();
+        let now = momentum(&w);
+        assert!(
+            abs_diff_eq!(now, before, epsilon = V_TOL * before.abs()),
+            "momentum {before} -> {now}"
+        );
+    }
+    assert!(hit_x > 0, "the free ball was never struck");
+}
+
+/// Newton's cradle of up to eleven touching balls struck at 5 m/s (free space, e = 1): the
+/// impact passes along the row inside the step, however many balls a struck ball's way on
+/// reaches beyond its neighbour; the last leaves at 5 m/s.
+#[test]
+fn a_long_fast_cradle_stays_in_the_step() {
+    let (r, v) = (0.02, 5.0);
+    for n in [6usize, 11] {
+        for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+            let mut w = world_with_gravity(0.0);
+            let zero = Vector3::zeros();
+            let first = Vector3::new(-2.0 * r - 0.1, 0.0, 0.0);
+            let mut balls = vec![ball(&mut w, first, Vector3::x() * v, zero, r, 1.0, 0.0).0];
+            for k in 0..n - 1 {
+                let at = Vector3::new(2.0 * r * k as f64, 0.0, 0.0);
+                balls.push(ball(&mut w, at, zero, zero, r, 1.0, 0.0).0);
+            }
+            let mut p = plugin(mode);
+            p.set_all_dynamic_bodies_impact(true);
+            let seen = first_pair_events(&mut p, &mut w, 30);
+            assert_eq!(seen.len(), 2 * (n - 1), "{mode:?}, {n} balls");
+            assert!(
+                seen.iter().all(|e| e.timing == ImpactTiming::InStep),
+                "{mode:?}, {n} balls: {:?}",
+                seen.iter().map(|e| e.timing).collect::<Vec<_>>()
+            );
+            let last = na(w.bodies[balls[n - 1]].linvel()).x;
+            assert!(
+                abs_diff_eq!(last, v, epsilon = V_TOL * v),
+                "{mode:?}, {n} balls: the last leaves at {last}"
+            );
+        }
+    }
+}
+
+/// A ball passes right through another (the other turned by a user torque, so that the
+/// pair takes the step's-end path) and bounces off the floor within the same step: their
+/// relative motion bent on the way, and the pair met (the impact at the step's end).
+#[test]
+fn a_ball_through_a_ball_then_off_the_floor_meets_it() {
+    let r = 0.02;
+    let (h, d, v) = (0.07, 0.06, 12.0);
+    let zero = Vector3::zeros();
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(0.0);
+        let mut p = plugin(mode);
+        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
+        let (_, floor) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(up)
+                .restitution(1.0)
+                .friction(0.0),
+        );
+        p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+        let at = Vector3::new(-d, h + d, 0.0);
+        ball(&mut w, at, Vector3::new(v, -v, 0.0), zero, r, 1.0, 0.0);
+        let (b, _) = ball(&mut w, Vector3::new(0.0, h, 0.0), zero, zero, r, 1.0, 0.0);
+        w.bodies[b].add_torque(Vector::new(0.0, 0.0, real(1e-4)), true);
+        p.set_all_dynamic_bodies_impact(true);
+        p.step(&mut w);
+        assert!(
+            !pair_events(&p).is_empty(),
+            "{mode:?}: passed through, no impact"
+        );
+    }
+}

@@ -42,6 +42,14 @@ pub(crate) const LOADED_COS: f64 = 0.5;
 /// pair stays rapier's resting contact.
 pub(crate) const CHAIN_MAX_TILT_SIN: f64 = 0.1;
 
+/// A pair of bodies out of rapier's solver whose relative velocity changed over the step by
+/// more than this fraction of it (a bounce off the ground, a third body's impact) did not
+/// move straight relative to each other: at the step's end, centres that crossed the line
+/// of centres they started on may have met on the bent way. Below it, only a straight
+/// relative motion that came within reach is a meeting (two balls passing a few
+/// millimetres apart do not meet). Damping and friction change it by far less in a step.
+pub(crate) const BENT_RELATIVE_MOTION: f64 = 0.1;
+
 /// Relative tolerance of the plane test ([`on_plane`]): a ball that rolled in closed form is
 /// still on its plane when its closest ground contact is within this many metres per metre of
 /// radius (at least per metre) and the contact's normal is the plane's to this many parts of

@@ -64,10 +64,11 @@ pub(crate) struct NearBodies<'a> {
     pub bodies: &'a RigidBodySet,
 }
 
-/// How many times a cluster is moved again with a pair found on the way (`Unmoved::Meets`)
-/// before it is left to the settle stage: each time moves the whole cluster again, so that
-/// a row of `n` balls lying apart, each sent into the next, would cost `n` times the row;
-/// a longer one is resolved at the step's end, and its next impacts in the next step.
+/// How many bodies from outside a cluster it takes in on the way (`Unmoved::Meets`) before
+/// it is left to the settle stage: each moves the whole cluster again, so that a row of `n`
+/// balls lying apart, each sent into the next, would cost `n` times the row; a longer one is
+/// resolved at the step's end, and its next impacts in the next step. (A body of the cluster
+/// reached on the way joins a pair without moving the cluster again.)
 const MAX_CLUSTER_GROWTH: usize = 8;
 
 /// A body of a cluster (a ball, a die, a pin) and what its motion needs.
@@ -130,6 +131,7 @@ pub(crate) fn move_clusters(
                 Err(Unmoved::Meets { member, other })
                     if grown < MAX_CLUSTER_GROWTH
                         && clusters.of_body.get(&other).is_none_or(|k| *k == c)
+                        && !written.contains(&other)
                         && cands.get(&other).is_some()
                         && same_dominance(bodies, members[member], other)
                         && !refused(members[member], other) =>

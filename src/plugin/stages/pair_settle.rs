@@ -17,7 +17,7 @@ use crate::plugin::bridge::resolve::{
 use crate::plugin::config::ImpactConfig;
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::impact_plugin::ImpactPlugin;
-use crate::plugin::policy::{EndCheck, Role};
+use crate::plugin::policy::{BENT_RELATIVE_MOTION, EndCheck, Role};
 use crate::plugin::queries::body_contact::{body_contact, touch_point};
 use crate::plugin::queries::observe::{body_geom, touched_besides_grounds};
 use crate::plugin::stages::commit::Origin;
@@ -55,8 +55,9 @@ impl<'v> AfterStep<'v> {
     /// After the step, for an `Impact` pair of balls not moved together (something else
     /// touched one, or a search gave up): rapier's end state, in which the pair was out of
     /// its solver, so that the balls may have passed into, or right through, each other. If
-    /// they met in the step (they overlap, their centres crossed the line of centres they
-    /// started on, or their straight relative motion came within reach), the model's impulse
+    /// they met in the step (they overlap, their straight relative motion or the straight
+    /// path between their start and end offsets came within reach, or their centres crossed
+    /// the line of centres they started on while their relative motion bent), the model's impulse
     /// along that line (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
     /// the pressed speed for a ball touching something else), and both balls moved apart
     /// along it to touching, on the sides they started on, each by its inverse-mass share,
@@ -85,10 +86,14 @@ impl<'v> AfterStep<'v> {
         // step: they met if they overlap now, or if on the way their centres came within
         // reach: by their relative motion over the step (straight, as out of the solver), or
         // on the straight line from where one started relative to the other to where it
-        // ended (the motion changed on the way). Centres that crossed the line of centres
-        // they started on but stayed farther apart than the reach passed each other.
+        // ended. Centres that crossed the line of centres they started on met there too when
+        // the relative motion bent on the way (a ball that passed through the other and
+        // bounced off the ground); moving straight, they passed each other farther apart
+        // than the reach.
         let crossed = d.dot(&pair.normal) < 0.0;
         let dv = sb.v - sa.v;
+        let bent = (dv - pair.relative_v).norm()
+            > BENT_RELATIVE_MOTION * dv.norm().max(pair.relative_v.norm());
         let back = dv.norm_squared();
         let nearest = if back > 0.0 {
             // The closest approach of d - dv s for s in [0, dt] before the step's end.
@@ -107,7 +112,8 @@ impl<'v> AfterStep<'v> {
             }
             _ => f64::INFINITY,
         };
-        let met = len < pair.reach || nearest < pair.reach || along_path < pair.reach;
+        let met =
+            len < pair.reach || nearest < pair.reach || along_path < pair.reach || crossed && bent;
         if !met || pair.normal == Vector3::zeros() && len == 0.0 {
             return;
         }

@@ -191,6 +191,8 @@ pub(crate) struct PlannedPair {
     pub normal: Vector3<f64>,
     /// `b`'s centre of mass less `a`'s at the step's start (m).
     pub offset: Vector3<f64>,
+    /// `b`'s velocity less `a`'s at the step's start (m/s).
+    pub relative_v: Vector3<f64>,
     pub role: Role,
     /// Its bodies need the plugin's hook flags: an `Impact` pair leaves rapier's solver, and a
     /// `Resting` one that rapier would bounce higher than the resting gap gets zero

@@ -308,6 +308,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             reach,
             normal,
             offset: b.com - a.com,
+            relative_v: b.v - a.v,
             role: if impact { Role::Impact } else { Role::Resting },
             hooked,
         })

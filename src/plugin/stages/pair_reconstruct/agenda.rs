@@ -73,6 +73,11 @@ impl Agenda {
         }
     }
 
+    /// Room for one more pair (the next index), with no event yet.
+    pub(super) fn add_pair(&mut self) {
+        self.found.push((0, None));
+    }
+
     /// Body `k`'s ground impact, as last searched.
     pub(super) fn ground(&mut self, k: usize, next: Option<(f64, Next)>) {
         self.set(k, next);

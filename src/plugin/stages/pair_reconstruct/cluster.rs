@@ -6,7 +6,7 @@ use super::agenda::{Agenda, Next};
 use super::{ClusterBall, NearBodies};
 use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
-use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na};
+use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
     BodyContactAt, GroundContactAt, ImpactInput, PairSide, Site, correction, resolve,
     resolve_balls, resolve_bodies,
@@ -20,7 +20,7 @@ use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landi
 use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::plugin::state::handles::Slotted;
+use crate::plugin::state::handles::{HandleMap, Slotted};
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
 
@@ -56,11 +56,10 @@ pub(crate) fn through_pair_impacts(
         colliders,
         near,
         balls,
-        pairs,
         step,
     };
     let mut meets = None;
-    let moved = move_cluster(view, cluster, &mut meets);
+    let moved = move_cluster(view, cluster, pairs, &mut meets);
     if moved.is_none() {
         view.commit.withdraw(events_from);
     }
@@ -79,11 +78,12 @@ pub(crate) fn through_pair_impacts(
 fn move_cluster(
     view: &mut AfterStep,
     cluster: Cluster,
+    pairs: &[(usize, usize)],
     meets: &mut Option<(usize, RigidBodyHandle)>,
 ) -> Option<Vec<State>> {
     let max_events = view.config.max_impacts_per_step * cluster.balls.len();
     let mut events = 0usize;
-    let mut run = Run::start(cluster)?;
+    let mut run = Run::start(cluster, pairs)?;
 
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
@@ -98,10 +98,18 @@ fn move_cluster(
             }
             Next::Touch(p, touch) => run.touch_event(view, p, touch, te)?,
         };
+        // A body sent off may reach a body it has no pair with: a member of the cluster
+        // joins it in a pair searched from here (until then, both moved as the pair plan
+        // had them apart); a body outside it moves the cluster again with it.
         for &k in &changed[..count] {
-            if let Some(other) = run.meets_other_body(k, te) {
-                *meets = Some((k, other));
-                return None;
+            while let Some(other) = run.meets_other_body(k, te) {
+                match other {
+                    Reached::Member(j) => run.add_pair(k, j, te)?,
+                    Reached::Outside(body) => {
+                        *meets = Some((k, body));
+                        return None;
+                    }
+                }
             }
         }
         run.search_again(&changed[..count], te)?;
@@ -109,15 +117,22 @@ fn move_cluster(
     run.ends()
 }
 
-/// What a cluster's motion reads and never changes: the colliders, its bodies, its `Impact`
-/// pairs (indices into `balls`) and the step.
+/// What a cluster's motion reads and never changes: the colliders, the bodies it may reach,
+/// its bodies and the step.
 #[derive(Clone, Copy)]
 struct Cluster<'c, 'a> {
     colliders: &'c ColliderSet,
     near: &'c NearBodies<'c>,
     balls: &'c [ClusterBall<'a>],
-    pairs: &'c [(usize, usize)],
     step: &'c EndOfStep<'c>,
+}
+
+/// A body that a body of the cluster sent off may reach, and has no pair with.
+enum Reached {
+    /// A member of the cluster (its index).
+    Member(usize),
+    /// A member of the pair plan outside the cluster.
+    Outside(RigidBodyHandle),
 }
 
 /// A touch slower than the resting speed: a resting contact from there on.
@@ -136,16 +151,21 @@ struct Run<'c, 'a> {
     flights: Vec<Flight>,
     /// Pairs left touching slowly: resting for the rest of the step.
     resting: Vec<bool>,
-    /// Each body's pairs, by index in the cluster's pairs.
+    /// The cluster's pairs (indices into `balls`): its `Impact` pairs, then those its bodies
+    /// reached on the way.
+    pairs: Vec<(usize, usize)>,
+    /// Each body's pairs, by index in `pairs`.
     pairs_of: Vec<Vec<usize>>,
+    /// Each body's index by its body's slot.
+    by_slot: HandleMap<u32, usize>,
     agenda: Agenda,
 }
 
 impl<'c, 'a> Run<'c, 'a> {
     /// Every body at its start state, rolling or flying, and the first event of each body's
     /// ground and of each pair; `None` where a search gave up.
-    fn start(cluster: Cluster<'c, 'a>) -> Option<Self> {
-        let (balls, pairs) = (cluster.balls, cluster.pairs);
+    fn start(cluster: Cluster<'c, 'a>, pairs: &[(usize, usize)]) -> Option<Self> {
+        let balls = cluster.balls;
         let moving: Vec<Moving> = balls
             .iter()
             .map(|b| Moving {
@@ -167,15 +187,22 @@ impl<'c, 'a> Run<'c, 'a> {
         for (k, m) in moving.iter().enumerate() {
             agenda.ground(k, cluster.ground(k, m, 0.0).ok()?);
         }
-        for p in 0..pairs.len() {
-            agenda.touch(p, cluster.touch(p, &moving, 0.0).ok()?);
+        for (p, pair) in pairs.iter().enumerate() {
+            agenda.touch(p, cluster.touch(p, *pair, &moving, 0.0).ok()?);
         }
+        let by_slot = balls
+            .iter()
+            .enumerate()
+            .map(|(k, b)| (b.cand.body.slot() as u32, k))
+            .collect();
         Some(Run {
             cluster,
             moving,
             flights,
             resting: vec![false; pairs.len()],
+            pairs: pairs.to_vec(),
             pairs_of,
+            by_slot,
             agenda,
         })
     }
@@ -243,15 +270,17 @@ impl<'c, 'a> Run<'c, 'a> {
         te: f64,
     ) -> Option<([usize; 2], usize)> {
         let cluster = self.cluster;
-        let (i, j) = cluster.pairs[p];
-        let resolved = cluster.pair_impact(view, p, &touch, &self.moving, te);
+        let (i, j) = self.pairs[p];
+        let resolved = cluster.pair_impact(view, (i, j), &touch, &self.moving, te);
         let Ok(resolved) = resolved else {
             self.resting[p] = true;
             return Some(([i, j], 0));
         };
         let Some((after_i, after_j, pair_events)) = resolved else {
             // A graze is stepped over: the pair's next search starts after it.
-            let found = cluster.touch(p, &self.moving, next_after(te)).ok()?;
+            let found = cluster
+                .touch(p, (i, j), &self.moving, next_after(te))
+                .ok()?;
             self.agenda.touch(p, found);
             return Some(([i, j], 0));
         };
@@ -280,14 +309,14 @@ impl<'c, 'a> Run<'c, 'a> {
         }
         for (n, &k) in changed.iter().enumerate() {
             for &q in &self.pairs_of[k] {
-                let (a, b) = cluster.pairs[q];
+                let (a, b) = self.pairs[q];
                 if n == 1 && (a == changed[0] || b == changed[0]) {
                     continue;
                 }
                 let found = if self.resting[q] {
                     None
                 } else {
-                    cluster.touch(q, &self.moving, te).ok()?
+                    cluster.touch(q, (a, b), &self.moving, te).ok()?
                 };
                 self.agenda.touch(q, found);
             }
@@ -295,33 +324,60 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(())
     }
 
-    /// A member of the pair plan that body `k`, its motion changed at `t`, may reach before
-    /// the step's end and has no pair with in the cluster, if any: its motion from `t` is
-    /// bounded by a sphere about its centre there (as for its grounds, `reach`), each other
-    /// member's over the step by its swept box in the pair index. Reads only.
-    fn meets_other_body(&self, k: usize, t: f64) -> Option<RigidBodyHandle> {
+    /// A body that body `k`, its motion changed at `t`, may reach before the step's end and
+    /// has no pair with in the cluster, if any: a member of the pair plan whose swept box in
+    /// the pair index (its travel over the step from its start-of-step motion) meets the box
+    /// of `k`'s way on (from its centre at `t` along its velocity to the step's end, widened
+    /// by its bounding radius, its acceleration's bow and the contact margin), and whose box
+    /// `k` moves towards. Reads only.
+    fn meets_other_body(&self, k: usize, t: f64) -> Option<Reached> {
         let cluster = self.cluster;
+        let (ball, step) = (&cluster.balls[k], cluster.step);
         let s = self.moving[k].at(t);
-        let reach = cluster.reach(k, &s, cluster.step.dt - t);
+        let left = step.dt - t;
+        let widen = ball.geom.radius
+            + ball.cand.flight.accel.norm() * left * left
+            + step.policy.contact_margin();
+        let end = s.com + s.v * left;
+        let query = Aabb::new(
+            vec_from_na(&s.com.inf(&end).add_scalar(-widen)),
+            vec_from_na(&s.com.sup(&end).add_scalar(widen)),
+        );
         let slot = |b: usize| cluster.balls[b].cand.body.slot() as u32;
         let own = slot(k);
         let partner = |q: &usize| {
-            let (a, b) = cluster.pairs[*q];
+            let (a, b) = self.pairs[*q];
             slot(if a == k { b } else { a })
         };
-        let half = to_real(reach);
-        let centre = vec_from_na(&s.com);
-        let query = Aabb::from_half_extents(centre, crate::rapier::math::Vector::splat(half));
-        cluster
+        let (slot, _) = cluster
             .near
             .index
             .leaves_meeting(&query)
             .filter(|(slot, _)| {
                 *slot != own && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
             })
-            .find(|(_, aabb)| box_distance(aabb, &s.com) <= reach)
-            .and_then(|(slot, _)| cluster.near.bodies.get_unknown_gen(slot))
-            .map(|(_, handle)| handle)
+            .find(|(_, aabb)| (vec_to_na(aabb.center()) - s.com).dot(&s.v) > 0.0)?;
+        match self.by_slot.get(&slot) {
+            Some(j) => Some(Reached::Member(*j)),
+            None => {
+                let (_, body) = cluster.near.bodies.get_unknown_gen(slot)?;
+                Some(Reached::Outside(body))
+            }
+        }
+    }
+
+    /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
+    /// moved as the pair plan had them apart). `None` where the search gave up.
+    fn add_pair(&mut self, k: usize, j: usize, t: f64) -> Option<()> {
+        let p = self.pairs.len();
+        self.pairs.push((k, j));
+        self.pairs_of[k].push(p);
+        self.pairs_of[j].push(p);
+        self.resting.push(false);
+        self.agenda.add_pair();
+        let found = self.cluster.touch(p, (k, j), &self.moving, t).ok()?;
+        self.agenda.touch(p, found);
+        Some(())
     }
 
     /// Every body's state at the step's end, or `None` when a rolling ball is no longer on
@@ -375,9 +431,15 @@ impl Cluster<'_, '_> {
         }
     }
 
-    /// Pair `p`'s first touch after `t` while approaching, `Err` where the search gave up.
-    fn touch(&self, p: usize, moving: &[Moving], t: f64) -> Result<Option<(f64, Next)>, ()> {
-        let (i, j) = self.pairs[p];
+    /// Pair `p` of bodies `i` and `j`: its first touch after `t` while approaching, `Err`
+    /// where the search gave up.
+    fn touch(
+        &self,
+        p: usize,
+        (i, j): (usize, usize),
+        moving: &[Moving],
+        t: f64,
+    ) -> Result<Option<(f64, Next)>, ()> {
         let (bi, bj) = (&self.balls[i], &self.balls[j]);
         let dt = self.step.dt;
         let found = match (bi.radius, bj.radius) {
@@ -398,7 +460,7 @@ impl Cluster<'_, '_> {
         Ok(found.map(|(tc, touch)| (tc, Next::Touch(p, touch))))
     }
 
-    /// The model's impulse for pair `p` touching at `te`, the bodies where `moving` has them
+    /// The model's impulse for the pair of bodies `i` and `j` touching at `te`, the bodies where `moving` has them
     /// then: along the line of centres for two centred balls, at parry's contact `touch`
     /// (with the flat-landing points of `touch_point`) otherwise; `Err` for a touch slower
     /// than the resting speed. Reads only.
@@ -410,12 +472,11 @@ impl Cluster<'_, '_> {
     fn pair_impact(
         &self,
         view: &AfterStep,
-        p: usize,
+        (i, j): (usize, usize),
         touch: &Option<BodyTouch>,
         moving: &[Moving],
         te: f64,
     ) -> Result<Resolved, SlowTouch> {
-        let (i, j) = self.pairs[p];
         let balls = self.balls;
         let side = |k: usize| {
             let ball = &balls[k];
@@ -570,18 +631,6 @@ impl Cluster<'_, '_> {
             motion: Motion::Rolling(rolling),
         })
     }
-}
-
-/// The distance from `p` to the box `aabb` (0 inside it).
-fn box_distance(aabb: &Aabb, p: &nalgebra::Vector3<f64>) -> f64 {
-    let (lo, hi) = (aabb.mins, aabb.maxs);
-    let gap = |x: f64, lo, hi| (to_f64(lo) - x).max(x - to_f64(hi)).max(0.0);
-    nalgebra::Vector3::new(
-        gap(p.x, lo.x, hi.x),
-        gap(p.y, lo.y, hi.y),
-        gap(p.z, lo.z, hi.z),
-    )
-    .norm()
 }
 
 /// The smallest time after `t` that differs from it.
