@@ -1246,3 +1246,36 @@ fn a_ball_through_a_ball_then_off_the_floor_meets_it() {
         );
     }
 }
+
+/// Two 5 cm balls placed overlapping by 2.5 cm, one approaching at 0.5 m/s with a sideways
+/// slip, the other spinning (mu = 0.5, e = 0.8, free space): the impact at the step's start
+/// is the spheres' closed form, each lever arm the ball's radius, so the struck ball's spin
+/// about z ends at 18.75 rad/s (the overlap taken off its lever arm gives 24.88).
+#[test]
+fn overlapping_balls_turn_about_their_radii() {
+    let r = 0.05;
+    let zero = Vector3::zeros();
+    for mode in MODES {
+        let mut w = world_with_gravity(0.0);
+        let mut p = plugin(mode);
+        let v = Vector3::new(0.5, 0.3, 0.0);
+        ball(&mut w, zero, v, zero, r, 0.8, 0.5);
+        let spin = Vector3::new(0.0, 0.0, 30.0);
+        let (b, _) = ball(
+            &mut w,
+            Vector3::new(0.075, 0.0, 0.0),
+            zero,
+            spin,
+            r,
+            0.8,
+            0.5,
+        );
+        p.set_all_dynamic_bodies_impact(true);
+        p.step(&mut w);
+        let wz = na(w.bodies[b].angvel()).z;
+        assert!(
+            abs_diff_eq!(wz, 18.75, epsilon = V_TOL * 18.75),
+            "{mode:?}: spin {wz}, the closed form 18.75"
+        );
+    }
+}

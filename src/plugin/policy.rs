@@ -132,6 +132,13 @@ pub(crate) const FLIGHT_SPEED_FLOOR: f64 = 1e-9;
 /// bodies at rest relative to each other still advance.
 pub(crate) const BODIES_SPEED_FLOOR: f64 = 1e-12;
 
+/// Relative difference of two balls' centre distance from the sum of their radii within which
+/// they touch as found or placed (a pair placed touching in `f32` is off by a few 1e-7 of
+/// it); beyond it they overlap, and are resolved as touching ([`resolve_balls`]).
+///
+/// [`resolve_balls`]: crate::plugin::bridge::resolve::resolve_balls
+pub(crate) const TOUCHING_ROUNDING: f64 = 1e-6;
+
 /// Rounding (m per m of distance from the origin, and per m of gap) of a flight's positions
 /// and of a contact query's distance, allowed for when a search decides a step is clear.
 pub(crate) const POSITION_ROUNDING: f64 = 1e-9;

@@ -9,7 +9,7 @@ use crate::model::{
 use crate::motion::State;
 use crate::plugin::bridge::convert::{diag_to_na, rot_to_na, to_f64, vec_from_na};
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
-use crate::plugin::policy::{ISOTROPIC_TOLERANCE, rests_at};
+use crate::plugin::policy::{ISOTROPIC_TOLERANCE, TOUCHING_ROUNDING, rests_at};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom, Hit, body_velocity_at};
 use crate::rapier::prelude::{
     CoefficientCombineRule, Collider, ColliderHandle, LockedAxes, RigidBody, RigidBodyHandle,
@@ -341,28 +341,46 @@ impl<'a> ImpactInput<'a> {
     }
 }
 
-/// Resolves the impact of ball `a` on ball `b` (states at time `t`), their centres'
-/// distance the sum of their radii: the contact normal is the line of centres, the point on
-/// it at `a`'s radius. See [`resolve_bodies`].
+/// Resolves the impact of ball `a` on ball `b` (states at time `t`): the contact normal is
+/// the line of centres, the point on it at `a`'s radius, and each ball's lever arm its radius
+/// (the spheres' closed form), also for balls that overlap (by more than
+/// [`TOUCHING_ROUNDING`]): `b` is then resolved as if touching `a` along the line of
+/// centres, and keeps its position. See [`resolve_bodies`].
 pub(crate) fn resolve_balls(
     input: &ImpactInput,
     a: &PairSide,
     b: &PairSide,
     t: f64,
 ) -> Option<(State, State, [ImpactEvent; 2])> {
-    let n = (b.state.com - a.state.com).try_normalize(0.0)?;
+    let d = b.state.com - a.state.com;
+    let n = d.try_normalize(0.0)?;
     let point = a.state.com + n * a.radius;
-    resolve_bodies(
+    let reach = a.radius + b.radius;
+    let com = if (d.norm() - reach).abs() > TOUCHING_ROUNDING * reach {
+        a.state.com + n * reach
+    } else {
+        b.state.com
+    };
+    let touching = PairSide {
+        state: State { com, ..b.state },
+        ..*b
+    };
+    let (after_a, after_b, events) = resolve_bodies(
         input,
         a,
-        b,
+        &touching,
         &BodyContactAt {
             normal: n,
             point,
             points: 1,
         },
         t,
-    )
+    )?;
+    let after_b = State {
+        com: b.state.com,
+        ..after_b
+    };
+    Some((after_a, after_b, events))
 }
 
 /// Where two bodies touch at an impact between them.
