@@ -1279,3 +1279,57 @@ fn overlapping_balls_turn_about_their_radii() {
         );
     }
 }
+
+/// A ball rolling at 1 m/s into a row of four balls lying touching on a table with friction
+/// (e = 1 between the balls, frictionless between them): the search for the first touch of
+/// two neighbours lying a rounding apart does not stall, every impact is in the step, and
+/// the last ball leaves with the whole speed (its impulse is m v).
+#[test]
+fn a_cradle_on_a_table_with_friction_is_resolved_in_the_step() {
+    let (r, v, m) = (0.02, 1.0, 0.17);
+    let zero = Vector3::zeros();
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(G);
+        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
+        let (_, table) = w.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::halfspace(up)
+                .restitution(0.5)
+                .friction(0.2),
+        );
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, table).unwrap();
+        let spin = Vector3::new(0.0, 0.0, -v / r);
+        ball(
+            &mut w,
+            Vector3::new(-0.1, r, 0.0),
+            Vector3::x() * v,
+            spin,
+            r,
+            1.0,
+            0.0,
+        );
+        let mut last = None;
+        for k in 0..4 {
+            let at = Vector3::new(0.05 + 2.0 * r * k as f64, r, 0.0);
+            last = Some(ball(&mut w, at, zero, zero, r, 1.0, 0.0).0);
+        }
+        p.set_all_dynamic_bodies_impact(true);
+        let mut seen = Vec::new();
+        for _ in 0..10 {
+            p.step(&mut w);
+            seen.extend(pair_events(&p));
+        }
+        let timings: Vec<_> = seen.iter().map(|e| e.timing).collect();
+        assert!(
+            !seen.is_empty() && timings.iter().all(|t| *t == ImpactTiming::InStep),
+            "{mode:?}: {timings:?}"
+        );
+        let on_last = seen.iter().find(|e| Some(e.body) == last).unwrap();
+        let speed = wide(on_last.impulse.x) / m;
+        assert!(
+            abs_diff_eq!(speed, v, epsilon = V_TOL * v),
+            "{mode:?}: the last ball leaves at {speed}"
+        );
+    }
+}

@@ -115,8 +115,10 @@ pub(crate) fn first_touch(
             return Ok(uniform_touch(a, b, reach, t, t_end));
         }
     }
-    // Conservative advancement: over [t, t_end] the relative speed is at most its value at t
-    // plus the accelerations' bound times the time left.
+    // Conservative advancement: from t the relative speed grows by at most the accelerations'
+    // bound times the time, so over [t, t + h] the gap closes by at most
+    // `dv h + accel h^2 / 2`; the step is the longest h that cannot close it (a pair lying
+    // a rounding apart, neither closing, steps by the square root of the gap, not by the gap).
     let mut t = t;
     let mut gap = gap;
     let mut rate = rate;
@@ -126,13 +128,15 @@ pub(crate) fn first_touch(
         }
         let (sa, sb) = (a.at(t), b.at(t));
         let accel = a.motion.accel_bound(&sa) + b.motion.accel_bound(&sb);
-        let speed = (sb.v - sa.v).norm() + accel * (t_end - t);
-        if speed <= 0.0 {
+        let dv = (sb.v - sa.v).norm();
+        if dv <= 0.0 && accel <= 0.0 {
             return Ok(None);
         }
+        // The positive root of accel h^2 / 2 + dv h = gap, without cancellation.
+        let h = 2.0 * gap / (dv + (dv * dv + 2.0 * accel * gap).sqrt());
         // Newton's step from the outside when the gap closes; kept only if it stays outside
         // (a gap convex in time, as under uniform relative motion, never overshoots).
-        let safe = t + gap / speed;
+        let safe = t + h;
         let mut next = safe;
         if rate < 0.0 {
             let newton = t - gap / rate;
