@@ -139,6 +139,13 @@ fn step_start_balls(
     if rests_at(closing, policy.resting_speed) || gap > closing * dt + margin {
         return None;
     }
+    // Moving straight relative to each other, balls whose line of relative motion passes
+    // farther from the other's centre than the reach pass each other without touching.
+    let dv = sb.v - sa.v;
+    let miss = d - dv * (d.dot(&dv) / dv.norm_squared());
+    if len > pair.reach && miss.norm() >= pair.reach {
+        return None;
+    }
     // The key orders the colliders by slot: match them to the bodies.
     let (ca, cb) = if ra.colliders().contains(&pair.key.0) {
         pair.key
