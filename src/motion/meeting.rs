@@ -116,9 +116,11 @@ pub(crate) fn first_touch(
         }
     }
     // Conservative advancement: from t the relative speed grows by at most the accelerations'
-    // bound times the time, so over [t, t + h] the gap closes by at most
-    // `dv h + accel h^2 / 2`; the step is the longest h that cannot close it (a pair lying
-    // a rounding apart, neither closing, steps by the square root of the gap, not by the gap).
+    // bound times the time, so it stays below `dv + accel (t_end - t)` until the step's end,
+    // and over [t, t + h] the gap closes by at most `dv h + accel h^2 / 2`. Each bound gives
+    // a step that cannot close the gap; the longer is taken (the first reaches the step's
+    // end from afar, the second steps a pair lying a rounding apart, neither closing, by the
+    // square root of the gap rather than by the gap).
     let mut t = t;
     let mut gap = gap;
     let mut rate = rate;
@@ -133,7 +135,8 @@ pub(crate) fn first_touch(
             return Ok(None);
         }
         // The positive root of accel h^2 / 2 + dv h = gap, without cancellation.
-        let h = 2.0 * gap / (dv + (dv * dv + 2.0 * accel * gap).sqrt());
+        let quadratic = 2.0 * gap / (dv + (dv * dv + 2.0 * accel * gap).sqrt());
+        let h = quadratic.max(gap / (dv + accel * (t_end - t)));
         // Newton's step from the outside when the gap closes; kept only if it stays outside
         // (a gap convex in time, as under uniform relative motion, never overshoots).
         let safe = t + h;
