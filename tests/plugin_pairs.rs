@@ -1339,3 +1339,60 @@ fn a_cradle_on_a_table_with_friction_is_resolved_in_the_step() {
         );
     }
 }
+
+/// Two strikes in one step: a heavy ball sends a light one off at nearly twice its speed,
+/// while a light ball strikes the next one, which the first then meets in that step (free
+/// space, e = 1, `Exact`). The two clusters of impacts become one: every impact is in the
+/// step, and momentum and energy are kept.
+#[test]
+fn two_strikes_whose_balls_meet_are_moved_together() {
+    let r = 0.02;
+    let zero = Vector3::zeros();
+    let mut w = world_with_gravity(0.0);
+    let mut p = plugin(TimingMode::Exact);
+    let a = heavy_ball(&mut w, -0.2, 6.0);
+    let (b, _) = ball(&mut w, zero, zero, zero, r, 1.0, 0.0);
+    let (c, _) = ball(
+        &mut w,
+        Vector3::new(0.07, 0.0, 0.0),
+        zero,
+        zero,
+        r,
+        1.0,
+        0.0,
+    );
+    let at = Vector3::new(0.07 + 2.0 * r + 0.0283, 0.0, 0.0);
+    let (d, _) = ball(&mut w, at, Vector3::new(-1.0, 0.0, 0.0), zero, r, 1.0, 0.0);
+    p.set_all_dynamic_bodies_impact(true);
+    let mass = |h| if h == a { 50.0 * 0.17 } else { 0.17 };
+    let all = [a, b, c, d];
+    let momentum = |w: &PhysicsWorld| -> f64 {
+        all.iter()
+            .map(|h| mass(*h) * na(w.bodies[*h].linvel()).x)
+            .sum()
+    };
+    let energy = |w: &PhysicsWorld| -> f64 {
+        all.iter()
+            .map(|h| 0.5 * mass(*h) * na(w.bodies[*h].linvel()).norm_squared())
+            .sum()
+    };
+    let (p0, e0) = (momentum(&w), energy(&w));
+    let seen = first_pair_events(&mut p, &mut w, 5);
+    let pairs: Vec<_> = seen.iter().map(|e| (e.body, e.body2, e.timing)).collect();
+    assert!(
+        seen.iter().any(|e| e.body == d && e.body2 == Some(c))
+            && seen.iter().any(|e| e.body == b && e.body2 == Some(c)),
+        "the strikes and B meeting C are not all in one step: {pairs:?}"
+    );
+    assert!(
+        seen.iter().all(|e| e.timing == ImpactTiming::InStep),
+        "{pairs:?}"
+    );
+    let scale = 50.0 * 0.17 * 6.0;
+    assert!(abs_diff_eq!(momentum(&w), p0, epsilon = V_TOL * scale));
+    assert!(
+        abs_diff_eq!(energy(&w), e0, epsilon = V_TOL * e0),
+        "{} from {e0}",
+        energy(&w)
+    );
+}

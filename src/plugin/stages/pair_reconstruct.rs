@@ -116,9 +116,15 @@ pub(crate) fn move_clusters(
     }
     let cands = CandidatesByBody::new(step);
     let clusters = Clusters::of(&impacts);
+    // The later clusters taken in whole by an earlier one (moved with it).
+    let mut absorbed = vec![false; clusters.members.len()];
     for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
+        if absorbed[c] {
+            continue;
+        }
         let (mut members, mut pairs) = (Cow::Borrowed(members), Cow::Borrowed(pairs));
         let (mut grown, from) = (0, view.commit.reported().len());
+        let mut taken = Vec::new();
         let (balls, ends) = loop {
             if !moves_alone(view, bodies, &cands, &members) {
                 break (Vec::new(), None);
@@ -126,29 +132,58 @@ pub(crate) fn move_clusters(
             let Some(balls) = cluster_balls(view, bodies, colliders, &cands, &members) else {
                 break (Vec::new(), None);
             };
-            match through_pair_impacts(view, colliders, near, &balls, &pairs, step) {
-                Ok(ends) => break (balls, Some(ends)),
-                Err(Unmoved::Meets { member, other })
-                    if grown < MAX_CLUSTER_GROWTH
-                        && clusters.of_body.get(&other).is_none_or(|k| *k == c)
-                        && !written.contains(&other)
-                        && cands.get(&other).is_some()
-                        && same_dominance(bodies, members[member], other)
-                        && !refused(members[member], other) =>
-                {
-                    grown += 1;
-                    let k = match members.iter().position(|h| *h == other) {
-                        Some(k) => k,
-                        None => {
-                            members.to_mut().push(other);
-                            members.len() - 1
-                        }
-                    };
-                    pairs.to_mut().push((member, k));
+            let (member, other) =
+                match through_pair_impacts(view, colliders, near, &balls, &pairs, step) {
+                    Ok(ends) => break (balls, Some(ends)),
+                    Err(Unmoved::GaveUp) => break (Vec::new(), None),
+                    Err(Unmoved::Meets { member, other }) => (member, other),
+                };
+            // The body reached joins with the pair: alone (a body with a plan, in no
+            // cluster), or with the whole of its later cluster; never a body another cluster
+            // moved already.
+            let can_join = grown < MAX_CLUSTER_GROWTH
+                && !written.contains(&other)
+                && same_dominance(bodies, members[member], other)
+                && !refused(members[member], other);
+            // Its cluster, and its place there, for a later cluster.
+            let joins = match clusters.of_body.get(&other) {
+                _ if !can_join => None,
+                None => cands.get(&other).map(|_| None),
+                Some(&later) if later > c && !absorbed[later] => clusters.members[later]
+                    .iter()
+                    .position(|h| *h == other)
+                    .map(|place| Some((later, place))),
+                Some(_) => None,
+            };
+            let Some(joins) = joins else {
+                break (Vec::new(), None);
+            };
+            grown += 1;
+            let k = match joins {
+                None => {
+                    members.to_mut().push(other);
+                    members.len() - 1
                 }
-                Err(_) => break (Vec::new(), None),
-            }
+                Some((later, place)) => {
+                    absorbed[later] = true;
+                    taken.push(later);
+                    let offset = members.len();
+                    members.to_mut().extend(&clusters.members[later]);
+                    let shifted = clusters.pairs[later]
+                        .iter()
+                        .map(|(i, j)| (i + offset, j + offset));
+                    pairs.to_mut().extend(shifted);
+                    offset + place
+                }
+            };
+            pairs.to_mut().push((member, k));
         };
+        if ends.is_none() {
+            // Not moved: each cluster it took in is moved on its own.
+            for later in taken {
+                absorbed[later] = false;
+            }
+        }
         let Some(ends) = ends else {
             continue;
         };

@@ -326,19 +326,18 @@ impl<'c, 'a> Run<'c, 'a> {
 
     /// A body that body `k`, its motion changed at `t`, may reach before the step's end and
     /// has no pair with in the cluster, if any: a member of the pair plan whose swept box in
-    /// the pair index (its travel over the step from its start-of-step motion) meets the box
-    /// of `k`'s way on (from its centre at `t` along its velocity to the step's end, widened
-    /// by its bounding radius, its acceleration's bow and the contact margin), and whose box
-    /// `k` moves towards. Reads only.
+    /// the pair index (its travel over the step from its start-of-step motion, the plan's
+    /// margin included), widened by `k`'s bounding radius and its acceleration's bow, the
+    /// segment of `k`'s way on (from its centre at `t` along its velocity to the step's end)
+    /// crosses, and whose box `k` moves towards. Reads only.
     fn meets_other_body(&self, k: usize, t: f64) -> Option<Reached> {
         let cluster = self.cluster;
         let (ball, step) = (&cluster.balls[k], cluster.step);
         let s = self.moving[k].at(t);
         let left = step.dt - t;
-        let widen = ball.geom.radius
-            + ball.cand.flight.accel.norm() * left * left
-            + step.policy.contact_margin();
-        let end = s.com + s.v * left;
+        let widen = ball.geom.radius + ball.cand.flight.accel.norm() * left * left;
+        let way = s.v * left;
+        let end = s.com + way;
         let query = Aabb::new(
             vec_from_na(&s.com.inf(&end).add_scalar(-widen)),
             vec_from_na(&s.com.sup(&end).add_scalar(widen)),
@@ -356,7 +355,10 @@ impl<'c, 'a> Run<'c, 'a> {
             .filter(|(slot, _)| {
                 *slot != own && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
             })
-            .find(|(_, aabb)| (vec_to_na(aabb.center()) - s.com).dot(&s.v) > 0.0)?;
+            .find(|(_, aabb)| {
+                (vec_to_na(aabb.center()) - s.com).dot(&s.v) > 0.0
+                    && segment_crosses(&s.com, &way, aabb, widen)
+            })?;
         match self.by_slot.get(&slot) {
             Some(j) => Some(Reached::Member(*j)),
             None => {
@@ -631,6 +633,35 @@ impl Cluster<'_, '_> {
             motion: Motion::Rolling(rolling),
         })
     }
+}
+
+/// Does the segment from `from` along `way` cross the box `aabb` widened by `widen` on every
+/// side (the slabs' test)?
+fn segment_crosses(
+    from: &nalgebra::Vector3<f64>,
+    way: &nalgebra::Vector3<f64>,
+    aabb: &Aabb,
+    widen: f64,
+) -> bool {
+    let (lo, hi) = (vec_to_na(aabb.mins), vec_to_na(aabb.maxs));
+    let (mut enter, mut leave) = (0.0f64, 1.0f64);
+    for axis in 0..3 {
+        let (lo, hi) = (lo[axis] - widen, hi[axis] + widen);
+        let (p, d) = (from[axis], way[axis]);
+        if d == 0.0 {
+            if p < lo || p > hi {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo - p) / d, (hi - p) / d);
+        enter = enter.max(a.min(b));
+        leave = leave.min(a.max(b));
+        if enter > leave {
+            return false;
+        }
+    }
+    true
 }
 
 /// The smallest time after `t` that differs from it.
