@@ -352,6 +352,26 @@ pub(crate) fn pushed_by_other(rb: &RigidBody, narrow_phase: &NarrowPhase) -> boo
         .any(|ch| narrow_phase.contact_pairs_with(*ch).any(pushes))
 }
 
+/// Did rapier's solver push the body in the step through a contact it kept, or does it hold
+/// the body in any contact, even a speculative one that stayed open, with a collider that
+/// `looked_for` does not cover (one the caller cannot see the body reach)?
+pub(crate) fn held_or_by_unseen(
+    rb: &RigidBody,
+    narrow_phase: &NarrowPhase,
+    looked_for: impl Fn(ColliderHandle) -> bool,
+) -> bool {
+    rb.colliders().iter().any(|ch| {
+        narrow_phase.contact_pairs_with(*ch).any(|pair| {
+            let other = if pair.collider1 == *ch {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            pushes(pair) || in_solver(pair) && !looked_for(other)
+        })
+    })
+}
+
 /// Did rapier's solver push the pair apart in its last step (a solver contact with a nonzero
 /// impulse)?
 fn pushes(pair: &ContactPair) -> bool {

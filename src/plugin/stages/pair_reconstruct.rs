@@ -41,7 +41,7 @@ use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::config::TimingMode;
 use crate::plugin::policy::{EndCheck, Role};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
-use crate::plugin::queries::observe::{body_geom, centred_ball, pushed_by_other};
+use crate::plugin::queries::observe::{body_geom, centred_ball, held_or_by_unseen};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::pair_plan::PairIndex;
 use crate::plugin::stages::reconstruct::{FlownEnd, ccd_consistent};
@@ -126,7 +126,7 @@ pub(crate) fn move_clusters(
         let (mut grown, from) = (0, view.commit.reported().len());
         let mut taken = Vec::new();
         let (balls, ends) = loop {
-            if !moves_alone(view, bodies, &cands, &members) {
+            if !moves_alone(view, (bodies, colliders), &cands, &members) {
                 break (Vec::new(), None);
             }
             let Some(balls) = cluster_balls(view, bodies, colliders, &cands, &members) else {
@@ -350,16 +350,26 @@ impl Sets {
 
 /// Did every body of the cluster move alone in the step: managed and awake, not pushed by
 /// any contact rapier's solver kept (a speculative contact that stayed open pushes nothing),
-/// no joint, no user torque, no `Step` impulse, and rapier's CCD consistent with its motion?
-/// Reads only.
+/// nor held in one, even open, with a collider the cluster does not look for (neither a
+/// ground nor an opted-in body: a wall), no joint, no user torque, no `Step` impulse, and
+/// rapier's CCD consistent with its motion? Reads only.
 fn moves_alone(
     view: &AfterStep,
-    bodies: &RigidBodySet,
+    (bodies, colliders): (&RigidBodySet, &ColliderSet),
     cands: &CandidatesByBody,
     members: &[RigidBodyHandle],
 ) -> bool {
     let step = cands.step;
     let sets = &step.sets;
+    let registry = view.registry;
+    let looked_for = |c: ColliderHandle| {
+        registry.entry(c).is_some()
+            || colliders
+                .get(c)
+                .and_then(|co| co.parent())
+                .and_then(|b| Some((b, bodies.get(b)?)))
+                .is_some_and(|(b, rb)| registry.takes_pairs(b, rb))
+    };
     members.iter().all(|h| {
         let (Some(now), Some(cand)) = (view.commit.body(bodies, *h), cands.get(h)) else {
             return false;
@@ -367,7 +377,7 @@ fn moves_alone(
         let rb = now.rb();
         view.registry.manages(*h, rb)
             && !now.is_sleeping()
-            && !pushed_by_other(rb, sets.narrow_phase)
+            && !held_or_by_unseen(rb, sets.narrow_phase, looked_for)
             && !sets.jointed(*h)
             && rb.user_torque() == Vector::ZERO
             && !cand.touched

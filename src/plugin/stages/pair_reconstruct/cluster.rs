@@ -329,7 +329,9 @@ impl<'c, 'a> Run<'c, 'a> {
     /// the pair index (its travel over the step from its start-of-step motion, the plan's
     /// margin included), widened by `k`'s bounding radius and its acceleration's bow, the
     /// segment of `k`'s way on (from its centre at `t` along its velocity to the step's end)
-    /// crosses, and whose box `k` moves towards. Reads only.
+    /// crosses. A body of the cluster so found joins a pair whose search decides; one outside
+    /// it must also be closing on `k` (its velocity as rapier's step leaves it), as moving
+    /// it with the cluster moves the whole cluster again. Reads only.
     fn meets_other_body(&self, k: usize, t: f64) -> Option<Reached> {
         let cluster = self.cluster;
         let (ball, step) = (&cluster.balls[k], cluster.step);
@@ -348,24 +350,28 @@ impl<'c, 'a> Run<'c, 'a> {
             let (a, b) = self.pairs[*q];
             slot(if a == k { b } else { a })
         };
-        let (slot, _) = cluster
+        // The lowest slot of those found: the tree's order depends on its history, which a
+        // restored plugin does not have.
+        cluster
             .near
             .index
             .leaves_meeting(&query)
-            .filter(|(slot, _)| {
-                *slot != own && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
-            })
-            .find(|(_, aabb)| {
-                (vec_to_na(aabb.center()) - s.com).dot(&s.v) > 0.0
+            .filter(|(slot, aabb)| {
+                *slot != own
+                    && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
                     && segment_crosses(&s.com, &way, aabb, widen)
-            })?;
-        match self.by_slot.get(&slot) {
-            Some(j) => Some(Reached::Member(*j)),
-            None => {
-                let (_, body) = cluster.near.bodies.get_unknown_gen(slot)?;
-                Some(Reached::Outside(body))
-            }
-        }
+            })
+            .filter_map(|(slot, aabb)| match self.by_slot.get(&slot) {
+                Some(j) => Some((slot, Reached::Member(*j))),
+                None => {
+                    let (rb, body) = cluster.near.bodies.get_unknown_gen(slot)?;
+                    let towards = vec_to_na(aabb.center()) - s.com;
+                    let closing = towards.dot(&(s.v - vec_to_na(rb.linvel()))) > 0.0;
+                    closing.then_some((slot, Reached::Outside(body)))
+                }
+            })
+            .min_by_key(|(slot, _)| *slot)
+            .map(|(_, reached)| reached)
     }
 
     /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
