@@ -65,6 +65,57 @@ fn pair_events(plugin: &ImpactPlugin) -> Vec<rapier_impact::ImpactEvent> {
         .collect()
 }
 
+/// The momentum along x of these bodies (handle, mass) (kg m/s).
+fn momentum_x(w: &PhysicsWorld, masses: &[(RigidBodyHandle, f64)]) -> f64 {
+    masses
+        .iter()
+        .map(|(h, m)| m * na(w.bodies[*h].linvel()).x)
+        .sum()
+}
+
+/// The kinetic energy of these balls' centres (handle, mass) (J).
+fn translational_energy(w: &PhysicsWorld, masses: &[(RigidBodyHandle, f64)]) -> f64 {
+    masses
+        .iter()
+        .map(|(h, m)| 0.5 * m * na(w.bodies[*h].linvel()).norm_squared())
+        .sum()
+}
+
+/// A row of `count` still balls of radius `r` (e = 1, frictionless), touching along x from
+/// `x` on, their centres at height `y`.
+fn touching_row(
+    w: &mut PhysicsWorld,
+    x: f64,
+    y: f64,
+    r: f64,
+    count: usize,
+) -> Vec<RigidBodyHandle> {
+    let zero = Vector3::zeros();
+    (0..count)
+        .map(|k| {
+            ball(
+                w,
+                Vector3::new(x + 2.0 * r * k as f64, y, 0.0),
+                zero,
+                zero,
+                r,
+                1.0,
+                0.0,
+            )
+            .0
+        })
+        .collect()
+}
+
+/// Asserts that there are events and that every one is in the step.
+fn assert_in_step(events: &[rapier_impact::ImpactEvent], label: &str) {
+    let timings: Vec<_> = events.iter().map(|e| e.timing).collect();
+    assert!(
+        !events.is_empty() && timings.iter().all(|t| *t == ImpactTiming::InStep),
+        "{label}: {timings:?}"
+    );
+}
+
 /// Steps until a step reports impacts between bodies (at most `steps`), and returns them.
 fn first_pair_events(
     p: &mut ImpactPlugin,
@@ -928,18 +979,8 @@ fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
             let (c, _) = ball(&mut w, Vector3::new(0.07, y, 0.0), zero, zero, r, 1.0, 0.0);
             p.set_all_dynamic_bodies_impact(true);
             let masses = [(a, m_heavy), (b, m_light), (c, m_light)];
-            let x_momentum = |w: &PhysicsWorld| -> f64 {
-                masses
-                    .iter()
-                    .map(|(h, m)| m * na(w.bodies[*h].linvel()).x)
-                    .sum()
-            };
-            let energy = |w: &PhysicsWorld| -> f64 {
-                masses
-                    .iter()
-                    .map(|(h, m)| 0.5 * m * na(w.bodies[*h].linvel()).norm_squared())
-                    .sum()
-            };
+            let x_momentum = |w: &PhysicsWorld| momentum_x(w, &masses);
+            let energy = |w: &PhysicsWorld| translational_energy(w, &masses);
             let (p0, e0) = (x_momentum(&w), energy(&w));
             let (mut first_ab, mut bc) = (None, Vec::new());
             for n in 0..6 {
@@ -1160,19 +1201,15 @@ fn a_ball_reached_by_two_strikes_in_one_step_keeps_the_momentum() {
     );
     let a2 = heavy_ball(&mut w, 0.185, -4.0);
     p.set_all_dynamic_bodies_impact(true);
-    let mass = |h| {
-        if h == a1 || h == a2 {
-            50.0 * 0.17
-        } else {
-            0.17
-        }
-    };
-    let momentum = |w: &PhysicsWorld| -> f64 {
-        [a1, b1, x, b2, a2]
-            .iter()
-            .map(|h| mass(*h) * na(w.bodies[*h].linvel()).x)
-            .sum()
-    };
+    let (heavy, light) = (50.0 * 0.17, 0.17);
+    let masses = [
+        (a1, heavy),
+        (b1, light),
+        (x, light),
+        (b2, light),
+        (a2, heavy),
+    ];
+    let momentum = |w: &PhysicsWorld| momentum_x(w, &masses);
     let before = momentum(&w);
     let mut hit_x = 0;
     for _ in 0..3 {
@@ -1198,21 +1235,15 @@ fn a_long_fast_cradle_stays_in_the_step() {
             let mut w = world_with_gravity(0.0);
             let zero = Vector3::zeros();
             let first = Vector3::new(-2.0 * r - 0.1, 0.0, 0.0);
-            let mut balls = vec![ball(&mut w, first, Vector3::x() * v, zero, r, 1.0, 0.0).0];
-            for k in 0..n - 1 {
-                let at = Vector3::new(2.0 * r * k as f64, 0.0, 0.0);
-                balls.push(ball(&mut w, at, zero, zero, r, 1.0, 0.0).0);
-            }
+            ball(&mut w, first, Vector3::x() * v, zero, r, 1.0, 0.0);
+            let row = touching_row(&mut w, 0.0, 0.0, r, n - 1);
             let mut p = plugin(mode);
             p.set_all_dynamic_bodies_impact(true);
             let seen = first_pair_events(&mut p, &mut w, 30);
-            assert_eq!(seen.len(), 2 * (n - 1), "{mode:?}, {n} balls");
-            assert!(
-                seen.iter().all(|e| e.timing == ImpactTiming::InStep),
-                "{mode:?}, {n} balls: {:?}",
-                seen.iter().map(|e| e.timing).collect::<Vec<_>>()
-            );
-            let last = na(w.bodies[balls[n - 1]].linvel()).x;
+            let label = format!("{mode:?}, {n} balls");
+            assert_eq!(seen.len(), 2 * (n - 1), "{label}");
+            assert_in_step(&seen, &label);
+            let last = na(w.bodies[row[n - 2]].linvel()).x;
             assert!(
                 abs_diff_eq!(last, v, epsilon = V_TOL * v),
                 "{mode:?}, {n} balls: the last leaves at {last}"
@@ -1293,7 +1324,6 @@ fn overlapping_balls_turn_about_their_radii() {
 #[test]
 fn a_cradle_on_a_table_with_friction_is_resolved_in_the_step() {
     let (r, v, m) = (0.02, 1.0, 0.17);
-    let zero = Vector3::zeros();
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
         let mut w = world_with_gravity(G);
         let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
@@ -1315,23 +1345,15 @@ fn a_cradle_on_a_table_with_friction_is_resolved_in_the_step() {
             1.0,
             0.0,
         );
-        let mut last = None;
-        for k in 0..4 {
-            let at = Vector3::new(0.05 + 2.0 * r * k as f64, r, 0.0);
-            last = Some(ball(&mut w, at, zero, zero, r, 1.0, 0.0).0);
-        }
+        let last = touching_row(&mut w, 0.05, r, r, 4)[3];
         p.set_all_dynamic_bodies_impact(true);
         let mut seen = Vec::new();
         for _ in 0..10 {
             p.step(&mut w);
             seen.extend(pair_events(&p));
         }
-        let timings: Vec<_> = seen.iter().map(|e| e.timing).collect();
-        assert!(
-            !seen.is_empty() && timings.iter().all(|t| *t == ImpactTiming::InStep),
-            "{mode:?}: {timings:?}"
-        );
-        let on_last = seen.iter().find(|e| Some(e.body) == last).unwrap();
+        assert_in_step(&seen, &format!("{mode:?}"));
+        let on_last = seen.iter().find(|e| e.body == last).unwrap();
         let speed = wide(on_last.impulse.x) / m;
         assert!(
             abs_diff_eq!(speed, v, epsilon = V_TOL * v),
@@ -1364,18 +1386,9 @@ fn two_strikes_whose_balls_meet_are_moved_together() {
     let at = Vector3::new(0.07 + 2.0 * r + 0.0283, 0.0, 0.0);
     let (d, _) = ball(&mut w, at, Vector3::new(-1.0, 0.0, 0.0), zero, r, 1.0, 0.0);
     p.set_all_dynamic_bodies_impact(true);
-    let mass = |h| if h == a { 50.0 * 0.17 } else { 0.17 };
-    let all = [a, b, c, d];
-    let momentum = |w: &PhysicsWorld| -> f64 {
-        all.iter()
-            .map(|h| mass(*h) * na(w.bodies[*h].linvel()).x)
-            .sum()
-    };
-    let energy = |w: &PhysicsWorld| -> f64 {
-        all.iter()
-            .map(|h| 0.5 * mass(*h) * na(w.bodies[*h].linvel()).norm_squared())
-            .sum()
-    };
+    let masses = [(a, 50.0 * 0.17), (b, 0.17), (c, 0.17), (d, 0.17)];
+    let momentum = |w: &PhysicsWorld| momentum_x(w, &masses);
+    let energy = |w: &PhysicsWorld| translational_energy(w, &masses);
     let (p0, e0) = (momentum(&w), energy(&w));
     let seen = first_pair_events(&mut p, &mut w, 5);
     let pairs: Vec<_> = seen.iter().map(|e| (e.body, e.body2, e.timing)).collect();
@@ -1440,5 +1453,53 @@ fn a_ball_catching_up_with_a_slowed_ball_meets_it() {
                 );
             }
         }
+    }
+}
+
+/// A ball struck towards one its collision groups let it pass (free space, e = 1): rapier
+/// would not solve that pair, so the struck ball passes it, in the step, untouched.
+#[test]
+fn a_ball_sent_off_passes_a_ball_its_groups_let_through() {
+    let r = 0.02;
+    let zero = Vector3::zeros();
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(0.0);
+        let mut p = plugin(mode);
+        ball(&mut w, zero, Vector3::x() * 6.0, zero, r, 1.0, 0.0);
+        let (b, cb) = ball(
+            &mut w,
+            Vector3::new(0.06, 0.0, 0.0),
+            zero,
+            zero,
+            r,
+            1.0,
+            0.0,
+        );
+        let (c, cc) = ball(
+            &mut w,
+            Vector3::new(0.12, 0.0, 0.0),
+            zero,
+            zero,
+            r,
+            1.0,
+            0.0,
+        );
+        let groups =
+            |member, filter| InteractionGroups::new(member, filter, InteractionTestMode::And);
+        w.colliders[cb].set_collision_groups(groups(Group::GROUP_2, Group::ALL));
+        w.colliders[cc].set_collision_groups(groups(Group::GROUP_3, Group::GROUP_1));
+        p.set_all_dynamic_bodies_impact(true);
+        for _ in 0..3 {
+            p.step(&mut w);
+            let met = pair_events(&p)
+                .iter()
+                .any(|e| e.body == c || e.body2 == Some(c));
+            assert!(!met, "{mode:?}: B and C met");
+        }
+        assert!(
+            na(w.bodies[b].translation()).x > 0.2,
+            "{mode:?}: B did not pass C"
+        );
+        assert_eq!(na(w.bodies[c].linvel()).x, 0.0, "{mode:?}");
     }
 }

@@ -270,19 +270,10 @@ pub(crate) fn pressed_besides(
     sets: &Sets,
     registry: &Registry,
 ) -> bool {
-    if sets.jointed(body) {
-        return true;
-    }
-    rb.colliders().iter().any(|ch| {
-        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            let other = if pair.collider1 == *ch {
-                pair.collider2
-            } else {
-                pair.collider1
-            };
+    sets.jointed(body)
+        || any_pair(rb, sets.narrow_phase, |other, pair| {
             other != partner && registry.entry(other).is_none() && pushes(pair)
         })
-    })
 }
 
 /// Did the body touch, in rapier's solver after the last step, anything but a ground, or
@@ -308,17 +299,27 @@ fn solver_contact_besides(
     sets: &Sets,
     counts: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
-    if sets.jointed(body) {
-        return true;
-    }
+    sets.jointed(body)
+        || any_pair(rb, sets.narrow_phase, |other, pair| {
+            Some(other) != partner && counts(other) && in_solver(pair)
+        })
+}
+
+/// Does any of rapier's contact pairs of the body's colliders pass `test` (given the other
+/// collider and the pair)?
+fn any_pair(
+    rb: &RigidBody,
+    narrow_phase: &NarrowPhase,
+    test: impl Fn(ColliderHandle, &ContactPair) -> bool,
+) -> bool {
     rb.colliders().iter().any(|ch| {
-        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
+        narrow_phase.contact_pairs_with(*ch).any(|pair| {
             let other = if pair.collider1 == *ch {
                 pair.collider2
             } else {
                 pair.collider1
             };
-            Some(other) != partner && counts(other) && in_solver(pair)
+            test(other, pair)
         })
     })
 }
@@ -360,15 +361,8 @@ pub(crate) fn held_or_by_unseen(
     narrow_phase: &NarrowPhase,
     looked_for: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
-    rb.colliders().iter().any(|ch| {
-        narrow_phase.contact_pairs_with(*ch).any(|pair| {
-            let other = if pair.collider1 == *ch {
-                pair.collider2
-            } else {
-                pair.collider1
-            };
-            pushes(pair) || in_solver(pair) && !looked_for(other)
-        })
+    any_pair(rb, narrow_phase, |other, pair| {
+        pushes(pair) || in_solver(pair) && !looked_for(other)
     })
 }
 

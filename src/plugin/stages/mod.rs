@@ -206,13 +206,14 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         let near = NearBodies {
             index: &self.pair_index,
             bodies,
+            refused: &refused,
         };
         let mut view = AfterStep::new(
             (&self.config, &self.registry, &self.flags),
             &mut self.memory,
             (&mut self.writes, &mut self.reports),
         );
-        pair_reconstruct::move_clusters(&mut view, bodies, colliders, &near, &refused, step)
+        pair_reconstruct::move_clusters(&mut view, bodies, colliders, &near, step)
     }
 }
 

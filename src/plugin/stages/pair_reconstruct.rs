@@ -58,10 +58,23 @@ use std::borrow::Cow;
 
 /// Where a cluster finds the bodies outside its pairs that a body it sends off may meet: the
 /// pair plan's members, by their swept boxes (`PairIndex`), and rapier's bodies, for the
-/// handle of a box's slot.
+/// handle of a box's slot; and whether a pair so found may be the model's.
 pub(crate) struct NearBodies<'a> {
     pub index: &'a PairIndex,
     pub bodies: &'a RigidBodySet,
+    /// Would rapier not solve the pair of the two bodies, or the user's filter refuse it?
+    pub refused: &'a dyn Fn(RigidBodyHandle, RigidBodyHandle) -> bool,
+}
+
+impl NearBodies<'_> {
+    /// May the pair of `a` and `b`, not planned, be the model's: rapier would solve it, the
+    /// user's filter accepts it, and rapier's contacts weigh the two alike (one dominance
+    /// group: a pair of two is rapier's, `pair_plan`)?
+    pub fn may_pair(&self, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
+        let group =
+            |h: RigidBodyHandle| self.bodies.get(h).map(|rb| rb.effective_dominance_group());
+        group(a) == group(b) && !(self.refused)(a, b)
+    }
 }
 
 /// How many bodies from outside a cluster it takes in on the way (`Unmoved::Meets`) before
@@ -101,7 +114,6 @@ pub(crate) fn move_clusters(
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     near: &NearBodies,
-    refused: &dyn Fn(RigidBodyHandle, RigidBodyHandle) -> bool,
     step: &EndOfStep,
 ) -> HandleSet<RigidBodyHandle> {
     let mut written = HandleSet::default();
@@ -141,10 +153,8 @@ pub(crate) fn move_clusters(
             // The body reached joins with the pair: alone (a body with a plan, in no
             // cluster), or with the whole of its later cluster; never a body another cluster
             // moved already.
-            let can_join = grown < MAX_CLUSTER_GROWTH
-                && !written.contains(&other)
-                && same_dominance(bodies, members[member], other)
-                && !refused(members[member], other);
+            // (`meets_other_body` found only pairs that may be the model's.)
+            let can_join = grown < MAX_CLUSTER_GROWTH && !written.contains(&other);
             // Its cluster, and its place there, for a later cluster.
             let joins = match clusters.of_body.get(&other) {
                 _ if !can_join => None,
@@ -383,13 +393,6 @@ fn moves_alone(
             && !cand.touched
             && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)
     })
-}
-
-/// Do rapier's contacts weigh the two bodies alike (one dominance group)? A pair of two
-/// groups is rapier's (`pair_plan`), and never joins a cluster.
-fn same_dominance(bodies: &RigidBodySet, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
-    let group = |h: RigidBodyHandle| bodies.get(h).map(|rb| rb.effective_dominance_group());
-    group(a) == group(b)
 }
 
 /// Each member's [`ClusterBall`], in the members' order: its collider, its radius if it is a

@@ -361,13 +361,18 @@ impl<'c, 'a> Run<'c, 'a> {
                     && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
                     && segment_crosses(&s.com, &way, aabb, widen)
             })
-            .filter_map(|(slot, aabb)| match self.by_slot.get(&slot) {
-                Some(j) => Some((slot, Reached::Member(*j))),
-                None => {
-                    let (rb, body) = cluster.near.bodies.get_unknown_gen(slot)?;
-                    let towards = vec_to_na(aabb.center()) - s.com;
-                    let closing = towards.dot(&(s.v - vec_to_na(rb.linvel()))) > 0.0;
-                    closing.then_some((slot, Reached::Outside(body)))
+            .filter_map(|(slot, aabb)| {
+                let (rb, body) = cluster.near.bodies.get_unknown_gen(slot)?;
+                if !cluster.near.may_pair(ball.cand.body, body) {
+                    return None;
+                }
+                match self.by_slot.get(&slot) {
+                    Some(j) => Some((slot, Reached::Member(*j))),
+                    None => {
+                        let towards = vec_to_na(aabb.center()) - s.com;
+                        let closing = towards.dot(&(s.v - vec_to_na(rb.linvel()))) > 0.0;
+                        closing.then_some((slot, Reached::Outside(body)))
+                    }
                 }
             })
             .min_by_key(|(slot, _)| *slot)
