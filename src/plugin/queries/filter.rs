@@ -15,6 +15,8 @@
 //! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately
 //! ([`user_refuses`]), where the colliders' hook flags ask for it, as rapier would.
 
+use crate::plugin::hooks::flags::HookFlags;
+use crate::plugin::queries::observe::Sets;
 use crate::plugin::state::handles::PairKey;
 use crate::rapier::prelude::{
     ActiveHooks, Collider, ColliderSet, ImpulseJointSet, MultibodyJointSet, PairFilterContext,
@@ -69,6 +71,22 @@ pub(crate) fn joint_disables_contacts(
         || multibody_joints
             .joint_between(a, b)
             .is_some_and(|(_, _, link)| !link.joint.data.contacts_enabled)
+}
+
+/// Would rapier not solve the pair `key` of two bodies' colliders (`a` and `b` their bodies),
+/// a joint between the bodies disable its contacts, or the user's filter refuse it (asked
+/// where the user's flags recorded in `flags` ask for it)? Every test is symmetric in the
+/// two.
+pub(crate) fn pair_refused<H: PhysicsHooks>(
+    (user_hooks, flags): (&H, &HookFlags),
+    (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
+    key: PairKey,
+    (a, b): (RigidBodyHandle, RigidBodyHandle),
+) -> bool {
+    let user = flags.recorded_pair_flags(colliders, key);
+    !rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+        || joint_disables_contacts(sets.impulse_joints, sets.multibody_joints, a, b)
+        || user_refuses(user_hooks, user, bodies, colliders, key)
 }
 
 /// Does the user's filter refuse the pair `key` (body collider, ground collider)? Asked only

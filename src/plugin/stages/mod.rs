@@ -189,19 +189,15 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) -> HandleSet<RigidBodyHandle> {
-        let (user_hooks, flags) = (&self.user_hooks, &self.flags);
-        let sets = &step.sets;
+        let hooks = (&self.user_hooks, &self.flags);
         let refused = |a: RigidBodyHandle, b: RigidBodyHandle| {
             let collider =
                 |h: RigidBodyHandle| bodies.get(h).and_then(|rb| rb.colliders().first().copied());
             let (Some(ca), Some(cb)) = (collider(a), collider(b)) else {
                 return true;
             };
-            let key = pair_key(ca, cb);
-            let user = flags.recorded_pair_flags(colliders, key);
-            !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
-                || filter::joint_disables_contacts(sets.impulse_joints, sets.multibody_joints, a, b)
-                || filter::user_refuses(user_hooks, user, bodies, colliders, key)
+            let sets = (bodies, colliders, &step.sets);
+            filter::pair_refused(hooks, sets, pair_key(ca, cb), (a, b))
         };
         let near = NearBodies {
             index: &self.pair_index,

@@ -119,16 +119,12 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// refuse it? (`filter.rs`; every test there is symmetric in the two.)
     pub(super) fn refused(&self, key: PairKey, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
         let inputs = self.inputs;
-        let (bodies, colliders) = (self.bodies, inputs.colliders);
-        let user = inputs.flags.recorded_pair_flags(colliders, key);
-        !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
-            || filter::joint_disables_contacts(
-                inputs.sets.impulse_joints,
-                inputs.sets.multibody_joints,
-                a,
-                b,
-            )
-            || filter::user_refuses(inputs.user_hooks, user, bodies, colliders, key)
+        filter::pair_refused(
+            (inputs.user_hooks, inputs.flags),
+            (self.bodies, inputs.colliders, inputs.sets),
+            key,
+            (a, b),
+        )
     }
 
     /// The closing speed of two members along their line of centres, and their centres'
