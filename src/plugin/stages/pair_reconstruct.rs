@@ -34,7 +34,8 @@
 mod agenda;
 mod cluster;
 
-pub(crate) use cluster::{Unmoved, through_pair_impacts};
+use cluster::Unmoved;
+pub(crate) use cluster::through_pair_impacts;
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -107,8 +108,8 @@ pub(crate) struct ClusterBall<'a> {
 /// ([`through_pair_impacts`]), checked against their grounds (`EndCheck::Flown`) and
 /// written. A body an event sends towards another member of the pair plan it has no pair
 /// with grows the cluster by that pair, where rapier would solve it and the other body can
-/// be moved with the cluster (`grow`); otherwise the cluster is left to the settle stage.
-/// Returns the bodies written.
+/// be moved with the cluster ([`Growing::take_in`]); otherwise the cluster is left to the
+/// settle stage. Returns the bodies written.
 pub(crate) fn move_clusters(
     view: &mut AfterStep,
     bodies: &RigidBodySet,
@@ -134,67 +135,32 @@ pub(crate) fn move_clusters(
         if absorbed[c] {
             continue;
         }
-        let (mut members, mut pairs) = (Cow::Borrowed(members), Cow::Borrowed(pairs));
-        let (mut grown, from) = (0, view.commit.reported().len());
-        let mut taken = Vec::new();
-        let (balls, ends) = loop {
-            if !moves_alone(view, (bodies, colliders), &cands, &members) {
-                break (Vec::new(), None);
+        let mut growing = Growing::new(c, members, pairs);
+        let from = view.commit.reported().len();
+        let moved = loop {
+            let members = &growing.members;
+            if !moves_alone(view, (bodies, colliders), &cands, members) {
+                break None;
             }
-            let Some(balls) = cluster_balls(view, bodies, colliders, &cands, &members) else {
-                break (Vec::new(), None);
+            let Some(balls) = cluster_balls(view, bodies, colliders, &cands, members) else {
+                break None;
             };
-            let (member, other) =
-                match through_pair_impacts(view, colliders, near, &balls, &pairs, step) {
-                    Ok(ends) => break (balls, Some(ends)),
-                    Err(Unmoved::GaveUp) => break (Vec::new(), None),
-                    Err(Unmoved::Meets { member, other }) => (member, other),
-                };
-            // The body reached joins with the pair: alone (a body with a plan, in no
-            // cluster), or with the whole of its later cluster; never a body another cluster
-            // moved already.
-            // (`meets_other_body` found only pairs that may be the model's.)
-            let can_join = grown < MAX_CLUSTER_GROWTH && !written.contains(&other);
-            // Its cluster, and its place there, for a later cluster.
-            let joins = match clusters.of_body.get(&other) {
-                _ if !can_join => None,
-                None => cands.get(&other).map(|_| None),
-                Some(&later) if later > c && !absorbed[later] => clusters.members[later]
-                    .iter()
-                    .position(|h| *h == other)
-                    .map(|place| Some((later, place))),
-                Some(_) => None,
-            };
-            let Some(joins) = joins else {
-                break (Vec::new(), None);
-            };
-            grown += 1;
-            let k = match joins {
-                None => {
-                    members.to_mut().push(other);
-                    members.len() - 1
+            match through_pair_impacts(view, colliders, near, &balls, &growing.pairs, step) {
+                Ok(ends) => break Some((balls, ends)),
+                Err(Unmoved::GaveUp) => break None,
+                Err(Unmoved::Meets { member, other }) => {
+                    let sets = (&clusters, &cands, &written);
+                    if !growing.take_in(sets, &mut absorbed, member, other) {
+                        break None;
+                    }
                 }
-                Some((later, place)) => {
-                    absorbed[later] = true;
-                    taken.push(later);
-                    let offset = members.len();
-                    members.to_mut().extend(&clusters.members[later]);
-                    let shifted = clusters.pairs[later]
-                        .iter()
-                        .map(|(i, j)| (i + offset, j + offset));
-                    pairs.to_mut().extend(shifted);
-                    offset + place
-                }
-            };
-            pairs.to_mut().push((member, k));
+            }
         };
-        if ends.is_none() {
+        let Some((balls, ends)) = moved else {
             // Not moved: each cluster it took in is moved on its own.
-            for later in taken {
+            for later in growing.taken {
                 absorbed[later] = false;
             }
-        }
-        let Some(ends) = ends else {
             continue;
         };
         for (ball, end) in balls.iter().zip(ends) {
@@ -217,6 +183,79 @@ pub(crate) fn move_clusters(
         }
     }
     written
+}
+
+/// A cluster as it grows by the bodies its events send its bodies towards: its members and
+/// pairs (the plan's, then those taken in), and the later clusters it took in whole.
+struct Growing<'c> {
+    /// Its index among the step's clusters.
+    cluster: usize,
+    members: Cow<'c, [RigidBodyHandle]>,
+    pairs: Cow<'c, [(usize, usize)]>,
+    /// How many times it grew.
+    grown: usize,
+    taken: Vec<usize>,
+}
+
+impl<'c> Growing<'c> {
+    fn new(cluster: usize, members: &'c [RigidBodyHandle], pairs: &'c [(usize, usize)]) -> Self {
+        Self {
+            cluster,
+            members: Cow::Borrowed(members),
+            pairs: Cow::Borrowed(pairs),
+            grown: 0,
+            taken: Vec::new(),
+        }
+    }
+
+    /// Takes in `other`, which member `member` may reach (a pair that may be the model's:
+    /// `meets_other_body` found only such), with their pair, where it can be moved with the
+    /// cluster: alone (a body with a plan, in no cluster), or with the whole of its later
+    /// cluster, never a body another cluster moved already, and at most
+    /// [`MAX_CLUSTER_GROWTH`] times. `false` where it cannot.
+    fn take_in(
+        &mut self,
+        (clusters, cands, written): (&'c Clusters, &CandidatesByBody, &HandleSet<RigidBodyHandle>),
+        absorbed: &mut [bool],
+        member: usize,
+        other: RigidBodyHandle,
+    ) -> bool {
+        if self.grown >= MAX_CLUSTER_GROWTH || written.contains(&other) {
+            return false;
+        }
+        // Its later cluster, and its place there.
+        let joins = match clusters.of_body.get(&other) {
+            None => cands.get(&other).map(|_| None),
+            Some(&later) if later > self.cluster && !absorbed[later] => clusters.members[later]
+                .iter()
+                .position(|h| *h == other)
+                .map(|place| Some((later, place))),
+            Some(_) => None,
+        };
+        let Some(joins) = joins else {
+            return false;
+        };
+        self.grown += 1;
+        let k = match joins {
+            None => {
+                self.members.to_mut().push(other);
+                self.members.len() - 1
+            }
+            Some((later, place)) => {
+                absorbed[later] = true;
+                self.taken.push(later);
+                let offset = self.members.len();
+                self.members.to_mut().extend(&clusters.members[later]);
+                let shifted = clusters.pairs[later]
+                    .iter()
+                    .map(|(i, j)| (i + offset, j + offset));
+                self.pairs.to_mut().extend(shifted);
+                offset + place
+            }
+        };
+        self.pairs.to_mut().push((member, k));
+        true
+    }
 }
 
 /// The step's candidates by body.

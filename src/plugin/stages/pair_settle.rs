@@ -82,38 +82,8 @@ impl<'v> AfterStep<'v> {
         let (ra, rb, mut sa, mut sb) = (na.rb(), nb.rb(), na.state(), nb.state());
         let d = sb.com - sa.com;
         let len = d.norm();
-        // Out of rapier's solver, the balls may have passed into or through each other in the
-        // step: they met if they overlap now, or if on the way their centres came within
-        // reach: by their relative motion over the step (straight, as out of the solver), or
-        // on the straight line from where one started relative to the other to where it
-        // ended. Centres that crossed the line of centres they started on met there too when
-        // the relative motion bent on the way (a ball that passed through the other and
-        // bounced off the ground); moving straight, they passed each other farther apart
-        // than the reach.
         let crossed = d.dot(&pair.normal) < 0.0;
-        let dv = sb.v - sa.v;
-        let bent = (dv - pair.relative_v).norm()
-            > BENT_RELATIVE_MOTION * dv.norm().max(pair.relative_v.norm());
-        let back = dv.norm_squared();
-        let nearest = if back > 0.0 {
-            // The closest approach of d - dv s for s in [0, dt] before the step's end.
-            let s_min = (d.dot(&dv) / back).clamp(0.0, step.dt);
-            (d - dv * s_min).norm()
-        } else {
-            len
-        };
-        let travel = d - pair.offset;
-        let along_path = match -pair.offset.dot(&travel) {
-            // The closest approach of offset + travel u for u in (0, 1]; none where the path
-            // leads apart from its start (a pair that started touching and separated).
-            closing if closing > 0.0 => {
-                let u = (closing / travel.norm_squared()).min(1.0);
-                (pair.offset + travel * u).norm()
-            }
-            _ => f64::INFINITY,
-        };
-        let met =
-            len < pair.reach || nearest < pair.reach || along_path < pair.reach || crossed && bent;
+        let met = met_in_step(pair, d, sb.v - sa.v, step.dt);
         if !met || pair.normal == Vector3::zeros() && len == 0.0 {
             return;
         }
@@ -364,4 +334,38 @@ impl<'s> Pushed<'s> {
             radius: side.radius,
         }
     }
+}
+
+/// Did two balls out of rapier's solver meet in the step, given their centres' offset `d`
+/// (b less a) and relative velocity `dv` at its end? They may have passed into or through
+/// each other: they met if they overlap now, or if on the way their centres came within
+/// reach: by their relative motion over the step (straight, as out of the solver), or on the
+/// straight line from where one started relative to the other to where it ended. Centres
+/// that crossed the line of centres they started on met there too when the relative motion
+/// bent on the way (a ball that passed through the other and bounced off the ground); moving
+/// straight, they passed each other farther apart than the reach.
+fn met_in_step(pair: &PlannedPair, d: Vector3<f64>, dv: Vector3<f64>, dt: f64) -> bool {
+    let len = d.norm();
+    let crossed = d.dot(&pair.normal) < 0.0;
+    let bent = (dv - pair.relative_v).norm()
+        > BENT_RELATIVE_MOTION * dv.norm().max(pair.relative_v.norm());
+    let back = dv.norm_squared();
+    let nearest = if back > 0.0 {
+        // The closest approach of d - dv s for s in [0, dt] before the step's end.
+        let s_min = (d.dot(&dv) / back).clamp(0.0, dt);
+        (d - dv * s_min).norm()
+    } else {
+        len
+    };
+    let travel = d - pair.offset;
+    let along_path = match -pair.offset.dot(&travel) {
+        // The closest approach of offset + travel u for u in (0, 1]; none where the path
+        // leads apart from its start (a pair that started touching and separated).
+        closing if closing > 0.0 => {
+            let u = (closing / travel.norm_squared()).min(1.0);
+            (pair.offset + travel * u).norm()
+        }
+        _ => f64::INFINITY,
+    };
+    len < pair.reach || nearest < pair.reach || along_path < pair.reach || crossed && bent
 }

@@ -25,7 +25,6 @@ use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
 
 /// Why a cluster was not moved alone.
-#[derive(Debug, PartialEq)]
 pub(crate) enum Unmoved {
     /// A search gave up, or the cluster met what it cannot move (see [`move_cluster`]).
     GaveUp,
@@ -84,7 +83,6 @@ fn move_cluster(
     let max_events = view.config.max_impacts_per_step * cluster.balls.len();
     let mut events = 0usize;
     let mut run = Run::start(cluster, pairs)?;
-
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
         if events > max_events {
@@ -547,7 +545,12 @@ impl Cluster<'_, '_> {
     /// then. Reads only.
     fn reaches_other_grounds(&self, view: &AfterStep, k: usize, s: &State, left: f64) -> bool {
         let (ball, step) = (&self.balls[k], self.step);
-        let half = to_real(self.reach(k, s, left));
+        let accel = ball.cand.flight.accel.norm();
+        let reach = ball.geom.radius
+            + s.v.norm() * left
+            + accel * left * left
+            + step.policy.contact_margin();
+        let half = to_real(reach);
         let centre = vec_from_na(&s.com);
         // A ball that met a slab's tiles one by one has tiles among its grounds.
         let tiles = ball
@@ -565,18 +568,6 @@ impl Cluster<'_, '_> {
                     .iter()
                     .any(|g| g.handle == step.grounds[*i].handle)
             })
-    }
-
-    /// How far body `k`, at `s` with `left` seconds of the step to go, can reach from its
-    /// centre (m): its bounding radius, its travel at its speed and under its acceleration
-    /// (gravity and its user force), and the contact margin.
-    fn reach(&self, k: usize, s: &State, left: f64) -> f64 {
-        let ball = &self.balls[k];
-        let accel = ball.cand.flight.accel.norm();
-        ball.geom.radius
-            + s.v.norm() * left
-            + accel * left * left
-            + self.step.policy.contact_margin()
     }
 
     /// How body `k` moves on after an impact with another body left it at `after` (time
