@@ -116,6 +116,15 @@ fn assert_in_step(events: &[rapier_impact::ImpactEvent], label: &str) {
     );
 }
 
+/// A fixed half-space floor, its normal up, of restitution `e` and friction `mu`.
+fn floor(w: &mut PhysicsWorld, e: f64, mu: f64) -> ColliderHandle {
+    let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
+    let builder = ColliderBuilder::halfspace(up)
+        .restitution(real(e))
+        .friction(real(mu));
+    w.insert(RigidBodyBuilder::fixed(), builder).1
+}
+
 /// Steps until a step reports impacts between bodies (at most `steps`), and returns them.
 fn first_pair_events(
     p: &mut ImpactPlugin,
@@ -964,13 +973,7 @@ fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
             let mut w = world_with_gravity(gravity);
             let mut p = plugin(mode);
             if on_floor {
-                let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
-                let (_, floor) = w.insert(
-                    RigidBodyBuilder::fixed(),
-                    ColliderBuilder::halfspace(up)
-                        .restitution(1.0)
-                        .friction(0.0),
-                );
+                let floor = floor(&mut w, 1.0, 0.0);
                 p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
             }
             let zero = Vector3::zeros();
@@ -1053,13 +1056,7 @@ fn balls_passing_each_other_without_touching_get_no_impact() {
     ];
     for (mode, v) in runs {
         let mut w = world_with_gravity(G);
-        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
-        let (_, table) = w.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::halfspace(up)
-                .restitution(0.5)
-                .friction(0.2),
-        );
+        let table = floor(&mut w, 0.5, 0.2);
         let mut p = plugin(mode);
         p.add_ground(&w.bodies, &w.colliders, table).unwrap();
         w.insert(
@@ -1263,13 +1260,7 @@ fn a_ball_through_a_ball_then_off_the_floor_meets_it() {
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
         let mut w = world_with_gravity(0.0);
         let mut p = plugin(mode);
-        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
-        let (_, floor) = w.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::halfspace(up)
-                .restitution(1.0)
-                .friction(0.0),
-        );
+        let floor = floor(&mut w, 1.0, 0.0);
         p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
         let at = Vector3::new(-d, h + d, 0.0);
         ball(&mut w, at, Vector3::new(v, -v, 0.0), zero, r, 1.0, 0.0);
@@ -1326,13 +1317,7 @@ fn a_cradle_on_a_table_with_friction_is_resolved_in_the_step() {
     let (r, v, m) = (0.02, 1.0, 0.17);
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
         let mut w = world_with_gravity(G);
-        let up = rapier_impact::rapier::na::Unit::new_unchecked(Vector::Y);
-        let (_, table) = w.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::halfspace(up)
-                .restitution(0.5)
-                .friction(0.2),
-        );
+        let table = floor(&mut w, 0.5, 0.2);
         let mut p = plugin(mode);
         p.add_ground(&w.bodies, &w.colliders, table).unwrap();
         let spin = Vector3::new(0.0, 0.0, -v / r);
