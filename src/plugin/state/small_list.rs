@@ -18,16 +18,22 @@ impl<T> SmallList<T> {
     pub fn push(&mut self, x: T) {
         match self {
             Self::Empty => *self = Self::One(x),
-            Self::One(_) => {
-                if let Self::One(a) = std::mem::take(self) {
-                    // Room for a few more: a ball over a tiled floor is near several tiles,
-                    // and growing one by one reallocates at each.
-                    let mut v = Vec::with_capacity(SPILL_CAPACITY);
-                    v.extend([a, x]);
-                    *self = Self::Many(v);
-                }
-            }
+            Self::One(_) => self.spill(x),
             Self::Many(v) => v.push(x),
+        }
+    }
+
+    /// A second element: the list spills to a `Vec`. Out of line, so that the lists of one
+    /// element (most) keep their callers' code short.
+    #[cold]
+    #[inline(never)]
+    fn spill(&mut self, x: T) {
+        if let Self::One(a) = std::mem::take(self) {
+            // Room for a few more: a ball over a tiled floor is near several tiles, and
+            // growing one by one reallocates at each.
+            let mut v = Vec::with_capacity(SPILL_CAPACITY);
+            v.extend([a, x]);
+            *self = Self::Many(v);
         }
     }
 }

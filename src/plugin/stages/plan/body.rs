@@ -208,6 +208,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// tiles for a body that meets them one by one (`meets_tiles`), whose colliders are then
     /// noted in `step.by_tile` (the hooks look their pairs up by tile). `jointed`: whether the
     /// body has a joint.
+    #[inline(never)]
     fn near_slabs(
         &self,
         jointed: bool,
@@ -275,6 +276,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 /// impulse changes only its velocity). A ground whose box keeps the ball farther than the
 /// least `|gap|` already found (`GroundGeom::gap_bound`) cannot be the nearest, and is not
 /// queried here: a ball rolling on one tile of a floor queries that tile alone.
+#[inline(never)]
 fn nearest_first(
     geom: &BodyGeom,
     grounds: &mut SmallList<(usize, GroundGeom)>,

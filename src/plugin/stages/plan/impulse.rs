@@ -24,6 +24,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// the same step press it into the ground). No impulse: `Resting`. Writes nothing to
     /// rapier (the plan returns the state, recorded through the commit once the body's plan is
     /// done).
+    #[inline(never)]
     pub(super) fn step_start_impulse(
         &mut self,
         reads: BodyReads,

@@ -20,6 +20,7 @@ use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ActiveHooks, PhysicsHooks};
+use nalgebra::Vector3;
 
 /// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
 /// part, the pair's key, and the hook flags the user set on its two colliders (read once:
@@ -158,19 +159,33 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &mut StepData,
     ) -> StartContact {
         use crate::parry::shape::TypedShape;
-        let Pair {
-            k, part, gg, key, ..
-        } = pair;
         let Ok(Some((dist, n, _))) = found else {
             return found;
         };
         let mesh = matches!(
-            gg.shape.as_typed_shape(),
+            pair.gg.shape.as_typed_shape(),
             TypedShape::TriMesh(_) | TypedShape::HeightField(_)
         );
         if !mesh {
             return found;
         }
+        self.on_mesh_side(reads, plan, pair, (found, dist, n), step)
+    }
+
+    /// [`Self::mesh_side`] for a mesh or heightfield with a contact `found` at `dist` along
+    /// `n`. Out of line: most grounds are solids, whose plans skip it.
+    #[inline(never)]
+    fn on_mesh_side(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        (found, dist, n): (StartContact, f64, Vector3<f64>),
+        step: &mut StepData,
+    ) -> StartContact {
+        let Pair {
+            k, part, gg, key, ..
+        } = pair;
         let body = reads.body;
         let mut found = found;
         if let Some(side) = reads

@@ -435,6 +435,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// it, if its own ground is one flat face under it or one plane near it (not a crease
     /// inside a mesh) and the others near are pieces of that plane (`held_on`); else `None`.
     /// Reads only.
+    #[inline(never)]
     fn held(
         &self,
         scene: &Scene,
@@ -468,6 +469,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// first: the others within the resting gap of it must be pieces of that plane with the
     /// same coefficients (a flush seam: its friction and its ground's rolling ones), or it is
     /// not held (a ball resting in a crease is rapier's). Reads only.
+    #[inline(never)]
     fn held_on(
         &self,
         scene: &Scene,
@@ -514,6 +516,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// obstacle (rolling down into a crease, it touches the level ground while still on the
     /// slope: the reconstruct stage's search, with the same samples, finds the touch).
     /// `None` where that fails. Reads only.
+    #[inline(never)]
     fn pieces_under(
         &self,
         scene: &Scene,
