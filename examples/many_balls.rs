@@ -364,12 +364,13 @@ fn print_profile(profile: &StepProfile, steps: u64) {
         avg(c.hooked_bodies)
     );
     println!(
-        "pairs per step: impact {:.1}, resting {:.1}, rolling {:.1}, rapier's {:.1}, between bodies {:.1}",
+        "pairs per step: impact {:.1}, resting {:.1}, rolling {:.1}, rapier's {:.1}, between bodies {:.1} (cluster runs {:.2})",
         avg(c.impact_pairs),
         avg(c.resting_pairs),
         avg(c.rolling_pairs),
         avg(c.rapier_pairs),
-        avg(c.body_pairs)
+        avg(c.body_pairs),
+        avg(c.cluster_runs)
     );
     println!(
         "writes per step {:.1} ({:.1} of them moves), events per step {:.2}",

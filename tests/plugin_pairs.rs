@@ -944,11 +944,12 @@ fn a_pair_of_two_dominance_groups_is_rapiers() {
 /// A heavy ball strikes a light one lying 3 cm in front of a second light one (e = 1, no
 /// friction), in free space and on a floor: the struck ball leaves at nearly twice the
 /// striker's speed and meets the second one inside the same step. It must hit it, never pass
-/// through it. Where the second ball has a plan to move by (in free space in `Exact` mode, a
-/// flight), the three move together: every impact is in the step, at its closed form (the
-/// second ball leaves with the struck ball's speed), and momentum and energy are kept. Where
-/// it has none (`TimeOfImpact` mode, or resting on the floor), the strike is left to the
-/// step's end, and the struck ball meets the second one in the next step.
+/// through it. In free space the second ball has a flight to move by (in `TimeOfImpact` mode
+/// too, as an opted-in body), and the three move together: every impact is in the step, at
+/// its closed form (the second ball leaves with the struck ball's speed), and momentum and
+/// energy are kept. Resting on the floor, held by rapier's contact, it cannot be moved with
+/// them: the strike is left to the step's end, and the struck ball meets the second one in
+/// the next step.
 #[test]
 fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
     let (r, v, m_light, m_heavy) = (0.02, 6.0, 0.17, 50.0 * 0.17);
@@ -1020,7 +1021,7 @@ fn a_ball_sent_by_an_impact_meets_the_ball_in_front_of_it() {
             let &(n, hit) = bc
                 .first()
                 .unwrap_or_else(|| panic!("{label}: B never hit C"));
-            if mode == TimingMode::Exact && !on_floor {
+            if !on_floor {
                 // The struck ball's speed, 2 m_A / (m_A + m_B) v, passed on whole to C.
                 let sent = 2.0 * m_heavy / (m_heavy + m_light) * v;
                 let speed = wide(hit.impulse.x) / m_light;
@@ -1486,5 +1487,52 @@ fn a_ball_sent_off_passes_a_ball_its_groups_let_through() {
             "{mode:?}: B did not pass C"
         );
         assert_eq!(na(w.bodies[c].linvel()).x, 0.0, "{mode:?}");
+    }
+}
+
+/// A ball at 6 m/s strikes the first of a row of six lying 1.5 cm apart in free space (e = 1,
+/// no friction, equal masses): the speed passes along the whole row within the step, the
+/// striker and each ball stopping as it passes it on, momentum and energy kept. The balls
+/// beyond the striker's reach at the step's start are in no pair of the plan; each is met
+/// by a ball an impact sends off, and joins the cluster's run where it is met: one run for
+/// the whole row (moved again from the start for each ball met, the row cost the square of
+/// its length).
+#[test]
+fn a_row_struck_in_free_space_passes_the_speed_along_in_one_run() {
+    let (r, gap, v) = (0.02, 0.015, 6.0);
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(0.0);
+        let zero = Vector3::zeros();
+        let striker = Vector3::new(-2.0 * r - 0.005, 0.0, 0.0);
+        let mut balls = vec![ball(&mut w, striker, Vector3::x() * v, zero, r, 1.0, 0.0).0];
+        for k in 0..6 {
+            let at = Vector3::new((2.0 * r + gap) * k as f64, 0.0, 0.0);
+            balls.push(ball(&mut w, at, zero, zero, r, 1.0, 0.0).0);
+        }
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        p.set_profiling(true);
+        let masses: Vec<_> = balls.iter().map(|h| (*h, 0.17)).collect();
+        let (p0, e0) = (momentum_x(&w, &masses), translational_energy(&w, &masses));
+        p.step(&mut w);
+        let label = format!("{mode:?}");
+        let events = pair_events(&p);
+        assert_in_step(&events, &label);
+        // Two events an impact, one for each ball of the row passing the speed on.
+        assert_eq!(events.len(), 2 * 6, "{label}: {events:?}");
+        let runs = p.profile().unwrap().counts.cluster_runs;
+        assert_eq!(runs, 1, "{label}: the row moved {runs} times");
+        let vs: Vec<f64> = balls.iter().map(|h| na(w.bodies[*h].linvel()).x).collect();
+        let mut want = [0.0; 7];
+        want[6] = v;
+        assert!(
+            vs.iter()
+                .zip(want)
+                .all(|(got, want)| abs_diff_eq!(*got, want, epsilon = V_TOL * v)),
+            "{label}: velocities {vs:?}"
+        );
+        let (p1, e1) = (momentum_x(&w, &masses), translational_energy(&w, &masses));
+        assert_abs_diff_eq!(p1, p0, epsilon = V_TOL * p0);
+        assert_abs_diff_eq!(e1, e0, epsilon = V_TOL * e0);
     }
 }

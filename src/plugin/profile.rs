@@ -119,6 +119,11 @@ pub struct StepCounts {
     pub rapier_pairs: usize,
     /// Pairs between opted-in bodies with a role this step.
     pub body_pairs: usize,
+    /// Runs of the clusters of impacts between bodies, each moving its cluster from the
+    /// step's start: one a cluster, and one more each time a body it reached on the way could
+    /// not join it as the run went on (a member of another cluster, taken in whole: the
+    /// cluster is moved again with it). A body in no cluster joins the run it was reached in.
+    pub cluster_runs: usize,
     /// Bodies with the plugin's hook flags on their colliders at rapier's step. While every
     /// dynamic body is managed the flags are on the grounds instead (`docs/guide.md`,
     /// "Filtering and hooks"), and this counts only the balls flagged for pairs between
@@ -149,6 +154,7 @@ impl std::ops::AddAssign for StepCounts {
             rolling_pairs,
             rapier_pairs,
             body_pairs,
+            cluster_runs,
             hooked_bodies,
             writes,
             moves,
@@ -165,6 +171,7 @@ impl std::ops::AddAssign for StepCounts {
             (&mut self.rolling_pairs, rolling_pairs),
             (&mut self.rapier_pairs, rapier_pairs),
             (&mut self.body_pairs, body_pairs),
+            (&mut self.cluster_runs, cluster_runs),
             (&mut self.hooked_bodies, hooked_bodies),
             (&mut self.writes, writes),
             (&mut self.moves, moves),

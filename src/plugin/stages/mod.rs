@@ -162,7 +162,9 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.measure_ground_motion(&mut step, bodies);
         self.check_woken(&step, bodies, colliders);
         self.stopwatch.lap(Stage::Woken);
-        step.moved_together = self.move_clusters(&step, bodies, colliders);
+        let (moved_together, cluster_runs) = self.move_clusters(&step, bodies, colliders);
+        step.moved_together = moved_together;
+        self.stopwatch.count(|c| c.cluster_runs = cluster_runs);
         self.stopwatch.lap(Stage::PairClusters);
         self.reconstruct_bodies(&step, bodies, colliders);
         self.stopwatch.lap(Stage::Bodies);
@@ -182,13 +184,14 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
 impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// The clusters of `Impact` pairs between bodies (`pair_reconstruct.rs`); a pair found on
     /// the way joins a cluster only where rapier would solve it and the user's filter
-    /// accepts it (`queries/filter.rs`, as the pair plan asks). Returns the bodies moved.
+    /// accepts it (`queries/filter.rs`, as the pair plan asks). Returns the bodies moved, and
+    /// the clusters' runs.
     fn move_clusters(
         &mut self,
         step: &EndOfStep,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
-    ) -> HandleSet<RigidBodyHandle> {
+    ) -> (HandleSet<RigidBodyHandle>, usize) {
         let hooks = (&self.user_hooks, &self.flags);
         let refused = |a: RigidBodyHandle, b: RigidBodyHandle| {
             let collider =

@@ -23,10 +23,13 @@
 //! events than `max_impacts_per_step` per body, a rolling ball leaving its plane, a body sent
 //! off by an event reaching a ground it was not planned against, or reaching a member of the
 //! pair plan it has no pair with (by that body's swept box in the pair index). In that last
-//! case [`move_clusters`] adds the pair (and the body) and moves the cluster again, where the
-//! body can be moved with it; otherwise, and in every other case, the cluster's events are
-//! withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
-//! nothing into rapier.
+//! case a body in no cluster joins the run where it is met, with the pair, when it can be
+//! moved with the cluster and has no event of its own before (nothing of the cluster reached
+//! it sooner: the same run as the cluster moved again from its start with it); a body of
+//! another cluster makes [`move_clusters`] add the pair and that cluster, and move the
+//! cluster again; otherwise, and in every other case, the cluster's events are withdrawn,
+//! rapier's end state stands, and the settle stage checks the pairs. It writes nothing into
+//! rapier.
 //!
 //! Its parts: forming the clusters and committing their end states (here), the cluster's
 //! motion event by event (`cluster.rs`), and the agenda of its next events (`agenda.rs`).
@@ -34,8 +37,8 @@
 mod agenda;
 mod cluster;
 
-use cluster::Unmoved;
 pub(crate) use cluster::through_pair_impacts;
+use cluster::{Joining, Unmoved};
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -78,11 +81,12 @@ impl NearBodies<'_> {
     }
 }
 
-/// How many bodies from outside a cluster it takes in on the way (`Unmoved::Meets`) before
-/// it is left to the settle stage: each moves the whole cluster again, so that a row of `n`
-/// balls lying apart, each sent into the next, would cost `n` times the row; a longer one is
-/// resolved at the step's end, and its next impacts in the next step. (A body of the cluster
-/// reached on the way joins a pair without moving the cluster again.)
+/// How many bodies from outside a cluster it takes in on the way before it is left to the
+/// settle stage: a row of balls lying apart, each sent into the next, longer than this is
+/// resolved at the step's end, and its next impacts in the next step. A body in no cluster
+/// joins the run it is met in; a body of another cluster moves the cluster again with it,
+/// so the bound also bounds the runs. (A body of the cluster reached on the way joins a pair
+/// without counting.)
 const MAX_CLUSTER_GROWTH: usize = 8;
 
 /// A body of a cluster (a ball, a die, a pin) and what its motion needs.
@@ -108,16 +112,19 @@ pub(crate) struct ClusterBall<'a> {
 /// ([`through_pair_impacts`]), checked against their grounds (`EndCheck::Flown`) and
 /// written. A body an event sends towards another member of the pair plan it has no pair
 /// with grows the cluster by that pair, where rapier would solve it and the other body can
-/// be moved with the cluster ([`Growing::take_in`]); otherwise the cluster is left to the
-/// settle stage. Returns the bodies written.
+/// be moved with the cluster: one in no cluster joins the run there (`admit` below), one of
+/// a later cluster brings it whole and the cluster is moved again ([`Growing::take_in`]);
+/// otherwise the cluster is left to the settle stage. Returns the bodies written, and how
+/// many runs moved the clusters.
 pub(crate) fn move_clusters(
     view: &mut AfterStep,
     bodies: &RigidBodySet,
     colliders: &ColliderSet,
     near: &NearBodies,
     step: &EndOfStep,
-) -> HandleSet<RigidBodyHandle> {
+) -> (HandleSet<RigidBodyHandle>, usize) {
     let mut written = HandleSet::default();
+    let mut runs = 0;
     let impacts: Vec<_> = step
         .pairs
         .pairs
@@ -125,7 +132,7 @@ pub(crate) fn move_clusters(
         .filter(|p| p.role == Role::Impact)
         .collect();
     if impacts.is_empty() || view.config.timing == TimingMode::Step {
-        return written;
+        return (written, runs);
     }
     let cands = CandidatesByBody::new(step);
     let clusters = Clusters::of(&impacts);
@@ -137,6 +144,16 @@ pub(crate) fn move_clusters(
         }
         let mut growing = Growing::new(c, members, pairs);
         let from = view.commit.reported().len();
+        // A body in no cluster, not moved yet, that moves alone, joins on the way.
+        let admit = |view: &AfterStep, other: RigidBodyHandle| {
+            let lone = !written.contains(&other) && !clusters.of_body.contains_key(&other);
+            let single = std::slice::from_ref(&other);
+            (lone && cands.get(&other).is_some())
+                .then(|| moves_alone(view, (bodies, colliders), &cands, single))
+                .filter(|alone| *alone)
+                .and_then(|_| cluster_balls(view, bodies, colliders, &cands, single))
+                .and_then(|mut balls| balls.pop())
+        };
         let moved = loop {
             let members = &growing.members;
             if !moves_alone(view, (bodies, colliders), &cands, members) {
@@ -145,8 +162,16 @@ pub(crate) fn move_clusters(
             let Some(balls) = cluster_balls(view, bodies, colliders, &cands, members) else {
                 break None;
             };
-            match through_pair_impacts(view, colliders, near, &balls, &growing.pairs, step) {
-                Ok(ends) => break Some((balls, ends)),
+            let joining = Joining {
+                admit: &admit,
+                left: MAX_CLUSTER_GROWTH.saturating_sub(growing.grown),
+            };
+            let context = (colliders, near, step);
+            runs += 1;
+            let moved = through_pair_impacts(view, context, balls, &growing.pairs, &joining);
+            growing.joined(&moved.joined);
+            match moved.ends {
+                Ok(ends) => break Some((moved.balls, ends)),
                 Err(Unmoved::GaveUp) => break None,
                 Err(Unmoved::Meets { member, other }) => {
                     let sets = (&clusters, &cands, &written);
@@ -182,7 +207,7 @@ pub(crate) fn move_clusters(
             written.insert(ball.cand.body);
         }
     }
-    written
+    (written, runs)
 }
 
 /// A cluster as it grows by the bodies its events send its bodies towards: its members and
@@ -205,6 +230,18 @@ impl<'c> Growing<'c> {
             pairs: Cow::Borrowed(pairs),
             grown: 0,
             taken: Vec::new(),
+        }
+    }
+
+    /// The bodies that joined the cluster on the way (`through_pair_impacts`), each with its
+    /// pair with the member that reached it, in the order they joined: a cluster moved again
+    /// starts with them.
+    fn joined(&mut self, joined: &[(usize, RigidBodyHandle)]) {
+        for (member, body) in joined {
+            self.grown += 1;
+            self.members.to_mut().push(*body);
+            let k = self.members.len() - 1;
+            self.pairs.to_mut().push((*member, k));
         }
     }
 

@@ -98,7 +98,8 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Sorts the managed bodies (see [`Survey`]). A body surely far from every ground needs
-    /// no snapshot, inertia or geometry: in `Exact` mode it gets a flying candidate; a body
+    /// no snapshot, inertia or geometry: it gets a flying candidate where
+    /// [`Candidate::wanted_in_flight`] asks for one (in `Exact` mode, always); a body
     /// without collider is skipped. The members of the step's pairs are planned whatever
     /// their distance to the grounds, and outside `Exact` mode and slabs so is a body the last
     /// step's plan found near a ground, untested: if it is far after all, its plan finds it not
@@ -148,7 +149,8 @@ impl<H> ImpactPlugin<H> {
             match surely_far(rb, colliders, g_len, dt, margin, index, &step.grounds) {
                 Some(true) => {
                     survey.far.push(handle);
-                    if self.config.timing == TimingMode::Exact {
+                    let takes_pairs = self.registry.takes_pairs(handle, rb);
+                    if Candidate::wanted_in_flight(self.config.timing, false, takes_pairs) {
                         let shadow = last.shadows.get(&handle);
                         let (start, flight, local_com) =
                             snapshot(&self.writes.now(handle, rb), step.gravity, step.dt, shadow);

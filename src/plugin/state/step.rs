@@ -3,6 +3,7 @@
 
 use crate::motion::{Flight, Rolling, State};
 use crate::plugin::bridge::convert::vec_from_na;
+use crate::plugin::config::TimingMode;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::{Policy, Role};
 use crate::plugin::queries::ground_index::GroundMotion;
@@ -99,6 +100,19 @@ impl Candidate {
     pub fn steered_velocity(&self) -> Option<Vector> {
         self.steer
             .map(|offset| vec_from_na(&(self.start.v - offset)))
+    }
+
+    /// Does a body that no ground can reach in the step get a (flying) candidate? In `Exact`
+    /// mode, for its exact flight; a body of an `Impact` pair between bodies (`member`), for
+    /// its cluster; and, in `TimeOfImpact` mode, a body opted in to impacts between bodies
+    /// (`takes_pairs`), so that a cluster whose body an event sends towards it can take it in
+    /// and move it in the step (without a candidate the cluster is left to the step's end).
+    pub fn wanted_in_flight(timing: TimingMode, member: bool, takes_pairs: bool) -> bool {
+        match timing {
+            TimingMode::Exact => true,
+            TimingMode::TimeOfImpact => member || takes_pairs,
+            TimingMode::Step => member,
+        }
     }
 
     /// A body that no ground can reach in the step (only its flight, in `Exact` mode).

@@ -25,19 +25,28 @@ pub(super) enum Next {
 /// the lowest index, the same every run.
 pub(super) struct Agenda {
     queue: BinaryHeap<Reverse<Due>>,
-    /// The event found for each body's ground, then for each pair (by `Due::slot`), and the
-    /// number of its search: an entry in the queue from an earlier search is stale.
-    found: Vec<(u32, Option<Next>)>,
-    bodies: usize,
+    /// The event found for each body's ground, and the number of its search: an entry in the
+    /// queue from an earlier search is stale.
+    grounds: Vec<(u32, Option<Next>)>,
+    /// The same for each pair's touch.
+    touches: Vec<(u32, Option<Next>)>,
 }
 
 /// An entry of the [`Agenda`]'s queue.
 #[derive(Clone, Copy, Debug)]
 struct Due {
     t: f64,
-    /// A body's ground impact (its index) before a pair's touch (the body count plus its index).
-    slot: usize,
+    /// A body's ground impact comes before a pair's touch at the same time.
+    kind: Kind,
+    /// The body's or the pair's index.
+    index: usize,
     search: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Kind {
+    Ground,
+    Touch,
 }
 
 impl PartialEq for Due {
@@ -58,7 +67,8 @@ impl Ord for Due {
     fn cmp(&self, other: &Self) -> std::cmp::Ordering {
         self.t
             .total_cmp(&other.t)
-            .then(self.slot.cmp(&other.slot))
+            .then(self.kind.cmp(&other.kind))
+            .then(self.index.cmp(&other.index))
             .then(self.search.cmp(&other.search))
     }
 }
@@ -68,38 +78,52 @@ impl Agenda {
     pub(super) fn new(bodies: usize, pairs: usize) -> Self {
         Self {
             queue: BinaryHeap::with_capacity(bodies + pairs),
-            found: (0..bodies + pairs).map(|_| (0, None)).collect(),
-            bodies,
+            grounds: (0..bodies).map(|_| (0, None)).collect(),
+            touches: (0..pairs).map(|_| (0, None)).collect(),
         }
+    }
+
+    /// Room for one more body (the next index), with no event yet.
+    pub(super) fn add_body(&mut self) {
+        self.grounds.push((0, None));
     }
 
     /// Room for one more pair (the next index), with no event yet.
     pub(super) fn add_pair(&mut self) {
-        self.found.push((0, None));
+        self.touches.push((0, None));
     }
 
     /// Body `k`'s ground impact, as last searched.
     pub(super) fn ground(&mut self, k: usize, next: Option<(f64, Next)>) {
-        self.set(k, next);
+        self.set(Kind::Ground, k, next);
     }
 
     /// Pair `p`'s touch, as last searched (`None` also for a pair resting from here).
     pub(super) fn touch(&mut self, p: usize, next: Option<(f64, Next)>) {
-        self.set(self.bodies + p, next);
+        self.set(Kind::Touch, p, next);
     }
 
-    /// Replaces the event of `slot` (a body's ground, or the body count plus a pair's
-    /// index): its earlier entry in the queue becomes stale.
-    fn set(&mut self, slot: usize, next: Option<(f64, Next)>) {
-        let entry = &mut self.found[slot];
+    fn entry(&mut self, kind: Kind, index: usize) -> &mut (u32, Option<Next>) {
+        match kind {
+            Kind::Ground => &mut self.grounds[index],
+            Kind::Touch => &mut self.touches[index],
+        }
+    }
+
+    /// Replaces the event of a body's ground or a pair's touch: its earlier entry in the
+    /// queue becomes stale.
+    fn set(&mut self, kind: Kind, index: usize, next: Option<(f64, Next)>) {
+        let entry = self.entry(kind, index);
         entry.0 += 1;
         entry.1 = None;
+        let search = entry.0;
         if let Some((t, event)) = next {
             entry.1 = Some(event);
             self.queue.push(Reverse(Due {
                 t,
-                slot,
-                search: entry.0,
+                kind,
+                index,
+                search,
             }));
         }
     }
@@ -107,7 +131,7 @@ impl Agenda {
     /// The earliest event still current, taken off the agenda.
     pub(super) fn pop(&mut self) -> Option<(f64, Next)> {
         while let Some(Reverse(due)) = self.queue.pop() {
-            let entry = &mut self.found[due.slot];
+            let entry = self.entry(due.kind, due.index);
             if entry.0 == due.search {
                 if let Some(event) = entry.1.take() {
                     return Some((due.t, event));

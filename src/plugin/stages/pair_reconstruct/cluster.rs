@@ -37,55 +37,89 @@ pub(crate) enum Unmoved {
     },
 }
 
+/// Takes a body a member of a moving cluster reaches from outside into the cluster, where
+/// it can be moved with it (see [`Joining`]); `None` where it cannot.
+pub(crate) type Admit<'x, 's> = dyn Fn(&AfterStep, RigidBodyHandle) -> Option<ClusterBall<'s>> + 'x;
+
+/// The bodies from outside a cluster that join it on the way, and how many may.
+pub(crate) struct Joining<'x, 's> {
+    /// The body's [`ClusterBall`], or `None` where it cannot be moved with the cluster.
+    pub admit: &'x Admit<'x, 's>,
+    /// How many more bodies may join.
+    pub left: usize,
+}
+
+/// What moving a cluster gave: its bodies (those it started with, then those that joined it
+/// on the way, `joined`: the member that reached each, and the body), and their states at
+/// the step's end, or why it could not be moved alone.
+pub(crate) struct Moved<'s> {
+    pub balls: Vec<ClusterBall<'s>>,
+    pub joined: Vec<(usize, RigidBodyHandle)>,
+    pub ends: Result<Vec<State>, Unmoved>,
+}
+
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
 /// cluster's `Impact` pairs as indices into `balls`; `near` finds the pair plan's members
-/// a body sent off by an event may meet. Pushes the cluster's events into the step's events
-/// (`view.commit`), and withdraws them all when it returns `Err`; writes nothing into
-/// rapier.
-pub(crate) fn through_pair_impacts(
+/// a body sent off by an event may meet. A body so met from outside the cluster, in no other
+/// cluster and with no event of its own before the meeting, joins the cluster there, as
+/// `joining` admits it (the run goes on: moved again from the start, it would meet nothing
+/// sooner); any other ends the run (`Unmoved::Meets`). Pushes the cluster's events into the
+/// step's events (`view.commit`), and withdraws them all when the cluster is not moved;
+/// writes nothing into rapier.
+pub(crate) fn through_pair_impacts<'s>(
     view: &mut AfterStep,
-    colliders: &ColliderSet,
-    near: &NearBodies,
-    balls: &[ClusterBall],
+    (colliders, near, step): (&ColliderSet, &NearBodies, &EndOfStep),
+    balls: Vec<ClusterBall<'s>>,
     pairs: &[(usize, usize)],
-    step: &EndOfStep,
-) -> Result<Vec<State>, Unmoved> {
+    joining: &Joining<'_, 's>,
+) -> Moved<'s> {
     let events_from = view.commit.reported().len();
-    let cluster = Cluster {
+    let context = Context {
         colliders,
         near,
-        balls,
         step,
     };
+    let Some(mut run) = Run::start(context, balls, pairs) else {
+        // Not started: no event was pushed.
+        return Moved {
+            balls: Vec::new(),
+            joined: Vec::new(),
+            ends: Err(Unmoved::GaveUp),
+        };
+    };
     let mut meets = None;
-    let moved = move_cluster(view, cluster, pairs, &mut meets);
-    if moved.is_none() {
+    let ends = move_cluster(view, &mut run, joining, &mut meets);
+    if ends.is_none() {
         view.commit.withdraw(events_from);
     }
-    match (moved, meets) {
+    let ends = match (ends, meets) {
         (Some(ends), _) => Ok(ends),
         (None, Some((member, other))) => Err(Unmoved::Meets { member, other }),
         (None, None) => Err(Unmoved::GaveUp),
+    };
+    Moved {
+        balls: run.balls,
+        joined: run.joined,
+        ends,
     }
 }
 
 /// The cluster's events in time order, until the step's end or the cluster cannot be moved
 /// alone (`None`: more than `max_impacts_per_step` events per body, a search that stalls, a
 /// body reaching a ground it was not planned against or, into `meets`, a member of the pair
-/// plan it has no pair with, a rolling ball off its plane). Pushes events into the step's
-/// events (`view.commit`) without withdrawing them (the caller does).
-fn move_cluster(
+/// plan it has no pair with that cannot join, a rolling ball off its plane). Pushes events
+/// into the step's events (`view.commit`) without withdrawing them (the caller does).
+fn move_cluster<'s>(
     view: &mut AfterStep,
-    cluster: Cluster,
-    pairs: &[(usize, usize)],
+    run: &mut Run<'_, 's>,
+    joining: &Joining<'_, 's>,
     meets: &mut Option<(usize, RigidBodyHandle)>,
 ) -> Option<Vec<State>> {
-    let max_events = view.config.max_impacts_per_step * cluster.balls.len();
     let mut events = 0usize;
-    let mut run = Run::start(cluster, pairs)?;
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
-        if events > max_events {
+        // Each body's share, the bodies joined on the way included.
+        if events > view.config.max_impacts_per_step * run.balls.len() {
             return None;
         }
         // The bodies whose motion changed: their ground and pairs are searched again.
@@ -96,18 +130,22 @@ fn move_cluster(
             }
             Next::Touch(p, touch) => run.touch_event(view, p, touch, te)?,
         };
-        // A body sent off may reach a body it has no pair with: a member of the cluster
-        // joins it in a pair searched from here (until then, both moved as the pair plan
-        // had them apart); a body outside it moves the cluster again with it.
+        // A body sent off may reach a body it has no pair with: a member of the cluster, or
+        // one that joins it, pairs with it in a search from here (until then, both moved as
+        // the pair plan had them apart); any other moves the cluster again with it.
         for &k in &changed[..count] {
             while let Some(other) = run.meets_other_body(k, te) {
-                match other {
-                    Reached::Member(j) => run.add_pair(k, j, te)?,
-                    Reached::Outside(body) => {
-                        *meets = Some((k, body));
-                        return None;
-                    }
-                }
+                let j = match other {
+                    Reached::Member(j) => j,
+                    Reached::Outside(body) => match run.join(view, joining, k, body, te)? {
+                        Some(j) => j,
+                        None => {
+                            *meets = Some((k, body));
+                            return None;
+                        }
+                    },
+                };
+                run.add_pair(k, j, te)?;
             }
         }
         run.search_again(&changed[..count], te)?;
@@ -115,14 +153,33 @@ fn move_cluster(
     run.ends()
 }
 
-/// What a cluster's motion reads and never changes: the colliders, the bodies it may reach,
-/// its bodies and the step.
+/// What a cluster's motion reads and never changes: the colliders, the bodies it may reach
+/// and the step.
+#[derive(Clone, Copy)]
+struct Context<'c> {
+    colliders: &'c ColliderSet,
+    near: &'c NearBodies<'c>,
+    step: &'c EndOfStep<'c>,
+}
+
+/// A cluster's motion's reads: its context and its bodies as they stand.
 #[derive(Clone, Copy)]
 struct Cluster<'c, 'a> {
     colliders: &'c ColliderSet,
     near: &'c NearBodies<'c>,
     balls: &'c [ClusterBall<'a>],
     step: &'c EndOfStep<'c>,
+}
+
+impl<'c, 'a> Cluster<'c, 'a> {
+    fn of(context: &Context<'c>, balls: &'c [ClusterBall<'a>]) -> Self {
+        Cluster {
+            colliders: context.colliders,
+            near: context.near,
+            balls,
+            step: context.step,
+        }
+    }
 }
 
 /// A body that a body of the cluster sent off may reach, and has no pair with.
@@ -143,7 +200,11 @@ type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 /// A cluster in motion: each body's motion from its last event, and the agenda of what
 /// happens next.
 struct Run<'c, 'a> {
-    cluster: Cluster<'c, 'a>,
+    context: Context<'c>,
+    /// Its bodies: those it started with, then those that joined it on the way.
+    balls: Vec<ClusterBall<'a>>,
+    /// The bodies that joined it on the way: the member that reached each, and the body.
+    joined: Vec<(usize, RigidBodyHandle)>,
     moving: Vec<Moving>,
     /// Each body's flight (gravity, and its user force), held off by a settled ground impact.
     flights: Vec<Flight>,
@@ -162,19 +223,13 @@ struct Run<'c, 'a> {
 impl<'c, 'a> Run<'c, 'a> {
     /// Every body at its start state, rolling or flying, and the first event of each body's
     /// ground and of each pair; `None` where a search gave up.
-    fn start(cluster: Cluster<'c, 'a>, pairs: &[(usize, usize)]) -> Option<Self> {
-        let balls = cluster.balls;
-        let moving: Vec<Moving> = balls
-            .iter()
-            .map(|b| Moving {
-                state: b.cand.start,
-                t0: 0.0,
-                motion: match &b.cand.rolling {
-                    Some((_, rolling)) => Motion::Rolling(*rolling),
-                    None => Motion::Flight(b.cand.flight),
-                },
-            })
-            .collect();
+    fn start(
+        context: Context<'c>,
+        balls: Vec<ClusterBall<'a>>,
+        pairs: &[(usize, usize)],
+    ) -> Option<Self> {
+        let cluster = Cluster::of(&context, &balls);
+        let moving: Vec<Moving> = balls.iter().map(start_moving).collect();
         let flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
         let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); balls.len()];
         for (p, (i, j)) in pairs.iter().enumerate() {
@@ -194,7 +249,9 @@ impl<'c, 'a> Run<'c, 'a> {
             .map(|(k, b)| (b.cand.body.slot() as u32, k))
             .collect();
         Some(Run {
-            cluster,
+            context,
+            balls,
+            joined: Vec::new(),
             moving,
             flights,
             resting: vec![false; pairs.len()],
@@ -216,14 +273,14 @@ impl<'c, 'a> Run<'c, 'a> {
         t: f64,
         hit: &Hit,
     ) -> Option<()> {
-        let (ball, step) = (&self.cluster.balls[k], self.cluster.step);
+        let (ball, step) = (&self.balls[k], self.context.step);
         let flight = &mut self.flights[k];
         let part = &ball.geom.parts[hit.part];
         let gg = &ball.grounds[hit.ground];
         let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
         let material =
             view.registry
-                .material_of(self.cluster.colliders, part.handle, gg.handle, view.config);
+                .material_of(self.context.colliders, part.handle, gg.handle, view.config);
         let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
         let (body, timing) = (ball.cand.body, ImpactTiming::InStep);
         let input = ImpactInput::new(body, &ball.inertia, law, material, resting_speed, timing);
@@ -267,7 +324,7 @@ impl<'c, 'a> Run<'c, 'a> {
         touch: Option<BodyTouch>,
         te: f64,
     ) -> Option<([usize; 2], usize)> {
-        let cluster = self.cluster;
+        let cluster = Cluster::of(&self.context, &self.balls);
         let (i, j) = self.pairs[p];
         let resolved = cluster.pair_impact(view, (i, j), &touch, &self.moving, te);
         let Ok(resolved) = resolved else {
@@ -300,7 +357,7 @@ impl<'c, 'a> Run<'c, 'a> {
     /// (the pair of two changed bodies once; a resting pair has no touch). `None` where a
     /// search gave up.
     fn search_again(&mut self, changed: &[usize], te: f64) -> Option<()> {
-        let cluster = self.cluster;
+        let cluster = Cluster::of(&self.context, &self.balls);
         for &k in changed {
             self.agenda
                 .ground(k, cluster.ground(k, &self.moving[k], te).ok()?);
@@ -331,7 +388,7 @@ impl<'c, 'a> Run<'c, 'a> {
     /// it must also be closing on `k` (its velocity as rapier's step leaves it), as moving
     /// it with the cluster moves the whole cluster again. Reads only.
     fn meets_other_body(&self, k: usize, t: f64) -> Option<Reached> {
-        let cluster = self.cluster;
+        let cluster = Cluster::of(&self.context, &self.balls);
         let (ball, step) = (&cluster.balls[k], cluster.step);
         let s = self.moving[k].at(t);
         let left = step.dt - t;
@@ -377,6 +434,45 @@ impl<'c, 'a> Run<'c, 'a> {
             .map(|(_, reached)| reached)
     }
 
+    /// Takes `body` into the cluster, a body from outside it that member `k`, its motion
+    /// changed at `te`, may reach, where `joining` admits it and it has no ground event of its
+    /// own before `te`: it moves from its start-of-step state by its own motion, as it would in
+    /// the cluster moved again from the start with it (until `te` nothing of the cluster
+    /// reached it). Its index in the cluster; `Some(None)` where it cannot join here; `None`
+    /// where the search of its ground gave up.
+    fn join(
+        &mut self,
+        view: &AfterStep,
+        joining: &Joining<'_, 'a>,
+        k: usize,
+        body: RigidBodyHandle,
+        te: f64,
+    ) -> Option<Option<usize>> {
+        if self.joined.len() >= joining.left {
+            return Some(None);
+        }
+        let Some(ball) = (joining.admit)(view, body) else {
+            return Some(None);
+        };
+        let j = self.balls.len();
+        let moving = start_moving(&ball);
+        self.balls.push(ball);
+        let cluster = Cluster::of(&self.context, &self.balls);
+        let ground = cluster.ground(j, &moving, 0.0).ok()?;
+        if ground.as_ref().is_some_and(|(t, _)| *t < te) {
+            self.balls.pop();
+            return Some(None);
+        }
+        self.flights.push(self.balls[j].cand.flight);
+        self.moving.push(moving);
+        self.pairs_of.push(Vec::new());
+        self.by_slot.insert(body.slot() as u32, j);
+        self.agenda.add_body();
+        self.agenda.ground(j, ground);
+        self.joined.push((k, body));
+        Some(Some(j))
+    }
+
     /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
     /// moved as the pair plan had them apart). `None` where the search gave up.
     fn add_pair(&mut self, k: usize, j: usize, t: f64) -> Option<()> {
@@ -386,7 +482,8 @@ impl<'c, 'a> Run<'c, 'a> {
         self.pairs_of[j].push(p);
         self.resting.push(false);
         self.agenda.add_pair();
-        let found = self.cluster.touch(p, (k, j), &self.moving, t).ok()?;
+        let cluster = Cluster::of(&self.context, &self.balls);
+        let found = cluster.touch(p, (k, j), &self.moving, t).ok()?;
         self.agenda.touch(p, found);
         Some(())
     }
@@ -395,10 +492,10 @@ impl<'c, 'a> Run<'c, 'a> {
     /// its plane there (a cuboid's face it left, or a mesh, would need the ground's other
     /// faces).
     fn ends(&self) -> Option<Vec<State>> {
-        let step = self.cluster.step;
+        let step = self.context.step;
         let dt = step.dt;
         let ends: Vec<State> = self.moving.iter().map(|m| m.at(dt)).collect();
-        for (k, ball) in self.cluster.balls.iter().enumerate() {
+        for (k, ball) in self.balls.iter().enumerate() {
             if let (Motion::Rolling(rolling), Some(g)) = (self.moving[k].motion, ball.rolling_on) {
                 let hit = closest(
                     &ball.geom,
@@ -634,6 +731,19 @@ impl Cluster<'_, '_> {
             t0: t,
             motion: Motion::Rolling(rolling),
         })
+    }
+}
+
+/// A body of the cluster at its start-of-step state, rolling in closed form on its ground or
+/// flying.
+fn start_moving(ball: &ClusterBall) -> Moving {
+    Moving {
+        state: ball.cand.start,
+        t0: 0.0,
+        motion: match &ball.cand.rolling {
+            Some((_, rolling)) => Motion::Rolling(*rolling),
+            None => Motion::Flight(ball.cand.flight),
+        },
     }
 }
 

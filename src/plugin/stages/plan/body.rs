@@ -169,7 +169,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         let member = step.pairs.members.contains(handle);
         if near.is_empty() {
-            if self.config.timing == TimingMode::Exact || member {
+            let takes_pairs = self.registry.takes_pairs(handle, rb);
+            if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
                 step.candidates
                     .push(Candidate::flying(handle, start, flight, local_com));
             }
