@@ -1536,3 +1536,93 @@ fn a_row_struck_in_free_space_passes_the_speed_along_in_one_run() {
         assert_abs_diff_eq!(e1, e0, epsilon = V_TOL * e0);
     }
 }
+
+/// The stacked-ball drop: a tennis ball (3.3 cm, 57 g) on a basketball (12 cm, 600 g), both
+/// dropped from rest, touching or 3 cm apart, e = 1, no friction. The basketball bounces off
+/// the floor and meets the tennis ball, still falling, in the same step: they approach at
+/// twice the basketball's landing speed (both fell alike), and the impulse is the closed form
+/// `(1 + e) mu w` (`mu` the reduced mass), which launches the tennis ball at
+/// `(3 M - m) / (M + m)` times the landing speed. At the step's start the two were not
+/// approaching: the basketball's bounce turns it onto the tennis ball, so the pair is planned
+/// as an impact. In `Exact` mode, 3 cm apart, the basketball flies alone to the floor and the
+/// approach is the closed form of the drop, `2 sqrt(2 g h)`. Never do the balls overlap.
+#[test]
+fn a_ball_dropped_on_a_ball_is_launched_in_the_step_of_the_bounce() {
+    let (big_r, big_m, small_r, small_m) = (0.12, 0.6, 0.033, 0.057);
+    let reduced = big_m * small_m / (big_m + small_m);
+    let landing = (2.0 * G * (1.0 - big_r)).sqrt();
+    for gap in [0.0, 0.03] {
+        for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+            let label = format!("{mode:?}, {gap} m apart");
+            let mut w = world_with_gravity(G);
+            let floor = floor(&mut w, 1.0, 0.0);
+            let ball_of = |w: &mut PhysicsWorld, y: f64, r: f64, m: f64| {
+                let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+                w.insert(
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(0.0, real(y), 0.0))
+                        .can_sleep(false),
+                    ColliderBuilder::ball(real(r))
+                        .density(real(m / volume))
+                        .restitution(1.0)
+                        .friction(0.0),
+                )
+                .0
+            };
+            let big = ball_of(&mut w, 1.0, big_r, big_m);
+            let small = ball_of(&mut w, 1.0 + big_r + small_r + gap, small_r, small_m);
+            let mut p = plugin(mode);
+            p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+            p.set_all_dynamic_bodies_impact(true);
+            let mut landed = None;
+            let mut launched = None;
+            for n in 0..60 {
+                p.step(&mut w);
+                for e in p.events().iter().filter(|e| e.kind == EventKind::Impact) {
+                    match (e.body, e.body2) {
+                        (b, None) if b == big && landed.is_none() => landed = Some((n, *e)),
+                        (s, Some(_)) if s == small && launched.is_none() => {
+                            launched = Some((n, *e))
+                        }
+                        _ => {}
+                    }
+                }
+                let (a, b) = (
+                    na(w.bodies[big].translation()),
+                    na(w.bodies[small].translation()),
+                );
+                let overlap = big_r + small_r - (b - a).norm();
+                assert!(overlap < 1e-4, "{label}: step {n}: overlap {overlap}");
+            }
+            let (n_landed, landing_event) = landed.unwrap_or_else(|| panic!("{label}: no landing"));
+            let (n_launched, hit) = launched.unwrap_or_else(|| panic!("{label}: no launch"));
+            assert_eq!(n_launched, n_landed, "{label}: launched a step late");
+            assert_eq!(hit.timing, ImpactTiming::InStep, "{label}");
+            assert!(
+                hit.time >= landing_event.time,
+                "{label}: met before the landing"
+            );
+            // Both fell alike: the approach is twice the basketball's landing speed.
+            let w_pair = 2.0 * landing_event.approach_speed;
+            assert!(
+                abs_diff_eq!(hit.approach_speed, w_pair, epsilon = V_TOL * w_pair),
+                "{label}: approach {} against {w_pair}",
+                hit.approach_speed
+            );
+            let impulse = 2.0 * reduced * hit.approach_speed;
+            assert!(
+                abs_diff_eq!(hit.normal_impulse, impulse, epsilon = V_TOL * impulse),
+                "{label}: impulse {} against {impulse}",
+                hit.normal_impulse
+            );
+            if mode == TimingMode::Exact && gap > 0.0 {
+                assert!(
+                    abs_diff_eq!(hit.approach_speed, 2.0 * landing, epsilon = V_TOL * landing),
+                    "{label}: approach {} against the drop's {}",
+                    hit.approach_speed,
+                    2.0 * landing
+                );
+            }
+        }
+    }
+}

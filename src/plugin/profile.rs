@@ -121,8 +121,8 @@ pub struct StepCounts {
     pub body_pairs: usize,
     /// Runs of the clusters of impacts between bodies, each moving its cluster from the
     /// step's start: one a cluster, and one more each time a body it reached on the way could
-    /// not join it as the run went on (a member of another cluster, taken in whole: the
-    /// cluster is moved again with it). A body in no cluster joins the run it was reached in.
+    /// not join the run where it was met (it had an event of its own before): the cluster is
+    /// moved again with it.
     pub cluster_runs: usize,
     /// Bodies with the plugin's hook flags on their colliders at rapier's step. While every
     /// dynamic body is managed the flags are on the grounds instead (`docs/guide.md`,

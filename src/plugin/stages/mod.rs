@@ -256,6 +256,7 @@ impl<H> ImpactPlugin<H> {
             gravity: step.gravity,
             dt: step.dt,
             policy: &step.policy,
+            in_step: self.config.timing != TimingMode::Step,
         };
         let (pairs, woken) = pair_plan::plan_pairs(&mut self.pair_index, bodies, &inputs);
         step.pairs = pairs;

@@ -81,6 +81,9 @@ pub(crate) struct PairInputs<'a, H> {
     pub gravity: Vector3<f64>,
     pub dt: f64,
     pub policy: &'a Policy,
+    /// Impacts are resolved in the step (`TimeOfImpact`, `Exact`): a cluster moves its bodies
+    /// through their ground impacts, so a pair may be planned for a meeting after one.
+    pub in_step: bool,
 }
 
 /// The step's pairs (see the module's contract), and the sleeping members of their `Impact`

@@ -23,13 +23,13 @@
 //! events than `max_impacts_per_step` per body, a rolling ball leaving its plane, a body sent
 //! off by an event reaching a ground it was not planned against, or reaching a member of the
 //! pair plan it has no pair with (by that body's swept box in the pair index). In that last
-//! case a body in no cluster joins the run where it is met, with the pair, when it can be
-//! moved with the cluster and has no event of its own before (nothing of the cluster reached
-//! it sooner: the same run as the cluster moved again from its start with it); a body of
-//! another cluster makes [`move_clusters`] add the pair and that cluster, and move the
-//! cluster again; otherwise, and in every other case, the cluster's events are withdrawn,
-//! rapier's end state stands, and the settle stage checks the pairs. It writes nothing into
-//! rapier.
+//! case the body, alone or with the whole of its own cluster, joins the run where it is met,
+//! with the pair, when they can be moved with the cluster and none of them has an event of
+//! its own before (nothing of the cluster reached them sooner: the same run as the cluster
+//! moved again from its start with them); where one has, [`move_clusters`] adds them and the
+//! pair and moves the cluster again; otherwise, and in every other case, the cluster's events
+//! are withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
+//! nothing into rapier.
 //!
 //! Its parts: forming the clusters and committing their end states (here), the cluster's
 //! motion event by event (`cluster.rs`), and the agenda of its next events (`agenda.rs`).
@@ -38,7 +38,7 @@ mod agenda;
 mod cluster;
 
 pub(crate) use cluster::through_pair_impacts;
-use cluster::{Joining, Unmoved};
+use cluster::{Admitted, Joined, Joining, Unmoved};
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -81,13 +81,13 @@ impl NearBodies<'_> {
     }
 }
 
-/// How many bodies from outside a cluster it takes in on the way before it is left to the
-/// settle stage: a row of balls lying apart, each sent into the next, longer than this is
-/// resolved at the step's end, and its next impacts in the next step. A body in no cluster
-/// joins the run it is met in; a body of another cluster moves the cluster again with it,
-/// so the bound also bounds the runs. (A body of the cluster reached on the way joins a pair
-/// without counting.)
-const MAX_CLUSTER_GROWTH: usize = 8;
+/// How many times a cluster is moved again from its start with a body from outside it (a
+/// body of another cluster, taken in with the whole of its cluster, or one that had an event
+/// of its own before it was met) before it is left to the settle stage, its next impacts in
+/// the next step: each run costs the whole cluster. A body in no cluster joins the run it is
+/// met in, at the cost of its own searches, and does not count, nor does a body of the
+/// cluster reached on the way (it joins a pair).
+const MAX_CLUSTER_RESTARTS: usize = 8;
 
 /// A body of a cluster (a ball, a die, a pin) and what its motion needs.
 pub(crate) struct ClusterBall<'a> {
@@ -111,11 +111,11 @@ pub(crate) struct ClusterBall<'a> {
 /// `TimeOfImpact` and `Exact` modes: moved together from their start states
 /// ([`through_pair_impacts`]), checked against their grounds (`EndCheck::Flown`) and
 /// written. A body an event sends towards another member of the pair plan it has no pair
-/// with grows the cluster by that pair, where rapier would solve it and the other body can
-/// be moved with the cluster: one in no cluster joins the run there (`admit` below), one of
-/// a later cluster brings it whole and the cluster is moved again ([`Growing::take_in`]);
-/// otherwise the cluster is left to the settle stage. Returns the bodies written, and how
-/// many runs moved the clusters.
+/// with grows the cluster by that pair, where rapier would solve it and the other body (with
+/// its later cluster, if it has one) can be moved with the cluster: it joins the run there
+/// (`admit` below), or where it had an event of its own before, the cluster is moved again
+/// with it ([`Growing::take_in`]); otherwise the cluster is left to the settle stage. Returns
+/// the bodies written, and how many runs moved the clusters.
 pub(crate) fn move_clusters(
     view: &mut AfterStep,
     bodies: &RigidBodySet,
@@ -144,16 +144,6 @@ pub(crate) fn move_clusters(
         }
         let mut growing = Growing::new(c, members, pairs);
         let from = view.commit.reported().len();
-        // A body in no cluster, not moved yet, that moves alone, joins on the way.
-        let admit = |view: &AfterStep, other: RigidBodyHandle| {
-            let lone = !written.contains(&other) && !clusters.of_body.contains_key(&other);
-            let single = std::slice::from_ref(&other);
-            (lone && cands.get(&other).is_some())
-                .then(|| moves_alone(view, (bodies, colliders), &cands, single))
-                .filter(|alone| *alone)
-                .and_then(|_| cluster_balls(view, bodies, colliders, &cands, single))
-                .and_then(|mut balls| balls.pop())
-        };
         let moved = loop {
             let members = &growing.members;
             if !moves_alone(view, (bodies, colliders), &cands, members) {
@@ -162,14 +152,40 @@ pub(crate) fn move_clusters(
             let Some(balls) = cluster_balls(view, bodies, colliders, &cands, members) else {
                 break None;
             };
-            let joining = Joining {
-                admit: &admit,
-                left: MAX_CLUSTER_GROWTH.saturating_sub(growing.grown),
+            // A body met on the way, alone or with its later cluster, that moves alone and
+            // was not moved yet, joins the run.
+            let admit = |view: &AfterStep, other: RigidBodyHandle| {
+                if written.contains(&other) {
+                    return None;
+                }
+                let lone = std::slice::from_ref(&other);
+                let (members, pairs, cluster): (&[RigidBodyHandle], &[(usize, usize)], _) =
+                    match clusters.of_body.get(&other) {
+                        None => (lone, &[], None),
+                        Some(&later) if later > c && !absorbed[later] => (
+                            &clusters.members[later],
+                            &clusters.pairs[later],
+                            Some(later),
+                        ),
+                        Some(_) => return None,
+                    };
+                let movable = members.iter().all(|h| cands.get(h).is_some())
+                    && moves_alone(view, (bodies, colliders), &cands, members);
+                let balls = movable
+                    .then(|| cluster_balls(view, bodies, colliders, &cands, members))
+                    .flatten()?;
+                Some(Admitted {
+                    balls,
+                    met: members.iter().position(|h| *h == other)?,
+                    pairs: pairs.to_vec(),
+                    cluster,
+                })
             };
+            let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
             runs += 1;
             let moved = through_pair_impacts(view, context, balls, &growing.pairs, &joining);
-            growing.joined(&moved.joined);
+            growing.joined(moved.joined, &mut absorbed);
             match moved.ends {
                 Ok(ends) => break Some((moved.balls, ends)),
                 Err(Unmoved::GaveUp) => break None,
@@ -217,8 +233,8 @@ struct Growing<'c> {
     cluster: usize,
     members: Cow<'c, [RigidBodyHandle]>,
     pairs: Cow<'c, [(usize, usize)]>,
-    /// How many times it grew.
-    grown: usize,
+    /// How many times it was moved again from its start with bodies from outside it.
+    restarts: usize,
     taken: Vec<usize>,
 }
 
@@ -228,28 +244,33 @@ impl<'c> Growing<'c> {
             cluster,
             members: Cow::Borrowed(members),
             pairs: Cow::Borrowed(pairs),
-            grown: 0,
+            restarts: 0,
             taken: Vec::new(),
         }
     }
 
-    /// The bodies that joined the cluster on the way (`through_pair_impacts`), each with its
-    /// pair with the member that reached it, in the order they joined: a cluster moved again
-    /// starts with them.
-    fn joined(&mut self, joined: &[(usize, RigidBodyHandle)]) {
-        for (member, body) in joined {
-            self.grown += 1;
-            self.members.to_mut().push(*body);
-            let k = self.members.len() - 1;
-            self.pairs.to_mut().push((*member, k));
+    /// The bodies that joined the cluster on the way (`through_pair_impacts`), each group
+    /// with its pairs and its pair with the member that met it, in the order they joined; a
+    /// later cluster joined whole is taken in: a cluster moved again starts with them.
+    fn joined(&mut self, joined: Vec<Joined>, absorbed: &mut [bool]) {
+        for group in joined {
+            let offset = self.members.len();
+            self.members.to_mut().extend(&group.bodies);
+            let shifted = group.pairs.iter().map(|(i, j)| (i + offset, j + offset));
+            self.pairs.to_mut().extend(shifted);
+            self.pairs.to_mut().push((group.member, offset + group.met));
+            if let Some(later) = group.cluster {
+                absorbed[later] = true;
+                self.taken.push(later);
+            }
         }
     }
 
     /// Takes in `other`, which member `member` may reach (a pair that may be the model's:
     /// `meets_other_body` found only such), with their pair, where it can be moved with the
-    /// cluster: alone (a body with a plan, in no cluster), or with the whole of its later
-    /// cluster, never a body another cluster moved already, and at most
-    /// [`MAX_CLUSTER_GROWTH`] times. `false` where it cannot.
+    /// cluster: alone (a body with a plan, in no cluster, that could not join the run where
+    /// it was met), or with the whole of its later cluster, never a body another cluster
+    /// moved already, and at most [`MAX_CLUSTER_RESTARTS`] times. `false` where it cannot.
     fn take_in(
         &mut self,
         (clusters, cands, written): (&'c Clusters, &CandidatesByBody, &HandleSet<RigidBodyHandle>),
@@ -257,7 +278,7 @@ impl<'c> Growing<'c> {
         member: usize,
         other: RigidBodyHandle,
     ) -> bool {
-        if self.grown >= MAX_CLUSTER_GROWTH || written.contains(&other) {
+        if self.restarts >= MAX_CLUSTER_RESTARTS || written.contains(&other) {
             return false;
         }
         // Its later cluster, and its place there.
@@ -272,7 +293,7 @@ impl<'c> Growing<'c> {
         let Some(joins) = joins else {
             return false;
         };
-        self.grown += 1;
+        self.restarts += 1;
         let k = match joins {
             None => {
                 self.members.to_mut().push(other);

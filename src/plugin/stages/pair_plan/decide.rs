@@ -15,6 +15,7 @@ use crate::plugin::queries::body_contact::body_contact;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
 use crate::plugin::queries::observe::{ground_geom, held_besides, pressed_besides};
+use crate::plugin::stages::plan::closes_within;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::{PairPlan, PlannedPair};
 use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle, RigidBodySet};
@@ -36,6 +37,9 @@ pub(super) struct Judge<'p, 'a, H> {
     /// Whether member `k`, not a centred ball, lies within the resting gap of a ground:
     /// computed once a step, for the bodies of a pair looked at.
     lying: Vec<OnceCell<bool>>,
+    /// Member `k`'s velocity after a bounce off a ground it may hit in the step, if it may
+    /// ([`Self::bounced`]): computed once a step, for the bodies of a pair looked at.
+    bounces: Vec<OnceCell<Option<Vector3<f64>>>>,
 }
 
 /// How two members approach at the step's start.
@@ -72,7 +76,44 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                 .try_normalize(0.0)
                 .unwrap_or_else(Vector3::zeros),
             lying: members.balls.iter().map(|_| OnceCell::new()).collect(),
+            bounces: members.balls.iter().map(|_| OnceCell::new()).collect(),
         }
+    }
+
+    /// Member `k`'s velocity reflected off the first ground near it that it may hit within
+    /// the step faster than the resting speed (its normal speed relative to the ground turned
+    /// back whole, as `e = 1` would), or `None` where it hits none. A ball that bounces in the
+    /// step can turn onto a neighbour it was not closing on at the step's start (a ball
+    /// dropped with another on top of it): its pairs are judged at this velocity too. Parry's
+    /// contact with each ground near its swept sphere, at the step's start.
+    fn bounced(&self, k: usize) -> Option<Vector3<f64>> {
+        *self.bounces[k].get_or_init(|| {
+            let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
+            let m = &self.members.balls[k];
+            let swept = self.members.swept[k];
+            let near =
+                inputs
+                    .registry
+                    .index
+                    .near(inputs.grounds, vec_from_na(&m.com), to_real(swept));
+            if near.is_empty() {
+                return None;
+            }
+            let (geom, state) = geom_state(m, self.bodies, inputs.colliders);
+            let accel = inputs.gravity.dot(&self.down) * self.down;
+            near.iter().find_map(|g| {
+                let gg = ground_geom(&inputs.grounds[*g], inputs.colliders)?;
+                geom.get().parts.iter().find_map(|part| {
+                    let (dist, n, point) = contact(part, &gg, &state, 0.0, swept)?;
+                    let relative = m.v - gg.velocity_at(&point, 0.0);
+                    let (un, an) = (relative.dot(&n), accel.dot(&n));
+                    let arrival = -un - an.min(0.0) * dt;
+                    let hits =
+                        closes_within(dist, un, an, dt) && !rests_at(arrival, policy.resting_speed);
+                    hits.then(|| m.v - n * (2.0 * un.min(0.0)))
+                })
+            })
+        })
     }
 
     /// Member `k`, a body that is not a centred ball, lies within the resting gap of a ground
@@ -246,6 +287,29 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
         let forces = a.force_accel + b.force_accel;
+        // In the step's modes, a body that may bounce off a ground in the step may close on
+        // the other after the bounce (its normal speed turned back): the faster approach
+        // decides whether the pair may meet, and the cluster moves both through the bounce.
+        // (`Step` mode resolves pairs at the step's start, before any bounce.) rapier's own
+        // bounce of the pair is its approach at the step's start.
+        let approaching = closing;
+        let closes_at = |closing: f64| gap <= closing * dt + 0.5 * forces * dt * dt + self.margin;
+        // A bounce keeps a body's speed at most: the two close no faster than their speeds.
+        let fastest = a.v.norm() + b.v.norm();
+        let may_turn =
+            inputs.in_step && !rests_at(fastest, policy.resting_speed) && closes_at(fastest);
+        let closing =
+            if may_turn && (rests_at(closing, policy.resting_speed) || !closes_at(closing)) {
+                let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(&normal);
+                let bounced_a = self.bounced(i).map(|va| along(va, b.v));
+                let bounced_b = self.bounced(j).map(|vb| along(a.v, vb));
+                [bounced_a, bounced_b]
+                    .into_iter()
+                    .flatten()
+                    .fold(closing, f64::max)
+            } else {
+                closing
+            };
         let slow = rests_at(closing, policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
         // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
@@ -253,7 +317,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         if slow && !chain && !self.members.any_elastic {
             return None;
         }
-        let closes = gap <= closing * dt + 0.5 * forces * dt * dt + self.margin;
+        let closes = closes_at(closing);
         let (ca, cb) = (&inputs.colliders[a.collider], &inputs.colliders[b.collider]);
         // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
         let held_last_step = OnceCell::new();
@@ -262,9 +326,9 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // contact is new (no impulse the step before), or every step at `e >= 1`. Where that
         // cannot rise above the resting gap (below the pressed speed) it is rapier's resting
         // noise, and the pair keeps rapier's restitution.
-        let rapier_bounces = closing > 0.0 && closes && {
+        let rapier_bounces = approaching > 0.0 && closes_at(approaching) && {
             let e = material(ca, cb, None).restitution;
-            e >= 1.0 || e * closing > policy.pressed_speed && !held_pair()
+            e >= 1.0 || e * approaching > policy.pressed_speed && !held_pair()
         };
         // Slower than the resting speed it is no impact: rapier's resting contact, left as it
         // is where rapier's bounce of it is noise, and not planned.
@@ -295,6 +359,13 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // the user's filter of it, `hooks/mod.rs`).
         if hooked && self.refused(key, a.body, b.body) {
             return None;
+        }
+        if std::env::var_os("DBG_PAIR").is_some() && gap < -0.004 {
+            eprintln!(
+                "PAIR {:?} {:?} gap {gap:.4} closing {closing:.4} approaching {approaching:.4} impact {impact} hooked {hooked} slow {slow} chain {chain}",
+                a.body.into_raw_parts().0,
+                b.body.into_raw_parts().0
+            );
         }
         Some(PlannedPair {
             a: a.body,

@@ -37,33 +37,52 @@ pub(crate) enum Unmoved {
     },
 }
 
-/// Takes a body a member of a moving cluster reaches from outside into the cluster, where
-/// it can be moved with it (see [`Joining`]); `None` where it cannot.
-pub(crate) type Admit<'x, 's> = dyn Fn(&AfterStep, RigidBodyHandle) -> Option<ClusterBall<'s>> + 'x;
+/// Bodies from outside a cluster that may join its run where a member of it meets one of
+/// them: the body met, alone or with the rest of its own cluster.
+pub(crate) struct Admitted<'s> {
+    pub balls: Vec<ClusterBall<'s>>,
+    /// The body met, as an index in `balls`.
+    pub met: usize,
+    /// Their `Impact` pairs, as indices into `balls`.
+    pub pairs: Vec<(usize, usize)>,
+    /// The step's cluster they are, if any (its index among the step's clusters).
+    pub cluster: Option<usize>,
+}
 
-/// The bodies from outside a cluster that join it on the way, and how many may.
+/// The bodies that come with a body a member of a moving cluster reaches from outside it,
+/// where they can be moved with the cluster; `None` where they cannot.
+pub(crate) type Admit<'x, 's> = dyn Fn(&AfterStep, RigidBodyHandle) -> Option<Admitted<'s>> + 'x;
+
+/// The bodies from outside a cluster that join it on the way.
 pub(crate) struct Joining<'x, 's> {
-    /// The body's [`ClusterBall`], or `None` where it cannot be moved with the cluster.
     pub admit: &'x Admit<'x, 's>,
-    /// How many more bodies may join.
-    pub left: usize,
+}
+
+/// Bodies that joined a cluster's run: the member that met them, and what was admitted (its
+/// balls given to the run, their bodies kept here).
+pub(crate) struct Joined {
+    pub member: usize,
+    pub bodies: Vec<RigidBodyHandle>,
+    pub met: usize,
+    pub pairs: Vec<(usize, usize)>,
+    pub cluster: Option<usize>,
 }
 
 /// What moving a cluster gave: its bodies (those it started with, then those that joined it
-/// on the way, `joined`: the member that reached each, and the body), and their states at
-/// the step's end, or why it could not be moved alone.
+/// on the way, `joined`, in that order), and their states at the step's end, or why it could
+/// not be moved alone.
 pub(crate) struct Moved<'s> {
     pub balls: Vec<ClusterBall<'s>>,
-    pub joined: Vec<(usize, RigidBodyHandle)>,
+    pub joined: Vec<Joined>,
     pub ends: Result<Vec<State>, Unmoved>,
 }
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
 /// cluster's `Impact` pairs as indices into `balls`; `near` finds the pair plan's members
-/// a body sent off by an event may meet. A body so met from outside the cluster, in no other
-/// cluster and with no event of its own before the meeting, joins the cluster there, as
-/// `joining` admits it (the run goes on: moved again from the start, it would meet nothing
-/// sooner); any other ends the run (`Unmoved::Meets`). Pushes the cluster's events into the
+/// a body sent off by an event may meet. A body so met from outside the cluster, alone or with
+/// the rest of its own cluster as `joining` admits it, joins the run there where none of them
+/// has an event of its own before the meeting (the run goes on: moved again from the start
+/// with them, it would be the same run); any other ends the run (`Unmoved::Meets`). Pushes the cluster's events into the
 /// step's events (`view.commit`), and withdraws them all when the cluster is not moved;
 /// writes nothing into rapier.
 pub(crate) fn through_pair_impacts<'s>(
@@ -203,8 +222,8 @@ struct Run<'c, 'a> {
     context: Context<'c>,
     /// Its bodies: those it started with, then those that joined it on the way.
     balls: Vec<ClusterBall<'a>>,
-    /// The bodies that joined it on the way: the member that reached each, and the body.
-    joined: Vec<(usize, RigidBodyHandle)>,
+    /// The bodies that joined it on the way.
+    joined: Vec<Joined>,
     moving: Vec<Moving>,
     /// Each body's flight (gravity, and its user force), held off by a settled ground impact.
     flights: Vec<Flight>,
@@ -435,11 +454,12 @@ impl<'c, 'a> Run<'c, 'a> {
     }
 
     /// Takes `body` into the cluster, a body from outside it that member `k`, its motion
-    /// changed at `te`, may reach, where `joining` admits it and it has no ground event of its
-    /// own before `te`: it moves from its start-of-step state by its own motion, as it would in
-    /// the cluster moved again from the start with it (until `te` nothing of the cluster
-    /// reached it). Its index in the cluster; `Some(None)` where it cannot join here; `None`
-    /// where the search of its ground gave up.
+    /// changed at `te`, may reach, with what `joining` admits with it (the rest of its own
+    /// cluster), where none of them has an event of its own before `te` (a ground impact, or
+    /// a touch of two of them): each moves from its start-of-step state by its own motion, as
+    /// it would in the cluster moved again from the start with them (until `te` nothing of
+    /// the cluster reached them). The met body's index in the cluster; `Some(None)` where it
+    /// cannot join here; `None` where a search gave up.
     fn join(
         &mut self,
         view: &AfterStep,
@@ -448,29 +468,68 @@ impl<'c, 'a> Run<'c, 'a> {
         body: RigidBodyHandle,
         te: f64,
     ) -> Option<Option<usize>> {
-        if self.joined.len() >= joining.left {
-            return Some(None);
-        }
-        let Some(ball) = (joining.admit)(view, body) else {
+        let Some(admitted) = (joining.admit)(view, body) else {
             return Some(None);
         };
-        let j = self.balls.len();
-        let moving = start_moving(&ball);
-        self.balls.push(ball);
-        let cluster = Cluster::of(&self.context, &self.balls);
-        let ground = cluster.ground(j, &moving, 0.0).ok()?;
-        if ground.as_ref().is_some_and(|(t, _)| *t < te) {
-            self.balls.pop();
+        let Admitted {
+            balls,
+            met,
+            pairs,
+            cluster,
+        } = admitted;
+        let base = self.balls.len();
+        let bodies: Vec<RigidBodyHandle> = balls.iter().map(|b| b.cand.body).collect();
+        self.moving.extend(balls.iter().map(start_moving));
+        self.balls.extend(balls);
+        let first = self.pairs.len();
+        let found = {
+            let cluster = Cluster::of(&self.context, &self.balls);
+            let grounds: Vec<_> = (base..self.balls.len())
+                .map(|j| cluster.ground(j, &self.moving[j], 0.0))
+                .collect::<Result<_, _>>()
+                .ok()?;
+            let touches: Vec<_> = pairs
+                .iter()
+                .enumerate()
+                .map(|(q, (i, j))| {
+                    cluster.touch(first + q, (base + i, base + j), &self.moving, 0.0)
+                })
+                .collect::<Result<_, _>>()
+                .ok()?;
+            (grounds, touches)
+        };
+        let (grounds, touches) = found;
+        let before = |e: &Option<(f64, Next)>| e.as_ref().is_some_and(|(t, _)| *t < te);
+        if grounds.iter().any(before) || touches.iter().any(before) {
+            self.balls.truncate(base);
+            self.moving.truncate(base);
             return Some(None);
         }
-        self.flights.push(self.balls[j].cand.flight);
-        self.moving.push(moving);
-        self.pairs_of.push(Vec::new());
-        self.by_slot.insert(body.slot() as u32, j);
-        self.agenda.add_body();
-        self.agenda.ground(j, ground);
-        self.joined.push((k, body));
-        Some(Some(j))
+        for (j, ground) in (base..).zip(grounds) {
+            self.flights.push(self.balls[j].cand.flight);
+            self.pairs_of.push(Vec::new());
+            self.by_slot
+                .insert(self.balls[j].cand.body.slot() as u32, j);
+            self.agenda.add_body();
+            self.agenda.ground(j, ground);
+        }
+        for ((i, j), touch) in pairs.iter().zip(touches) {
+            let p = self.pairs.len();
+            self.pairs.push((base + i, base + j));
+            self.pairs_of[base + i].push(p);
+            self.pairs_of[base + j].push(p);
+            self.resting.push(false);
+            self.agenda.add_pair();
+            self.agenda.touch(p, touch);
+        }
+        self.joined.push(Joined {
+            member: k,
+            bodies,
+            met,
+            pairs,
+            cluster,
+        });
+        Some(Some(base + met))
     }
 
     /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
