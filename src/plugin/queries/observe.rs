@@ -260,20 +260,50 @@ pub(crate) fn held_besides(
 }
 
 /// Was the body pushed, by rapier's solver in the last step, by anything but a ground and
-/// the collider `partner` (a ball's pair partner), or does it have a joint? What presses a
-/// pair of balls is a third body; a speculative contact that stayed open (zero impulse, a
-/// ball lying a few millimetres from the next one) presses nothing.
+/// the collider `partner` (a ball's pair partner, if any), or does it have a joint? What
+/// presses a pair of balls is a third body; a speculative contact that stayed open (zero
+/// impulse, a ball lying a few millimetres from the next one) presses nothing.
 pub(crate) fn pressed_besides(
     body: RigidBodyHandle,
     rb: &RigidBody,
-    partner: ColliderHandle,
+    partner: Option<ColliderHandle>,
     sets: &Sets,
     registry: &Registry,
 ) -> bool {
     sets.jointed(body)
         || any_pair(rb, sets.narrow_phase, |other, pair| {
-            other != partner && registry.entry(other).is_none() && pushes(pair)
+            Some(other) != partner && registry.entry(other).is_none() && pushes(pair)
         })
+}
+
+/// Did rapier's solver, in the last step, push the body through a contact with a body that
+/// is neither a ground nor `partner`, along gravity's line (within [`LOADED_COS`] of `down`:
+/// something lies on it; or of up: it lies on something)? Such a body is part of a stack or a
+/// pile: rapier's solver will push it again in the step, so it cannot be moved alone through
+/// an impact with `partner`. Balls side by side (a cradle on a table) push each other
+/// sideways, and a speculative contact that stayed open pushes nothing. Without gravity
+/// (`down` zero) nothing stacks.
+pub(crate) fn stacked_besides(
+    rb: &RigidBody,
+    partner: ColliderHandle,
+    sets: &Sets,
+    registry: &Registry,
+    down: &Vector3<f64>,
+) -> bool {
+    if *down == Vector3::zeros() {
+        return false;
+    }
+    any_pair(rb, sets.narrow_phase, |other, pair| {
+        if other == partner || registry.entry(other).is_some() {
+            return false;
+        }
+        // rapier pushes the first collider's body along -normal, the second's along +normal.
+        let sign = if pair.collider1 == other { 1.0 } else { -1.0 };
+        pair.solver_manifolds()
+            .iter()
+            .filter(|m| solved(m) && m.points.iter().any(|p| p.data.impulse != 0.0))
+            .any(|m| (vec_to_na(m.data.normal) * sign).dot(down).abs() > LOADED_COS)
+    })
 }
 
 /// Did the body touch, in rapier's solver after the last step, anything but a ground, or

@@ -10,7 +10,8 @@
 
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
-use crate::plugin::state::handles::HandleSet;
+use crate::plugin::policy::Role;
+use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 
@@ -20,11 +21,12 @@ impl<H> ImpactPlugin<H> {
     pub(super) fn install(
         &mut self,
         step: &StepData,
+        last_pairs: &HandleMap<PairKey, Role>,
         (bodies, colliders): (&RigidBodySet, &mut ColliderSet),
         (near, far): (&[RigidBodyHandle], &[RigidBodyHandle]),
         unmanaged: bool,
     ) {
-        let members = self.hooked_pair_members(step);
+        let members = self.hooked_pair_members(step, last_pairs, colliders);
         // Idle: no managed body near a ground, none asleep (`HookFlags::update`).
         let idle = near.is_empty() && step.asleep.is_empty();
         let (flagged, arrangement) = ((near, members.as_slice()), (unmanaged, idle));
@@ -53,17 +55,38 @@ impl<H> ImpactPlugin<H> {
     /// flagged, and every pair of a flagged body loses its contact recycling: so one body of
     /// each pair is flagged, one already flagged where there is one (a flag put on or taken
     /// off is a change rapier's next step processes).
-    fn hooked_pair_members(&self, step: &StepData) -> Vec<RigidBodyHandle> {
+    ///
+    /// rapier recycles an unhooked pair's contacts while its bodies stay within its recycle
+    /// distance (5 cm at its defaults) of where its last full update found them, and a full
+    /// update of a hooked pair records the contacts as the hooks left them: taking the flag
+    /// off (no change rapier tracks) right after the plugin emptied an `Impact` pair's
+    /// contacts would leave rapier solving the pair with none, two balls sinking into each
+    /// other. So a pair that was an `Impact` last step stays hooked for one more step, in
+    /// which the hooks leave it as rapier makes it.
+    fn hooked_pair_members(
+        &self,
+        step: &StepData,
+        last_pairs: &HandleMap<PairKey, Role>,
+        colliders: &ColliderSet,
+    ) -> Vec<RigidBodyHandle> {
         let mut chosen: HandleSet<RigidBodyHandle> = HandleSet::default();
         let mut members: Vec<RigidBodyHandle> = Vec::new();
-        for pair in step.pairs.pairs.iter().filter(|pair| pair.hooked) {
-            if chosen.contains(&pair.a) || chosen.contains(&pair.b) {
+        let body_of = |c: ColliderHandle| colliders.get(c).and_then(|co| co.parent());
+        let hooked_now: Vec<_> = step.pairs.pairs.iter().filter(|pair| pair.hooked).collect();
+        let hooked_keys: HandleSet<PairKey> = hooked_now.iter().map(|pair| pair.key).collect();
+        let emptied_last_step = last_pairs
+            .iter()
+            .filter(|(key, role)| **role == Role::Impact && !hooked_keys.contains(key))
+            .filter_map(|((c1, c2), _)| Some((body_of(*c1)?, body_of(*c2)?)));
+        let hooked_now = hooked_now.iter().map(|pair| (pair.a, pair.b));
+        for (a, b) in hooked_now.chain(emptied_last_step) {
+            if chosen.contains(&a) || chosen.contains(&b) {
                 continue;
             }
-            let body = if self.flags.hooked().contains_key(&pair.b) {
-                pair.b
+            let body = if self.flags.hooked().contains_key(&b) {
+                b
             } else {
-                pair.a
+                a
             };
             chosen.insert(body);
             members.push(body);

@@ -134,7 +134,14 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         }
         self.commit(bodies, None);
         let planned = (near.as_slice(), survey.far.as_slice());
-        self.install(&step, (bodies, colliders), planned, survey.unmanaged);
+        let last_pairs = &last.pair_roles;
+        self.install(
+            &step,
+            last_pairs,
+            (bodies, colliders),
+            planned,
+            survey.unmanaged,
+        );
         self.memory.end_planning(last);
         self.stopwatch.lap(Stage::Install);
         let hooked = self.flags.hooked().len();

@@ -9,12 +9,14 @@ use super::{PairInputs, pair_key};
 use crate::motion::State;
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::material;
-use crate::plugin::policy::Role;
 use crate::plugin::policy::rests_at;
+use crate::plugin::policy::{LOADED_COS, Role};
 use crate::plugin::queries::body_contact::body_contact;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
-use crate::plugin::queries::observe::{ground_geom, held_besides, pressed_besides};
+use crate::plugin::queries::observe::{
+    ground_geom, held_besides, pressed_besides, stacked_besides,
+};
 use crate::plugin::stages::plan::closes_within;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::{PairPlan, PlannedPair};
@@ -37,9 +39,20 @@ pub(super) struct Judge<'p, 'a, H> {
     /// Whether member `k`, not a centred ball, lies within the resting gap of a ground:
     /// computed once a step, for the bodies of a pair looked at.
     lying: Vec<OnceCell<bool>>,
-    /// Member `k`'s velocity after a bounce off a ground it may hit in the step, if it may
-    /// ([`Self::bounced`]): computed once a step, for the bodies of a pair looked at.
-    bounces: Vec<OnceCell<Option<Vector3<f64>>>>,
+    /// Member `k` against the grounds near it ([`Self::grounded`]): computed once a step, for
+    /// the bodies of a pair looked at.
+    grounds: Vec<OnceCell<Grounded>>,
+}
+
+/// A member against the grounds near it at the step's start ([`Judge::grounded`]).
+#[derive(Clone, Copy, Default)]
+struct Grounded {
+    /// It lies on a ground: within the resting gap, approaching no faster than the held
+    /// speed (`Policy::held_speed`).
+    lies: bool,
+    /// Its velocity after a bounce off the ground it may hit fastest in the step, if it does
+    /// not lie on one.
+    bounced: Option<Vector3<f64>>,
 }
 
 /// How two members approach at the step's start.
@@ -76,18 +89,22 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                 .try_normalize(0.0)
                 .unwrap_or_else(Vector3::zeros),
             lying: members.balls.iter().map(|_| OnceCell::new()).collect(),
-            bounces: members.balls.iter().map(|_| OnceCell::new()).collect(),
+            grounds: members.balls.iter().map(|_| OnceCell::new()).collect(),
         }
     }
 
-    /// Member `k`'s velocity reflected off the first ground near it that it may hit within
-    /// the step faster than the resting speed (its normal speed relative to the ground turned
-    /// back whole, as `e = 1` would), or `None` where it hits none. A ball that bounces in the
-    /// step can turn onto a neighbour it was not closing on at the step's start (a ball
-    /// dropped with another on top of it): its pairs are judged at this velocity too. Parry's
-    /// contact with each ground near its swept sphere, at the step's start.
-    fn bounced(&self, k: usize) -> Option<Vector3<f64>> {
-        *self.bounces[k].get_or_init(|| {
+    /// Member `k` against the grounds near it at the step's start (parry's contact with each
+    /// ground near its swept sphere): whether it lies on one (within the resting gap, not
+    /// approaching faster than the held speed, what rapier's resting contact leaves), and if
+    /// not, its velocity reflected off the
+    /// ground it closes on fastest within the step faster than the resting speed (its normal
+    /// speed relative to the ground turned back whole, as `e = 1` would). A body flying onto
+    /// a ground can turn onto a neighbour it was not closing on at the step's start (a ball
+    /// dropped with another on top of it): its pairs are judged at that velocity too. A
+    /// ball lying on a ground (rolling into a wall, say) is the rolling's and the bodies
+    /// stage's, and bounces nowhere here.
+    fn grounded(&self, k: usize) -> Grounded {
+        *self.grounds[k].get_or_init(|| {
             let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
             let m = &self.members.balls[k];
             let swept = self.members.swept[k];
@@ -96,24 +113,49 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                     .registry
                     .index
                     .near(inputs.grounds, vec_from_na(&m.com), to_real(swept));
+            let mut found = Grounded::default();
             if near.is_empty() {
-                return None;
+                return found;
             }
             let (geom, state) = geom_state(m, self.bodies, inputs.colliders);
             let accel = inputs.gravity.dot(&self.down) * self.down;
-            near.iter().find_map(|g| {
-                let gg = ground_geom(&inputs.grounds[*g], inputs.colliders)?;
-                geom.get().parts.iter().find_map(|part| {
-                    let (dist, n, point) = contact(part, &gg, &state, 0.0, swept)?;
-                    let relative = m.v - gg.velocity_at(&point, 0.0);
-                    let (un, an) = (relative.dot(&n), accel.dot(&n));
-                    let arrival = -un - an.min(0.0) * dt;
-                    let hits =
-                        closes_within(dist, un, an, dt) && !rests_at(arrival, policy.resting_speed);
-                    hits.then(|| m.v - n * (2.0 * un.min(0.0)))
+            // Each contact's normal and normal speed (negative approaching).
+            let contacts = near.iter().flat_map(|g| {
+                let gg = ground_geom(&inputs.grounds[*g], inputs.colliders);
+                geom.get().parts.iter().filter_map(move |part| {
+                    let gg = gg.as_ref()?;
+                    let (dist, n, point) = contact(part, gg, &state, 0.0, swept)?;
+                    let un = (m.v - gg.velocity_at(&point, 0.0)).dot(&n);
+                    Some((dist, n, un))
                 })
-            })
+            });
+            let mut fastest: Option<(Vector3<f64>, f64)> = None;
+            for (dist, n, un) in contacts {
+                if dist <= policy.resting_gap && -un <= policy.held_speed {
+                    found.lies = true;
+                    return found;
+                }
+                let an = accel.dot(&n);
+                let arrival = -un - an.min(0.0) * dt;
+                let hits =
+                    closes_within(dist, un, an, dt) && !rests_at(arrival, policy.resting_speed);
+                if hits && fastest.is_none_or(|(_, u)| un < u) {
+                    fastest = Some((n, un));
+                }
+            }
+            found.bounced = fastest.map(|(n, un)| m.v - n * (2.0 * un.min(0.0)));
+            found
         })
+    }
+
+    /// Does one member of the pair of `i` and `j`, within the resting gap of each other along
+    /// `normal` (from `i` to `j`), lie on the other, along gravity's line, while that one lies
+    /// on a ground? A stack on the ground, held as a pair held at rest last step is.
+    fn lies_on_grounded(&self, (i, j): (usize, usize), gap: f64, normal: &Vector3<f64>) -> bool {
+        let along = normal.dot(&self.down);
+        gap <= self.inputs.policy.resting_gap
+            && along.abs() > LOADED_COS
+            && self.grounded(if along > 0.0 { j } else { i }).lies
     }
 
     /// Member `k`, a body that is not a centred ball, lies within the resting gap of a ground
@@ -301,8 +343,8 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let closing =
             if may_turn && (rests_at(closing, policy.resting_speed) || !closes_at(closing)) {
                 let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(&normal);
-                let bounced_a = self.bounced(i).map(|va| along(va, b.v));
-                let bounced_b = self.bounced(j).map(|vb| along(a.v, vb));
+                let bounced_a = self.grounded(i).bounced.map(|va| along(va, b.v));
+                let bounced_b = self.grounded(j).bounced.map(|vb| along(a.v, vb));
                 [bounced_a, bounced_b]
                     .into_iter()
                     .flatten()
@@ -337,21 +379,43 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         }
         let key = pair_key(a.collider, b.collider);
         // Held at rest last step: planned `Resting`, or (slow pairs are not planned) touching
-        // in rapier's solver.
-        let was_resting = || inputs.prev.get(&key) == Some(&Role::Resting) || held_pair();
+        // in rapier's solver; or one lying on the other, which lies on a ground (out of
+        // rapier's solver, a cluster leaves such a pair touching, approaching by up to what
+        // gravity adds over the rest of the step).
+        let was_resting = || {
+            inputs.prev.get(&key) == Some(&Role::Resting)
+                || held_pair()
+                || self.lies_on_grounded((i, j), gap, &normal)
+        };
         // Pressed, as a ground pair is: a body that rapier's solver pushed against something
         // else in the last step, and rapier's solver holds the pile. (Not by each other: their
         // own contact does not press them together.)
         let pressed = || {
             let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
-            pressed_besides(a.body, &bodies[a.body], b.collider, sets, registry)
-                || pressed_besides(b.body, &bodies[b.body], a.collider, sets, registry)
+            pressed_besides(a.body, &bodies[a.body], Some(b.collider), sets, registry)
+                || pressed_besides(b.body, &bodies[b.body], Some(a.collider), sets, registry)
+        };
+        // In the step's modes, a body of a stack or a pile (rapier's solver pushed it last
+        // step against a third body along gravity's line) is pushed by rapier's solver in the
+        // step too: it cannot be moved alone through the impact, which rapier's solver is
+        // left to resolve with the pile's other contacts (out of it, the pair would be
+        // settled at the step's end, one pair at a time, pushing the pile's balls into each
+        // other). `Step` mode's impulse at the step's start leaves the pair in rapier's
+        // solver.
+        let stacked = || {
+            if !inputs.in_step {
+                return false;
+            }
+            let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
+            stacked_besides(&bodies[a.body], b.collider, sets, registry, &self.down)
+                || stacked_besides(&bodies[b.body], a.collider, sets, registry, &self.down)
         };
         // An impact: approaching faster than the resting speed, closing the gap within the
-        // step (both fall alike; a user force adds its acceleration), and not resting or
-        // pressed. Anything else is rapier's (`Resting`), with e = 0 where rapier would
-        // bounce it.
-        let impact = !slow && closes && !policy.rests(gap, closing, was_resting(), pressed);
+        // step (both fall alike; a user force adds its acceleration), not resting or pressed,
+        // and neither body in a stack. Anything else is rapier's (`Resting`), with e = 0
+        // where rapier would bounce it.
+        let impact =
+            !slow && closes && !policy.rests(gap, closing, was_resting(), pressed) && !stacked();
         let hooked = impact || rapier_bounces;
         // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
         // solver or changes: an impact, a pair it zeroes (one a chain takes is asked there).
@@ -359,13 +423,6 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // the user's filter of it, `hooks/mod.rs`).
         if hooked && self.refused(key, a.body, b.body) {
             return None;
-        }
-        if std::env::var_os("DBG_PAIR").is_some() && gap < -0.004 {
-            eprintln!(
-                "PAIR {:?} {:?} gap {gap:.4} closing {closing:.4} approaching {approaching:.4} impact {impact} hooked {hooked} slow {slow} chain {chain}",
-                a.body.into_raw_parts().0,
-                b.body.into_raw_parts().0
-            );
         }
         Some(PlannedPair {
             a: a.body,

@@ -696,18 +696,22 @@ impl Cluster<'_, '_> {
     }
 
     /// Can body `k`, leaving an impact at `s` with `left` seconds of the step to go, reach a
-    /// ground it was not planned against? Its grounds came from its start-of-step speed, and
-    /// a hit from a heavier body can send it much faster; the cluster cannot be moved alone
-    /// then. Reads only.
+    /// ground it was not planned against, along its way on? Its grounds came from its
+    /// start-of-step speed, and a hit from a heavier body can send it much faster; the
+    /// cluster cannot be moved alone then. Reads only.
     fn reaches_other_grounds(&self, view: &AfterStep, k: usize, s: &State, left: f64) -> bool {
         let (ball, step) = (&self.balls[k], self.step);
         let accel = ball.cand.flight.accel.norm();
-        let reach = ball.geom.radius
-            + s.v.norm() * left
+        // Its way on: the segment along its velocity, bowed by its acceleration by at most
+        // `|a| left^2 / 2`, in a cube about the segment's middle (a ball sent up from the
+        // floor does not reach back down to it).
+        let way = s.v * left;
+        let reach = 0.5 * way.amax()
+            + ball.geom.radius
             + accel * left * left
             + step.policy.contact_margin();
         let half = to_real(reach);
-        let centre = vec_from_na(&s.com);
+        let centre = vec_from_na(&(s.com + 0.5 * way));
         // A ball that met a slab's tiles one by one has tiles among its grounds.
         let tiles = ball
             .geom

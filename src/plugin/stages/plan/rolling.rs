@@ -13,7 +13,7 @@ use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, PairContact, PlaneNear, contact_checked,
     earliest_touch, flat_relative, one_plane_under, plane_piece_of,
 };
-use crate::plugin::queries::observe::Scene;
+use crate::plugin::queries::observe::{Scene, pressed_besides};
 use crate::plugin::queries::reach::{OwnMotion, within_reach_of_other};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
@@ -232,7 +232,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } = *ball;
         let member = step.pairs.members.contains(handle);
         let slide = self.slide_of(scene, ball, step)?;
-        if !member && self.reached_by_other(scene, &slide, step) {
+        // A ball of an impact between bodies meets its partners in its cluster, however
+        // close; but one that rapier's solver pushed last step through a contact with another
+        // body (a ball lying on it) would be pushed again, and rolled out of rapier's solver
+        // it would sink under that body: it is rapier's.
+        let reached = if member {
+            let rb = &scene.bodies[handle];
+            pressed_besides(handle, rb, None, scene.sets, scene.registry)
+        } else {
+            self.reached_by_other(scene, &slide, step)
+        };
+        if reached {
             return Some(OnPlane::Reached);
         }
         let Slide {
