@@ -53,8 +53,7 @@ impl<H> ImpactPlugin<H> {
     /// hooks (`PlannedPair::hooked`): `Impact` pairs leave rapier's solver, `Resting` ones
     /// rapier would bounce get zero restitution. rapier hooks a pair when either collider is
     /// flagged, and every pair of a flagged body loses its contact recycling: so one body of
-    /// each pair is flagged, one already flagged where there is one (a flag put on or taken
-    /// off is a change rapier's next step processes).
+    /// each pair is flagged, one already flagged where there is one.
     ///
     /// rapier recycles an unhooked pair's contacts while its bodies stay within its recycle
     /// distance (5 cm at its defaults) of where its last full update found them, and a full
