@@ -155,30 +155,16 @@ pub(crate) fn move_clusters(
             // A body met on the way, alone or with its later cluster, that moves alone and
             // was not moved yet, joins the run.
             let admit = |view: &AfterStep, other: RigidBodyHandle| {
-                if written.contains(&other) {
-                    return None;
-                }
-                let lone = std::slice::from_ref(&other);
-                let (members, pairs, cluster): (&[RigidBodyHandle], &[(usize, usize)], _) =
-                    match clusters.of_body.get(&other) {
-                        None => (lone, &[], None),
-                        Some(&later) if later > c && !absorbed[later] => (
-                            &clusters.members[later],
-                            &clusters.pairs[later],
-                            Some(later),
-                        ),
-                        Some(_) => return None,
-                    };
-                let movable = members.iter().all(|h| cands.get(h).is_some())
-                    && moves_alone(view, (bodies, colliders), &cands, members);
-                let balls = movable
+                let group = group_of((&clusters, &cands, &written), &absorbed, c, other)?;
+                let members = &group.bodies[..];
+                let balls = moves_alone(view, (bodies, colliders), &cands, members)
                     .then(|| cluster_balls(view, bodies, colliders, &cands, members))
                     .flatten()?;
                 Some(Admitted {
                     balls,
-                    met: members.iter().position(|h| *h == other)?,
-                    pairs: pairs.to_vec(),
-                    cluster,
+                    met: group.met,
+                    pairs: group.pairs.to_vec(),
+                    cluster: group.cluster,
                 })
             };
             let joining = Joining { admit: &admit };
@@ -249,70 +235,105 @@ impl<'c> Growing<'c> {
         }
     }
 
-    /// The bodies that joined the cluster on the way (`through_pair_impacts`), each group
-    /// with its pairs and its pair with the member that met it, in the order they joined; a
-    /// later cluster joined whole is taken in: a cluster moved again starts with them.
+    /// The bodies that joined the cluster on the way (`through_pair_impacts`), in the order
+    /// they joined: a cluster moved again starts with them.
     fn joined(&mut self, joined: Vec<Joined>, absorbed: &mut [bool]) {
         for group in joined {
-            let offset = self.members.len();
-            self.members.to_mut().extend(&group.bodies);
-            let shifted = group.pairs.iter().map(|(i, j)| (i + offset, j + offset));
-            self.pairs.to_mut().extend(shifted);
-            self.pairs.to_mut().push((group.member, offset + group.met));
-            if let Some(later) = group.cluster {
-                absorbed[later] = true;
-                self.taken.push(later);
-            }
+            let Joined {
+                member,
+                bodies,
+                met,
+                pairs,
+                cluster,
+            } = group;
+            let group = Group {
+                bodies: Cow::Owned(bodies),
+                pairs: Cow::Owned(pairs),
+                met,
+                cluster,
+            };
+            self.add(member, &group, absorbed);
         }
     }
 
     /// Takes in `other`, which member `member` may reach (a pair that may be the model's:
-    /// `meets_other_body` found only such), with their pair, where it can be moved with the
-    /// cluster: alone (a body with a plan, in no cluster, that could not join the run where
-    /// it was met), or with the whole of its later cluster, never a body another cluster
-    /// moved already, and at most [`MAX_CLUSTER_RESTARTS`] times. `false` where it cannot.
+    /// `meets_other_body` found only such), with their pair and the rest of its later
+    /// cluster (`group_of`), moving the cluster again from its start, at most
+    /// [`MAX_CLUSTER_RESTARTS`] times. `false` where it cannot.
     fn take_in(
         &mut self,
-        (clusters, cands, written): (&'c Clusters, &CandidatesByBody, &HandleSet<RigidBodyHandle>),
+        sets: (&'c Clusters, &CandidatesByBody, &HandleSet<RigidBodyHandle>),
         absorbed: &mut [bool],
         member: usize,
         other: RigidBodyHandle,
     ) -> bool {
-        if self.restarts >= MAX_CLUSTER_RESTARTS || written.contains(&other) {
+        if self.restarts >= MAX_CLUSTER_RESTARTS {
             return false;
         }
-        // Its later cluster, and its place there.
-        let joins = match clusters.of_body.get(&other) {
-            None => cands.get(&other).map(|_| None),
-            Some(&later) if later > self.cluster && !absorbed[later] => clusters.members[later]
-                .iter()
-                .position(|h| *h == other)
-                .map(|place| Some((later, place))),
-            Some(_) => None,
-        };
-        let Some(joins) = joins else {
+        let Some(group) = group_of(sets, absorbed, self.cluster, other) else {
             return false;
         };
         self.restarts += 1;
-        let k = match joins {
-            None => {
-                self.members.to_mut().push(other);
-                self.members.len() - 1
-            }
-            Some((later, place)) => {
-                absorbed[later] = true;
-                self.taken.push(later);
-                let offset = self.members.len();
-                self.members.to_mut().extend(&clusters.members[later]);
-                let shifted = clusters.pairs[later]
-                    .iter()
-                    .map(|(i, j)| (i + offset, j + offset));
-                self.pairs.to_mut().extend(shifted);
-                offset + place
-            }
-        };
-        self.pairs.to_mut().push((member, k));
+        self.add(member, &group, absorbed);
         true
+    }
+
+    /// Adds `group`'s bodies and pairs, and its pair with member `member`; a later cluster
+    /// it is is taken in whole (moved with this one).
+    fn add(&mut self, member: usize, group: &Group, absorbed: &mut [bool]) {
+        let offset = self.members.len();
+        self.members.to_mut().extend(group.bodies.iter());
+        let shifted = group.pairs.iter().map(|(i, j)| (i + offset, j + offset));
+        self.pairs.to_mut().extend(shifted);
+        self.pairs.to_mut().push((member, offset + group.met));
+        if let Some(later) = group.cluster {
+            absorbed[later] = true;
+            self.taken.push(later);
+        }
+    }
+}
+
+/// The bodies that come with a body met from outside a cluster: it alone, or the whole of
+/// its later cluster.
+struct Group<'c> {
+    bodies: Cow<'c, [RigidBodyHandle]>,
+    /// Their `Impact` pairs, as indices into `bodies`.
+    pairs: Cow<'c, [(usize, usize)]>,
+    /// The body met, as an index in `bodies`.
+    met: usize,
+    /// Its cluster, if it has one (a later one).
+    cluster: Option<usize>,
+}
+
+/// What comes with `other`, met by a body of cluster `cluster`, where it can be moved with
+/// it: a body with a plan in no cluster, alone; a body of a later cluster not taken in
+/// yet, with the whole of it; never a body another cluster moved already. `None` otherwise.
+fn group_of<'c>(
+    (clusters, cands, written): (&'c Clusters, &CandidatesByBody, &HandleSet<RigidBodyHandle>),
+    absorbed: &[bool],
+    cluster: usize,
+    other: RigidBodyHandle,
+) -> Option<Group<'c>> {
+    if written.contains(&other) {
+        return None;
+    }
+    match clusters.of_body.get(&other) {
+        None => cands.get(&other).map(|_| Group {
+            bodies: Cow::Owned(vec![other]),
+            pairs: Cow::Borrowed(&[]),
+            met: 0,
+            cluster: None,
+        }),
+        Some(&later) if later > cluster && !absorbed[later] => {
+            let bodies = &clusters.members[later];
+            Some(Group {
+                bodies: Cow::Borrowed(bodies),
+                pairs: Cow::Borrowed(&clusters.pairs[later]),
+                met: bodies.iter().position(|h| *h == other)?,
+                cluster: Some(later),
+            })
+        }
+        Some(_) => None,
     }
 }
 

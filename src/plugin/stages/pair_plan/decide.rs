@@ -308,6 +308,66 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         Some((touch.dist, closing, n))
     }
 
+    /// Do two members `gap` apart (m) close it within the step at `closing` (m/s), their user
+    /// forces adding `forces` (m/s^2)? Both fall alike under gravity.
+    fn closes(&self, gap: f64, closing: f64, forces: f64) -> bool {
+        let dt = self.inputs.dt;
+        gap <= closing * dt + 0.5 * forces * dt * dt + self.margin
+    }
+
+    /// The closing speed of members `i` and `j` (`gap` apart, `closing` along `normal` at the
+    /// step's start), raised, in the step's modes, to what it is after one of them bounces off
+    /// a ground it flies onto in the step (its normal speed turned back,
+    /// [`Self::grounded`]), where that could make the pair meet and the start's approach does
+    /// not: the cluster moves both through the bounce. `Step` mode resolves pairs at the
+    /// step's start, before any bounce. Only for a pair whose speeds could close the gap (a
+    /// bounce keeps a body's speed at most), so that most pairs ask no ground.
+    fn closing_with_bounces(
+        &self,
+        (i, j): (usize, usize),
+        (gap, closing, normal): (f64, f64, &Vector3<f64>),
+        forces: f64,
+    ) -> f64 {
+        let resting_speed = self.inputs.policy.resting_speed;
+        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
+        let fastest = a.v.norm() + b.v.norm();
+        let may_turn = self.inputs.in_step
+            && !rests_at(fastest, resting_speed)
+            && self.closes(gap, fastest, forces);
+        if !may_turn || !rests_at(closing, resting_speed) && self.closes(gap, closing, forces) {
+            return closing;
+        }
+        let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
+        let bounced_a = self.grounded(i).bounced.map(|va| along(va, b.v));
+        let bounced_b = self.grounded(j).bounced.map(|vb| along(a.v, vb));
+        [bounced_a, bounced_b]
+            .into_iter()
+            .flatten()
+            .fold(closing, f64::max)
+    }
+
+    /// Is either member pressed, as a ground pair is: pushed by rapier's solver against
+    /// something else in the last step (rapier's solver holds the pile)? Not by each other:
+    /// their own contact does not press them together.
+    fn pressed(&self, a: &Ball, b: &Ball) -> bool {
+        let (bodies, sets, registry) = (self.bodies, self.inputs.sets, self.inputs.registry);
+        pressed_besides(a.body, &bodies[a.body], Some(b.collider), sets, registry)
+            || pressed_besides(b.body, &bodies[b.body], Some(a.collider), sets, registry)
+    }
+
+    /// In the step's modes, is either member part of a stack or a pile (rapier's solver pushed
+    /// it last step against a third body along gravity's line)? rapier's solver pushes it in
+    /// the step too: it cannot be moved alone through the impact, which rapier's solver is
+    /// left to resolve with the pile's other contacts (out of it, the pair would be settled
+    /// at the step's end, one pair at a time, pushing the pile's balls into each other).
+    /// `Step` mode's impulse at the step's start leaves the pair in rapier's solver.
+    fn stacked(&self, a: &Ball, b: &Ball) -> bool {
+        let (bodies, sets, registry) = (self.bodies, self.inputs.sets, self.inputs.registry);
+        self.inputs.in_step
+            && (stacked_besides(&bodies[a.body], b.collider, sets, registry, &self.down)
+                || stacked_besides(&bodies[b.body], a.collider, sets, registry, &self.down))
+    }
+
     /// The pair of members `i < j` with its role, or `None` when its bodies are of two
     /// dominance groups, when it cannot meet in the step, it is slow and rapier's resting
     /// contact as it is (unless `chain`: side by side with a body of an impact, it may pass
@@ -326,32 +386,13 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             reach,
             balls_only,
         } = self.approach(i, j)?;
-        let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
+        let (inputs, policy) = (self.inputs, self.inputs.policy);
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
         let forces = a.force_accel + b.force_accel;
-        // In the step's modes, a body that may bounce off a ground in the step may close on
-        // the other after the bounce (its normal speed turned back): the faster approach
-        // decides whether the pair may meet, and the cluster moves both through the bounce.
-        // (`Step` mode resolves pairs at the step's start, before any bounce.) rapier's own
-        // bounce of the pair is its approach at the step's start.
+        let closes_at = |closing: f64| self.closes(gap, closing, forces);
+        // rapier's own bounce of the pair is its approach at the step's start.
         let approaching = closing;
-        let closes_at = |closing: f64| gap <= closing * dt + 0.5 * forces * dt * dt + self.margin;
-        // A bounce keeps a body's speed at most: the two close no faster than their speeds.
-        let fastest = a.v.norm() + b.v.norm();
-        let may_turn =
-            inputs.in_step && !rests_at(fastest, policy.resting_speed) && closes_at(fastest);
-        let closing =
-            if may_turn && (rests_at(closing, policy.resting_speed) || !closes_at(closing)) {
-                let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(&normal);
-                let bounced_a = self.grounded(i).bounced.map(|va| along(va, b.v));
-                let bounced_b = self.grounded(j).bounced.map(|vb| along(a.v, vb));
-                [bounced_a, bounced_b]
-                    .into_iter()
-                    .flatten()
-                    .fold(closing, f64::max)
-            } else {
-                closing
-            };
+        let closing = self.closing_with_bounces((i, j), (gap, closing, &normal), forces);
         let slow = rests_at(closing, policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
         // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
@@ -387,35 +428,15 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                 || held_pair()
                 || self.lies_on_grounded((i, j), gap, &normal)
         };
-        // Pressed, as a ground pair is: a body that rapier's solver pushed against something
-        // else in the last step, and rapier's solver holds the pile. (Not by each other: their
-        // own contact does not press them together.)
-        let pressed = || {
-            let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
-            pressed_besides(a.body, &bodies[a.body], Some(b.collider), sets, registry)
-                || pressed_besides(b.body, &bodies[b.body], Some(a.collider), sets, registry)
-        };
-        // In the step's modes, a body of a stack or a pile (rapier's solver pushed it last
-        // step against a third body along gravity's line) is pushed by rapier's solver in the
-        // step too: it cannot be moved alone through the impact, which rapier's solver is
-        // left to resolve with the pile's other contacts (out of it, the pair would be
-        // settled at the step's end, one pair at a time, pushing the pile's balls into each
-        // other). `Step` mode's impulse at the step's start leaves the pair in rapier's
-        // solver.
-        let stacked = || {
-            if !inputs.in_step {
-                return false;
-            }
-            let (bodies, sets, registry) = (self.bodies, inputs.sets, inputs.registry);
-            stacked_besides(&bodies[a.body], b.collider, sets, registry, &self.down)
-                || stacked_besides(&bodies[b.body], a.collider, sets, registry, &self.down)
-        };
+        let pressed = || self.pressed(a, b);
         // An impact: approaching faster than the resting speed, closing the gap within the
         // step (both fall alike; a user force adds its acceleration), not resting or pressed,
         // and neither body in a stack. Anything else is rapier's (`Resting`), with e = 0
         // where rapier would bounce it.
-        let impact =
-            !slow && closes && !policy.rests(gap, closing, was_resting(), pressed) && !stacked();
+        let impact = !slow
+            && closes
+            && !policy.rests(gap, closing, was_resting(), pressed)
+            && !self.stacked(a, b);
         let hooked = impact || rapier_bounces;
         // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
         // solver or changes: an impact, a pair it zeroes (one a chain takes is asked there).

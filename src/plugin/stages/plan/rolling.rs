@@ -232,17 +232,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } = *ball;
         let member = step.pairs.members.contains(handle);
         let slide = self.slide_of(scene, ball, step)?;
-        // A ball of an impact between bodies meets its partners in its cluster, however
-        // close; but one that rapier's solver pushed last step through a contact with another
-        // body (a ball lying on it) would be pushed again, and rolled out of rapier's solver
-        // it would sink under that body: it is rapier's.
-        let reached = if member {
-            let rb = &scene.bodies[handle];
-            pressed_besides(handle, rb, None, scene.sets, scene.registry)
-        } else {
-            self.reached_by_other(scene, &slide, step)
-        };
-        if reached {
+        if self.reached(scene, &slide, member, step) {
             return Some(OnPlane::Reached);
         }
         let Slide {
@@ -407,6 +397,26 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             friction,
             to_plane: n * (radius - gg.skin),
         })
+    }
+
+    /// Is the ball reached by something besides its grounds, so that it is rapier's? A ball of
+    /// an impact between bodies (`member`) meets its partners in its cluster, however close;
+    /// but one that rapier's solver pushed last step through a contact with another body (a
+    /// ball lying on it) would be pushed again, and rolled out of rapier's solver it would
+    /// sink under that body. Any other ball: [`Self::reached_by_other`].
+    fn reached(&mut self, scene: &Scene, slide: &Slide, member: bool, step: &StepData) -> bool {
+        if member {
+            let handle = slide.ball.handle;
+            pressed_besides(
+                handle,
+                &scene.bodies[handle],
+                None,
+                scene.sets,
+                scene.registry,
+            )
+        } else {
+            self.reached_by_other(scene, slide, step)
+        }
     }
 
     /// Can something besides its grounds touch the ball within the step
