@@ -21,7 +21,11 @@
 //! [`CHAIN_MAX_TILT_SIN`](crate::plugin::policy::CHAIN_MAX_TILT_SIN); two balls closing slower
 //! than the pressed speed start none). A pair's closing speed is along the line of centres for
 //! two balls, and for other shapes the contact points' along parry's normal plus what the
-//! bodies' turning can add (angular speed times bounding radius). It writes nothing into
+//! bodies' turning can add (angular speed times bounding radius); in `TimeOfImpact` and
+//! `Exact` modes also after a member's bounce off a ground it flies onto in the step, and
+//! there a pair with a body of a stack or a pile (pushed by rapier's solver last step against
+//! a third body along gravity's line) is rapier's, and a ball lying on a ball that lies on a
+//! ground rests as a pair held last step does (`decide.rs`). It writes nothing into
 //! rapier: it returns the sleeping bodies an `Impact` pair may reach, whose wake-ups the caller
 //! records through the commit, so that the step plans them as awake bodies.
 //!
