@@ -70,6 +70,11 @@ pub(crate) fn contact_checked(
 /// touching shapes against large flat grounds (in `f32` it can tilt far from the face's
 /// normal); the plane's normal is exact. The body's support point
 /// towards the plane must lie over the face, else `None` (parry's answer stands).
+///
+/// A cuboid's face is the one the body's contact point is out of, unless that face's outside
+/// is against parry's normal: then the body pierced a thin plate, its deepest point is
+/// beyond the far face, and the face is the one parry's normal leaves by (the side the body
+/// is out of, never the far face, as `cuboid_face` says for points inside).
 fn plane_contact(
     part: &BodyPart,
     ground: &GroundGeom,
@@ -86,7 +91,12 @@ fn plane_contact(
         TypedShape::TriMesh(_) => return None,
         _ => None,
     };
+    let parry_normal = vec_to_na(c.normal1);
     match plane_contact_on(part, ground, s, t, vec_to_na(c.point2), first) {
+        Ok(found) if first.is_none() && found.1.dot(&parry_normal) <= 0.0 => {
+            let locator = cuboid_face_along(ground, t, &parry_normal)?;
+            plane_contact_on(part, ground, s, t, locator, None).ok()
+        }
         Ok(found) => Some(found),
         // Over another triangle of the mesh (a body across a diagonal): that one's plane.
         Err(Some(over)) => triangles_under(ground, t, &over)
@@ -190,6 +200,19 @@ pub(super) fn cuboid_face(p: &Vector3<f64>, half: &Vector3<f64>) -> (usize, Vect
     let mut n = Vector3::zeros();
     n[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
     (axis, n)
+}
+
+/// A world point at time `t` that locates (for [`cuboid_face`]) the face of a cuboid ground
+/// whose outward normal is nearest the world direction `n`: outside that face's centre, at
+/// twice the half extent. `None` for another shape.
+fn cuboid_face_along(ground: &GroundGeom, t: f64, n: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
+    let pose_g = ground.pose_at(t);
+    let local = pose_g.rotation.inverse() * n;
+    let axis = local.iamax();
+    let mut p = Vector3::zeros();
+    p[axis] = 2.0 * half[axis].copysign(local[axis]);
+    Some((pose_g * nalgebra::Point3::from(p)).coords)
 }
 
 /// The mesh or heightfield triangles under the world point `p` at time `t`: the closest
@@ -430,8 +453,67 @@ pub(crate) fn closest(
 
 #[cfg(test)]
 mod tests {
-    use super::cuboid_face;
-    use nalgebra::Vector3;
+    use super::{BodyPart, GroundGeom, contact_checked, cuboid_face};
+    use crate::motion::State;
+    use crate::parry::bounding_volume::Aabb;
+    use crate::parry::shape::Cuboid;
+    use crate::plugin::queries::ground_index::GroundMotion;
+    use crate::rapier::math::Vector;
+    use crate::rapier::prelude::ColliderHandle;
+    use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+
+    /// A cube pierces a thin plate near its edge from above: its centre over the top, its
+    /// lowest corner beyond the plate's side and its bottom below the plate's underside. Its
+    /// contact is the top face's, as parry finds it: the deepest point of the cube, below the
+    /// plate, must not send it to the underside, 0.8 m deeper (a tumbling box dropped through
+    /// a floor of tiles was resolved against the underside and thrown down through it).
+    #[test]
+    fn a_body_piercing_a_thin_plate_from_above_is_out_of_its_top() {
+        let plate = Cuboid::new(Vector::new(1.0, 0.05, 1.0));
+        let pose = Isometry3::translation(0.0, -0.05, 0.0);
+        let motion = GroundMotion {
+            handle: ColliderHandle::invalid(),
+            body: None,
+            com0: pose.translation.vector,
+            rot0: UnitQuaternion::identity(),
+            local: Isometry3::identity(),
+            pose0: pose,
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            aabb: Aabb::new_invalid(),
+            plane: None,
+            slab: None,
+        };
+        let ground = GroundGeom {
+            handle: ColliderHandle::invalid(),
+            shape: &plate,
+            skin: 0.0,
+            motion: &motion,
+            skip: Vec::new(),
+        };
+        let cube = Cuboid::new(Vector::new(0.2, 0.2, 0.2));
+        let part = BodyPart {
+            handle: ColliderHandle::invalid(),
+            shape: &cube,
+            local: Isometry3::identity(),
+            skin: 0.0,
+        };
+        // Tilted about z so that its lowest corner is at x > 1, past the plate's side.
+        let s = State {
+            com: Vector3::new(0.95, 0.1, 0.3),
+            rot: UnitQuaternion::from_euler_angles(0.0, 0.0, -0.3),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        };
+        let (dist, n, _) = contact_checked(&part, &ground, &s, 0.0, 0.0)
+            .unwrap()
+            .expect("the cube is inside the plate");
+        // The cube's corner hangs past the side, so the top face does not hold it and parry's
+        // contact stands: along the cube's own tilted face, 0.12 m deep. The underside would
+        // be 0.45 m deep.
+        assert!(n.y > 0.9, "out of the top side: {n:?} at {dist}");
+        assert!((-0.25..0.0).contains(&dist), "{dist}");
+    }
 
     #[test]
     fn a_cuboid_face_is_the_one_a_point_is_over_outside_and_the_nearest_inside() {
