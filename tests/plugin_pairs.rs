@@ -1815,9 +1815,10 @@ fn a_stack_of_three_balls_passes_the_bounce_up_in_the_step() {
 /// into the second. Each lies on the floor (rapier's resting contact, which leaves it sinking
 /// at up to about `g dt`), so neither is planned to bounce onto the other: the first ball's
 /// wall impact is resolved alone, and the pair is rapier's, which parts the two within half a
-/// second (to under rapier's resting depth of 3 mm). (Planned as an impact, the wall was
-/// missed by the cluster, which rolls a ball on its one plane, and the two were left 4 cm
-/// inside each other for good.)
+/// second (to under rapier's resting depth of 3 mm), both moving away at 4 m/s. (Planned as
+/// an impact, the wall was missed by the cluster, which rolled a ball on its one plane, and
+/// the two were left 4 cm inside each other for good; in `f64` the pair's impact then sent
+/// the first ball back into the wall, and the end check stopped it there, `e = 0`.)
 #[test]
 fn balls_rolling_into_a_wall_part() {
     let r = 0.05;
@@ -1843,5 +1844,69 @@ fn balls_rolling_into_a_wall_part() {
         }
         let d = (na(w.bodies[a].translation()) - na(w.bodies[b].translation())).norm();
         assert!(2.0 * r - d < 0.003, "{mode:?}: overlap {}", 2.0 * r - d);
+        // Everything elastic: both end moving away from the wall at 4 m/s (to rapier's solve
+        // of the pair, 4e-5 in `f32`).
+        for h in [a, b] {
+            let vx = wide(w.bodies[h].linvel().x);
+            assert_abs_diff_eq!(vx, -4.0, epsilon = 1e-4);
+        }
+    }
+}
+
+/// A ball rolling at 1 m/s, 2 cm from a wall (a ground, `e = 1`), struck from behind by a ball
+/// rolling at 4 m/s (balls frictionless, `e = 1`): in the first step the struck ball goes off
+/// at 4 m/s, bounces off the wall, and meets the other again, which it sends back at 4 m/s;
+/// it reaches the wall again in the next step. Elastic throughout, the balls end moving away
+/// at 1 and 4 m/s. (A ball of a pair's cluster rolled on its one plane and missed the wall:
+/// it was pushed out at the step's end still driving into it, and the closed form was lost.)
+#[test]
+fn a_ball_struck_into_a_wall_bounces_off_it_in_the_step() {
+    let r = 0.05;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(G);
+        let (_, wall) = w.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
+            ColliderBuilder::cuboid(0.1, 0.5, 0.5)
+                .restitution(1.0)
+                .friction(0.0),
+        );
+        let floor = floor(&mut w, 0.5, 0.0);
+        let rolling = |v: f64| (Vector3::x() * v, Vector3::new(0.0, 0.0, -v / r));
+        let ((va, wa), (vb, wb)) = (rolling(1.0), rolling(4.0));
+        let a = ball(&mut w, Vector3::new(0.93, r, 0.0), va, wa, r, 1.0, 0.0).0;
+        let b = ball(&mut w, Vector3::new(0.829, r, 0.0), vb, wb, r, 1.0, 0.0).0;
+        let x = |w: &PhysicsWorld, h: RigidBodyHandle| wide(w.bodies[h].translation().x);
+        // The closed form of the first step, from the positions as stored: the balls meet
+        // when their 1 mm gap closes at 3 m/s; the struck ball then has the wall's gap left.
+        let (xa, xb) = (x(&w, a), x(&w, b));
+        let meet = (xa - xb - 2.0 * r) / 3.0;
+        let wall_hit = meet + (1.0 - r - (xa + meet)) / 4.0;
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, wall).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+        p.set_all_dynamic_bodies_impact(true);
+        p.step(&mut w);
+        let of_a: Vec<_> = p.events().iter().filter(|e| e.body == a).collect();
+        let kinds: Vec<_> = of_a.iter().map(|e| e.body2.is_some()).collect();
+        assert_eq!(kinds, [true, false, true], "{mode:?}: {of_a:#?}");
+        assert!(
+            of_a.iter().all(|e| e.timing == ImpactTiming::InStep),
+            "{mode:?}: {of_a:#?}"
+        );
+        let off_wall = of_a[1];
+        assert_eq!(off_wall.ground, wall, "{mode:?}");
+        assert_abs_diff_eq!(off_wall.time, wall_hit, epsilon = 1e-7);
+        assert_abs_diff_eq!(off_wall.approach_speed, 4.0, epsilon = 1e-6);
+        for _ in 0..9 {
+            p.step(&mut w);
+            assert!(
+                x(&w, a) + r <= 1.0 + 1e-4,
+                "{mode:?}: in the wall at {}",
+                x(&w, a)
+            );
+        }
+        let vx = |h: RigidBodyHandle| wide(w.bodies[h].linvel().x);
+        assert_abs_diff_eq!(vx(a), -1.0, epsilon = 1e-6);
+        assert_abs_diff_eq!(vx(b), -4.0, epsilon = 1e-6);
     }
 }

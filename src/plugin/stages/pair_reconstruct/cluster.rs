@@ -16,7 +16,9 @@ use crate::plugin::policy::TIME_ULP_FLOOR;
 use crate::plugin::policy::on_plane;
 use crate::plugin::policy::rests_at;
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
-use crate::plugin::queries::geometry::{Hit, Search, closest, first_impact, landing_point};
+use crate::plugin::queries::geometry::{
+    Hit, Search, closest, earliest_touch, first_impact, landing_point,
+};
 use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -283,7 +285,9 @@ impl<'c, 'a> Run<'c, 'a> {
 
     /// Body `k`'s ground impact at `t` (state `s`, `hit`), as `reconstruct::through_impacts`
     /// resolves one: it flies on from there; a settled impact holds gravity off the rest of
-    /// the step. Pushes the events; `None` where the model gives none.
+    /// the step. A ball rolling into another ground (a wall) moves on as after an impact with
+    /// a body ([`Cluster::on_after_touch`]): on its plane it rolls on, lifted off it flies.
+    /// Pushes the events; `None` where the model gives none.
     fn ground_event(
         &mut self,
         view: &mut AfterStep,
@@ -293,7 +297,6 @@ impl<'c, 'a> Run<'c, 'a> {
         hit: &Hit,
     ) -> Option<()> {
         let (ball, step) = (&self.balls[k], self.context.step);
-        let flight = &mut self.flights[k];
         let part = &ball.geom.parts[hit.part];
         let gg = &ball.grounds[hit.ground];
         let (point, points) = landing_point(part, gg, s, t, hit, view.config.flat_tolerance);
@@ -313,6 +316,13 @@ impl<'c, 'a> Run<'c, 'a> {
         )?;
         let settled = event.settled;
         view.commit.event(event);
+        let before = self.moving[k];
+        if let Motion::Rolling(_) = before.motion {
+            let cluster = Cluster::of(&self.context, &self.balls);
+            self.moving[k] = cluster.on_after_touch(view, k, &before, after, t)?;
+            return Some(());
+        }
+        let flight = &mut self.flights[k];
         if settled {
             let site = Site {
                 body: ball.cand.body,
@@ -573,12 +583,15 @@ impl<'c, 'a> Run<'c, 'a> {
 }
 
 impl Cluster<'_, '_> {
-    /// Body `k`'s first ground impact after `t` (none while it rolls: its one plane is all it
-    /// meets), `Err` where the search gave up (the cluster is not moved alone).
+    /// Body `k`'s first ground impact after `t`, `Err` where the search gave up (the cluster
+    /// is not moved alone). A rolling ball meets its other grounds (a wall, a slope's foot)
+    /// along its rolling, as the bodies stage's rolling ball does (`rolling_touch`), and
+    /// never its own plane.
     fn ground(&self, k: usize, m: &Moving, t: f64) -> Result<Option<(f64, Next)>, ()> {
         let ball = &self.balls[k];
-        let Motion::Flight(flight) = m.motion else {
-            return Ok(None);
+        let flight = match m.motion {
+            Motion::Flight(flight) => flight,
+            Motion::Rolling(_) => return Ok(self.rolled_into(k, m, t)),
         };
         if ball.grounds.is_empty() {
             return Ok(None);
@@ -695,6 +708,29 @@ impl Cluster<'_, '_> {
         })
     }
 
+    /// Rolling body `k`'s first touch after `t` with one of its grounds besides the one it
+    /// rolls on (they come first in its list), while closing on it: sampled along the
+    /// rolling ([`earliest_touch`], which a graze between two samples passes: the end check
+    /// catches it).
+    fn rolled_into(&self, k: usize, m: &Moving, t: f64) -> Option<(f64, Next)> {
+        let (ball, step) = (&self.balls[k], self.step);
+        let others = &ball.grounds[..ball.rolling_on?];
+        let left = step.dt - t;
+        if others.is_empty() || left <= 0.0 {
+            return None;
+        }
+        let reach = step.policy.contact_margin();
+        let at = |after: f64| {
+            let s = m.at(t + after);
+            let hit = closest(&ball.geom, others, &s, t + after, reach);
+            (s, hit)
+        };
+        let after = earliest_touch(left, |after| at(after).1.is_some_and(|h| h.dist <= 0.0))?;
+        let (s, hit) = at(after);
+        let hit = hit.filter(|h| h.un < 0.0)?;
+        Some((t + after, Next::Ground(k, s, hit)))
+    }
+
     /// Can body `k`, leaving an impact at `s` with `left` seconds of the step to go, reach a
     /// ground it was not planned against, along its way on? Its grounds came from its
     /// start-of-step speed, and a hit from a heavier body can send it much faster; the
@@ -730,8 +766,8 @@ impl Cluster<'_, '_> {
             })
     }
 
-    /// How body `k` moves on after an impact with another body left it at `after` (time
-    /// `t`): as before, but a ball rolling on its ground flies when lifted off it, and rolls
+    /// How body `k` moves on after an impact with another body (or, rolling, with a ground
+    /// besides its plane) left it at `after` (time `t`): as before, but a ball rolling on its ground flies when lifted off it, and rolls
     /// on when pressed into it (the ground takes the normal speed: a `Settle` event, pushed).
     /// `None` where the closed form of its rolling does not reach the step's end.
     fn on_after_touch(
