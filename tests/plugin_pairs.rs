@@ -1910,3 +1910,51 @@ fn a_ball_struck_into_a_wall_bounces_off_it_in_the_step() {
         assert_abs_diff_eq!(vx(b), -4.0, epsilon = 1e-6);
     }
 }
+
+/// A ball rolling at 2 m/s, 2 cm from a wall (a ground, `e = 1`), with a ball rolling at
+/// 3 m/s touching it from behind; neither opted in, so rapier's solver resolves the two
+/// (frictionless balls, `e = 1`), and the struck ball, its rolling disturbed, ends the step in
+/// the wall. It bounces off the wall with the wall's restitution, as a ball rapier's step
+/// leaves in a ground does, and the two end moving away. (The disturbed rolling ball's rule,
+/// written for its own plane, settled it on the wall, `e = 0`, and stopped it there.)
+#[test]
+fn a_rolling_ball_pushed_into_a_wall_by_rapier_bounces_off_it() {
+    let r = 0.05;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(G);
+        let (_, wall) = w.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
+            ColliderBuilder::cuboid(0.1, 0.5, 0.5)
+                .restitution(1.0)
+                .friction(0.0),
+        );
+        let floor = floor(&mut w, 0.5, 0.0);
+        let rolling = |v: f64| (Vector3::x() * v, Vector3::new(0.0, 0.0, -v / r));
+        let ((va, wa), (vc, wc)) = (rolling(2.0), rolling(3.0));
+        let a = ball(&mut w, Vector3::new(0.93, r, 0.0), va, wa, r, 1.0, 0.0).0;
+        let c = ball(&mut w, Vector3::new(0.83, r, 0.0), vc, wc, r, 1.0, 0.0).0;
+        let mut p = plugin(mode);
+        p.add_ground(&w.bodies, &w.colliders, wall).unwrap();
+        p.add_ground(&w.bodies, &w.colliders, floor).unwrap();
+        p.step(&mut w);
+        let off_wall = p
+            .events()
+            .iter()
+            .find(|e| e.body == a && e.ground == wall && e.kind == EventKind::Impact)
+            .unwrap_or_else(|| panic!("{mode:?}: no wall impact: {:#?}", p.events()));
+        assert!(
+            !off_wall.settled && off_wall.restitution == 1.0,
+            "{mode:?}: {off_wall:?}"
+        );
+        let vx = |w: &PhysicsWorld, h: RigidBodyHandle| wide(w.bodies[h].linvel().x);
+        assert!(off_wall.approach_speed > 2.0, "{mode:?}: {off_wall:?}");
+        assert_abs_diff_eq!(vx(&w, a), -off_wall.approach_speed, epsilon = 1e-6);
+        for _ in 0..5 {
+            p.step(&mut w);
+        }
+        assert!(
+            vx(&w, a) < 0.0 && vx(&w, c) < 0.0,
+            "{mode:?}: both move away"
+        );
+    }
+}

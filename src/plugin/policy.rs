@@ -276,13 +276,40 @@ pub(crate) enum EndCheck {
     Lagged,
     /// rapier's end state of a rolling ball something else acted on, in which it flew
     /// without its ground (a steered roll ends on its plane, with the velocities of one that
-    /// flew); `fall` (m/s) is the step's fall, `|a.n| dt`.
-    DisturbedRolling { fall: f64 },
+    /// flew); `fall` (m/s) is the step's fall, `|a.n| dt`, and `plane` the unit normal of the
+    /// plane it rolled on. Its row is that plane's ([`EndCheck::row_for`]).
+    DisturbedRolling {
+        fall: f64,
+        plane: nalgebra::Vector3<f64>,
+    },
     /// rapier's end state of a ball handed from its closed-form rolling to rapier's resting
     /// contact at the step's start (something else within reach): rapier keeps its resting
     /// depth, but what pushes it in harder (another body) is checked.
     ReleasedResting,
 }
+
+impl EndCheck {
+    /// The row of the table ([`Policy::end_action`]) for the `k`-th contact the check
+    /// resolves (from 0), of unit normal `normal`: the check's own for its first contact,
+    /// `RapierEnd` for every later one. A disturbed rolling ball's row is for its plane only,
+    /// where a step's fall or a push from above drove it in: any other ground it ended in (a
+    /// wall it was pushed into) is met as rapier's end state meets it, with its restitution.
+    pub fn row_for(self, k: usize, normal: &nalgebra::Vector3<f64>) -> EndCheck {
+        match self {
+            _ if k > 0 => EndCheck::RapierEnd,
+            EndCheck::DisturbedRolling { plane, .. } if normal.dot(&plane) < PLANE_NORMAL_COS => {
+                EndCheck::RapierEnd
+            }
+            why => why,
+        }
+    }
+}
+
+/// How near a contact's normal is to a disturbed rolling ball's plane normal (the cosine of
+/// the angle between them) for the contact to be on its plane ([`EndCheck::row_for`]): the
+/// rounding of a face normal from rapier's `f32` vertices, far below any slope's or wall's
+/// angle.
+const PLANE_NORMAL_COS: f64 = 1.0 - 1e-6;
 
 /// What holds a resting body that turned, asked only when [`EndCheck::TurningResting`] needs
 /// it.
@@ -420,8 +447,9 @@ impl Policy {
     /// | `Woken` | deeper than the gap, approaching | impact, `e = 0` |
     /// | `Lagged` | deeper than the gap, approaching | impact |
     /// | `Lagged` | deeper than the gap, leaving | push out, velocity kept |
-    /// | `DisturbedRolling` | into the ground no faster than the step's fall plus the resting speed | push out, stopped |
+    /// | `DisturbedRolling` | into its plane no faster than the step's fall plus the resting speed | push out, stopped |
     /// | `DisturbedRolling` | faster (something pushed it down) | impact, `e = 0` |
+    /// | `DisturbedRolling` | any other ground | as `RapierEnd` ([`EndCheck::row_for`]) |
     /// | `ReleasedResting` | deeper than the gap, approaching | impact, `e = 0` |
     /// | `ReleasedResting` | deeper than the gap, leaving | push out, velocity kept |
     /// | `TurningResting` | deeper than the gap, a point swinging down, not (slow and touching) and not pressed at its pivot | impact, `e = 0` if slower than a fall through the gap |
@@ -447,7 +475,7 @@ impl Policy {
             EndCheck::Lagged if deep => EndAction::PushOut { stop: false },
             EndCheck::ReleasedResting if deep && approaching => EndAction::Impact { settle: true },
             EndCheck::ReleasedResting if deep => EndAction::PushOut { stop: false },
-            EndCheck::DisturbedRolling { fall } => {
+            EndCheck::DisturbedRolling { fall, .. } => {
                 if un >= -(fall + self.resting_speed) {
                     EndAction::PushOut { stop: true }
                 } else {
@@ -574,9 +602,18 @@ mod tests {
         // A step's fall (0.164 m/s at 60 Hz) plus the resting speed puts the ball back;
         // faster is a push.
         let fall = 9.81 / 60.0;
-        let rolling = |un| p.end_action(EndCheck::DisturbedRolling { fall }, -0.001, un, never);
+        let plane = nalgebra::Vector3::y();
+        let why = EndCheck::DisturbedRolling { fall, plane };
+        let rolling = |un| p.end_action(why.row_for(0, &plane), -0.001, un, never);
         assert_eq!(rolling(-0.2), EndAction::PushOut { stop: true });
         assert_eq!(rolling(-0.3), EndAction::Impact { settle: true });
+        // Another ground it was pushed into (a wall) is rapier's end state's: an impact
+        // with its restitution. So is every contact after the first.
+        let wall = nalgebra::Vector3::x();
+        assert_eq!(why.row_for(0, &wall), EndCheck::RapierEnd);
+        assert_eq!(why.row_for(1, &plane), EndCheck::RapierEnd);
+        let into_wall = p.end_action(why.row_for(0, &wall), -0.01, -3.0, never);
+        assert_eq!(into_wall, EndAction::Impact { settle: false });
         // A ball released at the start keeps rapier's resting depth; deeper than the gap it
         // is settled if still going in, else moved out.
         let released = |dist, un| p.end_action(EndCheck::ReleasedResting, dist, un, never);

@@ -185,7 +185,10 @@ impl AfterStep<'_> {
             self.released.push(key);
         }
         let fall = -motion.accel.dot(&motion.normal) * step.dt;
-        let why = EndCheck::DisturbedRolling { fall };
+        let why = EndCheck::DisturbedRolling {
+            fall,
+            plane: motion.normal,
+        };
         self.settle_rapier_end(bodies, colliders, &subject, why);
     }
 

@@ -156,7 +156,7 @@ impl AfterStep<'_> {
                 break;
             };
             let hit = on_entry_side(hit, checked, &s, dt);
-            let rule = if k == 0 { why } else { EndCheck::RapierEnd };
+            let rule = why.row_for(k, &hit.normal);
             let action = step.policy.end_action(rule, hit.dist, hit.un, || {
                 let around = neighbours_of();
                 Surroundings {
