@@ -1958,3 +1958,39 @@ fn a_rolling_ball_pushed_into_a_wall_by_rapier_bounces_off_it() {
         );
     }
 }
+
+/// A ball at 3 m/s strikes a ball at rest off-centre (no gravity, smooth, `e = 1`); a torque
+/// on the striker (a user's) keeps the pair out of the in-step motion, so the impact is
+/// resolved at the step's end, where the balls have run 2 cm into each other. The impulse
+/// is along the line of centres where they touched, `(0.8, 0.6, 0)`, as in the step: the
+/// closed-form velocities. (The line of centres at the step's end is 4 degrees off it; in a
+/// crowd landing on itself, with overlaps of several centimetres, tens of degrees, which
+/// sent balls sideways faster than any impact could.)
+#[test]
+fn a_pair_resolved_at_the_step_end_is_struck_along_the_line_where_the_balls_touched() {
+    let r = 0.05;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        let mut w = world_with_gravity(0.0);
+        let v = Vector3::x() * 3.0;
+        let a = ball(&mut w, Vector3::zeros(), v, Vector3::zeros(), r, 1.0, 0.0).0;
+        let at = Vector3::new(0.12, 0.06, 0.0);
+        let b = ball(&mut w, at, Vector3::zeros(), Vector3::zeros(), r, 1.0, 0.0).0;
+        w.bodies[a].add_torque(Vector::new(0.0, 0.0, real(1e-6)), true);
+        let mut p = plugin(mode);
+        p.set_all_dynamic_bodies_impact(true);
+        p.step(&mut w);
+        let hit = p
+            .events()
+            .iter()
+            .find(|e| e.body == b && e.kind == EventKind::Impact)
+            .unwrap_or_else(|| panic!("{mode:?}: no impact: {:#?}", p.events()));
+        assert_eq!(hit.timing, ImpactTiming::StepEnd, "{mode:?}");
+        let n = Vector3::new(0.8, 0.6, 0.0);
+        assert!((na(hit.normal) - n).norm() < 1e-6, "{mode:?}: {hit:?}");
+        assert_abs_diff_eq!(hit.approach_speed, v.dot(&n), epsilon = 1e-6);
+        // Equal masses, smooth, elastic: the struck ball takes the normal part.
+        let (va, vb) = (na(w.bodies[a].linvel()), na(w.bodies[b].linvel()));
+        assert!((vb - n * v.dot(&n)).norm() < 1e-6, "{mode:?}: {vb:?}");
+        assert!((va - (v - n * v.dot(&n))).norm() < 1e-6, "{mode:?}: {va:?}");
+    }
+}
