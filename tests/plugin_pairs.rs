@@ -1811,6 +1811,20 @@ fn a_stack_of_three_balls_passes_the_bounce_up_in_the_step() {
     }
 }
 
+/// A floor (`e = 0.5`, frictionless) up to an elastic, frictionless wall whose face is at
+/// `x = 1`, under gravity: the world, the wall's and the floor's colliders.
+fn floor_to_a_wall() -> (PhysicsWorld, ColliderHandle, ColliderHandle) {
+    let mut w = world_with_gravity(G);
+    let (_, wall) = w.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
+        ColliderBuilder::cuboid(0.1, 0.5, 0.5)
+            .restitution(1.0)
+            .friction(0.0),
+    );
+    let floor = floor(&mut w, 0.5, 0.0);
+    (w, wall, floor)
+}
+
 /// Two balls rolling touching at 4 m/s into a wall (a ground): the first bounces off the wall
 /// into the second. Each lies on the floor (rapier's resting contact, which leaves it sinking
 /// at up to about `g dt`), so neither is planned to bounce onto the other: the first ball's
@@ -1823,14 +1837,7 @@ fn a_stack_of_three_balls_passes_the_bounce_up_in_the_step() {
 fn balls_rolling_into_a_wall_part() {
     let r = 0.05;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world_with_gravity(G);
-        let (_, wall) = w.insert(
-            RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
-            ColliderBuilder::cuboid(0.1, 0.5, 0.5)
-                .restitution(1.0)
-                .friction(0.0),
-        );
-        let floor = floor(&mut w, 0.5, 0.0);
+        let (mut w, wall, floor) = floor_to_a_wall();
         let v = Vector3::x() * 4.0;
         let spin = Vector3::new(0.0, 0.0, -4.0 / r);
         let a = ball(&mut w, Vector3::new(0.5, r, 0.0), v, spin, r, 1.0, 0.0).0;
@@ -1863,14 +1870,7 @@ fn balls_rolling_into_a_wall_part() {
 fn a_ball_struck_into_a_wall_bounces_off_it_in_the_step() {
     let r = 0.05;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world_with_gravity(G);
-        let (_, wall) = w.insert(
-            RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
-            ColliderBuilder::cuboid(0.1, 0.5, 0.5)
-                .restitution(1.0)
-                .friction(0.0),
-        );
-        let floor = floor(&mut w, 0.5, 0.0);
+        let (mut w, wall, floor) = floor_to_a_wall();
         let rolling = |v: f64| (Vector3::x() * v, Vector3::new(0.0, 0.0, -v / r));
         let ((va, wa), (vb, wb)) = (rolling(1.0), rolling(4.0));
         let a = ball(&mut w, Vector3::new(0.93, r, 0.0), va, wa, r, 1.0, 0.0).0;
@@ -1921,14 +1921,7 @@ fn a_ball_struck_into_a_wall_bounces_off_it_in_the_step() {
 fn a_rolling_ball_pushed_into_a_wall_by_rapier_bounces_off_it() {
     let r = 0.05;
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world_with_gravity(G);
-        let (_, wall) = w.insert(
-            RigidBodyBuilder::fixed().translation(Vector::new(1.1, 0.5, 0.0)),
-            ColliderBuilder::cuboid(0.1, 0.5, 0.5)
-                .restitution(1.0)
-                .friction(0.0),
-        );
-        let floor = floor(&mut w, 0.5, 0.0);
+        let (mut w, wall, floor) = floor_to_a_wall();
         let rolling = |v: f64| (Vector3::x() * v, Vector3::new(0.0, 0.0, -v / r));
         let ((va, wa), (vc, wc)) = (rolling(2.0), rolling(3.0));
         let a = ball(&mut w, Vector3::new(0.93, r, 0.0), va, wa, r, 1.0, 0.0).0;
