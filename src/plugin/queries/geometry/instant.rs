@@ -71,10 +71,11 @@ pub(crate) fn contact_checked(
 /// normal); the plane's normal is exact. The body's support point
 /// towards the plane must lie over the face, else `None` (parry's answer stands).
 ///
-/// A cuboid's face is the one the body's contact point is out of, unless that face's outside
-/// is against parry's normal: then the body pierced a thin plate, its deepest point is
-/// beyond the far face, and the face is the one parry's normal leaves by (the side the body
-/// is out of, never the far face, as `cuboid_face` says for points inside).
+/// A cuboid's face is the one the body's contact point is out of, unless that face's normal
+/// is more than 45 degrees from parry's (`FACE_AGREES_COS`): then the contact point lies
+/// inside the cuboid nearer another face than the one the body is out of (the deepest point
+/// of a body that pierced a thin plate, beyond the far face; a corner that went in at the
+/// top just inside a side), and the face is the one parry's normal leaves by.
 fn plane_contact(
     part: &BodyPart,
     ground: &GroundGeom,
@@ -93,7 +94,7 @@ fn plane_contact(
     };
     let parry_normal = vec_to_na(c.normal1);
     match plane_contact_on(part, ground, s, t, vec_to_na(c.point2), first) {
-        Ok(found) if first.is_none() && found.1.dot(&parry_normal) <= 0.0 => {
+        Ok(found) if first.is_none() && found.1.dot(&parry_normal) < FACE_AGREES_COS => {
             let locator = cuboid_face_along(ground, t, &parry_normal)?;
             plane_contact_on(part, ground, s, t, locator, None).ok()
         }
@@ -201,6 +202,12 @@ pub(super) fn cuboid_face(p: &Vector3<f64>, half: &Vector3<f64>) -> (usize, Vect
     n[axis] = if p[axis] < 0.0 { -1.0 } else { 1.0 };
     (axis, n)
 }
+
+/// The least cosine between parry's contact normal and the normal of the cuboid face the
+/// body's contact point locates for that face to stand ([`plane_contact`]): 45 degrees, far
+/// beyond the tilt of parry's normal against a flat face, far below the right angle between
+/// two faces.
+const FACE_AGREES_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// A world point at time `t` that locates (for [`cuboid_face`]) the face of a cuboid ground
 /// whose outward normal is nearest the world direction `n`: outside that face's centre, at
@@ -461,6 +468,56 @@ mod tests {
     use crate::rapier::math::Vector;
     use crate::rapier::prelude::ColliderHandle;
     use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+
+    /// A long bar lies across a plate's side edge, sloping gently down past it: its bottom
+    /// edge is 4 mm under the plate's top at its inner end and 6 mm at the side. Its contact
+    /// is out of the top, as parry finds it: the bar's deepest point inside the plate, at the
+    /// side, is nearer the side face, out of which the bar is 12 cm deep (a tumbling plate's
+    /// corner under a floor of tiles' edge was pushed out sideways by that much and left in
+    /// the floor under the tiles).
+    #[test]
+    fn a_bar_across_a_plates_edge_is_out_of_its_top() {
+        let plate = Cuboid::new(Vector::new(2.0, 0.05, 2.0));
+        let pose = Isometry3::translation(0.0, -0.05, 0.0);
+        let motion = GroundMotion {
+            handle: ColliderHandle::invalid(),
+            body: None,
+            com0: pose.translation.vector,
+            rot0: UnitQuaternion::identity(),
+            local: Isometry3::identity(),
+            pose0: pose,
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            aabb: Aabb::new_invalid(),
+            plane: None,
+            slab: None,
+        };
+        let ground = GroundGeom {
+            handle: ColliderHandle::invalid(),
+            shape: &plate,
+            skin: 0.0,
+            motion: &motion,
+            skip: Vec::new(),
+        };
+        let bar = Cuboid::new(Vector::new(0.14, 0.035, 0.01));
+        let part = BodyPart {
+            handle: ColliderHandle::invalid(),
+            shape: &bar,
+            local: Isometry3::identity(),
+            skin: 0.0,
+        };
+        let s = State {
+            com: Vector3::new(2.02, 0.0286, 0.3),
+            rot: UnitQuaternion::from_euler_angles(0.0, 0.0, -0.02),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        };
+        let (dist, n, _) = contact_checked(&part, &ground, &s, 0.0, 0.0)
+            .unwrap()
+            .expect("the bar is inside the plate");
+        assert!(n.y > 0.99, "out of the top: {n:?} at {dist}");
+        assert!((-0.01..0.0).contains(&dist), "{dist}");
+    }
 
     /// A cube pierces a thin plate near its edge from above: its centre over the top, its
     /// lowest corner beyond the plate's side and its bottom below the plate's underside. Its
