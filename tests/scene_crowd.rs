@@ -115,7 +115,7 @@ fn run(timing: Option<TimingMode>) -> Settling {
 }
 
 /// The balls land and spread within the first 250 steps (measured: the last impact between
-/// balls at steps 210 and 211 in `f32`, 184 and 211 in `f64`); an impact between balls after
+/// balls at steps 181 and 203 in `f32`, 178 and 203 in `f64`); an impact between balls after
 /// this step, with the crowd lying on the floor, would be chatter.
 const LANDED: usize = 300;
 
@@ -137,8 +137,8 @@ fn a_crowd_of_opted_in_balls_settles_without_chatter() {
             s.last_pair_impact <= LANDED,
             "{timing:?}: impacts between resting balls: {s:?}"
         );
-        // A ball meets a few neighbours as the crowd lands and spreads (2.6 to 2.8 impacts a ball
-        // and 22 at most, measured); a ball chattering against its resting neighbours meets
+        // A ball meets a few neighbours as the crowd lands and spreads (2.7 to 2.8 impacts a ball
+        // and 27 at most, measured); a ball chattering against its resting neighbours meets
         // them every few steps (83 times in this scene when slow impacts chained through the
         // crowd).
         assert!(

@@ -58,12 +58,13 @@ impl<'v> AfterStep<'v> {
     /// they met in the step (they overlap, their straight relative motion or the straight
     /// path between their start and end offsets came within reach, or their centres crossed
     /// the line of centres they started on while their relative motion bent), the model's impulse
-    /// along the line of centres where they touched, back along their relative motion
-    /// (`entry_normal`; else the line now, or the one they started on if they crossed)
-    /// (`ImpactTiming::StepEnd`; no bounce slower than the resting speed, or
-    /// the pressed speed for a ball touching something else), and both balls moved apart
-    /// along it to touching, on the sides they started on, each by its inverse-mass share,
-    /// with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
+    /// along the line of centres where they touched, on the straight way from their start
+    /// offset to their end offset (`entry_normal`; else the line now, or the one they started
+    /// on if they crossed) (`ImpactTiming::StepEnd`; no bounce slower than the resting speed,
+    /// or the pressed speed for a ball touching something else), and both balls moved apart
+    /// along it until their offset along it is the touching distance (off the line of
+    /// centres now, they end a little apart), on the sides they started on, each by its
+    /// inverse-mass share, with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
     pub fn pair_end(
         &mut self,
         bodies: &RigidBodySet,
@@ -89,10 +90,10 @@ impl<'v> AfterStep<'v> {
         if !met || pair.normal == Vector3::zeros() && len == 0.0 {
             return;
         }
-        // The contact normal: the line of centres where they touched, back along their
-        // relative motion; else the line of centres now, or the one they started on if they
-        // have crossed (or passed by).
-        let n = entry_normal(d, sb.v - sa.v, pair.reach, step.dt).unwrap_or(
+        // The contact normal: the line of centres where they touched, on the way from their
+        // start offset to their end offset; else the line of centres now, or the one they
+        // started on if they have crossed (or passed by).
+        let n = entry_normal(pair.offset, d, pair.reach).unwrap_or(
             if !crossed && len > 0.0 && len < pair.reach {
                 d / len
             } else {
@@ -341,39 +342,41 @@ impl<'s> Pushed<'s> {
     }
 }
 
+/// The unit line of centres (from the first ball to the second) where two balls of contact
+/// radii summing to `reach` came to touch in the step: on the straight path of their offset
+/// from `start` (the step's start) to `end` (its end; second less first), its entry into the
+/// sphere of radius `reach`. Both balls fall alike, so gravity leaves that path straight for
+/// balls in flight; the end's line of centres, after the balls ran up to `|dv| dt` into each
+/// other, can be tens of degrees off it (and with it the impulse's direction). The path
+/// between the two offsets, not the end's relative velocity, so that a ball whose state the
+/// step already corrected (a ground impact) is taken from where it was. `None` where the
+/// path does not enter (they started overlapping, or pass by).
+fn entry_normal(start: Vector3<f64>, end: Vector3<f64>, reach: f64) -> Option<Vector3<f64>> {
+    let travel = end - start;
+    let len2 = travel.norm_squared();
+    if !(len2 > 0.0 && reach > 0.0) || start.norm_squared() <= reach * reach {
+        return None;
+    }
+    // |start + travel u| = reach: u^2 |travel|^2 + 2 u start.travel + |start|^2 - reach^2 = 0;
+    // from outside, the entry is the smaller root.
+    let b = start.dot(&travel);
+    let disc = b * b - len2 * (start.norm_squared() - reach * reach);
+    if disc < 0.0 {
+        return None;
+    }
+    let u = (-b - disc.sqrt()) / len2;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let n = (start + travel * u) / reach;
+    n.iter().all(|c| c.is_finite()).then_some(n)
+}
+
 /// Did two balls out of rapier's solver meet in the step, given their centres' offset `d`
 /// (b less a) and relative velocity `dv` at its end? They may have passed into or through
 /// each other: they met if they overlap now, or if on the way their centres came within
 /// reach: by their relative motion over the step (straight, as out of the solver), or on the
 /// straight line from where one started relative to the other to where it ended. Centres
-/// The unit line of centres (from the first ball to the second) where two balls of contact
-/// radii summing to `reach` started to overlap, taking their offset `d` at the step's end
-/// (second minus first) back along their relative velocity `dv` at the step's end: the
-/// entry of the straight relative path into the sphere of radius `reach`, if it lies within
-/// the last `dt` seconds. Both balls fall alike, so gravity leaves their relative path
-/// straight; the end's line of centres, after the balls ran up to `|dv| dt` into each other,
-/// can be tens of degrees off it (and with it the impulse's direction). `None` where the
-/// path does not enter within the step (no overlap on it, or they started overlapping).
-fn entry_normal(d: Vector3<f64>, dv: Vector3<f64>, reach: f64, dt: f64) -> Option<Vector3<f64>> {
-    let speed2 = dv.norm_squared();
-    if !(speed2 > 0.0 && reach > 0.0) {
-        return None;
-    }
-    // |d - dv s| = reach: s^2 |dv|^2 - 2 s d.dv + |d|^2 - reach^2 = 0; the entry, back in
-    // time, is the larger root.
-    let b = d.dot(&dv);
-    let disc = b * b - speed2 * (d.norm_squared() - reach * reach);
-    if disc < 0.0 {
-        return None;
-    }
-    let s = (b + disc.sqrt()) / speed2;
-    if !(s > 0.0 && s <= dt) {
-        return None;
-    }
-    let n = (d - dv * s) / reach;
-    n.iter().all(|c| c.is_finite()).then_some(n)
-}
-
 /// that crossed the line of centres they started on met there too when the relative motion
 /// bent on the way (a ball that passed through the other and bounced off the ground); moving
 /// straight, they passed each other farther apart than the reach.

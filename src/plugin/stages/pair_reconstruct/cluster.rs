@@ -316,6 +316,10 @@ impl<'c, 'a> Run<'c, 'a> {
         )?;
         let settled = event.settled;
         view.commit.event(event);
+        // A ball sent off may drive into a pair it rested in.
+        for q in &self.pairs_of[k] {
+            self.resting[*q] = false;
+        }
         let before = self.moving[k];
         if let Motion::Rolling(_) = before.motion {
             let cluster = Cluster::of(&self.context, &self.balls);
