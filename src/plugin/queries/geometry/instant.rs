@@ -464,10 +464,62 @@ mod tests {
     use crate::motion::State;
     use crate::parry::bounding_volume::Aabb;
     use crate::parry::shape::Cuboid;
+    use crate::plugin::bridge::convert::to_real;
     use crate::plugin::queries::ground_index::GroundMotion;
     use crate::rapier::math::Vector;
     use crate::rapier::prelude::ColliderHandle;
     use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+
+    /// The contact (signed distance, normal) of a cuboid body of half extents `body` at
+    /// centre `com`, turned by `about_z` (rad) about the `z` axis, with a still plate of half
+    /// extents `plate` whose top is at `y = 0`.
+    fn plate_contact(
+        plate: [f64; 3],
+        body: [f64; 3],
+        com: [f64; 3],
+        about_z: f64,
+    ) -> (f64, Vector3<f64>) {
+        let v = |a: [f64; 3]| Vector::new(to_real(a[0]), to_real(a[1]), to_real(a[2]));
+        let plate_shape = Cuboid::new(v(plate));
+        let pose = Isometry3::translation(0.0, -plate[1], 0.0);
+        let motion = GroundMotion {
+            handle: ColliderHandle::invalid(),
+            body: None,
+            com0: pose.translation.vector,
+            rot0: UnitQuaternion::identity(),
+            local: Isometry3::identity(),
+            pose0: pose,
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            aabb: Aabb::new_invalid(),
+            plane: None,
+            slab: None,
+        };
+        let ground = GroundGeom {
+            handle: ColliderHandle::invalid(),
+            shape: &plate_shape,
+            skin: 0.0,
+            motion: &motion,
+            skip: Vec::new(),
+        };
+        let body_shape = Cuboid::new(v(body));
+        let part = BodyPart {
+            handle: ColliderHandle::invalid(),
+            shape: &body_shape,
+            local: Isometry3::identity(),
+            skin: 0.0,
+        };
+        let s = State {
+            com: Vector3::from(com),
+            rot: UnitQuaternion::from_euler_angles(0.0, 0.0, about_z),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        };
+        let (dist, n, _) = contact_checked(&part, &ground, &s, 0.0, 0.0)
+            .unwrap()
+            .expect("the body is inside the plate");
+        (dist, n)
+    }
 
     /// A long bar lies across a plate's side edge, sloping gently down past it: its bottom
     /// edge is 4 mm under the plate's top at its inner end and 6 mm at the side. Its contact
@@ -477,97 +529,24 @@ mod tests {
     /// the floor under the tiles).
     #[test]
     fn a_bar_across_a_plates_edge_is_out_of_its_top() {
-        let plate = Cuboid::new(Vector::new(2.0, 0.05, 2.0));
-        let pose = Isometry3::translation(0.0, -0.05, 0.0);
-        let motion = GroundMotion {
-            handle: ColliderHandle::invalid(),
-            body: None,
-            com0: pose.translation.vector,
-            rot0: UnitQuaternion::identity(),
-            local: Isometry3::identity(),
-            pose0: pose,
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-            aabb: Aabb::new_invalid(),
-            plane: None,
-            slab: None,
-        };
-        let ground = GroundGeom {
-            handle: ColliderHandle::invalid(),
-            shape: &plate,
-            skin: 0.0,
-            motion: &motion,
-            skip: Vec::new(),
-        };
-        let bar = Cuboid::new(Vector::new(0.14, 0.035, 0.01));
-        let part = BodyPart {
-            handle: ColliderHandle::invalid(),
-            shape: &bar,
-            local: Isometry3::identity(),
-            skin: 0.0,
-        };
-        let s = State {
-            com: Vector3::new(2.02, 0.0286, 0.3),
-            rot: UnitQuaternion::from_euler_angles(0.0, 0.0, -0.02),
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-        };
-        let (dist, n, _) = contact_checked(&part, &ground, &s, 0.0, 0.0)
-            .unwrap()
-            .expect("the bar is inside the plate");
+        let plate = [2.0, 0.05, 2.0];
+        let (dist, n) = plate_contact(plate, [0.14, 0.035, 0.01], [2.02, 0.0286, 0.3], -0.02);
         assert!(n.y > 0.99, "out of the top: {n:?} at {dist}");
         assert!((-0.01..0.0).contains(&dist), "{dist}");
     }
 
     /// A cube pierces a thin plate near its edge from above: its centre over the top, its
-    /// lowest corner beyond the plate's side and its bottom below the plate's underside. Its
-    /// contact is the top face's, as parry finds it: the deepest point of the cube, below the
-    /// plate, must not send it to the underside, 0.8 m deeper (a tumbling box dropped through
-    /// a floor of tiles was resolved against the underside and thrown down through it).
+    /// lowest corner beyond the plate's side (tilted about `z`) and its bottom below the
+    /// plate's underside. Its contact is on the top's side, as parry finds it: the deepest
+    /// point of the cube, below the plate, must not send it to the underside, 0.45 m deep (a
+    /// tumbling box dropped through a floor of tiles was resolved against the underside and
+    /// thrown down through it).
     #[test]
     fn a_body_piercing_a_thin_plate_from_above_is_out_of_its_top() {
-        let plate = Cuboid::new(Vector::new(1.0, 0.05, 1.0));
-        let pose = Isometry3::translation(0.0, -0.05, 0.0);
-        let motion = GroundMotion {
-            handle: ColliderHandle::invalid(),
-            body: None,
-            com0: pose.translation.vector,
-            rot0: UnitQuaternion::identity(),
-            local: Isometry3::identity(),
-            pose0: pose,
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-            aabb: Aabb::new_invalid(),
-            plane: None,
-            slab: None,
-        };
-        let ground = GroundGeom {
-            handle: ColliderHandle::invalid(),
-            shape: &plate,
-            skin: 0.0,
-            motion: &motion,
-            skip: Vec::new(),
-        };
-        let cube = Cuboid::new(Vector::new(0.2, 0.2, 0.2));
-        let part = BodyPart {
-            handle: ColliderHandle::invalid(),
-            shape: &cube,
-            local: Isometry3::identity(),
-            skin: 0.0,
-        };
-        // Tilted about z so that its lowest corner is at x > 1, past the plate's side.
-        let s = State {
-            com: Vector3::new(0.95, 0.1, 0.3),
-            rot: UnitQuaternion::from_euler_angles(0.0, 0.0, -0.3),
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-        };
-        let (dist, n, _) = contact_checked(&part, &ground, &s, 0.0, 0.0)
-            .unwrap()
-            .expect("the cube is inside the plate");
+        let plate = [1.0, 0.05, 1.0];
+        let (dist, n) = plate_contact(plate, [0.2, 0.2, 0.2], [0.95, 0.1, 0.3], -0.3);
         // The cube's corner hangs past the side, so the top face does not hold it and parry's
-        // contact stands: along the cube's own tilted face, 0.12 m deep. The underside would
-        // be 0.45 m deep.
+        // contact stands: along the cube's own tilted face, 0.12 m deep.
         assert!(n.y > 0.9, "out of the top side: {n:?} at {dist}");
         assert!((-0.25..0.0).contains(&dist), "{dist}");
     }
