@@ -42,6 +42,13 @@ pub(crate) const LOADED_COS: f64 = 0.5;
 /// pair stays rapier's resting contact.
 pub(crate) const CHAIN_MAX_TILT_SIN: f64 = 0.1;
 
+/// May an impact between two bodies of these dominance groups (rapier's effective groups) be
+/// the model's? Only of one group: rapier lets a contact between bodies of two groups push
+/// only the lower one, as if the other's mass were infinite, so such a pair stays rapier's.
+pub(crate) fn model_may_pair(dominance_a: i16, dominance_b: i16) -> bool {
+    dominance_a == dominance_b
+}
+
 /// A pair of bodies out of rapier's solver whose relative velocity changed over the step by
 /// more than this fraction of it (a bounce off the ground, a third body's impact) did not
 /// move straight relative to each other: at the step's end, centres that crossed the line

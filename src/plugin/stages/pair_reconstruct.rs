@@ -43,7 +43,7 @@ use cluster::{Admitted, Joined, Joining, Unmoved};
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::config::TimingMode;
-use crate::plugin::policy::{EndCheck, Role};
+use crate::plugin::policy::{EndCheck, Role, model_may_pair};
 use crate::plugin::queries::geometry::{BodyGeom, GroundGeom};
 use crate::plugin::queries::observe::{body_geom, centred_ball, held_or_by_unseen};
 use crate::plugin::stages::commit::Origin;
@@ -72,12 +72,12 @@ pub(crate) struct NearBodies<'a> {
 
 impl NearBodies<'_> {
     /// May the pair of `a` and `b`, not planned, be the model's: rapier would solve it, the
-    /// user's filter accepts it, and rapier's contacts weigh the two alike (one dominance
-    /// group: a pair of two is rapier's, `pair_plan`)?
+    /// user's filter accepts it, and their dominance groups allow it (`model_may_pair`)?
     pub fn may_pair(&self, a: RigidBodyHandle, b: RigidBodyHandle) -> bool {
         let group =
             |h: RigidBodyHandle| self.bodies.get(h).map(|rb| rb.effective_dominance_group());
-        group(a) == group(b) && !(self.refused)(a, b)
+        let groups = group(a).zip(group(b));
+        groups.is_some_and(|(ga, gb)| model_may_pair(ga, gb)) && !(self.refused)(a, b)
     }
 }
 

@@ -10,7 +10,7 @@ use crate::motion::State;
 use crate::plugin::bridge::convert::{to_real, vec_from_na};
 use crate::plugin::bridge::resolve::material;
 use crate::plugin::policy::rests_at;
-use crate::plugin::policy::{LOADED_COS, Role};
+use crate::plugin::policy::{LOADED_COS, Role, model_may_pair};
 use crate::plugin::queries::body_contact::body_contact;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
@@ -374,9 +374,11 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// the impact on), or it is hooked and rapier would not solve it or the user's filter
     /// refuses it. Reads only; the caller adds the pair.
     pub(super) fn evaluate(&self, i: usize, j: usize, chain: bool) -> Option<PlannedPair> {
-        // rapier lets a contact between bodies of two dominance groups push only the lower
-        // one, as if the other's mass were infinite: such a pair stays rapier's.
-        if self.members.balls[i].dominance != self.members.balls[j].dominance {
+        let (di, dj) = (
+            self.members.balls[i].dominance,
+            self.members.balls[j].dominance,
+        );
+        if !model_may_pair(di, dj) {
             return None;
         }
         let Approach {
