@@ -162,9 +162,7 @@ pub(crate) fn move_clusters(
                     .flatten()?;
                 Some(Admitted {
                     balls,
-                    met: group.met,
-                    pairs: group.pairs.to_vec(),
-                    cluster: group.cluster,
+                    group: group.into_owned(),
                 })
             };
             let joining = Joining { admit: &admit };
@@ -238,20 +236,7 @@ impl<'c> Growing<'c> {
     /// The bodies that joined the cluster on the way (`through_pair_impacts`), in the order
     /// they joined: a cluster moved again starts with them.
     fn joined(&mut self, joined: Vec<Joined>, absorbed: &mut [bool]) {
-        for group in joined {
-            let Joined {
-                member,
-                bodies,
-                met,
-                pairs,
-                cluster,
-            } = group;
-            let group = Group {
-                bodies: Cow::Owned(bodies),
-                pairs: Cow::Owned(pairs),
-                met,
-                cluster,
-            };
+        for Joined { member, group } in joined {
             self.add(member, &group, absorbed);
         }
     }
@@ -295,14 +280,26 @@ impl<'c> Growing<'c> {
 
 /// The bodies that come with a body met from outside a cluster: it alone, or the whole of
 /// its later cluster.
-struct Group<'c> {
-    bodies: Cow<'c, [RigidBodyHandle]>,
+pub(crate) struct Group<'c> {
+    pub bodies: Cow<'c, [RigidBodyHandle]>,
     /// Their `Impact` pairs, as indices into `bodies`.
-    pairs: Cow<'c, [(usize, usize)]>,
+    pub pairs: Cow<'c, [(usize, usize)]>,
     /// The body met, as an index in `bodies`.
-    met: usize,
+    pub met: usize,
     /// Its cluster, if it has one (a later one).
-    cluster: Option<usize>,
+    pub cluster: Option<usize>,
+}
+
+impl Group<'_> {
+    /// The same group, owning its lists (kept past the step's clusters' borrow).
+    fn into_owned(self) -> Group<'static> {
+        Group {
+            bodies: Cow::Owned(self.bodies.into_owned()),
+            pairs: Cow::Owned(self.pairs.into_owned()),
+            met: self.met,
+            cluster: self.cluster,
+        }
+    }
 }
 
 /// What comes with `other`, met by a body of cluster `cluster`, where it can be moved with

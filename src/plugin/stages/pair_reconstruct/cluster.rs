@@ -3,7 +3,7 @@
 //! then on to the next (see the parent module's contract).
 
 use super::agenda::{Agenda, Next};
-use super::{ClusterBall, NearBodies};
+use super::{ClusterBall, Group, NearBodies};
 use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
 use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
@@ -40,15 +40,11 @@ pub(crate) enum Unmoved {
 }
 
 /// Bodies from outside a cluster that may join its run where a member of it meets one of
-/// them: the body met, alone or with the rest of its own cluster.
+/// them: the body met, alone or with the rest of its own cluster (`group`), and their balls,
+/// in `group`'s order.
 pub(crate) struct Admitted<'s> {
     pub balls: Vec<ClusterBall<'s>>,
-    /// The body met, as an index in `balls`.
-    pub met: usize,
-    /// Their `Impact` pairs, as indices into `balls`.
-    pub pairs: Vec<(usize, usize)>,
-    /// The step's cluster they are, if any (its index among the step's clusters).
-    pub cluster: Option<usize>,
+    pub group: Group<'static>,
 }
 
 /// The bodies that come with a body a member of a moving cluster reaches from outside it,
@@ -61,13 +57,10 @@ pub(crate) struct Joining<'x, 's> {
 }
 
 /// Bodies that joined a cluster's run: the member that met them, and what was admitted (its
-/// balls given to the run, their bodies kept here).
+/// balls given to the run).
 pub(crate) struct Joined {
     pub member: usize,
-    pub bodies: Vec<RigidBodyHandle>,
-    pub met: usize,
-    pub pairs: Vec<(usize, usize)>,
-    pub cluster: Option<usize>,
+    pub group: Group<'static>,
 }
 
 /// What moving a cluster gave: its bodies (those it started with, then those that joined it
@@ -485,14 +478,8 @@ impl<'c, 'a> Run<'c, 'a> {
         let Some(admitted) = (joining.admit)(view, body) else {
             return Some(None);
         };
-        let Admitted {
-            balls,
-            met,
-            pairs,
-            cluster,
-        } = admitted;
+        let Admitted { balls, group } = admitted;
         let base = self.balls.len();
-        let bodies: Vec<RigidBodyHandle> = balls.iter().map(|b| b.cand.body).collect();
         self.moving.extend(balls.iter().map(start_moving));
         self.balls.extend(balls);
         let first = self.pairs.len();
@@ -502,7 +489,8 @@ impl<'c, 'a> Run<'c, 'a> {
                 .map(|j| cluster.ground(j, &self.moving[j], 0.0))
                 .collect::<Result<_, _>>()
                 .ok()?;
-            let touches: Vec<_> = pairs
+            let touches: Vec<_> = group
+                .pairs
                 .iter()
                 .enumerate()
                 .map(|(q, (i, j))| {
@@ -527,7 +515,7 @@ impl<'c, 'a> Run<'c, 'a> {
             self.agenda.add_body();
             self.agenda.ground(j, ground);
         }
-        for ((i, j), touch) in pairs.iter().zip(touches) {
+        for ((i, j), touch) in group.pairs.iter().zip(touches) {
             let p = self.pairs.len();
             self.pairs.push((base + i, base + j));
             self.pairs_of[base + i].push(p);
@@ -536,14 +524,9 @@ impl<'c, 'a> Run<'c, 'a> {
             self.agenda.add_pair();
             self.agenda.touch(p, touch);
         }
-        self.joined.push(Joined {
-            member: k,
-            bodies,
-            met,
-            pairs,
-            cluster,
-        });
-        Some(Some(base + met))
+        let met = base + group.met;
+        self.joined.push(Joined { member: k, group });
+        Some(Some(met))
     }
 
     /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
