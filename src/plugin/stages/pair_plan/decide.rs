@@ -96,9 +96,9 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// Member `k` against the grounds near it at the step's start (parry's contact with each
     /// ground near its swept sphere): whether it lies on one (within the resting gap, not
     /// approaching faster than the held speed, what rapier's resting contact leaves), and if
-    /// not, its velocity reflected off the
-    /// ground it closes on fastest within the step faster than the resting speed (its normal
-    /// speed relative to the ground turned back whole, as `e = 1` would). A body flying onto
+    /// not, its velocity reflected off the ground it closes on fastest within the step faster
+    /// than the resting speed (its normal speed relative to the ground turned back whole, as
+    /// `e = 1` would). A body flying onto
     /// a ground can turn onto a neighbour it was not closing on at the step's start (a ball
     /// dropped with another on top of it): its pairs are judged at that velocity too. A
     /// ball lying on a ground (rolling into a wall, say) is the rolling's and the bodies
