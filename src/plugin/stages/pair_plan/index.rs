@@ -18,6 +18,11 @@ use crate::rapier::prelude::RigidBodyHandle;
 pub(crate) struct PairIndex {
     tree: Bvh,
     workspace: BvhWorkspace,
+    /// The buffers of the traversal's sort of its pairs.
+    sort: PairSort,
+    /// How many pairs the last traversal found: the next one's list is sized for a few
+    /// more, rather than grown (and copied) pair by pair.
+    last_found: usize,
     /// The body slots with a leaf in the tree.
     slots: Vec<bool>,
     /// This step's ball (index in its list) by body slot, `u32::MAX` for none.
@@ -57,18 +62,19 @@ impl PairIndex {
         self.tree.optimize_incremental(&mut self.workspace);
     }
 
-    /// Every pair of balls (indices in this step's list, the smaller first) whose boxes meet,
-    /// in increasing order: one traversal of the tree against itself. (The tree's own order
-    /// depends on its history, which a restored plugin does not have.)
-    fn overlapping(&mut self) -> Vec<(usize, usize)> {
-        let mut out = Vec::new();
+    /// Every pair of the `balls` balls (indices in this step's list, the smaller first) whose
+    /// boxes meet, in increasing order: one traversal of the tree against itself. (The tree's
+    /// own order depends on its history, which a restored plugin does not have.)
+    fn overlapping(&mut self, balls: usize) -> Vec<(usize, usize)> {
+        let mut out = Vec::with_capacity(self.last_found + self.last_found / 4 + 16);
         let ball_of = &self.ball_of;
         self.tree
             .traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |s1, s2| {
                 let (i, j) = (ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
                 out.push((i.min(j), i.max(j)));
             });
-        sort_pairs(&mut out);
+        self.sort.sort(&mut out, balls);
+        self.last_found = out.len();
         out
     }
 
@@ -162,7 +168,7 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
     let mover = |k: usize| members.is_mover[k];
     let balls = members.balls.len();
     if members.any_elastic || 3 * members.movers > balls {
-        let all = index.overlapping();
+        let all = index.overlapping(balls);
         // At most every overlapping pair: sized once rather than grown.
         let mut pairs = Vec::with_capacity(all.len());
         pairs.extend(
@@ -184,22 +190,61 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
         }
     }
     // In increasing order, as the traversal's: not the tree's, which depends on its history.
-    sort_pairs(&mut pairs);
+    index.sort.sort(&mut pairs, balls);
     Candidates {
         pairs,
         traversed: None,
     }
 }
 
-/// Sorts pairs of ball indices in increasing order, as one `u64` key each (`i` high, `j`
-/// low: the same order as the tuples', at a fraction of the comparisons' cost). The indices
-/// fit in 32 bits: a step's balls are numbered in `PairIndex::ball_of`'s `u32`s.
-fn sort_pairs(pairs: &mut [(usize, usize)]) {
-    let key = |(i, j): (usize, usize)| ((i as u64) << 32) | j as u64;
-    let mut keys: Vec<u64> = pairs.iter().map(|p| key(*p)).collect();
-    keys.sort_unstable();
-    for (p, k) in pairs.iter_mut().zip(keys) {
-        *p = ((k >> 32) as usize, (k & u64::from(u32::MAX)) as usize);
+/// Sorts pairs of ball indices `(i, j)`, `i < j < balls`, in increasing order: placed in
+/// one bucket per first index (counted, then filled), then each bucket, a ball's few
+/// neighbours, sorted by the second. O(pairs + balls), where comparing whole pairs costs a
+/// factor of log(pairs). Its buffers are kept from step to step (`PairIndex`), so that a
+/// step's sort allocates nothing once they have grown.
+#[derive(Default)]
+struct PairSort {
+    /// Each first index's count, then where its bucket starts, then (filled) where it ends.
+    bucket_end: Vec<usize>,
+    /// The pairs' second indices, bucket after bucket.
+    seconds: Vec<usize>,
+}
+
+impl PairSort {
+    fn sort(&mut self, pairs: &mut [(usize, usize)], balls: usize) {
+        let bucket_end = &mut self.bucket_end;
+        bucket_end.clear();
+        bucket_end.resize(balls, 0);
+        for (i, _) in pairs.iter() {
+            bucket_end[*i] += 1;
+        }
+        let mut sum = 0;
+        for end in bucket_end.iter_mut() {
+            let count = *end;
+            *end = sum;
+            sum += count;
+        }
+        // Every entry is written below before it is read.
+        let seconds = &mut self.seconds;
+        if seconds.len() < pairs.len() {
+            seconds.resize(pairs.len(), 0);
+        }
+        for (i, j) in pairs.iter() {
+            seconds[bucket_end[*i]] = *j;
+            bucket_end[*i] += 1;
+        }
+        let mut k = 0;
+        for (i, end) in bucket_end.iter().enumerate() {
+            let end = *end;
+            // Most buckets hold one pair or none.
+            if end > k + 1 {
+                seconds[k..end].sort_unstable();
+            }
+            while k < end {
+                pairs[k] = (i, seconds[k]);
+                k += 1;
+            }
+        }
     }
 }
 
@@ -234,5 +279,33 @@ impl<'p> Around<'p> {
                 out[from..].sort_unstable();
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PairSort;
+
+    /// The bucket sort orders pairs as a comparison sort of the tuples does, empty buckets,
+    /// repeated first indices and a last ball without pairs included.
+    #[test]
+    fn sort_pairs_orders_as_tuples() {
+        let balls = 40;
+        // A fixed scramble of every pair of a few balls, and some of the others.
+        let mut pairs: Vec<(usize, usize)> = (0..balls)
+            .flat_map(|i| (i + 1..balls - 1).map(move |j| (i, j)))
+            .filter(|(i, j)| (i * 7 + j * 13) % 5 != 0 && (*i < 6 || (i + j) % 9 == 0))
+            .collect();
+        pairs.reverse();
+        let third = pairs.len() / 3;
+        pairs.rotate_left(third);
+        let mut expected = pairs.clone();
+        expected.sort_unstable();
+        let mut sort = PairSort::default();
+        sort.sort(&mut pairs, balls);
+        assert_eq!(pairs, expected);
+        let mut none: Vec<(usize, usize)> = Vec::new();
+        sort.sort(&mut none, balls);
+        assert!(none.is_empty());
     }
 }
