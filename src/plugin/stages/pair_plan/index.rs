@@ -58,7 +58,10 @@ impl PairIndex {
             self.tree.insert_or_update_partially(*aabb, *slot, 0.0);
             self.slots[*slot as usize] = true;
         }
-        self.tree.refit(&mut self.workspace);
+        // The boxes are refitted in place: a full refit also copies the whole tree into
+        // depth-first order in memory, which changes no query's result nor the tree's shape
+        // (which the incremental optimisation keeps balanced).
+        self.tree.refit_without_opt();
         self.tree.optimize_incremental(&mut self.workspace);
     }
 
