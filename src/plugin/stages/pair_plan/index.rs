@@ -23,6 +23,8 @@ pub(crate) struct PairIndex {
     /// How many pairs the last traversal found: the next one's list is sized for a few
     /// more, rather than grown (and copied) pair by pair.
     last_found: usize,
+    /// How many times the tree was updated: its shape is optimised every other update.
+    updates: u64,
     /// The body slots with a leaf in the tree.
     slots: Vec<bool>,
     /// This step's ball (index in its list) by body slot, `u32::MAX` for none.
@@ -62,7 +64,13 @@ impl PairIndex {
         // depth-first order in memory, which changes no query's result nor the tree's shape
         // (which the incremental optimisation keeps balanced).
         self.tree.refit_without_opt();
-        self.tree.optimize_incremental(&mut self.workspace);
+        // Optimising the shape every other step costs less than the little work it saves the
+        // traversals in the step between (the balls move little in a step); a query's result
+        // does not depend on the shape.
+        self.updates += 1;
+        if self.updates % 2 == 0 {
+            self.tree.optimize_incremental(&mut self.workspace);
+        }
     }
 
     /// Every pair of the `balls` balls (indices in this step's list, the smaller first) whose
