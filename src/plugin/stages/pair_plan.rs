@@ -127,7 +127,7 @@ fn plan_members<H: PhysicsHooks>(
 ) -> Planned {
     let judge = Judge::new(inputs, bodies, members, index);
     let mut planned = Planned::default();
-    for (i, j) in found.pairs {
+    for (i, j) in found.to_evaluate(members) {
         if members.balls[i].asleep && members.balls[j].asleep {
             continue;
         }
@@ -135,6 +135,7 @@ fn plan_members<H: PhysicsHooks>(
             planned.add(bodies, pair);
         }
     }
-    expand_chains(&judge, &mut planned, &Around::new(index, found.traversed));
+    let traversed = found.traversed.then_some(found.pairs);
+    expand_chains(&judge, &mut planned, &Around::new(index, traversed));
     planned
 }

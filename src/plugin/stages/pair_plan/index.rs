@@ -161,13 +161,29 @@ impl Overlaps {
 /// The pairs that may meet in the step, found in the index once `update`d with the members'
 /// leaves.
 pub(super) struct Candidates {
-    /// The pairs to evaluate (indices in the members' list, the smaller first), in the order
-    /// the plan evaluates them: every overlapping pair with a mover (any pair where a
-    /// restitution can reach 1).
+    /// Pairs of balls (indices in the members' list, the smaller first) in increasing order:
+    /// every overlapping pair when the tree was traversed against itself (`traversed`), else
+    /// those with a mover.
     pub pairs: Vec<(usize, usize)>,
-    /// Every overlapping pair, when the tree was traversed against itself: the chains read
-    /// each ball's neighbours from it instead of querying the tree again.
-    pub traversed: Option<Vec<(usize, usize)>>,
+    /// `pairs` is every overlapping pair: the chains read each ball's neighbours from it
+    /// instead of querying the tree again.
+    pub traversed: bool,
+}
+
+impl Candidates {
+    /// The pairs to evaluate, in the order the plan evaluates them: every overlapping pair
+    /// with a mover (any pair where a restitution can reach 1).
+    pub(super) fn to_evaluate<'c>(
+        &'c self,
+        members: &'c Members,
+    ) -> impl Iterator<Item = (usize, usize)> + 'c {
+        // Without a traversal the list holds only pairs with a mover.
+        let every = members.any_elastic || !self.traversed;
+        self.pairs
+            .iter()
+            .copied()
+            .filter(move |(i, j)| every || members.is_mover[*i] || members.is_mover[*j])
+    }
 }
 
 /// The step's candidate pairs. Reads the index (its list must be the members') and the
@@ -179,17 +195,9 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
     let mover = |k: usize| members.is_mover[k];
     let balls = members.balls.len();
     if members.any_elastic || 3 * members.movers > balls {
-        let all = index.overlapping(balls);
-        // At most every overlapping pair: sized once rather than grown.
-        let mut pairs = Vec::with_capacity(all.len());
-        pairs.extend(
-            all.iter()
-                .copied()
-                .filter(|(i, j)| members.any_elastic || mover(*i) || mover(*j)),
-        );
         return Candidates {
-            pairs,
-            traversed: Some(all),
+            pairs: index.overlapping(balls),
+            traversed: true,
         };
     }
     let mut pairs = Vec::new();
@@ -204,7 +212,7 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
     index.sort.sort(&mut pairs, balls);
     Candidates {
         pairs,
-        traversed: None,
+        traversed: false,
     }
 }
 
