@@ -119,28 +119,28 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             }
             let (geom, state) = geom_state(m, self.bodies, inputs.colliders);
             let accel = inputs.gravity.dot(&self.down) * self.down;
-            // Each contact's normal and normal speed (negative approaching).
-            let contacts = near.iter().flat_map(|g| {
-                let gg = ground_geom(&inputs.grounds[*g], inputs.colliders);
-                geom.get().parts.iter().filter_map(move |part| {
-                    let gg = gg.as_ref()?;
-                    let (dist, n, point) = contact(part, gg, &state, 0.0, swept)?;
-                    let un = (m.v - gg.velocity_at(&point, 0.0)).dot(&n);
-                    Some((dist, n, un))
-                })
-            });
             let mut fastest: Option<(Vector3<f64>, f64)> = None;
-            for (dist, n, un) in contacts {
-                if dist <= policy.resting_gap && -un <= policy.held_speed {
-                    found.lies = true;
-                    return found;
-                }
-                let an = accel.dot(&n);
-                let arrival = -un - an.min(0.0) * dt;
-                let hits =
-                    closes_within(dist, un, an, dt) && !rests_at(arrival, policy.resting_speed);
-                if hits && fastest.is_none_or(|(_, u)| un < u) {
-                    fastest = Some((n, un));
+            for g in near.iter() {
+                let Some(gg) = ground_geom(&inputs.grounds[*g], inputs.colliders) else {
+                    continue;
+                };
+                for part in geom.get().parts.iter() {
+                    let Some((dist, n, point)) = contact(part, &gg, &state, 0.0, swept) else {
+                        continue;
+                    };
+                    // The normal speed, negative approaching.
+                    let un = (m.v - gg.velocity_at(&point, 0.0)).dot(&n);
+                    if dist <= policy.resting_gap && -un <= policy.held_speed {
+                        found.lies = true;
+                        return found;
+                    }
+                    let an = accel.dot(&n);
+                    let arrival = -un - an.min(0.0) * dt;
+                    let hits =
+                        closes_within(dist, un, an, dt) && !rests_at(arrival, policy.resting_speed);
+                    if hits && fastest.is_none_or(|(_, u)| un < u) {
+                        fastest = Some((n, un));
+                    }
                 }
             }
             found.bounced = fastest.map(|(n, un)| m.v - n * (2.0 * un.min(0.0)));
