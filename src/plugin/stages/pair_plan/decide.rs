@@ -7,13 +7,14 @@ use super::gather::{Ball, Members, geom_state};
 use super::index::PairIndex;
 use super::{PairInputs, pair_key};
 use crate::motion::State;
-use crate::plugin::bridge::convert::{to_real, vec_from_na};
+use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::material;
 use crate::plugin::policy::rests_at;
 use crate::plugin::policy::{LOADED_COS, Role, model_may_pair};
 use crate::plugin::queries::body_contact::body_contact;
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::contact;
+use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
     ground_geom, held_besides, pressed_besides, stacked_besides,
 };
@@ -23,6 +24,18 @@ use crate::plugin::state::step::{PairPlan, PlannedPair};
 use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 use std::cell::OnceCell;
+
+/// At most this many grounds are weighed, for every pair that might ask them, in
+/// [`Judge::bounce_may_lift`]; more grounds are asked for each member's own contacts.
+const STILL_PLANES_MAX: usize = 4;
+
+/// How far a contact normal with a half-space may be from its plane's normal, and a unit
+/// normal's length from 1 (`f32` rounding is a thousand times smaller).
+const PLANE_NORMAL_SLACK: f64 = 1e-4;
+
+/// The rounding of a closing speed's computation, relative to the members' speeds (far above
+/// a few ulps).
+const CLOSING_ROUNDING: f64 = 1e-9;
 
 /// What deciding a pair reads: the stage's inputs, the bodies, the members and the pair
 /// index (its list the members'). Read-only but for its caches (`lying`), which hold answers
@@ -42,6 +55,9 @@ pub(super) struct Judge<'p, 'a, H> {
     /// Member `k` against the grounds near it ([`Self::grounded`]): computed once a step, for
     /// the bodies of a pair looked at.
     grounds: Vec<OnceCell<Grounded>>,
+    /// The grounds' outward normals, when there are at most [`STILL_PLANES_MAX`] grounds and
+    /// each is a half-space that stays still over the step; `None` otherwise.
+    still_planes: Option<Vec<Vector3<f64>>>,
 }
 
 /// A member against the grounds near it at the step's start ([`Judge::grounded`]).
@@ -90,7 +106,26 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                 .unwrap_or_else(Vector3::zeros),
             lying: members.balls.iter().map(|_| OnceCell::new()).collect(),
             grounds: members.balls.iter().map(|_| OnceCell::new()).collect(),
+            still_planes: still_planes(inputs.grounds),
         }
+    }
+
+    /// Could a bounce of a member moving at `speed` (m/s) off a ground raise the closing
+    /// speed of its pair along `normal` above the resting speed, `base` ((v_a - v_b)·normal)
+    /// being the closing speed without it and `speeds` the members' speeds summed? A bounce
+    /// off a still ground of normal `n` turns back the member's normal speed `u = v·n`
+    /// ([`Self::grounded`]): it adds `2 |u| |n·normal|` at most, with `|u| <= |v|`, and a
+    /// contact with a half-space has the plane's normal. `true` (the ground must be asked)
+    /// where some ground is not a still half-space, or for a NaN.
+    fn bounce_may_lift(&self, speed: f64, base: f64, normal: &Vector3<f64>, speeds: f64) -> bool {
+        let Some(planes) = &self.still_planes else {
+            return true;
+        };
+        // Summed rather than the largest taken: at least as large, and a NaN stays one.
+        let tilt: f64 = planes.iter().map(|n| n.dot(normal).abs()).sum();
+        let lift = 2.0 * speed * (tilt + PLANE_NORMAL_SLACK) * (1.0 + PLANE_NORMAL_SLACK);
+        let most = base + lift + CLOSING_ROUNDING * speeds;
+        !rests_at(most, self.inputs.policy.resting_speed)
     }
 
     /// Member `k` against the grounds near it at the step's start (parry's contact with each
@@ -322,15 +357,21 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// not: the cluster moves both through the bounce. `Step` mode resolves pairs at the
     /// step's start, before any bounce. Only for a pair whose speeds could close the gap (a
     /// bounce keeps a body's speed at most), so that most pairs ask no ground.
+    ///
+    /// Where the caller drops a slow pair (`slow_dropped`), a member whose bounce keeps the
+    /// pair slow ([`Self::bounce_may_lift`]) is not asked: the speed returned may then be
+    /// below the exact one, but only where both are slow.
     fn closing_with_bounces(
         &self,
         (i, j): (usize, usize),
         (gap, closing, normal): (f64, f64, &Vector3<f64>),
         forces: f64,
+        slow_dropped: bool,
     ) -> f64 {
         let resting_speed = self.inputs.policy.resting_speed;
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
-        let fastest = a.v.norm() + b.v.norm();
+        let (speed_a, speed_b) = (a.v.norm(), b.v.norm());
+        let fastest = speed_a + speed_b;
         let may_turn = self.inputs.in_step
             && !rests_at(fastest, resting_speed)
             && self.closes(gap, fastest, forces);
@@ -338,8 +379,18 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             return closing;
         }
         let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
-        let bounced_a = self.grounded(i).bounced.map(|va| along(va, b.v));
-        let bounced_b = self.grounded(j).bounced.map(|vb| along(a.v, vb));
+        let base = along(a.v, b.v);
+        let asks = |speed: f64| !slow_dropped || self.bounce_may_lift(speed, base, normal, fastest);
+        let bounced_a = if asks(speed_a) {
+            self.grounded(i).bounced.map(|va| along(va, b.v))
+        } else {
+            None
+        };
+        let bounced_b = if asks(speed_b) {
+            self.grounded(j).bounced.map(|vb| along(a.v, vb))
+        } else {
+            None
+        };
         [bounced_a, bounced_b]
             .into_iter()
             .flatten()
@@ -394,12 +445,14 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let closes_at = |closing: f64| self.closes(gap, closing, forces);
         // rapier's own bounce of the pair is its approach at the step's start.
         let approaching = closing;
-        let closing = self.closing_with_bounces((i, j), (gap, closing, &normal), forces);
+        let slow_dropped = !chain && !self.members.any_elastic;
+        let closing =
+            self.closing_with_bounces((i, j), (gap, closing, &normal), forces, slow_dropped);
         let slow = rests_at(closing, policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
         // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
         // pair is not planned; it leaves before its colliders and contacts are read.
-        if slow && !chain && !self.members.any_elastic {
+        if slow && slow_dropped {
             return None;
         }
         let closes = closes_at(closing);
@@ -460,6 +513,23 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             hooked,
         })
     }
+}
+
+/// The outward normals of `grounds` when there are at most [`STILL_PLANES_MAX`] and each is
+/// a half-space that neither moves nor turns in the step (its points' velocity is zero),
+/// `None` otherwise.
+fn still_planes(grounds: &[GroundMotion]) -> Option<Vec<Vector3<f64>>> {
+    if grounds.len() > STILL_PLANES_MAX {
+        return None;
+    }
+    let still = Vector3::zeros();
+    grounds
+        .iter()
+        .map(|g| match g.plane {
+            Some((n, _)) if g.v == still && g.w == still => Some(vec_to_na(n)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The plan as it grows, and the sleeping bodies it reaches (to wake once planning is done).
