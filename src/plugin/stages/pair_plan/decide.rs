@@ -358,15 +358,15 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// step's start, before any bounce. Only for a pair whose speeds could close the gap (a
     /// bounce keeps a body's speed at most), so that most pairs ask no ground.
     ///
-    /// Where the caller drops a slow pair (`slow_dropped`), a member whose bounce keeps the
-    /// pair slow ([`Self::bounce_may_lift`]) is not asked: the speed returned may then be
-    /// below the exact one, but only where both are slow.
+    /// A member whose bounce keeps the pair's closing speed at most the resting speed
+    /// ([`Self::bounce_may_lift`]) is not asked: the speed returned is then the exact one
+    /// where that is above the resting speed, and at most the resting speed where the exact
+    /// one is (a slow pair's speed is read for nothing else, [`Self::evaluate`]).
     fn closing_with_bounces(
         &self,
         (i, j): (usize, usize),
         (gap, closing, normal): (f64, f64, &Vector3<f64>),
         forces: f64,
-        slow_dropped: bool,
     ) -> f64 {
         let resting_speed = self.inputs.policy.resting_speed;
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
@@ -380,7 +380,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         }
         let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
         let base = along(a.v, b.v);
-        let asks = |speed: f64| !slow_dropped || self.bounce_may_lift(speed, base, normal, fastest);
+        let asks = |speed: f64| self.bounce_may_lift(speed, base, normal, fastest);
         let bounced_a = if asks(speed_a) {
             self.grounded(i).bounced.map(|va| along(va, b.v))
         } else {
@@ -445,17 +445,15 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let closes_at = |closing: f64| self.closes(gap, closing, forces);
         // rapier's own bounce of the pair is its approach at the step's start.
         let approaching = closing;
-        let slow_dropped = !chain && !self.members.any_elastic;
-        let closing =
-            self.closing_with_bounces((i, j), (gap, closing, &normal), forces, slow_dropped);
+        // Exact where not slow (only whether it is slow is read of a slow pair's speed).
+        let closing = self.closing_with_bounces((i, j), (gap, closing, &normal), forces);
         let slow = rests_at(closing, policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
         // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
         // pair is not planned; it leaves before its colliders and contacts are read.
-        if slow && slow_dropped {
+        if slow && !chain && !self.members.any_elastic {
             return None;
         }
-        let closes = closes_at(closing);
         let (ca, cb) = (&inputs.colliders[a.collider], &inputs.colliders[b.collider]);
         // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
         let held_last_step = OnceCell::new();
@@ -489,7 +487,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         // and neither body in a stack. Anything else is rapier's (`Resting`), with e = 0
         // where rapier would bounce it.
         let impact = !slow
-            && closes
+            && closes_at(closing)
             && !policy.rests(gap, closing, was_resting(), pressed)
             && !self.stacked(a, b);
         let hooked = impact || rapier_bounces;
