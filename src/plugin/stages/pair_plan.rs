@@ -127,6 +127,10 @@ fn plan_members<H: PhysicsHooks>(
 ) -> Planned {
     let judge = Judge::new(inputs, bodies, members, index);
     let mut planned = Planned::default();
+    // Sized for last step's count, which the step's is most often close to, rather than
+    // grown (and copied) pair by pair. (Not the roles' map: the order it is walked in, read
+    // by the next step's install, depends on its capacity.)
+    planned.plan.pairs.reserve(inputs.prev.len());
     for (i, j) in found.to_evaluate(members) {
         if members.balls[i].asleep && members.balls[j].asleep {
             continue;
