@@ -124,37 +124,42 @@ impl PairIndex {
 
 /// The pairs whose swept boxes overlap, as each ball's list of the others (both ways).
 pub(super) struct Overlaps {
-    /// Ball `k`'s others are `others[start[k]..start[k + 1]]`.
-    start: Vec<u32>,
+    /// Ball `k`'s others are `others[end[k - 1]..end[k]]` (from 0 for the first ball).
+    end: Vec<u32>,
     others: Vec<u32>,
 }
 
 impl Overlaps {
     /// The lists of `balls` balls from the overlapping `pairs` (each once, either order).
     pub(super) fn new(balls: usize, pairs: &[(usize, usize)]) -> Self {
-        let mut start = vec![0u32; balls + 1];
+        // Each ball's count, then where its list starts, then (filled) where it ends.
+        let mut end = vec![0u32; balls];
         for (i, j) in pairs {
-            start[*i + 1] += 1;
-            start[*j + 1] += 1;
+            end[*i] += 1;
+            end[*j] += 1;
         }
-        for k in 0..balls {
-            start[k + 1] += start[k];
+        let mut sum = 0;
+        for at in end.iter_mut() {
+            let count = *at;
+            *at = sum;
+            sum += count;
         }
-        let mut next = start.clone();
-        let mut others = vec![0u32; start[balls] as usize];
+        let mut others = vec![0u32; sum as usize];
         for (i, j) in pairs {
             for (from, to) in [(*i, *j), (*j, *i)] {
-                others[next[from] as usize] = to as u32;
-                next[from] += 1;
+                others[end[from] as usize] = to as u32;
+                end[from] += 1;
             }
         }
-        Overlaps { start, others }
+        Overlaps { end, others }
     }
 
     /// The balls whose swept boxes overlap ball `k`'s.
     pub(super) fn of(&self, k: usize) -> impl Iterator<Item = usize> + '_ {
-        let range = self.start[k] as usize..self.start[k + 1] as usize;
-        self.others[range].iter().map(|j| *j as usize)
+        let from = if k == 0 { 0 } else { self.end[k - 1] as usize };
+        self.others[from..self.end[k] as usize]
+            .iter()
+            .map(|j| *j as usize)
     }
 }
 
@@ -223,14 +228,21 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
 /// step's sort allocates nothing once they have grown.
 #[derive(Default)]
 struct PairSort {
-    /// Each first index's count, then where its bucket starts, then (filled) where it ends.
-    bucket_end: Vec<usize>,
+    /// Each first index's count, then where its bucket starts, then (filled) where it ends
+    /// (`u32`, half the bytes to clear each step, as the step's balls are numbered in
+    /// `PairIndex::ball_of`'s `u32`s).
+    bucket_end: Vec<u32>,
     /// The pairs' second indices, bucket after bucket.
-    seconds: Vec<usize>,
+    seconds: Vec<u32>,
 }
 
 impl PairSort {
     fn sort(&mut self, pairs: &mut [(usize, usize)], balls: usize) {
+        // More pairs than a `u32` counts: compared whole.
+        if u32::try_from(pairs.len()).is_err() {
+            pairs.sort_unstable();
+            return;
+        }
         let bucket_end = &mut self.bucket_end;
         bucket_end.clear();
         bucket_end.resize(balls, 0);
@@ -249,18 +261,18 @@ impl PairSort {
             seconds.resize(pairs.len(), 0);
         }
         for (i, j) in pairs.iter() {
-            seconds[bucket_end[*i]] = *j;
+            seconds[bucket_end[*i] as usize] = *j as u32;
             bucket_end[*i] += 1;
         }
         let mut k = 0;
         for (i, end) in bucket_end.iter().enumerate() {
-            let end = *end;
+            let end = *end as usize;
             // Most buckets hold one pair or none.
             if end > k + 1 {
                 seconds[k..end].sort_unstable();
             }
             while k < end {
-                pairs[k] = (i, seconds[k]);
+                pairs[k] = (i, seconds[k] as usize);
                 k += 1;
             }
         }
