@@ -95,6 +95,7 @@ pub(crate) fn first_touch(
     t_end: f64,
 ) -> Result<Option<f64>, Stalled> {
     let tol = touch_tolerance(reach);
+    // The gap and its rate at `t`, with both states there (the search's next step reads them).
     let gap_at = |t: f64| {
         let (sa, sb) = (a.at(t), b.at(t));
         let d = sb.com - sa.com;
@@ -104,15 +105,15 @@ pub(crate) fn first_touch(
         } else {
             0.0
         };
-        (len - reach, rate)
+        (len - reach, rate, (sa, sb))
     };
-    let (gap, rate) = gap_at(t);
+    let (gap, rate, states) = gap_at(t);
     if gap <= tol {
         return Ok((rate < 0.0).then_some(t));
     }
     if let (Some(aa), Some(ab)) = (a.motion.uniform_accel(), b.motion.uniform_accel()) {
         if aa == ab {
-            return Ok(uniform_touch(a, b, reach, t, t_end));
+            return Ok(uniform_touch(&states, reach, t, t_end));
         }
     }
     // Conservative advancement: from t the relative speed grows by at most the accelerations'
@@ -124,12 +125,13 @@ pub(crate) fn first_touch(
     let mut t = t;
     let mut gap = gap;
     let mut rate = rate;
+    let mut states = states;
     for _ in 0..MAX_STEPS {
         if gap <= tol {
             return Ok(Some(t));
         }
-        let (sa, sb) = (a.at(t), b.at(t));
-        let accel = a.motion.accel_bound(&sa) + b.motion.accel_bound(&sb);
+        let (sa, sb) = &states;
+        let accel = a.motion.accel_bound(sa) + b.motion.accel_bound(sb);
         let dv = (sb.v - sa.v).norm();
         if dv <= 0.0 && accel <= 0.0 {
             return Ok(None);
@@ -144,34 +146,38 @@ pub(crate) fn first_touch(
         if rate < 0.0 {
             let newton = t - gap / rate;
             if newton > safe && newton <= t_end {
-                let (g, r) = gap_at(newton);
+                let (g, r, s) = gap_at(newton);
                 if g >= -tol {
-                    (t, gap, rate) = (newton, g, r);
+                    (t, gap, rate, states) = (newton, g, r, s);
                     continue;
                 }
             }
         }
         if next > t_end {
             next = t_end;
-            let (g, r) = gap_at(next);
+            let (g, r, s) = gap_at(next);
             if g > tol {
                 return Ok(None);
             }
-            (t, gap, rate) = (next, g, r);
+            (t, gap, rate, states) = (next, g, r, s);
             continue;
         }
-        (t, gap, rate) = {
-            let (g, r) = gap_at(next);
-            (next, g, r)
+        (t, gap, rate, states) = {
+            let (g, r, s) = gap_at(next);
+            (next, g, r, s)
         };
     }
     Err(Stalled)
 }
 
-/// [`first_touch`] for a uniform relative motion: the smaller root of
-/// `|dx + dv s|^2 = reach^2`, written without cancellation.
-fn uniform_touch(a: &Moving, b: &Moving, reach: f64, t: f64, t_end: f64) -> Option<f64> {
-    let (sa, sb) = (a.at(t), b.at(t));
+/// [`first_touch`] for a uniform relative motion, from both balls' states at `t`: the
+/// smaller root of `|dx + dv s|^2 = reach^2`, written without cancellation.
+fn uniform_touch(
+    (sa, sb): &(State, State),
+    reach: f64,
+    t: f64,
+    t_end: f64,
+) -> Option<f64> {
     let dx = sb.com - sa.com;
     let dv = sb.v - sa.v;
     let qa = dv.norm_squared();
