@@ -172,12 +172,7 @@ pub(crate) fn first_touch(
 
 /// [`first_touch`] for a uniform relative motion, from both balls' states at `t`: the
 /// smaller root of `|dx + dv s|^2 = reach^2`, written without cancellation.
-fn uniform_touch(
-    (sa, sb): &(State, State),
-    reach: f64,
-    t: f64,
-    t_end: f64,
-) -> Option<f64> {
+fn uniform_touch((sa, sb): &(State, State), reach: f64, t: f64, t_end: f64) -> Option<f64> {
     let dx = sb.com - sa.com;
     let dv = sb.v - sa.v;
     let qa = dv.norm_squared();

@@ -130,6 +130,8 @@ fn move_cluster<'s>(
     meets: &mut Option<(usize, RigidBodyHandle)>,
 ) -> Option<Vec<State>> {
     let mut events = 0usize;
+    // The members near a changed body's way on, kept across the events.
+    let mut way = WayOn::new();
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
         // Each body's share, the bodies joined on the way included.
@@ -148,7 +150,8 @@ fn move_cluster<'s>(
         // one that joins it, pairs with it in a search from here (until then, both moved as
         // the pair plan had them apart); any other moves the cluster again with it.
         for &k in &changed[..count] {
-            while let Some(other) = run.meets_other_body(k, te) {
+            run.way_on(k, te, &mut way);
+            while let Some(other) = run.meets_other_body(k, &mut way) {
                 let j = match other {
                     Reached::Member(j) => j,
                     Reached::Outside(body) => match run.join(view, joining, k, body, te)? {
@@ -176,11 +179,10 @@ struct Context<'c> {
     step: &'c EndOfStep<'c>,
 }
 
-/// A cluster's motion's reads: its context and its bodies as they stand.
+/// A cluster's motion's reads: its colliders, its step and its bodies as they stand.
 #[derive(Clone, Copy)]
 struct Cluster<'c, 'a> {
     colliders: &'c ColliderSet,
-    near: &'c NearBodies<'c>,
     balls: &'c [ClusterBall<'a>],
     step: &'c EndOfStep<'c>,
 }
@@ -189,7 +191,6 @@ impl<'c, 'a> Cluster<'c, 'a> {
     fn of(context: &Context<'c>, balls: &'c [ClusterBall<'a>]) -> Self {
         Cluster {
             colliders: context.colliders,
-            near: context.near,
             balls,
             step: context.step,
         }
@@ -202,6 +203,32 @@ enum Reached {
     Member(usize),
     /// A member of the pair plan outside the cluster.
     Outside(RigidBodyHandle),
+}
+
+/// A changed body's way on: its centre and velocity where its motion changed, and the pair
+/// plan's members near the way ([`Run::way_on`]).
+struct WayOn {
+    com: nalgebra::Vector3<f64>,
+    v: nalgebra::Vector3<f64>,
+    near: Vec<NearLeaf>,
+}
+
+impl WayOn {
+    fn new() -> Self {
+        Self {
+            com: nalgebra::Vector3::zeros(),
+            v: nalgebra::Vector3::zeros(),
+            near: Vec::new(),
+        }
+    }
+}
+
+/// A member of the pair plan near a body's way on: its slot and swept box, and whether its
+/// pair with the body may be the model's, once asked.
+struct NearLeaf {
+    slot: u32,
+    aabb: Aabb,
+    may_pair: Option<bool>,
 }
 
 /// A touch slower than the resting speed: a resting contact from there on.
@@ -405,59 +432,78 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(())
     }
 
-    /// A body that body `k`, its motion changed at `t`, may reach before the step's end and
-    /// has no pair with in the cluster, if any: a member of the pair plan whose swept box in
-    /// the pair index (its travel over the step from its start-of-step motion, the plan's
-    /// margin included), widened by `k`'s bounding radius and its acceleration's bow, the
-    /// segment of `k`'s way on (from its centre at `t` along its velocity to the step's end)
-    /// crosses. A body of the cluster so found joins a pair whose search decides; one outside
-    /// it must also be closing on `k` (its velocity as rapier's step leaves it), as moving
-    /// it with the cluster moves the whole cluster again. Reads only.
-    fn meets_other_body(&self, k: usize, t: f64) -> Option<Reached> {
-        let cluster = Cluster::of(&self.context, &self.balls);
-        let (ball, step) = (&cluster.balls[k], cluster.step);
+    /// The pair plan's members near body `k`'s way on from `t`, its motion changed there,
+    /// into `way` (see [`Run::meets_other_body`]): those whose swept box in the pair index
+    /// (its travel over the step from its start-of-step motion, the plan's margin included),
+    /// widened by `k`'s bounding radius and its acceleration's bow, the segment of `k`'s way
+    /// on (from its centre at `t` along its velocity to the step's end) crosses, `k` itself
+    /// left out, in the order of their slots. Reads only.
+    fn way_on(&self, k: usize, t: f64, way: &mut WayOn) {
+        let (ball, step) = (&self.balls[k], self.context.step);
         let s = self.moving[k].at(t);
         let left = step.dt - t;
         let widen = ball.geom.radius + ball.cand.flight.accel.norm() * left * left;
-        let way = s.v * left;
-        let end = s.com + way;
+        let path = s.v * left;
+        let end = s.com + path;
         let query = Aabb::new(
             vec_from_na(&s.com.inf(&end).add_scalar(-widen)),
             vec_from_na(&s.com.sup(&end).add_scalar(widen)),
         );
-        let slot = |b: usize| cluster.balls[b].cand.body.slot() as u32;
-        let own = slot(k);
+        let own = ball.cand.body.slot() as u32;
+        (way.com, way.v) = (s.com, s.v);
+        way.near.clear();
+        way.near.extend(
+            self.context
+                .near
+                .index
+                .leaves_meeting(&query)
+                .filter(|(slot, aabb)| *slot != own && segment_crosses(&s.com, &path, aabb, widen))
+                .map(|(slot, aabb)| NearLeaf {
+                    slot,
+                    aabb,
+                    may_pair: None,
+                }),
+        );
+        // The lowest slot first: the tree's order depends on its history, which a restored
+        // plugin does not have.
+        way.near.sort_unstable_by_key(|leaf| leaf.slot);
+    }
+
+    /// A body that body `k`, its motion changed where `way` was found ([`Run::way_on`]), may
+    /// reach before the step's end and has no pair with in the cluster, if any: the one of
+    /// lowest slot among those near its way on. A body of the cluster so found joins a pair
+    /// whose search decides; one outside it must also be closing on `k` (its velocity as
+    /// rapier's step leaves it), as moving it with the cluster moves the whole cluster
+    /// again. Whether a pair may be the model's is asked once per body near the way (kept in
+    /// `way`), as the cluster grows by what this finds. Reads only.
+    fn meets_other_body(&self, k: usize, way: &mut WayOn) -> Option<Reached> {
+        let (balls, near) = (&self.balls, self.context.near);
+        let body_k = balls[k].cand.body;
         let partner = |q: &usize| {
             let (a, b) = self.pairs[*q];
-            slot(if a == k { b } else { a })
+            balls[if a == k { b } else { a }].cand.body.slot() as u32
         };
-        // The lowest slot of those found: the tree's order depends on its history, which a
-        // restored plugin does not have.
-        cluster
-            .near
-            .index
-            .leaves_meeting(&query)
-            .filter(|(slot, aabb)| {
-                *slot != own
-                    && !self.pairs_of[k].iter().any(|q| partner(q) == *slot)
-                    && segment_crosses(&s.com, &way, aabb, widen)
-            })
-            .filter_map(|(slot, aabb)| {
-                let (rb, body) = cluster.near.bodies.get_unknown_gen(slot)?;
-                if !cluster.near.may_pair(ball.cand.body, body) {
-                    return None;
+        let (com, v) = (way.com, way.v);
+        way.near.iter_mut().find_map(|leaf| {
+            let slot = leaf.slot;
+            if self.pairs_of[k].iter().any(|q| partner(q) == slot) {
+                return None;
+            }
+            let (rb, body) = near.bodies.get_unknown_gen(slot)?;
+            let mut may_pair = || {
+                *leaf
+                    .may_pair
+                    .get_or_insert_with(|| near.may_pair(body_k, body))
+            };
+            match self.by_slot.get(&slot) {
+                Some(j) => may_pair().then_some(Reached::Member(*j)),
+                None => {
+                    let towards = vec_to_na(leaf.aabb.center()) - com;
+                    let closing = towards.dot(&(v - vec_to_na(rb.linvel()))) > 0.0;
+                    (closing && may_pair()).then_some(Reached::Outside(body))
                 }
-                match self.by_slot.get(&slot) {
-                    Some(j) => Some((slot, Reached::Member(*j))),
-                    None => {
-                        let towards = vec_to_na(aabb.center()) - s.com;
-                        let closing = towards.dot(&(s.v - vec_to_na(rb.linvel()))) > 0.0;
-                        closing.then_some((slot, Reached::Outside(body)))
-                    }
-                }
-            })
-            .min_by_key(|(slot, _)| *slot)
-            .map(|(_, reached)| reached)
+            }
+        })
     }
 
     /// Takes `body` into the cluster, a body from outside it that member `k`, its motion
