@@ -144,14 +144,19 @@ pub(crate) fn move_clusters(
         }
         let mut growing = Growing::new(c, members, pairs);
         let from = view.commit.reported().len();
+        // The balls of the members so far, in their order: a cluster moved again keeps them
+        // (nothing they read changes before the clusters are written) and checks and
+        // builds only the bodies it took in.
+        let mut balls = Vec::new();
         let moved = loop {
-            let members = &growing.members;
-            if !moves_alone(view, (bodies, colliders), &cands, members) {
+            let taken_in = &growing.members[balls.len()..];
+            if !moves_alone(view, (bodies, colliders), &cands, taken_in) {
                 break None;
             }
-            let Some(balls) = cluster_balls(view, bodies, colliders, &cands, members) else {
+            let Some(more) = cluster_balls(view, bodies, colliders, &cands, taken_in) else {
                 break None;
             };
+            balls.extend(more);
             // A body met on the way, alone or with its later cluster, that moves alone and
             // was not moved yet, joins the run.
             let admit = |view: &AfterStep, other: RigidBodyHandle| {
@@ -168,12 +173,16 @@ pub(crate) fn move_clusters(
             let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
             runs += 1;
-            let moved = through_pair_impacts(view, context, balls, &growing.pairs, &joining);
+            let started = std::mem::take(&mut balls);
+            let moved = through_pair_impacts(view, context, started, &growing.pairs, &joining);
             growing.joined(moved.joined, &mut absorbed);
             match moved.ends {
                 Ok(ends) => break Some((moved.balls, ends)),
                 Err(Unmoved::GaveUp) => break None,
                 Err(Unmoved::Meets { member, other }) => {
+                    // The run's balls: the members', those that joined it included.
+                    debug_assert_eq!(moved.balls.len(), growing.members.len());
+                    balls = moved.balls;
                     let sets = (&clusters, &cands, &written);
                     if !growing.take_in(sets, &mut absorbed, member, other) {
                         break None;
