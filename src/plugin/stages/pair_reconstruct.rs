@@ -38,7 +38,7 @@ mod agenda;
 mod cluster;
 
 pub(crate) use cluster::through_pair_impacts;
-use cluster::{Admitted, Joined, Joining, Unmoved};
+use cluster::{Admitted, Joined, Joining, StartSearches, Unmoved};
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -148,6 +148,7 @@ pub(crate) fn move_clusters(
         // (nothing they read changes before the clusters are written) and checks and
         // builds only the bodies it took in.
         let mut balls = Vec::new();
+        let mut starts = StartSearches::default();
         let moved = loop {
             let taken_in = &growing.members[balls.len()..];
             if !moves_alone(view, (bodies, colliders), &cands, taken_in) {
@@ -173,8 +174,9 @@ pub(crate) fn move_clusters(
             let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
             runs += 1;
-            let started = std::mem::take(&mut balls);
-            let moved = through_pair_impacts(view, context, started, &growing.pairs, &joining);
+            let started = (std::mem::take(&mut balls), &growing.pairs[..]);
+            let searched = std::mem::take(&mut starts);
+            let moved = through_pair_impacts(view, context, started, searched, &joining);
             growing.joined(moved.joined, &mut absorbed);
             match moved.ends {
                 Ok(ends) => break Some((moved.balls, ends)),
@@ -182,7 +184,7 @@ pub(crate) fn move_clusters(
                 Err(Unmoved::Meets { member, other }) => {
                     // The run's balls: the members', those that joined it included.
                     debug_assert_eq!(moved.balls.len(), growing.members.len());
-                    balls = moved.balls;
+                    (balls, starts) = (moved.balls, moved.starts);
                     let sets = (&clusters, &cands, &written);
                     if !growing.take_in(sets, &mut absorbed, member, other) {
                         break None;

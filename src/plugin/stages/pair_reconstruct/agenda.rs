@@ -11,6 +11,7 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 /// What happens next in the cluster.
+#[derive(Clone, Copy)]
 pub(super) enum Next {
     /// Body `k`'s ground impact: its state there, and the hit.
     Ground(usize, State, Hit),

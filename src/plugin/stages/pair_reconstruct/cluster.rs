@@ -65,11 +65,25 @@ pub(crate) struct Joined {
 
 /// What moving a cluster gave: its bodies (those it started with, then those that joined it
 /// on the way, `joined`, in that order), and their states at the step's end, or why it could
-/// not be moved alone.
+/// not be moved alone; and its searches from the step's start, for a run again.
 pub(crate) struct Moved<'s> {
     pub balls: Vec<ClusterBall<'s>>,
     pub joined: Vec<Joined>,
     pub ends: Result<Vec<State>, Unmoved>,
+    pub starts: StartSearches,
+}
+
+/// The first events, searched from the step's start, of a cluster's bodies' grounds and of
+/// its pairs, in the order of its members and of its pairs as the cluster grows (the
+/// bodies and pairs it started with, then for each group that joined it on the way, its
+/// bodies and pairs and the pair of the member that met it): a cluster moved again from its
+/// start with more bodies searches only theirs (each search is a function of the bodies'
+/// start states alone).
+#[derive(Default)]
+pub(crate) struct StartSearches {
+    grounds: Vec<Option<(f64, Next)>>,
+    /// `None` for a pair not searched from the start (a member and the body it met).
+    touches: Vec<Option<Option<(f64, Next)>>>,
 }
 
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
@@ -83,8 +97,8 @@ pub(crate) struct Moved<'s> {
 pub(crate) fn through_pair_impacts<'s>(
     view: &mut AfterStep,
     (colliders, near, step): (&ColliderSet, &NearBodies, &EndOfStep),
-    balls: Vec<ClusterBall<'s>>,
-    pairs: &[(usize, usize)],
+    (balls, pairs): (Vec<ClusterBall<'s>>, &[(usize, usize)]),
+    starts: StartSearches,
     joining: &Joining<'_, 's>,
 ) -> Moved<'s> {
     let events_from = view.commit.reported().len();
@@ -93,12 +107,13 @@ pub(crate) fn through_pair_impacts<'s>(
         near,
         step,
     };
-    let Some(mut run) = Run::start(context, balls, pairs) else {
+    let Some(mut run) = Run::start(context, balls, pairs, starts) else {
         // Not started: no event was pushed.
         return Moved {
             balls: Vec::new(),
             joined: Vec::new(),
             ends: Err(Unmoved::GaveUp),
+            starts: StartSearches::default(),
         };
     };
     let mut meets = None;
@@ -115,6 +130,7 @@ pub(crate) fn through_pair_impacts<'s>(
         balls: run.balls,
         joined: run.joined,
         ends,
+        starts: run.starts,
     }
 }
 
@@ -259,15 +275,18 @@ struct Run<'c, 'a> {
     /// Each body's index by its body's slot.
     by_slot: HandleMap<u32, usize>,
     agenda: Agenda,
+    starts: StartSearches,
 }
 
 impl<'c, 'a> Run<'c, 'a> {
     /// Every body at its start state, rolling or flying, and the first event of each body's
-    /// ground and of each pair; `None` where a search gave up.
+    /// ground and of each pair (those in `starts` as found there, the others searched and
+    /// kept in it); `None` where a search gave up.
     fn start(
         context: Context<'c>,
         balls: Vec<ClusterBall<'a>>,
         pairs: &[(usize, usize)],
+        mut starts: StartSearches,
     ) -> Option<Self> {
         let cluster = Cluster::of(&context, &balls);
         let moving: Vec<Moving> = balls.iter().map(start_moving).collect();
@@ -279,10 +298,29 @@ impl<'c, 'a> Run<'c, 'a> {
         }
         let mut agenda = Agenda::new(balls.len(), pairs.len());
         for (k, m) in moving.iter().enumerate() {
-            agenda.ground(k, cluster.ground(k, m, 0.0).ok()?);
+            let found = match starts.grounds.get(k) {
+                Some(found) => *found,
+                None => {
+                    let found = cluster.ground(k, m, 0.0).ok()?;
+                    starts.grounds.push(found);
+                    found
+                }
+            };
+            agenda.ground(k, found);
         }
+        starts
+            .touches
+            .resize(starts.touches.len().max(pairs.len()), None);
         for (p, pair) in pairs.iter().enumerate() {
-            agenda.touch(p, cluster.touch(p, *pair, &moving, 0.0).ok()?);
+            let found = match starts.touches[p] {
+                Some(found) => found,
+                None => {
+                    let found = cluster.touch(p, *pair, &moving, 0.0).ok()?;
+                    starts.touches[p] = Some(found);
+                    found
+                }
+            };
+            agenda.touch(p, found);
         }
         let by_slot = balls
             .iter()
@@ -300,6 +338,7 @@ impl<'c, 'a> Run<'c, 'a> {
             pairs_of,
             by_slot,
             agenda,
+            starts,
         })
     }
 
@@ -553,6 +592,20 @@ impl<'c, 'a> Run<'c, 'a> {
             self.moving.truncate(base);
             return Some(None);
         }
+        // Searched from the start, as a run again with them would: kept for it, the pair of
+        // `k` and the body met (searched from `te`) left out.
+        debug_assert_eq!(self.starts.grounds.len(), base);
+        self.starts.grounds.extend(&grounds);
+        // Each pair's event named by its index among the cluster's pairs in a run again.
+        let again = self.starts.touches.len();
+        let renamed = touches.iter().enumerate().map(|(q, found)| {
+            Some(found.map(|(t, next)| match next {
+                Next::Touch(_, touch) => (t, Next::Touch(again + q, touch)),
+                ground => (t, ground),
+            }))
+        });
+        self.starts.touches.extend(renamed);
+        self.starts.touches.push(None);
         for (j, ground) in (base..).zip(grounds) {
             self.flights.push(self.balls[j].cand.flight);
             self.pairs_of.push(Vec::new());
