@@ -86,18 +86,18 @@ const MAX_STEPS: usize = 10_000;
 
 /// The first time in `[t, t_end]` at which balls `a` and `b`, whose radii sum to `reach`,
 /// touch while approaching, `Ok(None)` if they do not, or [`Stalled`]. A pair already
-/// touching and approaching at `t` touches at `t`.
+/// touching and approaching at `t` touches at `t`. `states` are the balls' states at `t`
+/// (`a.at(t)`, `b.at(t)`: a caller searching several pairs of a ball advances it once).
 pub(crate) fn first_touch(
-    a: &Moving,
-    b: &Moving,
+    (a, b): (&Moving, &Moving),
+    states: (State, State),
     reach: f64,
     t: f64,
     t_end: f64,
 ) -> Result<Option<f64>, Stalled> {
     let tol = touch_tolerance(reach);
-    // The gap and its rate at `t`, with both states there (the search's next step reads them).
-    let gap_at = |t: f64| {
-        let (sa, sb) = (a.at(t), b.at(t));
+    // The gap and its rate where the balls are at `sa` and `sb`.
+    let gap_of = |(sa, sb): &(State, State)| {
         let d = sb.com - sa.com;
         let len = d.norm();
         let rate = if len > 0.0 {
@@ -105,9 +105,15 @@ pub(crate) fn first_touch(
         } else {
             0.0
         };
-        (len - reach, rate, (sa, sb))
+        (len - reach, rate)
     };
-    let (gap, rate, states) = gap_at(t);
+    // The gap and its rate at `t`, with both states there (the search's next step reads them).
+    let gap_at = |t: f64| {
+        let states = (a.at(t), b.at(t));
+        let (gap, rate) = gap_of(&states);
+        (gap, rate, states)
+    };
+    let (gap, rate) = gap_of(&states);
     if gap <= tol {
         return Ok((rate < 0.0).then_some(t));
     }
@@ -209,6 +215,17 @@ mod tests {
         }
     }
 
+    /// [`first_touch`] from the balls' states at `t`.
+    fn touch(
+        a: &Moving,
+        b: &Moving,
+        reach: f64,
+        t: f64,
+        t_end: f64,
+    ) -> Result<Option<f64>, Stalled> {
+        first_touch((a, b), (a.at(t), b.at(t)), reach, t, t_end)
+    }
+
     fn falling() -> Motion {
         Motion::Flight(Flight {
             accel: Vector3::new(0.0, -9.81, 0.0),
@@ -227,16 +244,16 @@ mod tests {
             Vector3::new(-1.0, 0.0, 0.0),
             falling(),
         );
-        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
+        let t = touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         assert!((t - 0.1).abs() < 1e-15, "{t}");
-        assert_eq!(first_touch(&a, &b, 0.2, 0.0, 0.09), Ok(None));
+        assert_eq!(touch(&a, &b, 0.2, 0.0, 0.09), Ok(None));
         // Moving apart: never.
         let c = ball(
             Vector3::new(0.5, 0.0, 0.0),
             Vector3::new(3.0, 0.0, 0.0),
             falling(),
         );
-        assert_eq!(first_touch(&a, &c, 0.2, 0.0, 1.0), Ok(None));
+        assert_eq!(touch(&a, &c, 0.2, 0.0, 1.0), Ok(None));
     }
 
     #[test]
@@ -258,7 +275,7 @@ mod tests {
             slide,
         );
         let b = ball(Vector3::new(0.6, 0.1, 0.0), Vector3::zeros(), slide);
-        let t = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
+        let t = touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         let gap = (b.at(t).com - a.at(t).com).norm() - 0.2;
         // Touching to rounding (Newton's last step may land a rounding error inside).
         assert!(gap.abs() <= touch_tolerance(0.2), "gap {gap:e} at {t}");
@@ -276,10 +293,10 @@ mod tests {
         };
         let a = ball(Vector3::zeros(), Vector3::new(2.0, 0.3, 0.0), f(1e-300));
         let b = ball(Vector3::new(0.5, 0.0, 0.0), Vector3::zeros(), f(0.0));
-        let searched = first_touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
+        let searched = touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();
         let b0 = ball(Vector3::new(0.5, 0.0, 0.0), Vector3::zeros(), f(0.0));
         let a0 = ball(Vector3::zeros(), Vector3::new(2.0, 0.3, 0.0), f(0.0));
-        let closed = first_touch(&a0, &b0, 0.2, 0.0, 1.0).unwrap().unwrap();
+        let closed = touch(&a0, &b0, 0.2, 0.0, 1.0).unwrap().unwrap();
         assert!((searched - closed).abs() < 1e-12, "{searched} vs {closed}");
     }
 }

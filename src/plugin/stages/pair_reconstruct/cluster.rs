@@ -311,11 +311,14 @@ impl<'c, 'a> Run<'c, 'a> {
         starts
             .touches
             .resize(starts.touches.len().max(pairs.len()), None);
+        // Each body at the start, advanced once for all its pairs.
+        let mut at_start: Vec<Option<State>> = vec![None; balls.len()];
+        let mut at = |k: usize| *at_start[k].get_or_insert_with(|| moving[k].at(0.0));
         for (p, pair) in pairs.iter().enumerate() {
             let found = match starts.touches[p] {
                 Some(found) => found,
                 None => {
-                    let found = cluster.touch(p, *pair, &moving, 0.0).ok()?;
+                    let found = cluster.touch_from(p, *pair, &moving, 0.0, &mut at).ok()?;
                     starts.touches[p] = Some(found);
                     found
                 }
@@ -454,6 +457,13 @@ impl<'c, 'a> Run<'c, 'a> {
             self.agenda
                 .ground(k, cluster.ground(k, &self.moving[k], te).ok()?);
         }
+        // Each changed body at `te`, advanced once for all its pairs.
+        let moving = &self.moving;
+        let mut own: [Option<State>; 2] = [None, None];
+        let mut at = |b: usize| match changed.iter().position(|k| *k == b) {
+            Some(n) => *own[n].get_or_insert_with(|| moving[b].at(te)),
+            None => moving[b].at(te),
+        };
         for (n, &k) in changed.iter().enumerate() {
             for &q in &self.pairs_of[k] {
                 let (a, b) = self.pairs[q];
@@ -463,7 +473,7 @@ impl<'c, 'a> Run<'c, 'a> {
                 let found = if self.resting[q] {
                     None
                 } else {
-                    cluster.touch(q, (a, b), &self.moving, te).ok()?
+                    cluster.touch_from(q, (a, b), moving, te, &mut at).ok()?
                 };
                 self.agenda.touch(q, found);
             }
@@ -702,16 +712,32 @@ impl Cluster<'_, '_> {
     fn touch(
         &self,
         p: usize,
+        pair: (usize, usize),
+        moving: &[Moving],
+        t: f64,
+    ) -> Result<Option<(f64, Next)>, ()> {
+        self.touch_from(p, pair, moving, t, &mut |k| moving[k].at(t))
+    }
+
+    /// [`Cluster::touch`], where `at` gives a body's state at `t` (`moving[k].at(t)`, kept
+    /// by a caller searching several pairs of a body from `t`).
+    fn touch_from(
+        &self,
+        p: usize,
         (i, j): (usize, usize),
         moving: &[Moving],
         t: f64,
+        at: &mut impl FnMut(usize) -> State,
     ) -> Result<Option<(f64, Next)>, ()> {
         let (bi, bj) = (&self.balls[i], &self.balls[j]);
         let dt = self.step.dt;
         let found = match (bi.radius, bj.radius) {
-            (Some(ri), Some(rj)) => first_touch(&moving[i], &moving[j], ri + rj, t, dt)
-                .map_err(|_| ())?
-                .map(|tc| (tc, None)),
+            (Some(ri), Some(rj)) => {
+                let (a, b) = (&moving[i], &moving[j]);
+                first_touch((a, b), (at(i), at(j)), ri + rj, t, dt)
+                    .map_err(|_| ())?
+                    .map(|tc| (tc, None))
+            }
             _ => {
                 let mover = |k: usize| Mover {
                     geom: &self.balls[k].geom,
