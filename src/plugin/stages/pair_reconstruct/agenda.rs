@@ -75,12 +75,17 @@ impl Ord for Due {
 }
 
 impl Agenda {
-    /// An empty agenda for `bodies` bodies and `pairs` pairs.
-    pub(super) fn new(bodies: usize, pairs: usize) -> Self {
+    /// An empty agenda for `bodies` bodies and `pairs` pairs, with room for `room` of each
+    /// (those added on the way).
+    pub(super) fn new((bodies, pairs): (usize, usize), room: (usize, usize)) -> Self {
+        let mut grounds = Vec::with_capacity(room.0);
+        grounds.resize_with(bodies, || (0, None));
+        let mut touches = Vec::with_capacity(room.1);
+        touches.resize_with(pairs, || (0, None));
         Self {
             queue: BinaryHeap::with_capacity(bodies + pairs),
-            grounds: (0..bodies).map(|_| (0, None)).collect(),
-            touches: (0..pairs).map(|_| (0, None)).collect(),
+            grounds,
+            touches,
         }
     }
 

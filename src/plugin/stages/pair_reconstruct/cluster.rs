@@ -23,6 +23,7 @@ use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::{HandleMap, Slotted};
+use crate::plugin::state::small_list::SmallList;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
 
@@ -271,7 +272,7 @@ struct Run<'c, 'a> {
     /// reached on the way.
     pairs: Vec<(usize, usize)>,
     /// Each body's pairs, by index in `pairs`.
-    pairs_of: Vec<Vec<usize>>,
+    pairs_of: Vec<SmallList<usize>>,
     /// Each body's index by its body's slot.
     by_slot: HandleMap<u32, usize>,
     agenda: Agenda,
@@ -289,14 +290,21 @@ impl<'c, 'a> Run<'c, 'a> {
         mut starts: StartSearches,
     ) -> Option<Self> {
         let cluster = Cluster::of(&context, &balls);
-        let moving: Vec<Moving> = balls.iter().map(start_moving).collect();
-        let flights: Vec<Flight> = balls.iter().map(|b| b.cand.flight).collect();
-        let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); balls.len()];
+        // Room for as many bodies again, and as many pairs again as bodies: a run meets a
+        // few on the way (`join`, `add_pair`), and its lists then do not grow.
+        let (bodies_room, pairs_room) = (2 * balls.len(), pairs.len() + balls.len());
+        let mut moving = Vec::with_capacity(bodies_room);
+        moving.extend(balls.iter().map(start_moving));
+        let mut flights = Vec::with_capacity(bodies_room);
+        flights.extend(balls.iter().map(|b| b.cand.flight));
+        let mut pairs_of = Vec::with_capacity(bodies_room);
+        pairs_of.resize(balls.len(), SmallList::Empty);
         for (p, (i, j)) in pairs.iter().enumerate() {
             pairs_of[*i].push(p);
             pairs_of[*j].push(p);
         }
-        let mut agenda = Agenda::new(balls.len(), pairs.len());
+        let mut agenda = Agenda::new((balls.len(), pairs.len()), (bodies_room, pairs_room));
+        starts.grounds.reserve(balls.len() - starts.grounds.len());
         for (k, m) in moving.iter().enumerate() {
             let found = match starts.grounds.get(k) {
                 Some(found) => *found,
@@ -330,14 +338,18 @@ impl<'c, 'a> Run<'c, 'a> {
             .enumerate()
             .map(|(k, b)| (b.cand.body.slot() as u32, k))
             .collect();
+        let mut resting = Vec::with_capacity(pairs_room);
+        resting.resize(pairs.len(), false);
+        let mut run_pairs = Vec::with_capacity(pairs_room);
+        run_pairs.extend_from_slice(pairs);
         Some(Run {
             context,
             balls,
             joined: Vec::new(),
             moving,
             flights,
-            resting: vec![false; pairs.len()],
-            pairs: pairs.to_vec(),
+            resting,
+            pairs: run_pairs,
             pairs_of,
             by_slot,
             agenda,
@@ -379,7 +391,7 @@ impl<'c, 'a> Run<'c, 'a> {
         let settled = event.settled;
         view.commit.event(event);
         // A ball sent off may drive into a pair it rested in.
-        for q in &self.pairs_of[k] {
+        for q in self.pairs_of[k].iter() {
             self.resting[*q] = false;
         }
         let before = self.moving[k];
@@ -442,7 +454,7 @@ impl<'c, 'a> Run<'c, 'a> {
             self.moving[k] = cluster.on_after_touch(view, k, &self.moving[k], after, te)?;
         }
         // A ball that moved on may drive into a pair it rested in.
-        for q in self.pairs_of[i].iter().chain(&self.pairs_of[j]) {
+        for q in self.pairs_of[i].iter().chain(self.pairs_of[j].iter()) {
             self.resting[*q] = false;
         }
         Some(([i, j], 2))
@@ -465,7 +477,7 @@ impl<'c, 'a> Run<'c, 'a> {
             None => moving[b].at(te),
         };
         for (n, &k) in changed.iter().enumerate() {
-            for &q in &self.pairs_of[k] {
+            for &q in self.pairs_of[k].iter() {
                 let (a, b) = self.pairs[q];
                 if n == 1 && (a == changed[0] || b == changed[0]) {
                     continue;
@@ -618,7 +630,7 @@ impl<'c, 'a> Run<'c, 'a> {
         self.starts.touches.push(None);
         for (j, ground) in (base..).zip(grounds) {
             self.flights.push(self.balls[j].cand.flight);
-            self.pairs_of.push(Vec::new());
+            self.pairs_of.push(SmallList::Empty);
             self.by_slot
                 .insert(self.balls[j].cand.body.slot() as u32, j);
             self.agenda.add_body();
