@@ -52,7 +52,7 @@ use crate::plugin::stages::reconstruct::{FlownEnd, ccd_consistent};
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::plugin::state::handles::{HandleMap, HandleSet};
+use crate::plugin::state::handles::{HandleMap, HandleSet, Slotted};
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::PlannedPair;
@@ -348,28 +348,69 @@ fn group_of<'c>(
 /// The step's candidates by body.
 struct CandidatesByBody<'s> {
     step: &'s EndOfStep<'s>,
-    index: HandleMap<RigidBodyHandle, usize>,
+    index: CandidateIndex,
 }
+
+/// Where each body's candidate is in the step's list (the last, should a body have two).
+enum CandidateIndex {
+    /// By the body's slot (`u32::MAX`: none), where the candidates' slots are few enough
+    /// next to their number that the table costs no more than they do.
+    BySlot(Vec<u32>),
+    /// By body, where the slots are spread out.
+    ByBody(HandleMap<RigidBodyHandle, usize>),
+}
+
+/// The most slots a [`CandidateIndex::BySlot`] table has per candidate.
+const SLOTS_PER_CANDIDATE: usize = 4;
 
 impl<'s> CandidatesByBody<'s> {
     fn new(step: &'s EndOfStep<'s>) -> Self {
-        let index = step
-            .candidates
-            .iter()
-            .enumerate()
-            .map(|(k, c)| (c.body, k))
-            .collect();
+        let cands = &step.candidates;
+        let slots = cands.iter().map(|c| c.body.slot() + 1).max().unwrap_or(0);
+        let dense = slots <= SLOTS_PER_CANDIDATE * cands.len() && cands.len() < u32::MAX as usize;
+        let index = dense
+            .then(|| Self::by_slot(cands, slots))
+            .flatten()
+            .unwrap_or_else(|| {
+                let by_body = cands.iter().enumerate().map(|(k, c)| (c.body, k)).collect();
+                CandidateIndex::ByBody(by_body)
+            });
         Self { step, index }
+    }
+
+    /// The index by slot of `cands`, whose slots are below `slots`; `None` where two bodies
+    /// of one slot have candidates (two generations: a table by body tells them apart).
+    fn by_slot(cands: &[Candidate], slots: usize) -> Option<CandidateIndex> {
+        let mut by_slot = vec![u32::MAX; slots];
+        for (k, c) in cands.iter().enumerate() {
+            let entry = &mut by_slot[c.body.slot()];
+            if cands
+                .get(*entry as usize)
+                .is_some_and(|was| was.body != c.body)
+            {
+                return None;
+            }
+            *entry = k as u32;
+        }
+        Some(CandidateIndex::BySlot(by_slot))
     }
 
     /// The candidate of `body`, if it has one.
     fn get(&self, body: &RigidBodyHandle) -> Option<&'s Candidate> {
-        self.index.get(body).map(|k| &self.step.candidates[*k])
+        let cands = &self.step.candidates;
+        match &self.index {
+            CandidateIndex::BySlot(by_slot) => {
+                let k = *by_slot.get(body.slot())?;
+                // A slot's candidate is another generation's body, or none (`u32::MAX`).
+                cands.get(k as usize).filter(|c| c.body == *body)
+            }
+            CandidateIndex::ByBody(by_body) => by_body.get(body).map(|k| &cands[*k]),
+        }
     }
 
     /// The candidate of `body`, which must have one.
     fn of(&self, body: &RigidBodyHandle) -> &'s Candidate {
-        &self.step.candidates[self.index[body]]
+        self.get(body).expect("every member has a candidate")
     }
 }
 
