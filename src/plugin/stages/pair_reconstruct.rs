@@ -429,13 +429,20 @@ impl Clusters {
     /// order the pairs first reach them, so the order is the plan's every run (whichever body
     /// the union-find makes a set's root).
     fn of(impacts: &[&PlannedPair]) -> Self {
-        let mut sets = Sets::default();
+        // Each table sized for the pairs' bodies at most, so that none grows.
+        fn by_body<V>(impacts: &[&PlannedPair]) -> HandleMap<RigidBodyHandle, V> {
+            HandleMap::with_capacity_and_hasher(2 * impacts.len(), Default::default())
+        }
+        let mut sets = Sets {
+            parent: by_body(impacts),
+            size: by_body(impacts),
+        };
         for pair in impacts {
             sets.join(pair.a, pair.b);
         }
         let mut members: Vec<Vec<RigidBodyHandle>> = Vec::new();
-        let mut cluster_of: HandleMap<RigidBodyHandle, usize> = HandleMap::default();
-        let mut place: HandleMap<RigidBodyHandle, usize> = HandleMap::default();
+        let mut cluster_of: HandleMap<RigidBodyHandle, usize> = by_body(impacts);
+        let mut place: HandleMap<RigidBodyHandle, usize> = by_body(impacts);
         for pair in impacts {
             for body in [pair.a, pair.b] {
                 if place.contains_key(&body) {
@@ -451,7 +458,7 @@ impl Clusters {
             }
         }
         let mut pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); members.len()];
-        let mut of_body = HandleMap::default();
+        let mut of_body = by_body(impacts);
         for pair in impacts {
             let c = cluster_of[&sets.root(pair.a)];
             pairs[c].push((place[&pair.a], place[&pair.b]));
