@@ -36,9 +36,10 @@
 
 mod agenda;
 mod cluster;
+mod pairs_of;
 
 pub(crate) use cluster::through_pair_impacts;
-use cluster::{Admitted, Joined, Joining, StartSearches, Unmoved};
+use cluster::{Admitted, Joined, Joining, RunLists, StartSearches, Unmoved};
 
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
@@ -138,6 +139,8 @@ pub(crate) fn move_clusters(
     let clusters = Clusters::of(&impacts);
     // The later clusters taken in whole by an earlier one (moved with it).
     let mut absorbed = vec![false; clusters.members.len()];
+    // The runs' lists, handed from one run to the next.
+    let mut lists = RunLists::default();
     for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
         if absorbed[c] {
             continue;
@@ -176,6 +179,7 @@ pub(crate) fn move_clusters(
             runs += 1;
             let started = (std::mem::take(&mut balls), &growing.pairs[..]);
             let searched = std::mem::take(&mut starts);
+            let searched = (searched, &mut lists);
             let moved = through_pair_impacts(view, context, started, searched, &joining);
             growing.joined(moved.joined, &mut absorbed);
             match moved.ends {

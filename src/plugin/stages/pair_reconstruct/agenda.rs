@@ -24,6 +24,7 @@ pub(super) enum Next {
 /// changed: an event costs the searches of its bodies' ground and pairs, not of every pair of
 /// the cluster. The earliest comes first; ties go to a ground impact before a touch, then to
 /// the lowest index, the same every run.
+#[derive(Default)]
 pub(super) struct Agenda {
     queue: BinaryHeap<Reverse<Due>>,
     /// The event found for each body's ground, and the number of its search: an entry in the
@@ -75,18 +76,17 @@ impl Ord for Due {
 }
 
 impl Agenda {
-    /// An empty agenda for `bodies` bodies and `pairs` pairs, with room for `room` of each
-    /// (those added on the way).
-    pub(super) fn new((bodies, pairs): (usize, usize), room: (usize, usize)) -> Self {
-        let mut grounds = Vec::with_capacity(room.0);
-        grounds.resize_with(bodies, || (0, None));
-        let mut touches = Vec::with_capacity(room.1);
-        touches.resize_with(pairs, || (0, None));
-        Self {
-            queue: BinaryHeap::with_capacity(bodies + pairs),
-            grounds,
-            touches,
-        }
+    /// Empties the agenda, for `bodies` bodies and `pairs` pairs, with room for `room` of
+    /// each (those added on the way); the lists' room is kept.
+    pub(super) fn reset(&mut self, (bodies, pairs): (usize, usize), room: (usize, usize)) {
+        self.queue.clear();
+        self.queue.reserve(bodies + pairs);
+        self.grounds.clear();
+        self.grounds.reserve(room.0);
+        self.grounds.resize_with(bodies, || (0, None));
+        self.touches.clear();
+        self.touches.reserve(room.1);
+        self.touches.resize_with(pairs, || (0, None));
     }
 
     /// Room for one more body (the next index), with no event yet.

@@ -3,6 +3,7 @@
 //! then on to the next (see the parent module's contract).
 
 use super::agenda::{Agenda, Next};
+use super::pairs_of::PairsOf;
 use super::{ClusterBall, Group, NearBodies};
 use crate::motion::meeting::first_touch;
 use crate::motion::{Flight, Motion, Moving, State};
@@ -23,7 +24,6 @@ use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::{HandleMap, Slotted};
-use crate::plugin::state::small_list::SmallList;
 use crate::rapier::parry::bounding_volume::Aabb;
 use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
 
@@ -99,7 +99,7 @@ pub(crate) fn through_pair_impacts<'s>(
     view: &mut AfterStep,
     (colliders, near, step): (&ColliderSet, &NearBodies, &EndOfStep),
     (balls, pairs): (Vec<ClusterBall<'s>>, &[(usize, usize)]),
-    starts: StartSearches,
+    (starts, lists): (StartSearches, &mut RunLists),
     joining: &Joining<'_, 's>,
 ) -> Moved<'s> {
     let events_from = view.commit.reported().len();
@@ -108,7 +108,7 @@ pub(crate) fn through_pair_impacts<'s>(
         near,
         step,
     };
-    let Some(mut run) = Run::start(context, balls, pairs, starts) else {
+    let Some(mut run) = Run::start(context, (balls, pairs), starts, lists) else {
         // Not started: no event was pushed.
         return Moved {
             balls: Vec::new(),
@@ -118,7 +118,7 @@ pub(crate) fn through_pair_impacts<'s>(
         };
     };
     let mut meets = None;
-    let ends = move_cluster(view, &mut run, joining, &mut meets);
+    let ends = move_cluster(view, &mut run, joining, &mut lists.way, &mut meets);
     if ends.is_none() {
         view.commit.withdraw(events_from);
     }
@@ -127,11 +127,12 @@ pub(crate) fn through_pair_impacts<'s>(
         (None, Some((member, other))) => Err(Unmoved::Meets { member, other }),
         (None, None) => Err(Unmoved::GaveUp),
     };
+    let (balls, joined, starts) = run.finish(lists);
     Moved {
-        balls: run.balls,
-        joined: run.joined,
+        balls,
+        joined,
         ends,
-        starts: run.starts,
+        starts,
     }
 }
 
@@ -144,11 +145,10 @@ fn move_cluster<'s>(
     view: &mut AfterStep,
     run: &mut Run<'_, 's>,
     joining: &Joining<'_, 's>,
+    way: &mut WayOn,
     meets: &mut Option<(usize, RigidBodyHandle)>,
 ) -> Option<Vec<State>> {
     let mut events = 0usize;
-    // The members near a changed body's way on, kept across the events.
-    let mut way = WayOn::new();
     while let Some((te, event)) = run.agenda.pop() {
         events += 1;
         // Each body's share, the bodies joined on the way included.
@@ -167,8 +167,8 @@ fn move_cluster<'s>(
         // one that joins it, pairs with it in a search from here (until then, both moved as
         // the pair plan had them apart); any other moves the cluster again with it.
         for &k in &changed[..count] {
-            run.way_on(k, te, &mut way);
-            while let Some(other) = run.meets_other_body(k, &mut way) {
+            run.way_on(k, te, way);
+            while let Some(other) = run.meets_other_body(k, way) {
                 let j = match other {
                     Reached::Member(j) => j,
                     Reached::Outside(body) => match run.join(view, joining, k, body, te)? {
@@ -224,14 +224,14 @@ enum Reached {
 
 /// A changed body's way on: its centre and velocity where its motion changed, and the pair
 /// plan's members near the way ([`Run::way_on`]).
-struct WayOn {
+pub(super) struct WayOn {
     com: nalgebra::Vector3<f64>,
     v: nalgebra::Vector3<f64>,
     near: Vec<NearLeaf>,
 }
 
-impl WayOn {
-    fn new() -> Self {
+impl Default for WayOn {
+    fn default() -> Self {
         Self {
             com: nalgebra::Vector3::zeros(),
             v: nalgebra::Vector3::zeros(),
@@ -255,6 +255,22 @@ struct SlowTouch;
 /// bodies not approaching (a graze at rounding level).
 type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 
+/// The lists of a cluster's run ([`Run`]'s), handed on to the next run: cleared and filled
+/// again, a run allocates only where it outgrows the runs before it.
+#[derive(Default)]
+pub(crate) struct RunLists {
+    moving: Vec<Moving>,
+    flights: Vec<Flight>,
+    resting: Vec<bool>,
+    pairs: Vec<(usize, usize)>,
+    pairs_of: PairsOf,
+    by_slot: HandleMap<u32, usize>,
+    agenda: Agenda,
+    /// The bodies' states at the step's start, as [`Run::start`] advances them.
+    at_start: Vec<Option<State>>,
+    way: WayOn,
+}
+
 /// A cluster in motion: each body's motion from its last event, and the agenda of what
 /// happens next.
 struct Run<'c, 'a> {
@@ -272,7 +288,7 @@ struct Run<'c, 'a> {
     /// reached on the way.
     pairs: Vec<(usize, usize)>,
     /// Each body's pairs, by index in `pairs`.
-    pairs_of: Vec<SmallList<usize>>,
+    pairs_of: PairsOf,
     /// Each body's index by its body's slot.
     by_slot: HandleMap<u32, usize>,
     agenda: Agenda,
@@ -285,25 +301,30 @@ impl<'c, 'a> Run<'c, 'a> {
     /// kept in it); `None` where a search gave up.
     fn start(
         context: Context<'c>,
-        balls: Vec<ClusterBall<'a>>,
-        pairs: &[(usize, usize)],
+        (balls, pairs): (Vec<ClusterBall<'a>>, &[(usize, usize)]),
         mut starts: StartSearches,
+        lists: &mut RunLists,
     ) -> Option<Self> {
         let cluster = Cluster::of(&context, &balls);
         // Room for as many bodies again, and as many pairs again as bodies: a run meets a
         // few on the way (`join`, `add_pair`), and its lists then do not grow.
         let (bodies_room, pairs_room) = (2 * balls.len(), pairs.len() + balls.len());
-        let mut moving = Vec::with_capacity(bodies_room);
+        let mut moving = std::mem::take(&mut lists.moving);
+        moving.clear();
+        moving.reserve(bodies_room);
         moving.extend(balls.iter().map(start_moving));
-        let mut flights = Vec::with_capacity(bodies_room);
+        let mut flights = std::mem::take(&mut lists.flights);
+        flights.clear();
+        flights.reserve(bodies_room);
         flights.extend(balls.iter().map(|b| b.cand.flight));
-        let mut pairs_of = Vec::with_capacity(bodies_room);
-        pairs_of.resize(balls.len(), SmallList::Empty);
+        let mut pairs_of = std::mem::take(&mut lists.pairs_of);
+        pairs_of.reset(balls.len());
         for (p, (i, j)) in pairs.iter().enumerate() {
-            pairs_of[*i].push(p);
-            pairs_of[*j].push(p);
+            pairs_of.push(*i, p);
+            pairs_of.push(*j, p);
         }
-        let mut agenda = Agenda::new((balls.len(), pairs.len()), (bodies_room, pairs_room));
+        let mut agenda = std::mem::take(&mut lists.agenda);
+        agenda.reset((balls.len(), pairs.len()), (bodies_room, pairs_room));
         starts.grounds.reserve(balls.len() - starts.grounds.len());
         for (k, m) in moving.iter().enumerate() {
             let found = match starts.grounds.get(k) {
@@ -320,7 +341,9 @@ impl<'c, 'a> Run<'c, 'a> {
             .touches
             .resize(starts.touches.len().max(pairs.len()), None);
         // Each body at the start, advanced once for all its pairs.
-        let mut at_start: Vec<Option<State>> = vec![None; balls.len()];
+        let at_start = &mut lists.at_start;
+        at_start.clear();
+        at_start.resize(balls.len(), None);
         let mut at = |k: usize| *at_start[k].get_or_insert_with(|| moving[k].at(0.0));
         for (p, pair) in pairs.iter().enumerate() {
             let found = match starts.touches[p] {
@@ -333,14 +356,21 @@ impl<'c, 'a> Run<'c, 'a> {
             };
             agenda.touch(p, found);
         }
-        let by_slot = balls
-            .iter()
-            .enumerate()
-            .map(|(k, b)| (b.cand.body.slot() as u32, k))
-            .collect();
-        let mut resting = Vec::with_capacity(pairs_room);
+        let mut by_slot = std::mem::take(&mut lists.by_slot);
+        by_slot.clear();
+        by_slot.extend(
+            balls
+                .iter()
+                .enumerate()
+                .map(|(k, b)| (b.cand.body.slot() as u32, k)),
+        );
+        let mut resting = std::mem::take(&mut lists.resting);
+        resting.clear();
+        resting.reserve(pairs_room);
         resting.resize(pairs.len(), false);
-        let mut run_pairs = Vec::with_capacity(pairs_room);
+        let mut run_pairs = std::mem::take(&mut lists.pairs);
+        run_pairs.clear();
+        run_pairs.reserve(pairs_room);
         run_pairs.extend_from_slice(pairs);
         Some(Run {
             context,
@@ -355,6 +385,19 @@ impl<'c, 'a> Run<'c, 'a> {
             agenda,
             starts,
         })
+    }
+
+    /// The run's bodies, those that joined it and its searches from the start; its lists
+    /// handed back to `lists`, for the next run.
+    fn finish(self, lists: &mut RunLists) -> (Vec<ClusterBall<'a>>, Vec<Joined>, StartSearches) {
+        lists.moving = self.moving;
+        lists.flights = self.flights;
+        lists.resting = self.resting;
+        lists.pairs = self.pairs;
+        lists.pairs_of = self.pairs_of;
+        lists.by_slot = self.by_slot;
+        lists.agenda = self.agenda;
+        (self.balls, self.joined, self.starts)
     }
 
     /// Body `k`'s ground impact at `t` (state `s`, `hit`), as `reconstruct::through_impacts`
@@ -391,8 +434,8 @@ impl<'c, 'a> Run<'c, 'a> {
         let settled = event.settled;
         view.commit.event(event);
         // A ball sent off may drive into a pair it rested in.
-        for q in self.pairs_of[k].iter() {
-            self.resting[*q] = false;
+        for q in self.pairs_of.of(k) {
+            self.resting[q] = false;
         }
         let before = self.moving[k];
         if let Motion::Rolling(_) = before.motion {
@@ -454,8 +497,8 @@ impl<'c, 'a> Run<'c, 'a> {
             self.moving[k] = cluster.on_after_touch(view, k, &self.moving[k], after, te)?;
         }
         // A ball that moved on may drive into a pair it rested in.
-        for q in self.pairs_of[i].iter().chain(self.pairs_of[j].iter()) {
-            self.resting[*q] = false;
+        for q in self.pairs_of.of(i).chain(self.pairs_of.of(j)) {
+            self.resting[q] = false;
         }
         Some(([i, j], 2))
     }
@@ -477,7 +520,7 @@ impl<'c, 'a> Run<'c, 'a> {
             None => moving[b].at(te),
         };
         for (n, &k) in changed.iter().enumerate() {
-            for &q in self.pairs_of[k].iter() {
+            for q in self.pairs_of.of(k) {
                 let (a, b) = self.pairs[q];
                 if n == 1 && (a == changed[0] || b == changed[0]) {
                     continue;
@@ -540,14 +583,14 @@ impl<'c, 'a> Run<'c, 'a> {
     fn meets_other_body(&self, k: usize, way: &mut WayOn) -> Option<Reached> {
         let (balls, near) = (&self.balls, self.context.near);
         let body_k = balls[k].cand.body;
-        let partner = |q: &usize| {
-            let (a, b) = self.pairs[*q];
+        let partner = |q: usize| {
+            let (a, b) = self.pairs[q];
             balls[if a == k { b } else { a }].cand.body.slot() as u32
         };
         let (com, v) = (way.com, way.v);
         way.near.iter_mut().find_map(|leaf| {
             let slot = leaf.slot;
-            if self.pairs_of[k].iter().any(|q| partner(q) == slot) {
+            if self.pairs_of.of(k).any(|q| partner(q) == slot) {
                 return None;
             }
             let (rb, body) = near.bodies.get_unknown_gen(slot)?;
@@ -630,7 +673,7 @@ impl<'c, 'a> Run<'c, 'a> {
         self.starts.touches.push(None);
         for (j, ground) in (base..).zip(grounds) {
             self.flights.push(self.balls[j].cand.flight);
-            self.pairs_of.push(SmallList::Empty);
+            self.pairs_of.add_body();
             self.by_slot
                 .insert(self.balls[j].cand.body.slot() as u32, j);
             self.agenda.add_body();
@@ -639,8 +682,8 @@ impl<'c, 'a> Run<'c, 'a> {
         for ((i, j), touch) in group.pairs.iter().zip(touches) {
             let p = self.pairs.len();
             self.pairs.push((base + i, base + j));
-            self.pairs_of[base + i].push(p);
-            self.pairs_of[base + j].push(p);
+            self.pairs_of.push(base + i, p);
+            self.pairs_of.push(base + j, p);
             self.resting.push(false);
             self.agenda.add_pair();
             self.agenda.touch(p, touch);
@@ -655,8 +698,8 @@ impl<'c, 'a> Run<'c, 'a> {
     fn add_pair(&mut self, k: usize, j: usize, t: f64) -> Option<()> {
         let p = self.pairs.len();
         self.pairs.push((k, j));
-        self.pairs_of[k].push(p);
-        self.pairs_of[j].push(p);
+        self.pairs_of.push(k, p);
+        self.pairs_of.push(j, p);
         self.resting.push(false);
         self.agenda.add_pair();
         let cluster = Cluster::of(&self.context, &self.balls);
