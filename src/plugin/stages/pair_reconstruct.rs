@@ -32,7 +32,8 @@
 //! nothing into rapier.
 //!
 //! Its parts: forming the clusters and committing their end states (here), the cluster's
-//! motion event by event (`cluster.rs`), and the agenda of its next events (`agenda.rs`).
+//! motion event by event (`cluster.rs`), the agenda of its next events (`agenda.rs`), and
+//! each body's pairs in a run (`pairs_of.rs`).
 
 mod agenda;
 mod cluster;
@@ -139,8 +140,10 @@ pub(crate) fn move_clusters(
     let clusters = Clusters::of(&impacts);
     // The later clusters taken in whole by an earlier one (moved with it).
     let mut absorbed = vec![false; clusters.members.len()];
-    // The runs' lists, handed from one run to the next.
+    // The runs' lists, and the clusters' searches from the start, handed from one run to
+    // the next.
     let mut lists = RunLists::default();
+    let mut starts = StartSearches::default();
     for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
         if absorbed[c] {
             continue;
@@ -151,7 +154,7 @@ pub(crate) fn move_clusters(
         // (nothing they read changes before the clusters are written) and checks and
         // builds only the bodies it took in.
         let mut balls = Vec::new();
-        let mut starts = StartSearches::default();
+        starts.clear();
         let moved = loop {
             let taken_in = &growing.members[balls.len()..];
             if !moves_alone(view, (bodies, colliders), &cands, taken_in) {
@@ -182,13 +185,14 @@ pub(crate) fn move_clusters(
             let searched = (searched, &mut lists);
             let moved = through_pair_impacts(view, context, started, searched, &joining);
             growing.joined(moved.joined, &mut absorbed);
+            starts = moved.starts;
             match moved.ends {
                 Ok(ends) => break Some((moved.balls, ends)),
                 Err(Unmoved::GaveUp) => break None,
                 Err(Unmoved::Meets { member, other }) => {
                     // The run's balls: the members', those that joined it included.
                     debug_assert_eq!(moved.balls.len(), growing.members.len());
-                    (balls, starts) = (moved.balls, moved.starts);
+                    balls = moved.balls;
                     let sets = (&clusters, &cands, &written);
                     if !growing.take_in(sets, &mut absorbed, member, other) {
                         break None;

@@ -20,6 +20,16 @@ pub(super) enum Next {
     Touch(usize, Option<BodyTouch>),
 }
 
+impl Next {
+    /// The same event, a pair's touch named as pair `p`.
+    pub(super) fn as_pair(self, p: usize) -> Self {
+        match self {
+            Next::Touch(_, touch) => Next::Touch(p, touch),
+            ground => ground,
+        }
+    }
+}
+
 /// A cluster's next events, each found once and searched again only when one of its bodies
 /// changed: an event costs the searches of its bodies' ground and pairs, not of every pair of
 /// the cluster. The earliest comes first; ties go to a ground impact before a touch, then to

@@ -87,6 +87,14 @@ pub(crate) struct StartSearches {
     touches: Vec<Option<Option<(f64, Next)>>>,
 }
 
+impl StartSearches {
+    /// No searches, the lists' room kept (for another cluster).
+    pub fn clear(&mut self) {
+        self.grounds.clear();
+        self.touches.clear();
+    }
+}
+
 /// The cluster's states at the step's end (see the module's contract). `pairs` are the
 /// cluster's `Impact` pairs as indices into `balls`; `near` finds the pair plan's members
 /// a body sent off by an event may meet. A body so met from outside the cluster, alone or with
@@ -632,61 +640,51 @@ impl<'c, 'a> Run<'c, 'a> {
         let base = self.balls.len();
         self.moving.extend(balls.iter().map(start_moving));
         self.balls.extend(balls);
-        let first = self.pairs.len();
-        let found = {
+        // Searched from the start, as a run again with them would: kept for it in `starts`,
+        // each pair named by its index among the cluster's pairs in a run again.
+        debug_assert_eq!(self.starts.grounds.len(), base);
+        let again = self.starts.touches.len();
+        {
             let cluster = Cluster::of(&self.context, &self.balls);
-            let grounds: Vec<_> = (base..self.balls.len())
-                .map(|j| cluster.ground(j, &self.moving[j], 0.0))
-                .collect::<Result<_, _>>()
-                .ok()?;
-            let touches: Vec<_> = group
-                .pairs
-                .iter()
-                .enumerate()
-                .map(|(q, (i, j))| {
-                    cluster.touch(first + q, (base + i, base + j), &self.moving, 0.0)
-                })
-                .collect::<Result<_, _>>()
-                .ok()?;
-            (grounds, touches)
-        };
-        let (grounds, touches) = found;
+            for j in base..self.balls.len() {
+                let found = cluster.ground(j, &self.moving[j], 0.0).ok()?;
+                self.starts.grounds.push(found);
+            }
+            for (q, (i, j)) in group.pairs.iter().enumerate() {
+                let pair = (base + i, base + j);
+                let found = cluster.touch(again + q, pair, &self.moving, 0.0).ok()?;
+                self.starts.touches.push(Some(found));
+            }
+        }
         let before = |e: &Option<(f64, Next)>| e.as_ref().is_some_and(|(t, _)| *t < te);
-        if grounds.iter().any(before) || touches.iter().any(before) {
+        let mut touches = self.starts.touches[again..].iter().flatten();
+        if self.starts.grounds[base..].iter().any(before) || touches.any(before) {
             self.balls.truncate(base);
             self.moving.truncate(base);
+            self.starts.grounds.truncate(base);
+            self.starts.touches.truncate(again);
             return Some(None);
         }
-        // Searched from the start, as a run again with them would: kept for it, the pair of
-        // `k` and the body met (searched from `te`) left out.
-        debug_assert_eq!(self.starts.grounds.len(), base);
-        self.starts.grounds.extend(&grounds);
-        // Each pair's event named by its index among the cluster's pairs in a run again.
-        let again = self.starts.touches.len();
-        let renamed = touches.iter().enumerate().map(|(q, found)| {
-            Some(found.map(|(t, next)| match next {
-                Next::Touch(_, touch) => (t, Next::Touch(again + q, touch)),
-                ground => (t, ground),
-            }))
-        });
-        self.starts.touches.extend(renamed);
+        // The pair of `k` and the body met is searched from `te`, not from the start.
         self.starts.touches.push(None);
-        for (j, ground) in (base..).zip(grounds) {
+        for j in base..self.balls.len() {
             self.flights.push(self.balls[j].cand.flight);
             self.pairs_of.add_body();
             self.by_slot
                 .insert(self.balls[j].cand.body.slot() as u32, j);
             self.agenda.add_body();
-            self.agenda.ground(j, ground);
+            self.agenda.ground(j, self.starts.grounds[j]);
         }
-        for ((i, j), touch) in group.pairs.iter().zip(touches) {
+        for (q, (i, j)) in group.pairs.iter().enumerate() {
             let p = self.pairs.len();
             self.pairs.push((base + i, base + j));
             self.pairs_of.push(base + i, p);
             self.pairs_of.push(base + j, p);
             self.resting.push(false);
             self.agenda.add_pair();
-            self.agenda.touch(p, touch);
+            let found = self.starts.touches[again + q].flatten();
+            self.agenda
+                .touch(p, found.map(|(t, next)| (t, next.as_pair(p))));
         }
         let met = base + group.met;
         self.joined.push(Joined { member: k, group });
