@@ -160,17 +160,18 @@ pub(crate) fn move_clusters(
             if !moves_alone(view, (bodies, colliders), &cands, taken_in) {
                 break None;
             }
-            let Some(more) = cluster_balls(view, bodies, colliders, &cands, taken_in) else {
+            let sets = (bodies, colliders);
+            if cluster_balls(view, sets, &cands, taken_in, &mut balls).is_none() {
                 break None;
-            };
-            balls.extend(more);
+            }
             // A body met on the way, alone or with its later cluster, that moves alone and
             // was not moved yet, joins the run.
             let admit = |view: &AfterStep, other: RigidBodyHandle| {
                 let group = group_of((&clusters, &cands, &written), &absorbed, c, other)?;
                 let members = &group.bodies[..];
-                let balls = moves_alone(view, (bodies, colliders), &cands, members)
-                    .then(|| cluster_balls(view, bodies, colliders, &cands, members))
+                let mut balls = Vec::new();
+                moves_alone(view, (bodies, colliders), &cands, members)
+                    .then(|| cluster_balls(view, (bodies, colliders), &cands, members, &mut balls))
                     .flatten()?;
                 Some(Admitted {
                     balls,
@@ -577,51 +578,50 @@ fn moves_alone(
     })
 }
 
-/// Each member's [`ClusterBall`], in the members' order: its collider, its radius if it is a
-/// centred ball, its `Impact` grounds and the ground it rolls on. `None` when a member has no
-/// collider or its rolling ground has no geometry. Every member must have a candidate (as
-/// [`moves_alone`] checks). Reads only.
+/// Each member's [`ClusterBall`], in the members' order, after those of `balls`: its
+/// collider, its radius if it is a centred ball, its `Impact` grounds and the ground it rolls
+/// on. `None` when a member has no collider or its rolling ground has no geometry (the
+/// members before it added). Every member must have a candidate (as [`moves_alone`] checks).
+/// Reads only.
 fn cluster_balls<'s>(
     view: &AfterStep,
-    bodies: &RigidBodySet,
-    colliders: &'s ColliderSet,
+    (bodies, colliders): (&RigidBodySet, &'s ColliderSet),
     cands: &CandidatesByBody<'s>,
     members: &[RigidBodyHandle],
-) -> Option<Vec<ClusterBall<'s>>> {
+    balls: &mut Vec<ClusterBall<'s>>,
+) -> Option<()> {
     let step = cands.step;
-    members
-        .iter()
-        .map(|h| {
-            let cand = cands.of(h);
-            let rb = &bodies[*h];
-            let geom = body_geom(rb, colliders, &cand.local_com);
-            let part = geom.parts.first()?;
-            let radius = part
-                .shape
-                .as_ball()
-                .filter(|_| centred_ball(part))
-                .map(|b| to_f64(b.radius) + part.skin);
-            let collider = part.handle;
-            let mut grounds =
-                view.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
-            let rolling_on = match &cand.rolling {
-                Some((g, _)) => {
-                    grounds.push(view.pair_geom(&step.grounds[*g], &geom, colliders)?);
-                    Some(grounds.len() - 1)
-                }
-                None => None,
-            };
-            Some(ClusterBall {
-                cand,
-                collider,
-                radius,
-                geom,
-                grounds,
-                rolling_on,
-                inertia: Inertia::of(rb),
-            })
-        })
-        .collect()
+    balls.reserve(members.len());
+    for h in members {
+        let cand = cands.of(h);
+        let rb = &bodies[*h];
+        let geom = body_geom(rb, colliders, &cand.local_com);
+        let part = geom.parts.first()?;
+        let radius = part
+            .shape
+            .as_ball()
+            .filter(|_| centred_ball(part))
+            .map(|b| to_f64(b.radius) + part.skin);
+        let collider = part.handle;
+        let mut grounds = view.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
+        let rolling_on = match &cand.rolling {
+            Some((g, _)) => {
+                grounds.push(view.pair_geom(&step.grounds[*g], &geom, colliders)?);
+                Some(grounds.len() - 1)
+            }
+            None => None,
+        };
+        balls.push(ClusterBall {
+            cand,
+            collider,
+            radius,
+            geom,
+            grounds,
+            rolling_on,
+            inertia: Inertia::of(rb),
+        });
+    }
+    Some(())
 }
 
 #[cfg(test)]
