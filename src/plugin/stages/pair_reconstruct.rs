@@ -144,6 +144,8 @@ pub(crate) fn move_clusters(
     // the next.
     let mut lists = RunLists::default();
     let mut starts = StartSearches::default();
+    // The list of a cluster's balls, emptied for the next cluster once it is written.
+    let mut spare_balls = Vec::new();
     for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
         if absorbed[c] {
             continue;
@@ -153,7 +155,7 @@ pub(crate) fn move_clusters(
         // The balls of the members so far, in their order: a cluster moved again keeps them
         // (nothing they read changes before the clusters are written) and checks and
         // builds only the bodies it took in.
-        let mut balls = Vec::new();
+        let mut balls = std::mem::take(&mut spare_balls);
         starts.clear();
         let moved = loop {
             let taken_in = &growing.members[balls.len()..];
@@ -226,6 +228,8 @@ pub(crate) fn move_clusters(
             view.commit.state(body, &end, local_com, Origin::Model);
             written.insert(ball.cand.body);
         }
+        spare_balls = balls;
+        spare_balls.clear();
     }
     (written, runs)
 }
