@@ -139,17 +139,18 @@ pub(crate) fn move_clusters(
     let cands = CandidatesByBody::new(step);
     let clusters = Clusters::of(&impacts);
     // The later clusters taken in whole by an earlier one (moved with it).
-    let mut absorbed = vec![false; clusters.members.len()];
+    let mut absorbed = vec![false; clusters.len()];
     // The runs' lists, and the clusters' searches from the start, handed from one run to
     // the next.
     let mut lists = RunLists::default();
     let mut starts = StartSearches::default();
     // The list of a cluster's balls, emptied for the next cluster once it is written.
     let mut spare_balls = Vec::new();
-    for (c, (members, pairs)) in clusters.members.iter().zip(&clusters.pairs).enumerate() {
+    for c in 0..clusters.len() {
         if absorbed[c] {
             continue;
         }
+        let (members, pairs) = (clusters.members(c), clusters.pairs(c));
         let mut growing = Growing::new(c, members, pairs);
         let from = view.commit.reported().len();
         // The balls of the members so far, in their order: a cluster moved again keeps them
@@ -338,18 +339,18 @@ fn group_of<'c>(
     if written.contains(&other) {
         return None;
     }
-    match clusters.of_body.get(&other) {
+    match clusters.of_body(&other) {
         None => cands.get(&other).map(|_| Group {
             bodies: Cow::Owned(vec![other]),
             pairs: Cow::Borrowed(&[]),
             met: 0,
             cluster: None,
         }),
-        Some(&later) if later > cluster && !absorbed[later] => {
-            let bodies = &clusters.members[later];
+        Some(later) if later > cluster && !absorbed[later] => {
+            let bodies = clusters.members(later);
             Some(Group {
                 bodies: Cow::Borrowed(bodies),
-                pairs: Cow::Borrowed(&clusters.pairs[later]),
+                pairs: Cow::Borrowed(clusters.pairs(later)),
                 met: bodies.iter().position(|h| *h == other)?,
                 cluster: Some(later),
             })
@@ -429,119 +430,179 @@ impl<'s> CandidatesByBody<'s> {
 
 /// The connected sets of bodies joined by `Impact` pairs.
 struct Clusters {
-    /// Each cluster's members, in the order the pairs first list them.
-    members: Vec<Vec<RigidBodyHandle>>,
-    /// Each cluster's pairs, in the plan's order, as indices into its members.
-    pairs: Vec<Vec<(usize, usize)>>,
-    /// Each member's cluster.
-    of_body: HandleMap<RigidBodyHandle, usize>,
+    /// Each cluster's members, cluster after cluster, each in the order the pairs first list
+    /// them.
+    members: Vec<RigidBodyHandle>,
+    /// Where each cluster's members start in `members`, and their end last.
+    member_starts: Vec<usize>,
+    /// Each cluster's pairs, cluster after cluster, each in the plan's order, as indices into
+    /// its members.
+    pairs: Vec<(usize, usize)>,
+    /// Where each cluster's pairs start in `pairs`, and their end last.
+    pair_starts: Vec<usize>,
+    /// Each body's number, in the order the pairs first list them.
+    number: HandleMap<RigidBodyHandle, usize>,
+    /// Each body's cluster, by its number.
+    cluster: Vec<usize>,
 }
 
 impl Clusters {
     /// The clusters of these pairs, by union-find over them; clusters are numbered in the
     /// order the pairs first reach them, so the order is the plan's every run (whichever body
-    /// the union-find makes a set's root).
+    /// the union-find makes a set's root). The bodies are numbered once, and the rest runs
+    /// on their numbers.
     fn of(impacts: &[&PlannedPair]) -> Self {
-        // Each table sized for the pairs' bodies at most, so that none grows.
-        fn by_body<V>(impacts: &[&PlannedPair]) -> HandleMap<RigidBodyHandle, V> {
-            HandleMap::with_capacity_and_hasher(2 * impacts.len(), Default::default())
-        }
-        let mut sets = Sets {
-            parent: by_body(impacts),
-            size: by_body(impacts),
+        let mut number: HandleMap<RigidBodyHandle, usize> =
+            HandleMap::with_capacity_and_hasher(2 * impacts.len(), Default::default());
+        let mut bodies = Vec::with_capacity(2 * impacts.len());
+        let mut number_of = |body: RigidBodyHandle| {
+            *number.entry(body).or_insert_with(|| {
+                bodies.push(body);
+                bodies.len() - 1
+            })
         };
-        for pair in impacts {
-            sets.join(pair.a, pair.b);
+        let ends: Vec<(usize, usize)> = impacts
+            .iter()
+            .map(|pair| (number_of(pair.a), number_of(pair.b)))
+            .collect();
+        let mut sets = Sets::new(bodies.len());
+        for (a, b) in &ends {
+            sets.join(*a, *b);
         }
-        let mut members: Vec<Vec<RigidBodyHandle>> = Vec::new();
-        let mut cluster_of: HandleMap<RigidBodyHandle, usize> = by_body(impacts);
-        let mut place: HandleMap<RigidBodyHandle, usize> = by_body(impacts);
-        for pair in impacts {
-            for body in [pair.a, pair.b] {
-                if place.contains_key(&body) {
-                    continue;
-                }
-                let r = sets.root(body);
-                let c = *cluster_of.entry(r).or_insert_with(|| {
-                    members.push(Vec::new());
-                    members.len() - 1
-                });
-                place.insert(body, members[c].len());
-                members[c].push(body);
+        // The bodies by number are in the order the pairs first list them: each joins its
+        // cluster's members there.
+        let mut cluster_of_root = vec![usize::MAX; bodies.len()];
+        let (mut cluster, mut place) = (Vec::with_capacity(bodies.len()), Vec::new());
+        let mut sizes: Vec<usize> = Vec::new();
+        place.reserve(bodies.len());
+        for body in 0..bodies.len() {
+            let root = sets.root(body);
+            if cluster_of_root[root] == usize::MAX {
+                cluster_of_root[root] = sizes.len();
+                sizes.push(0);
             }
+            let c = cluster_of_root[root];
+            cluster.push(c);
+            place.push(sizes[c]);
+            sizes[c] += 1;
         }
-        let mut pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); members.len()];
-        let mut of_body = by_body(impacts);
-        for pair in impacts {
-            let c = cluster_of[&sets.root(pair.a)];
-            pairs[c].push((place[&pair.a], place[&pair.b]));
-            of_body.insert(pair.a, c);
-            of_body.insert(pair.b, c);
+        let member_starts = starts_of(&sizes);
+        let mut members = vec![RigidBodyHandle::invalid(); bodies.len()];
+        for (body, handle) in bodies.iter().enumerate() {
+            members[member_starts[cluster[body]] + place[body]] = *handle;
+        }
+        let mut pair_counts = vec![0; sizes.len()];
+        for (a, _) in &ends {
+            pair_counts[cluster[*a]] += 1;
+        }
+        let pair_starts = starts_of(&pair_counts);
+        let mut next = pair_starts.clone();
+        let mut pairs = vec![(0, 0); ends.len()];
+        for (a, b) in &ends {
+            let slot = &mut next[cluster[*a]];
+            pairs[*slot] = (place[*a], place[*b]);
+            *slot += 1;
         }
         Clusters {
             members,
+            member_starts,
             pairs,
-            of_body,
+            pair_starts,
+            number,
+            cluster,
         }
+    }
+
+    /// How many clusters there are.
+    fn len(&self) -> usize {
+        self.member_starts.len() - 1
+    }
+
+    /// Cluster `c`'s members.
+    fn members(&self, c: usize) -> &[RigidBodyHandle] {
+        &self.members[self.member_starts[c]..self.member_starts[c + 1]]
+    }
+
+    /// Cluster `c`'s pairs, as indices into its members.
+    fn pairs(&self, c: usize) -> &[(usize, usize)] {
+        &self.pairs[self.pair_starts[c]..self.pair_starts[c + 1]]
+    }
+
+    /// The cluster of `body`, if it is in one.
+    fn of_body(&self, body: &RigidBodyHandle) -> Option<usize> {
+        self.number.get(body).map(|n| self.cluster[*n])
     }
 }
 
-/// Disjoint sets of bodies (union-find): the smaller set joins the larger, and every walk to
-/// a root points the bodies it passed at the root, so `n` joins and finds over a cluster of
-/// `n` bodies cost about `n` steps, not `n^2` (a row of balls struck at one end lists its
-/// pairs in the order that would chain a naive union's roots).
-#[derive(Default)]
+/// Where each of lists of these lengths starts, laid one after another, and their end last.
+fn starts_of(lengths: &[usize]) -> Vec<usize> {
+    let mut starts = Vec::with_capacity(lengths.len() + 1);
+    starts.push(0);
+    for length in lengths {
+        starts.push(starts[starts.len() - 1] + length);
+    }
+    starts
+}
+
+/// Disjoint sets of numbered bodies (union-find): the smaller set joins the larger, and every
+/// walk to a root points the bodies it passed at the root, so `n` joins and finds over a
+/// cluster of `n` bodies cost about `n` steps, not `n^2` (a row of balls struck at one end
+/// lists its pairs in the order that would chain a naive union's roots).
 struct Sets {
-    /// A body's parent in its set's tree (a root has none, or itself).
-    parent: HandleMap<RigidBodyHandle, RigidBodyHandle>,
-    /// A root's set size.
-    size: HandleMap<RigidBodyHandle, u32>,
+    /// Each body's parent in its set's tree (a root is its own).
+    parent: Vec<usize>,
+    /// Each root's set size.
+    size: Vec<u32>,
 }
 
 impl Sets {
-    /// The root of `body`'s set (itself if it joined none).
-    fn root(&mut self, body: RigidBodyHandle) -> RigidBodyHandle {
+    /// Bodies `0..n`, each alone.
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+            size: vec![1; n],
+        }
+    }
+
+    /// The root of `body`'s set.
+    fn root(&mut self, body: usize) -> usize {
         let mut r = body;
-        while let Some(p) = self.parent.get(&r).copied().filter(|p| *p != r) {
-            r = p;
+        while self.parent[r] != r {
+            r = self.parent[r];
         }
         let mut k = body;
         while k != r {
-            let next = self.parent.insert(k, r).unwrap_or(r);
-            k = next;
+            k = std::mem::replace(&mut self.parent[k], r);
         }
         r
     }
 
     /// Joins the sets of `a` and `b`.
-    fn join(&mut self, a: RigidBodyHandle, b: RigidBodyHandle) {
+    fn join(&mut self, a: usize, b: usize) {
         let (ra, rb) = (self.root(a), self.root(b));
         if ra == rb {
             return;
         }
-        let size = |s: &Self, r| s.size.get(&r).copied().unwrap_or(1);
-        let (small, large) = if size(self, ra) < size(self, rb) {
+        let (small, large) = if self.size[ra] < self.size[rb] {
             (ra, rb)
         } else {
             (rb, ra)
         };
-        let joined = size(self, small) + size(self, large);
-        self.parent.insert(small, large);
-        self.size.remove(&small);
-        self.size.insert(large, joined);
+        self.parent[small] = large;
+        self.size[large] += self.size[small];
     }
 
     /// The longest walk from a body to its root (a test's measure of the trees' height).
     #[cfg(test)]
     fn height(&self) -> usize {
-        let depth = |mut k: RigidBodyHandle| {
+        let depth = |mut k: usize| {
             let mut n = 0;
-            while let Some(p) = self.parent.get(&k).copied().filter(|p| *p != k) {
-                (k, n) = (p, n + 1);
+            while self.parent[k] != k {
+                (k, n) = (self.parent[k], n + 1);
             }
             n
         };
-        self.parent.keys().map(|k| depth(*k)).max().unwrap_or(0)
+        (0..self.parent.len()).map(depth).max().unwrap_or(0)
     }
 }
 
@@ -631,27 +692,25 @@ fn cluster_balls<'s>(
 #[cfg(test)]
 mod tests {
     use super::Sets;
-    use crate::rapier::prelude::RigidBodyHandle;
 
     /// A row of bodies joined pair by pair from one end, and from the other, and two rows
     /// joined in a random order: one set each, whose trees stay shallow (a naive union makes
     /// a row's tree as tall as the row, and walks it once a pair).
     #[test]
     fn a_row_joined_pair_by_pair_is_one_shallow_set() {
-        let n = 1024u32;
-        let body = |i: u32| RigidBodyHandle::from_raw_parts(i, 0);
-        let orders: [Vec<u32>; 2] = [(0..n - 1).collect(), (0..n - 1).rev().collect()];
+        let n = 1024usize;
+        let orders: [Vec<usize>; 2] = [(0..n - 1).collect(), (0..n - 1).rev().collect()];
         for order in orders {
-            let mut sets = Sets::default();
+            let mut sets = Sets::new(n);
             for i in order {
-                sets.join(body(i), body(i + 1));
+                sets.join(i, i + 1);
             }
             assert!(sets.height() <= 10, "height {}", sets.height());
-            let root = sets.root(body(0));
-            assert!((0..n).all(|i| sets.root(body(i)) == root));
+            let root = sets.root(0);
+            assert!((0..n).all(|i| sets.root(i) == root));
         }
         // Two rows, their pairs shuffled (a fixed sequence): two sets.
-        let mut pairs: Vec<(u32, u32)> = (0..n / 2 - 1).map(|i| (i, i + 1)).collect();
+        let mut pairs: Vec<(usize, usize)> = (0..n / 2 - 1).map(|i| (i, i + 1)).collect();
         pairs.extend((n / 2..n - 1).map(|i| (i, i + 1)));
         let mut x = 0x9e37_79b9u64;
         for k in (1..pairs.len()).rev() {
@@ -660,14 +719,14 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             pairs.swap(k, (x >> 33) as usize % (k + 1));
         }
-        let mut sets = Sets::default();
+        let mut sets = Sets::new(n);
         for (a, b) in pairs {
-            sets.join(body(a), body(b));
+            sets.join(a, b);
         }
-        let (first, second) = (sets.root(body(0)), sets.root(body(n - 1)));
+        let (first, second) = (sets.root(0), sets.root(n - 1));
         assert_ne!(first, second);
-        assert!((0..n / 2).all(|i| sets.root(body(i)) == first));
-        assert!((n / 2..n).all(|i| sets.root(body(i)) == second));
+        assert!((0..n / 2).all(|i| sets.root(i) == first));
+        assert!((n / 2..n).all(|i| sets.root(i) == second));
         assert!(sets.height() <= 10, "height {}", sets.height());
     }
 }
