@@ -210,6 +210,45 @@ impl Rolling {
             ..*s
         };
         let mut turned = Vector3::zeros();
+        let first = if dt > 0.0 && dt < f64::INFINITY {
+            Some(self.phase(&st, &at, gn, false)?)
+        } else {
+            None
+        };
+        match first {
+            // One phase of constant accelerations past the step's end (a roll on level
+            // ground, a ball at rest): the step is that phase's first `dt`, as the phases'
+            // walk below would take it.
+            Some(Phase {
+                kind: PhaseKind::Constant { linear, angular },
+                until,
+                ..
+            }) if until > dt => {
+                accelerate(&mut st, &mut turned, (&linear, &angular), dt);
+            }
+            first => self.walk_phases(&mut st, &mut turned, (&at, gn), first, dt)?,
+        }
+        st.w += n * wn1;
+        turned += n * turned_n;
+        Some(State {
+            rot: UnitQuaternion::from_scaled_axis(turned) * s.rot,
+            ..st
+        })
+    }
+
+    /// The phases of the motion from `st` (its spin along the ground only; `turned` the
+    /// angle its spin turned so far) over `dt`, on a ground of acceleration `at` along it and
+    /// `gn` into it, the first phase `first` where it is known: `st` and `turned` moved to
+    /// the end. `None` where the closed form does not reach.
+    fn walk_phases(
+        &self,
+        st: &mut State,
+        turned: &mut Vector3<f64>,
+        (at, gn): (&Vector3<f64>, f64),
+        mut first: Option<Phase>,
+        dt: f64,
+    ) -> Option<()> {
+        let n = self.normal;
         let mut t = 0.0;
         let mut slides = false;
         // At most: slide, roll, slide again (rolling needs too much friction further down),
@@ -219,15 +258,15 @@ impl Rolling {
             if left <= 0.0 {
                 break;
             }
-            let phase = self.phase(&st, &at, gn, slides)?;
+            let phase = match first.take() {
+                Some(phase) => phase,
+                None => self.phase(st, at, gn, slides)?,
+            };
             let h = phase.until.min(left);
-            let p0 = st;
+            let p0 = *st;
             match phase.kind {
                 PhaseKind::Constant { linear, angular } => {
-                    st.com += st.v * h + 0.5 * linear * h * h;
-                    turned += st.w * h + 0.5 * angular * h * h;
-                    st.v += linear * h;
-                    st.w += angular * h;
+                    accelerate(st, turned, (&linear, &angular), h);
                 }
                 PhaseKind::SlideAcross(slip) => {
                     // dv/dt = a_t - mu g_n s/|s| and ds/dt = a_t - B s/|s| with
@@ -243,7 +282,7 @@ impl Rolling {
                     st.v = p0.v + at * h + impulse;
                     // dw/dt = (-r n) x F / I = n x (-F/m) / (k r).
                     let spin = -1.0 / (self.inertia_ratio * self.radius);
-                    turned += p0.w * h + n.cross(&moment) * spin;
+                    *turned += p0.w * h + n.cross(&moment) * spin;
                     st.w = p0.w + n.cross(&impulse) * spin;
                 }
                 PhaseKind::RollAcross(velocity) => {
@@ -251,7 +290,7 @@ impl Rolling {
                     st.com += end.travelled;
                     st.v = end.w;
                     let r = self.radius;
-                    turned += n.cross(&end.travelled) / r;
+                    *turned += n.cross(&end.travelled) / r;
                     st.w = n.cross(&st.v) / r;
                 }
             }
@@ -269,12 +308,7 @@ impl Rolling {
                 }
             }
         }
-        st.w += n * wn1;
-        turned += n * turned_n;
-        Some(State {
-            rot: UnitQuaternion::from_scaled_axis(turned) * s.rot,
-            ..st
-        })
+        Some(())
     }
 
     /// The phase the ball is in at `st` (its spin along the ground only), on a ground of
@@ -468,6 +502,20 @@ impl Rolling {
             w,
         }
     }
+}
+
+/// `h` seconds of constant accelerations `linear` and `angular` (of the spin along the ground)
+/// from `st`, `turned` adding the angle its spin turns.
+fn accelerate(
+    st: &mut State,
+    turned: &mut Vector3<f64>,
+    (linear, angular): (&Vector3<f64>, &Vector3<f64>),
+    h: f64,
+) {
+    st.com += st.v * h + 0.5 * linear * h * h;
+    *turned += st.w * h + 0.5 * angular * h * h;
+    st.v += linear * h;
+    st.w += angular * h;
 }
 
 /// The speed (m/s) at and below which the closed form takes a ball moving at `speed`, its
