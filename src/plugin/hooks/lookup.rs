@@ -1,9 +1,9 @@
 //! Lookup: the per-step tables rapier's hooks read during its step.
 //!
-//! Contract: built at the end of `before_step` from the plan's roles and the hook flags, read
-//! (never written) by the `PhysicsHooks` impl (`hooks/mod.rs`) while rapier steps; a lookup is an
-//! index and a handle compare, not a hash. The hook flags themselves are put in place by
-//! `hooks/flags.rs`.
+//! Contract: built at the end of `before_step` from the plan's roles (and the colliders of the
+//! pairs of opted-in balls) and the hook flags, read (never written) by the `PhysicsHooks` impl
+//! (`hooks/mod.rs`) while rapier steps; a lookup is an index and a handle compare, not a hash.
+//! The hook flags themselves are put in place by `hooks/flags.rs`.
 
 use crate::plugin::hooks::flags::HookedBody;
 use crate::plugin::policy::Role;
@@ -29,6 +29,10 @@ pub(crate) struct Lookup {
     pub rest: Vec<(ColliderHandle, Role, ActiveHooks)>,
     /// By collider index: the hook flags the user set on a collider the plugin flagged.
     pub user_flags: Vec<Option<(ColliderHandle, ActiveHooks)>>,
+    /// By collider index: `true` where a collider of that index is in a pair of opted-in
+    /// balls (`PairPlan::roles`), so that a pair with any other collider (a ball and its
+    /// ground) is told apart from those pairs without hashing its key.
+    pub pair_members: Vec<bool>,
 }
 
 #[derive(Clone, Copy)]
@@ -60,9 +64,11 @@ pub(crate) enum Looked {
 
 impl Lookup {
     /// `user_flags`: the hook flags the user set on a collider; `far`: the colliders of the
-    /// bodies with no ground in reach (no roles).
+    /// bodies with no ground in reach (no roles); `ball_pairs`: the roles of the pairs of
+    /// opted-in balls.
     pub fn build(
         (roles, by_tile): (&HandleMap<PairKey, Role>, &[ColliderHandle]),
+        ball_pairs: &HandleMap<PairKey, Role>,
         far: &[ColliderHandle],
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
         user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
@@ -78,7 +84,11 @@ impl Lookup {
                 None;
                 len(&mut hooked.values().flat_map(|e| e.colliders.iter().copied()))
             ],
+            pair_members: vec![false; len(&mut ball_pairs.keys().flat_map(|k| [k.0, k.1]))],
         };
+        for c in ball_pairs.keys().flat_map(|k| [k.0, k.1]) {
+            out.pair_members[slot_of(c)] = true;
+        }
         for c in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
             out.user_flags[slot_of(c)] = Some((c, user_flags(c)));
         }
@@ -143,6 +153,14 @@ impl Lookup {
         }
         out.rest = rest.into_iter().map(|(_, pair)| pair).collect();
         out
+    }
+
+    /// May `(c1, c2)` be a pair of opted-in balls (`PairPlan::roles`)? `false` only where
+    /// the table is built and one of the two is in no such pair.
+    #[inline]
+    pub fn may_pair_balls(&self, c1: ColliderHandle, c2: ColliderHandle) -> bool {
+        let member = |c| self.pair_members.get(slot_of(c)).copied().unwrap_or(false);
+        !self.roles_built || member(c1) && member(c2)
     }
 
     /// The role and user flags of the body collider's pair with `ground`, if the table holds

@@ -178,7 +178,7 @@ impl<H> ImpactPlugin<H> {
         // The table holds the registry as `before_step` saw it; a ground marked or unmarked
         // since is checked against the sets.
         // A pair of opted-in balls.
-        if !self.step.pairs.roles.is_empty() {
+        if !self.step.pairs.roles.is_empty() && self.lookup.may_pair_balls(c1, c2) {
             let key = pair_key(c1, c2);
             if let Some(role) = self.step.pairs.roles.get(&key) {
                 let user = self.pair_user_flags(colliders, c1, c2);

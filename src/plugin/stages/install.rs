@@ -43,6 +43,7 @@ impl<H> ImpactPlugin<H> {
             .collect();
         self.lookup = Lookup::build(
             (&step.roles, &step.by_tile),
+            &step.pairs.roles,
             &far_colliders,
             flags.hooked(),
             |c| flags.recorded_user_flags(colliders, c),
