@@ -52,6 +52,7 @@ use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBodySet};
 use nalgebra::Vector3;
+use std::cell::OnceCell;
 
 impl<H> ImpactPlugin<H> {
     /// Routes every candidate not in `step.moved_together` (see the module's contract). A body
@@ -215,18 +216,21 @@ impl AfterStep<'_> {
             return;
         };
         let flown = FlownEnd::new(cand, step.dt);
-        let free = flew_alone(&now, &flown, has_grounds, step);
+        // Asked only where the route needs it (a body with no ground flies as rapier's
+        // integrator left it, outside `Exact` mode): its contacts are walked.
+        let alone = OnceCell::new();
+        let free = || *alone.get_or_init(|| flew_alone(&now, &flown, has_grounds, step));
         // Before any geometry: a body with no ground left to search, or whose search would
         // find the step clear (`Candidate::closing`) and that rapier's CCD did not cut short,
         // only flies (exactly, in `Exact` mode).
         let clear = mode != TimingMode::Step
-            && free
             && has_grounds
             && !cand.closing
+            && free()
             && ccd_consistent(&now, &flown, step.dt, step);
         if !has_grounds || clear {
             if mode == TimingMode::Exact
-                && free
+                && free()
                 && (clear || ccd_consistent(&now, &flown, step.dt, step))
             {
                 self.fly_exactly(&now, &flown);
@@ -245,7 +249,7 @@ impl AfterStep<'_> {
         let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(now.rb());
-        match first_search(&now, &subject, &flown, mode != TimingMode::Step && free) {
+        match first_search(&now, &subject, &flown, mode != TimingMode::Step && free()) {
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
