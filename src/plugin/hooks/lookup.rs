@@ -165,6 +165,7 @@ impl Lookup {
 
     /// The role and user flags of the body collider's pair with `ground`, if the table holds
     /// it.
+    #[inline]
     fn held(&self, slot: &RoleSlot, ground: ColliderHandle) -> Option<(Role, ActiveHooks)> {
         if slot.ground == ground {
             return Some((slot.role, slot.user));
@@ -221,21 +222,32 @@ impl Lookup {
         if !self.roles_built {
             return None;
         }
-        [(c1, c2), (c2, c1)].into_iter().find_map(|(body, ground)| {
-            match self.roles.get(slot_of(body)) {
-                Some(Some(slot)) if slot.body == body => {
-                    let ground = if slot.by_tile {
-                        ground
-                    } else {
-                        stand_in(ground)
-                    };
-                    Some(match self.held(slot, ground) {
-                        Some((role, user)) => Looked::Pair((body, ground), role, user),
-                        None => Looked::Far((body, ground), slot.body_user),
-                    })
-                }
-                _ => None,
+        self.pair_of_body(c1, c2, &stand_in)
+            .or_else(|| self.pair_of_body(c2, c1, &stand_in))
+    }
+
+    /// [`Self::pair`] with `body` as the body collider, `None` when the table does not know
+    /// it as one.
+    #[inline]
+    fn pair_of_body(
+        &self,
+        body: ColliderHandle,
+        ground: ColliderHandle,
+        stand_in: &impl Fn(ColliderHandle) -> ColliderHandle,
+    ) -> Option<Looked> {
+        match self.roles.get(slot_of(body)) {
+            Some(Some(slot)) if slot.body == body => {
+                let ground = if slot.by_tile {
+                    ground
+                } else {
+                    stand_in(ground)
+                };
+                Some(match self.held(slot, ground) {
+                    Some((role, user)) => Looked::Pair((body, ground), role, user),
+                    None => Looked::Far((body, ground), slot.body_user),
+                })
             }
-        })
+            _ => None,
+        }
     }
 }
