@@ -212,7 +212,7 @@ impl Lookup {
     /// holds it, or `Far` for a body collider the table knows with a ground it does not hold;
     /// `None` when neither collider is a body collider of the table. A slab's tile is looked
     /// up as `stand_in` names it, unless the body's pairs are by tile.
-    #[inline]
+    #[inline(always)]
     pub fn pair(
         &self,
         c1: ColliderHandle,

@@ -168,6 +168,7 @@ impl<H> ImpactPlugin<H> {
     /// managed body-ground pair, `None` for another pair. The step's table answers the pairs
     /// `before_step` gave a role (most of them) without looking at the sets; the others are
     /// checked (a pair the plugin did not see coming is `Resting`).
+    #[inline(always)]
     fn pair_in_step(
         &self,
         bodies: &RigidBodySet,
