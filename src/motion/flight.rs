@@ -258,12 +258,14 @@ impl Flight {
     }
 
     /// An upper bound of the centre-of-mass speed over `[0, tau]` from `s`.
+    #[inline]
     pub fn max_speed(&self, s: &State, tau: f64) -> f64 {
         s.v.norm() + self.accel.norm() * tau
     }
 
     /// An upper bound of the angular speed over any flight from `s` (torque-free motion
     /// can speed up the spin of an anisotropic body at constant `L` and energy).
+    #[inline]
     pub fn max_angular_speed(&self, s: &State) -> f64 {
         match &self.gyro {
             Some(gyro) => gyro.max_speed(&s.rot, &s.w),
