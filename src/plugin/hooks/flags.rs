@@ -212,6 +212,7 @@ impl HookFlags {
 
     /// The hook flags the user set on a collider (those rapier would have seen without the
     /// plugin).
+    #[inline]
     pub fn recorded_user_flags(&self, colliders: &ColliderSet, c: ColliderHandle) -> ActiveHooks {
         let Some(co) = colliders.get(c) else {
             return ActiveHooks::empty();
@@ -226,6 +227,7 @@ impl HookFlags {
 
     /// The hook flags the user set on either collider of the pair `key` (what rapier would
     /// have seen for the pair without the plugin).
+    #[inline]
     pub fn recorded_pair_flags(&self, colliders: &ColliderSet, key: PairKey) -> ActiveHooks {
         self.recorded_user_flags(colliders, key.0) | self.recorded_user_flags(colliders, key.1)
     }
