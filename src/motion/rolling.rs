@@ -216,9 +216,9 @@ impl Rolling {
             None
         };
         match first {
-            // One phase of constant accelerations past the step's end (a roll on level
-            // ground, a ball at rest): the step is that phase's first `dt`, as the phases'
-            // walk below would take it.
+            // The common step (a roll on level ground, a ball at rest): one phase of constant
+            // accelerations lasting past the step's end, taken as the phases' walk below would
+            // take it, without the walk.
             Some(Phase {
                 kind: PhaseKind::Constant { linear, angular },
                 until,

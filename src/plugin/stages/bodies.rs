@@ -216,8 +216,8 @@ impl AfterStep<'_> {
             return;
         };
         let flown = FlownEnd::new(cand, step.dt);
-        // Asked only where the route needs it (a body with no ground flies as rapier's
-        // integrator left it, outside `Exact` mode): its contacts are walked.
+        // Whether it flew alone walks its contacts: asked only on the routes that read it (not
+        // for a body with no ground outside `Exact` mode, whose end rapier's integrator keeps).
         let alone = OnceCell::new();
         let free = || *alone.get_or_init(|| flew_alone(&now, &flown, has_grounds, step));
         // Before any geometry: a body with no ground left to search, or whose search would
