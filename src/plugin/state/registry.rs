@@ -15,7 +15,8 @@ use crate::plugin::config::{
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
 use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
+    CoefficientCombineRule, ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle,
+    RigidBodySet,
 };
 
 /// The grounds and the managed bodies (see the module's contract).
@@ -294,11 +295,13 @@ impl Registry {
         ground: ColliderHandle,
         default: (f64, f64),
     ) -> (f64, f64) {
-        let own = self.body_rolling.get(&body).copied().unwrap_or(default);
-        let over = self
-            .grounds
-            .get(&ground)
-            .map_or((None, None), |g| g.rolling);
+        // Most worlds give no ball its own: no lookup then.
+        let own = if self.body_rolling.is_empty() {
+            default
+        } else {
+            self.body_rolling.get(&body).copied().unwrap_or(default)
+        };
+        let over = self.entry(ground).map_or((None, None), |g| g.rolling);
         (over.0.unwrap_or(own.0), over.1.unwrap_or(own.1))
     }
 
@@ -324,10 +327,18 @@ impl Registry {
         body: ColliderHandle,
         ground: ColliderHandle,
     ) -> f64 {
-        let over = self.grounds.get(&ground).and_then(|g| g.material);
+        if let Some(over) = self.entry(ground).and_then(|g| g.material) {
+            return over.friction;
+        }
+        // rapier's combination, as `material` makes it (its restitution is not asked here).
         match (colliders.get(body), colliders.get(ground)) {
-            (Some(b), Some(g)) => material(b, g, over).friction,
-            _ => over.map_or(0.0, |m| m.friction),
+            (Some(b), Some(g)) => to_f64(CoefficientCombineRule::combine(
+                b.friction(),
+                g.friction(),
+                b.friction_combine_rule(),
+                g.friction_combine_rule(),
+            )),
+            _ => 0.0,
         }
     }
 
