@@ -185,11 +185,11 @@ impl NeighbourReads {
 /// body does to the other one during the step is not bounded either: the reconstruct stage
 /// reads rapier's contact impulses after the step
 /// ([`pushed_by_other`](crate::plugin::queries::observe::pushed_by_other)). For a centred ball
-/// (`body` must be one: its own spin is not counted); a pair parry cannot measure, and any
-/// joint, is within reach.
+/// (`rb` must be one: its own spin is not counted); a pair parry cannot measure, and any
+/// joint (`jointed`: the body has one, as `Sets::jointed` says), is within reach.
 pub(crate) fn within_reach_of_other(
-    body: RigidBodyHandle,
     rb: &RigidBody,
+    jointed: bool,
     own: &OwnMotion,
     scene: &Scene,
     neighbours: &mut NeighbourReads,
@@ -204,7 +204,7 @@ pub(crate) fn within_reach_of_other(
     } = *scene;
     // The memo's motions are read with the plan's gravity and step, which every ball shares.
     debug_assert!(own.gravity == neighbours.gravity && own.dt == neighbours.dt);
-    if sets.jointed(body) {
+    if jointed {
         return true;
     }
     // Each side's reach is drawn with the plan's step, which a neighbour's was read with.

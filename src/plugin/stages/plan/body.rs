@@ -17,7 +17,7 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::parry::bounding_volume::Aabb;
-use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBodyHandle};
+use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBody, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// A ground's contact with a body part at the step's start, as `contact_checked` answers.
@@ -27,6 +27,8 @@ pub(super) type StartContact = Result<Option<PairContact>, Unsupported>;
 /// the stages of its plan.
 pub(super) struct BodyNear<'c> {
     pub handle: RigidBodyHandle,
+    /// rapier's body (read as the step's writes leave it through `start`; looked up once).
+    pub rb: &'c RigidBody,
     /// Its state at the step's start (before any `Step` impulse).
     pub start: State,
     pub flight: Flight,
@@ -181,6 +183,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
+            rb,
             start,
             flight,
             local_com,

@@ -38,7 +38,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let n = hit.normal;
         let (point, count) =
             landing_point(part, gg, &plan.state, 0.0, hit, self.config.flat_tolerance);
-        let inertia = Inertia::of(&scene.bodies[body.handle]);
+        let inertia = Inertia::of(body.rb);
         let single = BodyGeom {
             parts: SmallList::One(*part),
             radius: body.geom.radius,

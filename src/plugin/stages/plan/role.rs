@@ -237,7 +237,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     normal,
                     point: point - normal * depth,
                 };
-                let inertia = Inertia::of(&reads.scene.bodies[body.handle]);
+                let inertia = Inertia::of(body.rb);
                 let mut event = correction(
                     EventKind::PushOut,
                     &site,
@@ -385,7 +385,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // the end of step would bounce it back out. What touched the body is asked only
         // where it decides (rarely: most resting pairs are slow), and only of a body
         // measured after the last step.
-        let rb = &scene.bodies[body.handle];
+        let rb = body.rb;
         let pressed =
             || measured && touched_besides_grounds(body.handle, rb, scene.sets, self.registry);
         if step.policy.rests(dist, arrival, was_resting, pressed) {

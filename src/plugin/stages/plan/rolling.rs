@@ -19,7 +19,9 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ActiveHooks, ColliderHandle, PhysicsHooks, RigidBodyHandle};
+use crate::rapier::prelude::{
+    ActiveHooks, ColliderHandle, PhysicsHooks, RigidBody, RigidBodyHandle,
+};
 use nalgebra::Vector3;
 
 /// What the closed form makes of a ball resting on a plane ground (`Planner::rolling_of`).
@@ -44,11 +46,16 @@ pub(crate) enum OnPlane {
 }
 
 /// A ball (the body's only collider, centred) resting on the ground `gg` with normal `n`, as
-/// `Planner::rolling_of` asks it: `on_ground` is its state put on the ground (touching it,
-/// no normal speed), `others` the other grounds near it, `user` the pair's user hook flags,
-/// `last` what the plugin kept of the last step.
+/// `Planner::rolling_of` asks it: `rb` is its rapier body, `member` whether it is a ball of an
+/// impact between bodies, `jointed` whether it has a joint (both as `BodyNear` has them),
+/// `on_ground` its state put on the ground (touching it, no normal speed), `others` the
+/// other grounds near it, `user` the pair's user hook flags, `last` what the plugin kept of
+/// the last step.
 struct BallOnGround<'q, 'c> {
     handle: RigidBodyHandle,
+    rb: &'c RigidBody,
+    member: bool,
+    jointed: bool,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
     user: ActiveHooks,
@@ -140,6 +147,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         let ball = BallOnGround {
             handle: body.handle,
+            rb: body.rb,
+            member: body.member,
+            jointed: body.jointed,
             part,
             gg,
             user,
@@ -192,7 +202,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     normal: n,
                     point,
                 };
-                let inertia = Inertia::of(&scene.bodies[body.handle]);
+                let inertia = Inertia::of(body.rb);
                 self.reports
                     .events
                     .push(released(&site, &inertia, &plan.state, 0.0));
@@ -223,14 +233,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Option<OnPlane> {
         let BallOnGround {
-            handle,
             part,
             gg,
             n,
+            member,
             ref on_ground,
             ..
         } = *ball;
-        let member = step.pairs.members.contains(handle);
         let slide = self.slide_of(scene, ball, step)?;
         if self.reached(scene, &slide, member, step) {
             return Some(OnPlane::Reached);
@@ -245,7 +254,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // ground: its one flat face, in its frame.
         let travel = (v.norm() + on_ground.w.norm() * radius) * step.dt;
         let inside = ball.others.is_empty() && flat_relative(part, gg, on_ground, travel, radius);
-        let inertia_ratio = Inertia::of(&scene.bodies[handle]).ball_ratio(radius)?;
+        let inertia_ratio = Inertia::of(ball.rb).ball_ratio(radius)?;
         let motion = Rolling {
             normal: n,
             radius,
@@ -335,8 +344,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             ..
         } = *ball;
         let colliders = scene.colliders;
-        let rb = &scene.bodies[handle];
-        let member = step.pairs.members.contains(handle);
+        let (rb, member) = (ball.rb, ball.member);
         let b = part.shape.as_ball()?;
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
@@ -407,13 +415,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     fn reached(&mut self, scene: &Scene, slide: &Slide, member: bool, step: &StepData) -> bool {
         if member {
             let handle = slide.ball.handle;
-            pressed_besides(
-                handle,
-                &scene.bodies[handle],
-                None,
-                scene.sets,
-                scene.registry,
-            )
+            pressed_besides(handle, slide.ball.rb, None, scene.sets, scene.registry)
         } else {
             self.reached_by_other(scene, slide, step)
         }
@@ -442,13 +444,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             gravity: step.gravity,
             dt: step.dt,
         };
-        within_reach_of_other(
-            ball.handle,
-            &scene.bodies[ball.handle],
-            &own,
-            scene,
-            self.neighbours,
-        )
+        within_reach_of_other(ball.rb, ball.jointed, &own, scene, self.neighbours)
     }
 
     /// At rest on a slope of `tilt` that holds it: `OnPlane::Held` with the grounds holding
