@@ -19,7 +19,7 @@ use crate::plugin::queries::geometry::{
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{ActiveHooks, PhysicsHooks};
+use crate::rapier::prelude::{ActiveHooks, Collider, PhysicsHooks};
 use nalgebra::Vector3;
 
 /// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
@@ -71,14 +71,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 key,
                 user,
             };
-            let role =
-                if self.filtered(body, scene, key, user) || self.coefficients_refused(scene, key) {
-                    Role::Filtered
-                } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
-                    role
-                } else {
-                    self.contact_role(reads, plan, pair, &mut verdict, step)
-                };
+            // Both exist: the body's geometry and the ground's were read from them.
+            let pair_colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
+            let role = if self.filtered(body, scene, key, pair_colliders, user)
+                || self.coefficients_refused(key, pair_colliders)
+            {
+                Role::Filtered
+            } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
+                role
+            } else {
+                self.contact_role(reads, plan, pair, &mut verdict, step)
+            };
             step.roles.insert(key, role);
         }
         if verdict.any_impact {
@@ -91,11 +94,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// that disables contacts, rapier's own filtering, or the user's filter (asked when `user`,
     /// the pair's user hook flags, asks for it, with the start-of-step state, so that every
     /// pair the plugin could resolve in the step is covered; rapier asks it again during the
-    /// step, for the pairs its broad phase has)? Reads only.
-    fn filtered(&self, body: &BodyNear, scene: &Scene, key: PairKey, user: ActiveHooks) -> bool {
+    /// step, for the pairs its broad phase has)? `(body_co, ground_co)`: the pair's two
+    /// colliders. Reads only.
+    fn filtered(
+        &self,
+        body: &BodyNear,
+        scene: &Scene,
+        key: PairKey,
+        (body_co, ground_co): (&Collider, &Collider),
+        user: ActiveHooks,
+    ) -> bool {
         let (bodies, colliders, sets) = (scene.bodies, scene.colliders, scene.sets);
         let joint_filtered = body.jointed
-            && colliders[key.1].parent().is_some_and(|ground_body| {
+            && ground_co.parent().is_some_and(|ground_body| {
                 filter::joint_disables_contacts(
                     sets.impulse_joints,
                     sets.multibody_joints,
@@ -104,21 +115,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 )
             });
         joint_filtered
-            || !filter::rapier_solves(bodies, &colliders[key.0], &colliders[key.1])
+            || !filter::rapier_solves(bodies, body_co, ground_co)
             || filter::user_refuses(self.user_hooks, user, bodies, colliders, key)
     }
 
     /// Is a collider of the pair out of the plugin's coefficient ranges, with no ground
     /// material to replace them? The pair is then rapier's, as a filtered one is (nothing made
     /// up for it), and each such collider is diagnosed (reported once, `Memory::reported`).
-    /// Reads the two colliders; the registry only when one is out of range.
-    fn coefficients_refused(&mut self, scene: &Scene, key: PairKey) -> bool {
-        let out = |c| {
-            scene.colliders.get(c).filter(|co| {
-                !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
-            })
+    /// Reads the pair's two colliders (`pair_colliders`); the registry only when one is out of
+    /// range.
+    fn coefficients_refused(
+        &mut self,
+        key: PairKey,
+        pair_colliders: (&Collider, &Collider),
+    ) -> bool {
+        let out = |co: &&Collider| {
+            !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
         };
-        let (body, ground) = (out(key.0), out(key.1));
+        let (body, ground) = (
+            Some(pair_colliders.0).filter(out),
+            Some(pair_colliders.1).filter(out),
+        );
         if body.is_none() && ground.is_none()
             || self
                 .registry
@@ -211,6 +228,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                                 body,
                                 reads.scene,
                                 (part.handle, other.handle),
+                                (
+                                    &reads.scene.colliders[part.handle],
+                                    &reads.scene.colliders[other.handle],
+                                ),
                                 self.flags.recorded_pair_flags(
                                     reads.scene.colliders,
                                     (part.handle, other.handle),
