@@ -180,6 +180,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
         let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
+        let geom_of = |i: &usize| Some((*i, ground_geom(&scene.grounds[*i], scene.colliders)?));
+        // Most bodies are near one ground: taken as it is, not collected through an iterator.
+        let grounds = match &near {
+            SmallList::One(i) => geom_of(i).map_or(SmallList::Empty, SmallList::One),
+            near => near.iter().filter_map(geom_of).collect(),
+        };
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
             handle,
@@ -194,14 +200,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             member,
             turns_surface,
             jointed,
-            grounds: SmallList::Empty,
+            grounds,
             start_contacts: SmallList::Empty,
         });
-        body.grounds = body
-            .near
-            .iter()
-            .filter_map(|i| Some((*i, ground_geom(&scene.grounds[*i], scene.colliders)?)))
-            .collect();
         if !turns_surface && body.grounds.len() > 1 {
             body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
         }
