@@ -15,8 +15,8 @@ use crate::plugin::config::{
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
 use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
 use crate::rapier::prelude::{
-    CoefficientCombineRule, ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle,
-    RigidBodySet,
+    CoefficientCombineRule, Collider, ColliderHandle, ColliderSet, LockedAxes, RigidBody,
+    RigidBodyHandle, RigidBodySet,
 };
 
 /// The grounds and the managed bodies (see the module's contract).
@@ -327,19 +327,33 @@ impl Registry {
         body: ColliderHandle,
         ground: ColliderHandle,
     ) -> f64 {
-        if let Some(over) = self.entry(ground).and_then(|g| g.material) {
+        match (colliders.get(body), colliders.get(ground)) {
+            (Some(b), Some(g)) => self.friction_between(b, g, ground),
+            _ => self
+                .entry(ground)
+                .and_then(|g| g.material)
+                .map_or(0.0, |m| m.friction),
+        }
+    }
+
+    /// [`Self::friction_of`] for the body collider `body` and the ground collider `ground`
+    /// (of handle `ground_handle`), both already looked up.
+    pub fn friction_between(
+        &self,
+        body: &Collider,
+        ground: &Collider,
+        ground_handle: ColliderHandle,
+    ) -> f64 {
+        if let Some(over) = self.entry(ground_handle).and_then(|g| g.material) {
             return over.friction;
         }
         // rapier's combination, as `material` makes it (its restitution is not asked here).
-        match (colliders.get(body), colliders.get(ground)) {
-            (Some(b), Some(g)) => to_f64(CoefficientCombineRule::combine(
-                b.friction(),
-                g.friction(),
-                b.friction_combine_rule(),
-                g.friction_combine_rule(),
-            )),
-            _ => 0.0,
-        }
+        to_f64(CoefficientCombineRule::combine(
+            body.friction(),
+            ground.friction(),
+            body.friction_combine_rule(),
+            ground.friction_combine_rule(),
+        ))
     }
 
     /// The material of a body collider against a ground collider: the constant coefficients

@@ -23,14 +23,15 @@ use crate::rapier::prelude::{ActiveHooks, Collider, PhysicsHooks};
 use nalgebra::Vector3;
 
 /// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
-/// part, the pair's key, and the hook flags the user set on its two colliders (read once:
-/// the filter and the rolling ask them).
+/// part, the pair's key, its two colliders, and the hook flags the user set on them (read
+/// once: the filter and the rolling ask them).
 #[derive(Clone, Copy)]
 pub(super) struct Pair<'q, 'c> {
     pub k: usize,
     pub part: &'q BodyPart<'c>,
     pub gg: &'q GroundGeom<'c>,
     pub key: PairKey,
+    pub colliders: (&'c Collider, &'c Collider),
     pub user: ActiveHooks,
 }
 
@@ -64,17 +65,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let key = (part.handle, gg.handle);
             // Read once: the user's filter and the rolling decision both ask for them.
             let user = self.flags.recorded_pair_flags(scene.colliders, key);
+            // Both exist: the body's geometry and the ground's were read from them.
+            let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
             let pair = Pair {
                 k,
                 part,
                 gg,
                 key,
+                colliders,
                 user,
             };
-            // Both exist: the body's geometry and the ground's were read from them.
-            let pair_colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
-            let role = if self.filtered(body, scene, key, pair_colliders, user)
-                || self.coefficients_refused(key, pair_colliders)
+            let role = if self.filtered(body, scene, key, colliders, user)
+                || self.coefficients_refused(key, colliders)
             {
                 Role::Filtered
             } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {

@@ -20,7 +20,7 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{
-    ActiveHooks, ColliderHandle, PhysicsHooks, RigidBody, RigidBodyHandle,
+    ActiveHooks, Collider, ColliderHandle, PhysicsHooks, RigidBody, RigidBodyHandle,
 };
 use nalgebra::Vector3;
 
@@ -49,8 +49,8 @@ pub(crate) enum OnPlane {
 /// `Planner::rolling_of` asks it: `rb` is its rapier body, `member` whether it is a ball of an
 /// impact between bodies, `jointed` whether it has a joint (both as `BodyNear` has them),
 /// `on_ground` its state put on the ground (touching it, no normal speed), `others` the
-/// other grounds near it, `user` the pair's user hook flags, `last` what the plugin kept of
-/// the last step.
+/// other grounds near it, `colliders` the pair's two colliders and `user` their user hook
+/// flags, `last` what the plugin kept of the last step.
 struct BallOnGround<'q, 'c> {
     handle: RigidBodyHandle,
     rb: &'c RigidBody,
@@ -58,6 +58,7 @@ struct BallOnGround<'q, 'c> {
     jointed: bool,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
+    colliders: (&'c Collider, &'c Collider),
     user: ActiveHooks,
     last: &'q LastStep,
     others: &'q [&'q GroundGeom<'c>],
@@ -126,6 +127,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             part,
             gg,
             key,
+            colliders,
             user,
         } = pair;
         let (gi, _) = &body.grounds[k];
@@ -152,6 +154,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             jointed: body.jointed,
             part,
             gg,
+            colliders,
             user,
             last,
             others: &others,
@@ -240,7 +243,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             ref on_ground,
             ..
         } = *ball;
-        let slide = self.slide_of(scene, ball, step)?;
+        let slide = self.slide_of(ball, step)?;
         if self.reached(scene, &slide, member, step) {
             return Some(OnPlane::Reached);
         }
@@ -330,7 +333,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// finite non-negative number. Reads only.
     fn slide_of<'b, 'q, 'c>(
         &self,
-        scene: &Scene,
         ball: &'b BallOnGround<'q, 'c>,
         step: &StepData,
     ) -> Option<Slide<'b, 'q, 'c>> {
@@ -343,7 +345,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             ref on_ground,
             ..
         } = *ball;
-        let colliders = scene.colliders;
         let (rb, member) = (ball.rb, ball.member);
         let b = part.shape.as_ball()?;
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
@@ -387,7 +388,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         if !(an < 0.0 && plain) || !member && slow && !resisted && !carried || user_modifies {
             return None;
         }
-        let friction = self.registry.friction_of(colliders, part.handle, gg.handle);
+        let (body_co, ground_co) = ball.colliders;
+        let friction = self
+            .registry
+            .friction_between(body_co, ground_co, gg.handle);
         if !(friction.is_finite() && friction >= 0.0) {
             return None;
         }
