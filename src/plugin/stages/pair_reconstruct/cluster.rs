@@ -157,7 +157,7 @@ fn move_cluster<'s>(
     meets: &mut Option<(usize, RigidBodyHandle)>,
 ) -> Option<Vec<State>> {
     let mut events = 0usize;
-    while let Some((te, event)) = run.agenda.pop() {
+    while let Some((te, event)) = run.tables.agenda.pop() {
         events += 1;
         // Each body's share, the bodies joined on the way included.
         if events > view.config.max_impacts_per_step * run.balls.len() {
@@ -263,30 +263,10 @@ struct SlowTouch;
 /// bodies not approaching (a graze at rounding level).
 type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 
-/// The lists of a cluster's run ([`Run`]'s), handed on to the next run: cleared and filled
-/// again, a run allocates only where it outgrows the runs before it.
+/// A run's lists: each body's motion and flight, the pairs and which of them rest, each
+/// body's pairs and its index by slot, and the agenda.
 #[derive(Default)]
-pub(crate) struct RunLists {
-    moving: Vec<Moving>,
-    flights: Vec<Flight>,
-    resting: Vec<bool>,
-    pairs: Vec<(usize, usize)>,
-    pairs_of: PairsOf,
-    by_slot: HandleMap<u32, usize>,
-    agenda: Agenda,
-    /// The bodies' states at the step's start, as [`Run::start`] advances them.
-    at_start: Vec<Option<State>>,
-    way: WayOn,
-}
-
-/// A cluster in motion: each body's motion from its last event, and the agenda of what
-/// happens next.
-struct Run<'c, 'a> {
-    context: Context<'c>,
-    /// Its bodies: those it started with, then those that joined it on the way.
-    balls: Vec<ClusterBall<'a>>,
-    /// The bodies that joined it on the way.
-    joined: Vec<Joined>,
+struct RunTables {
     moving: Vec<Moving>,
     /// Each body's flight (gravity, and its user force), held off by a settled ground impact.
     flights: Vec<Flight>,
@@ -300,6 +280,27 @@ struct Run<'c, 'a> {
     /// Each body's index by its body's slot.
     by_slot: HandleMap<u32, usize>,
     agenda: Agenda,
+}
+
+/// The lists of a cluster's run, handed on to the next run: cleared and filled again, a run
+/// allocates only where it outgrows the runs before it.
+#[derive(Default)]
+pub(crate) struct RunLists {
+    tables: RunTables,
+    /// The bodies' states at the step's start, as [`Run::start`] advances them.
+    at_start: Vec<Option<State>>,
+    way: WayOn,
+}
+
+/// A cluster in motion: each body's motion from its last event, and the agenda of what
+/// happens next.
+struct Run<'c, 'a> {
+    context: Context<'c>,
+    /// Its bodies: those it started with, then those that joined it on the way.
+    balls: Vec<ClusterBall<'a>>,
+    /// The bodies that joined it on the way.
+    joined: Vec<Joined>,
+    tables: RunTables,
     starts: StartSearches,
 }
 
@@ -317,21 +318,27 @@ impl<'c, 'a> Run<'c, 'a> {
         // Room for as many bodies again, and as many pairs again as bodies: a run meets a
         // few on the way (`join`, `add_pair`), and its lists then do not grow.
         let (bodies_room, pairs_room) = (2 * balls.len(), pairs.len() + balls.len());
-        let mut moving = std::mem::take(&mut lists.moving);
+        let mut tables = std::mem::take(&mut lists.tables);
+        let RunTables {
+            moving,
+            flights,
+            resting,
+            pairs: run_pairs,
+            pairs_of,
+            by_slot,
+            agenda,
+        } = &mut tables;
         moving.clear();
         moving.reserve(bodies_room);
         moving.extend(balls.iter().map(start_moving));
-        let mut flights = std::mem::take(&mut lists.flights);
         flights.clear();
         flights.reserve(bodies_room);
         flights.extend(balls.iter().map(|b| b.cand.flight));
-        let mut pairs_of = std::mem::take(&mut lists.pairs_of);
         pairs_of.reset(balls.len());
         for (p, (i, j)) in pairs.iter().enumerate() {
             pairs_of.push(*i, p);
             pairs_of.push(*j, p);
         }
-        let mut agenda = std::mem::take(&mut lists.agenda);
         agenda.reset((balls.len(), pairs.len()), (bodies_room, pairs_room));
         starts.grounds.reserve(balls.len() - starts.grounds.len());
         for (k, m) in moving.iter().enumerate() {
@@ -352,19 +359,19 @@ impl<'c, 'a> Run<'c, 'a> {
         let at_start = &mut lists.at_start;
         at_start.clear();
         at_start.resize(balls.len(), None);
+        let moving = &*moving;
         let mut at = |k: usize| *at_start[k].get_or_insert_with(|| moving[k].at(0.0));
         for (p, pair) in pairs.iter().enumerate() {
             let found = match starts.touches[p] {
                 Some(found) => found,
                 None => {
-                    let found = cluster.touch_from(p, *pair, &moving, 0.0, &mut at).ok()?;
+                    let found = cluster.touch_from(p, *pair, moving, 0.0, &mut at).ok()?;
                     starts.touches[p] = Some(found);
                     found
                 }
             };
             agenda.touch(p, found);
         }
-        let mut by_slot = std::mem::take(&mut lists.by_slot);
         by_slot.clear();
         by_slot.extend(
             balls
@@ -372,11 +379,9 @@ impl<'c, 'a> Run<'c, 'a> {
                 .enumerate()
                 .map(|(k, b)| (b.cand.body.slot() as u32, k)),
         );
-        let mut resting = std::mem::take(&mut lists.resting);
         resting.clear();
         resting.reserve(pairs_room);
         resting.resize(pairs.len(), false);
-        let mut run_pairs = std::mem::take(&mut lists.pairs);
         run_pairs.clear();
         run_pairs.reserve(pairs_room);
         run_pairs.extend_from_slice(pairs);
@@ -384,13 +389,7 @@ impl<'c, 'a> Run<'c, 'a> {
             context,
             balls,
             joined: Vec::new(),
-            moving,
-            flights,
-            resting,
-            pairs: run_pairs,
-            pairs_of,
-            by_slot,
-            agenda,
+            tables,
             starts,
         })
     }
@@ -398,13 +397,7 @@ impl<'c, 'a> Run<'c, 'a> {
     /// The run's bodies, those that joined it and its searches from the start; its lists
     /// handed back to `lists`, for the next run.
     fn finish(self, lists: &mut RunLists) -> (Vec<ClusterBall<'a>>, Vec<Joined>, StartSearches) {
-        lists.moving = self.moving;
-        lists.flights = self.flights;
-        lists.resting = self.resting;
-        lists.pairs = self.pairs;
-        lists.pairs_of = self.pairs_of;
-        lists.by_slot = self.by_slot;
-        lists.agenda = self.agenda;
+        lists.tables = self.tables;
         (self.balls, self.joined, self.starts)
     }
 
@@ -442,16 +435,16 @@ impl<'c, 'a> Run<'c, 'a> {
         let settled = event.settled;
         view.commit.event(event);
         // A ball sent off may drive into a pair it rested in.
-        for q in self.pairs_of.of(k) {
-            self.resting[q] = false;
+        for q in self.tables.pairs_of.of(k) {
+            self.tables.resting[q] = false;
         }
-        let before = self.moving[k];
+        let before = self.tables.moving[k];
         if let Motion::Rolling(_) = before.motion {
             let cluster = Cluster::of(&self.context, &self.balls);
-            self.moving[k] = cluster.on_after_touch(view, k, &before, after, t)?;
+            self.tables.moving[k] = cluster.on_after_touch(view, k, &before, after, t)?;
             return Some(());
         }
-        let flight = &mut self.flights[k];
+        let flight = &mut self.tables.flights[k];
         if settled {
             let site = Site {
                 body: ball.cand.body,
@@ -463,10 +456,10 @@ impl<'c, 'a> Run<'c, 'a> {
             };
             rest_on_ground(view, &site, &ball.inertia, flight, &mut after, t, step);
         }
-        self.moving[k] = Moving {
+        self.tables.moving[k] = Moving {
             state: after,
             t0: t,
-            motion: Motion::Flight(self.flights[k]),
+            motion: Motion::Flight(self.tables.flights[k]),
         };
         Some(())
     }
@@ -483,18 +476,18 @@ impl<'c, 'a> Run<'c, 'a> {
         te: f64,
     ) -> Option<([usize; 2], usize)> {
         let cluster = Cluster::of(&self.context, &self.balls);
-        let (i, j) = self.pairs[p];
-        let resolved = cluster.pair_impact(view, (i, j), &touch, &self.moving, te);
+        let (i, j) = self.tables.pairs[p];
+        let resolved = cluster.pair_impact(view, (i, j), &touch, &self.tables.moving, te);
         let Ok(resolved) = resolved else {
-            self.resting[p] = true;
+            self.tables.resting[p] = true;
             return Some(([i, j], 0));
         };
         let Some((after_i, after_j, pair_events)) = resolved else {
             // A graze is stepped over: the pair's next search starts after it.
             let found = cluster
-                .touch(p, (i, j), &self.moving, next_after(te))
+                .touch(p, (i, j), &self.tables.moving, next_after(te))
                 .ok()?;
-            self.agenda.touch(p, found);
+            self.tables.agenda.touch(p, found);
             return Some(([i, j], 0));
         };
         view.commit.events(pair_events);
@@ -502,11 +495,12 @@ impl<'c, 'a> Run<'c, 'a> {
             if cluster.reaches_other_grounds(view, k, &after, cluster.step.dt - te) {
                 return None;
             }
-            self.moving[k] = cluster.on_after_touch(view, k, &self.moving[k], after, te)?;
+            self.tables.moving[k] =
+                cluster.on_after_touch(view, k, &self.tables.moving[k], after, te)?;
         }
         // A ball that moved on may drive into a pair it rested in.
-        for q in self.pairs_of.of(i).chain(self.pairs_of.of(j)) {
-            self.resting[q] = false;
+        for q in self.tables.pairs_of.of(i).chain(self.tables.pairs_of.of(j)) {
+            self.tables.resting[q] = false;
         }
         Some(([i, j], 2))
     }
@@ -517,28 +511,29 @@ impl<'c, 'a> Run<'c, 'a> {
     fn search_again(&mut self, changed: &[usize], te: f64) -> Option<()> {
         let cluster = Cluster::of(&self.context, &self.balls);
         for &k in changed {
-            self.agenda
-                .ground(k, cluster.ground(k, &self.moving[k], te).ok()?);
+            self.tables
+                .agenda
+                .ground(k, cluster.ground(k, &self.tables.moving[k], te).ok()?);
         }
         // Each changed body at `te`, advanced once for all its pairs.
-        let moving = &self.moving;
+        let moving = &self.tables.moving;
         let mut own: [Option<State>; 2] = [None, None];
         let mut at = |b: usize| match changed.iter().position(|k| *k == b) {
             Some(n) => *own[n].get_or_insert_with(|| moving[b].at(te)),
             None => moving[b].at(te),
         };
         for (n, &k) in changed.iter().enumerate() {
-            for q in self.pairs_of.of(k) {
-                let (a, b) = self.pairs[q];
+            for q in self.tables.pairs_of.of(k) {
+                let (a, b) = self.tables.pairs[q];
                 if n == 1 && (a == changed[0] || b == changed[0]) {
                     continue;
                 }
-                let found = if self.resting[q] {
+                let found = if self.tables.resting[q] {
                     None
                 } else {
                     cluster.touch_from(q, (a, b), moving, te, &mut at).ok()?
                 };
-                self.agenda.touch(q, found);
+                self.tables.agenda.touch(q, found);
             }
         }
         Some(())
@@ -552,7 +547,7 @@ impl<'c, 'a> Run<'c, 'a> {
     /// left out, in the order of their slots. Reads only.
     fn way_on(&self, k: usize, t: f64, way: &mut WayOn) {
         let (ball, step) = (&self.balls[k], self.context.step);
-        let s = self.moving[k].at(t);
+        let s = self.tables.moving[k].at(t);
         let left = step.dt - t;
         let widen = ball.geom.radius + ball.cand.flight.accel.norm() * left * left;
         let path = s.v * left;
@@ -592,13 +587,13 @@ impl<'c, 'a> Run<'c, 'a> {
         let (balls, near) = (&self.balls, self.context.near);
         let body_k = balls[k].cand.body;
         let partner = |q: usize| {
-            let (a, b) = self.pairs[q];
+            let (a, b) = self.tables.pairs[q];
             balls[if a == k { b } else { a }].cand.body.slot() as u32
         };
         let (com, v) = (way.com, way.v);
         way.near.iter_mut().find_map(|leaf| {
             let slot = leaf.slot;
-            if self.pairs_of.of(k).any(|q| partner(q) == slot) {
+            if self.tables.pairs_of.of(k).any(|q| partner(q) == slot) {
                 return None;
             }
             let (rb, body) = near.bodies.get_unknown_gen(slot)?;
@@ -607,7 +602,7 @@ impl<'c, 'a> Run<'c, 'a> {
                     .may_pair
                     .get_or_insert_with(|| near.may_pair(body_k, body))
             };
-            match self.by_slot.get(&slot) {
+            match self.tables.by_slot.get(&slot) {
                 Some(j) => may_pair().then_some(Reached::Member(*j)),
                 None => {
                     let towards = vec_to_na(leaf.aabb.center()) - com;
@@ -638,7 +633,7 @@ impl<'c, 'a> Run<'c, 'a> {
         };
         let Admitted { balls, group } = admitted;
         let base = self.balls.len();
-        self.moving.extend(balls.iter().map(start_moving));
+        self.tables.moving.extend(balls.iter().map(start_moving));
         self.balls.extend(balls);
         // Searched from the start, as a run again with them would: kept for it in `starts`,
         // each pair named by its index among the cluster's pairs in a run again.
@@ -647,12 +642,14 @@ impl<'c, 'a> Run<'c, 'a> {
         {
             let cluster = Cluster::of(&self.context, &self.balls);
             for j in base..self.balls.len() {
-                let found = cluster.ground(j, &self.moving[j], 0.0).ok()?;
+                let found = cluster.ground(j, &self.tables.moving[j], 0.0).ok()?;
                 self.starts.grounds.push(found);
             }
             for (q, (i, j)) in group.pairs.iter().enumerate() {
                 let pair = (base + i, base + j);
-                let found = cluster.touch(again + q, pair, &self.moving, 0.0).ok()?;
+                let found = cluster
+                    .touch(again + q, pair, &self.tables.moving, 0.0)
+                    .ok()?;
                 self.starts.touches.push(Some(found));
             }
         }
@@ -660,7 +657,7 @@ impl<'c, 'a> Run<'c, 'a> {
         let mut touches = self.starts.touches[again..].iter().flatten();
         if self.starts.grounds[base..].iter().any(before) || touches.any(before) {
             self.balls.truncate(base);
-            self.moving.truncate(base);
+            self.tables.moving.truncate(base);
             self.starts.grounds.truncate(base);
             self.starts.touches.truncate(again);
             return Some(None);
@@ -668,22 +665,24 @@ impl<'c, 'a> Run<'c, 'a> {
         // The pair of `k` and the body met is searched from `te`, not from the start.
         self.starts.touches.push(None);
         for j in base..self.balls.len() {
-            self.flights.push(self.balls[j].cand.flight);
-            self.pairs_of.add_body();
-            self.by_slot
+            self.tables.flights.push(self.balls[j].cand.flight);
+            self.tables.pairs_of.add_body();
+            self.tables
+                .by_slot
                 .insert(self.balls[j].cand.body.slot() as u32, j);
-            self.agenda.add_body();
-            self.agenda.ground(j, self.starts.grounds[j]);
+            self.tables.agenda.add_body();
+            self.tables.agenda.ground(j, self.starts.grounds[j]);
         }
         for (q, (i, j)) in group.pairs.iter().enumerate() {
-            let p = self.pairs.len();
-            self.pairs.push((base + i, base + j));
-            self.pairs_of.push(base + i, p);
-            self.pairs_of.push(base + j, p);
-            self.resting.push(false);
-            self.agenda.add_pair();
+            let p = self.tables.pairs.len();
+            self.tables.pairs.push((base + i, base + j));
+            self.tables.pairs_of.push(base + i, p);
+            self.tables.pairs_of.push(base + j, p);
+            self.tables.resting.push(false);
+            self.tables.agenda.add_pair();
             let found = self.starts.touches[again + q].flatten();
-            self.agenda
+            self.tables
+                .agenda
                 .touch(p, found.map(|(t, next)| (t, next.as_pair(p))));
         }
         let met = base + group.met;
@@ -694,15 +693,15 @@ impl<'c, 'a> Run<'c, 'a> {
     /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
     /// moved as the pair plan had them apart). `None` where the search gave up.
     fn add_pair(&mut self, k: usize, j: usize, t: f64) -> Option<()> {
-        let p = self.pairs.len();
-        self.pairs.push((k, j));
-        self.pairs_of.push(k, p);
-        self.pairs_of.push(j, p);
-        self.resting.push(false);
-        self.agenda.add_pair();
+        let p = self.tables.pairs.len();
+        self.tables.pairs.push((k, j));
+        self.tables.pairs_of.push(k, p);
+        self.tables.pairs_of.push(j, p);
+        self.tables.resting.push(false);
+        self.tables.agenda.add_pair();
         let cluster = Cluster::of(&self.context, &self.balls);
-        let found = cluster.touch(p, (k, j), &self.moving, t).ok()?;
-        self.agenda.touch(p, found);
+        let found = cluster.touch(p, (k, j), &self.tables.moving, t).ok()?;
+        self.tables.agenda.touch(p, found);
         Some(())
     }
 
@@ -712,9 +711,11 @@ impl<'c, 'a> Run<'c, 'a> {
     fn ends(&self) -> Option<Vec<State>> {
         let step = self.context.step;
         let dt = step.dt;
-        let ends: Vec<State> = self.moving.iter().map(|m| m.at(dt)).collect();
+        let ends: Vec<State> = self.tables.moving.iter().map(|m| m.at(dt)).collect();
         for (k, ball) in self.balls.iter().enumerate() {
-            if let (Motion::Rolling(rolling), Some(g)) = (self.moving[k].motion, ball.rolling_on) {
+            if let (Motion::Rolling(rolling), Some(g)) =
+                (self.tables.moving[k].motion, ball.rolling_on)
+            {
                 let hit = closest(
                     &ball.geom,
                     &ball.grounds[g..=g],
