@@ -42,6 +42,7 @@ mod pairs_of;
 pub(crate) use cluster::through_pair_impacts;
 use cluster::{Admitted, Joined, Joining, RunLists, StartSearches, Unmoved};
 
+use crate::motion::State;
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::config::TimingMode;
@@ -170,16 +171,8 @@ pub(crate) fn move_clusters(
             // A body met on the way, alone or with its later cluster, that moves alone and
             // was not moved yet, joins the run.
             let admit = |view: &AfterStep, other: RigidBodyHandle| {
-                let group = group_of((&clusters, &cands, &written), &absorbed, c, other)?;
-                let members = &group.bodies[..];
-                let mut balls = Vec::new();
-                moves_alone(view, (bodies, colliders), &cands, members)
-                    .then(|| cluster_balls(view, (bodies, colliders), &cands, members, &mut balls))
-                    .flatten()?;
-                Some(Admitted {
-                    balls,
-                    group: group.into_owned(),
-                })
+                let sets = (&clusters, &cands, &written);
+                admitted(view, (bodies, colliders), sets, &absorbed, (c, other))
             };
             let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
@@ -211,28 +204,73 @@ pub(crate) fn move_clusters(
             }
             continue;
         };
-        for (ball, end) in balls.iter().zip(ends) {
-            // Never left inside a ground. No energy cap: an impact between bodies passes
-            // energy from one to the other, so the body hit may end above its start energy.
-            let checked = Checked {
-                body: ball.cand.body,
-                geom: &ball.geom,
-                inertia: &ball.inertia,
-                cand: None,
-                grounds: &ball.grounds,
-                events_from: from,
-            };
-            let why = EndCheck::Flown;
-            let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
-            let end = settled.unwrap_or(end);
-            let (body, local_com) = (ball.cand.body, &ball.cand.local_com);
-            view.commit.state(body, &end, local_com, Origin::Model);
-            written.insert(ball.cand.body);
-        }
+        commit_moved(
+            view,
+            (bodies, colliders, step),
+            (&balls, ends),
+            from,
+            &mut written,
+        );
         spare_balls = balls;
         spare_balls.clear();
     }
     (written, runs)
+}
+
+/// What comes with `other`, met by a body of cluster `c` from outside it, where all of it
+/// moves alone and can be moved with the cluster ([`group_of`]): its bodies and their balls.
+fn admitted<'c>(
+    view: &AfterStep,
+    (bodies, colliders): (&RigidBodySet, &'c ColliderSet),
+    sets: (
+        &Clusters,
+        &CandidatesByBody<'c>,
+        &HandleSet<RigidBodyHandle>,
+    ),
+    absorbed: &[bool],
+    (c, other): (usize, RigidBodyHandle),
+) -> Option<Admitted<'c>> {
+    let cands = sets.1;
+    let group = group_of(sets, absorbed, c, other)?;
+    let members = &group.bodies[..];
+    let mut balls = Vec::new();
+    moves_alone(view, (bodies, colliders), cands, members)
+        .then(|| cluster_balls(view, (bodies, colliders), cands, members, &mut balls))
+        .flatten()?;
+    Some(Admitted {
+        balls,
+        group: group.into_owned(),
+    })
+}
+
+/// Records a moved cluster's end states (`ends`, in `balls`' order; its events are the
+/// commit's from `from` on), each checked against its grounds first, and adds its bodies to
+/// `written`.
+fn commit_moved(
+    view: &mut AfterStep,
+    (bodies, colliders, step): (&RigidBodySet, &ColliderSet, &EndOfStep),
+    (balls, ends): (&[ClusterBall], Vec<State>),
+    from: usize,
+    written: &mut HandleSet<RigidBodyHandle>,
+) {
+    for (ball, end) in balls.iter().zip(ends) {
+        // Never left inside a ground. No energy cap: an impact between bodies passes
+        // energy from one to the other, so the body hit may end above its start energy.
+        let checked = Checked {
+            body: ball.cand.body,
+            geom: &ball.geom,
+            inertia: &ball.inertia,
+            cand: None,
+            grounds: &ball.grounds,
+            events_from: from,
+        };
+        let why = EndCheck::Flown;
+        let (_, settled) = view.check(bodies, colliders, &checked, &end, why, step);
+        let end = settled.unwrap_or(end);
+        let (body, local_com) = (ball.cand.body, &ball.cand.local_com);
+        view.commit.state(body, &end, local_com, Origin::Model);
+        written.insert(ball.cand.body);
+    }
 }
 
 /// A cluster as it grows by the bodies its events send its bodies towards: its members and
