@@ -137,16 +137,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             v: state.v - n * n.dot(&state.v),
             ..state
         };
-        // Most often a ball alone on one ground: nothing to gather.
-        let others: SmallList<&GroundGeom> = if body.grounds.len() > 1 {
-            body.grounds
-                .iter()
-                .filter(|(other, _)| other != gi)
-                .map(|(_, g)| g)
-                .collect()
-        } else {
-            SmallList::Empty
-        };
+        let others = other_grounds(&body.grounds, *gi);
         let ball = BallOnGround {
             handle: body.handle,
             rb: body.rb,
@@ -602,6 +593,23 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
         }
         Some(piece_handles)
+    }
+}
+
+/// The grounds near a ball besides the one of index `gi` in the step's grounds, in their
+/// order: most often a ball is alone on one ground, and nothing is gathered.
+fn other_grounds<'g, 'c>(
+    grounds: &'g [(usize, GroundGeom<'c>)],
+    gi: usize,
+) -> SmallList<&'g GroundGeom<'c>> {
+    if grounds.len() > 1 {
+        grounds
+            .iter()
+            .filter(|(other, _)| *other != gi)
+            .map(|(_, g)| g)
+            .collect()
+    } else {
+        SmallList::Empty
     }
 }
 
