@@ -380,7 +380,10 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         }
         let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
         let base = along(a.v, b.v);
-        let asks = |speed: f64| self.bounce_may_lift(speed, base, normal, fastest);
+        // A NaN closing speed (a non-finite spin of a shape's member) is replaced by any
+        // bounce's in the fold below (`f64::max`), so every bounce is then asked.
+        let asks =
+            |speed: f64| closing.is_nan() || self.bounce_may_lift(speed, base, normal, fastest);
         let bounced_a = if asks(speed_a) {
             self.grounded(i).bounced.map(|va| along(va, b.v))
         } else {
