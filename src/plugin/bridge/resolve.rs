@@ -92,13 +92,18 @@ pub(crate) fn material(body: &Collider, ground: &Collider, over: Option<Material
         body.restitution_combine_rule(),
         ground.restitution_combine_rule(),
     );
-    let mu = CoefficientCombineRule::combine(
+    Material::new(to_f64(e), combined_friction(body, ground))
+}
+
+/// rapier's combination of the two colliders' frictions, by their combine rules (the
+/// friction of [`material`] without a ground's material).
+pub(crate) fn combined_friction(body: &Collider, ground: &Collider) -> f64 {
+    to_f64(CoefficientCombineRule::combine(
         body.friction(),
         ground.friction(),
         body.friction_combine_rule(),
         ground.friction_combine_rule(),
-    );
-    Material::new(to_f64(e), to_f64(mu))
+    ))
 }
 
 /// A contact's coefficients before its approach speed is known: the constant ones (with the

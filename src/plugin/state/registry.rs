@@ -8,15 +8,14 @@
 
 use crate::model::{Material, RestitutionCurve};
 use crate::plugin::bridge::convert::to_f64;
-use crate::plugin::bridge::resolve::{ContactMaterial, material};
+use crate::plugin::bridge::resolve::{ContactMaterial, combined_friction, material};
 use crate::plugin::config::{
     ConfigError, GroundMaterial, ImpactConfig, body_bounce, rolling_coefficient,
 };
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
 use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
 use crate::rapier::prelude::{
-    CoefficientCombineRule, Collider, ColliderHandle, ColliderSet, LockedAxes, RigidBody,
-    RigidBodyHandle, RigidBodySet,
+    Collider, ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
 };
 
 /// The grounds and the managed bodies (see the module's contract).
@@ -347,13 +346,7 @@ impl Registry {
         if let Some(over) = self.entry(ground_handle).and_then(|g| g.material) {
             return over.friction;
         }
-        // rapier's combination, as `material` makes it (its restitution is not asked here).
-        to_f64(CoefficientCombineRule::combine(
-            body.friction(),
-            ground.friction(),
-            body.friction_combine_rule(),
-            ground.friction_combine_rule(),
-        ))
+        combined_friction(body, ground)
     }
 
     /// The material of a body collider against a ground collider: the constant coefficients
