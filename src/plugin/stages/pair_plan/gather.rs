@@ -82,58 +82,59 @@ impl<'a> Members<'a> {
         // Sized for every opted-in body at once: grown ball by ball, the list (rebuilt each
         // step) was copied about as many times as it doubled.
         let mut balls: Vec<Ball> = Vec::with_capacity(registry.pairs_capacity(bodies.len()));
-        balls.extend(
-            bodies
-                .iter()
-                .filter(|(handle, rb)| registry.takes_pairs(*handle, rb))
-                .filter_map(|(handle, rb)| member(handle, rb, inputs.colliders, refused)),
-        );
-        if balls.len() < 2 || balls.iter().all(|b| b.asleep) {
+        let (mut any_elastic, mut any_awake) = (false, false);
+        for (handle, rb) in bodies.iter() {
+            if !registry.takes_pairs(handle, rb) {
+                continue;
+            }
+            if let Some((ball, elastic)) = member(handle, rb, inputs.colliders, refused) {
+                any_elastic |= elastic;
+                any_awake |= !ball.asleep;
+                balls.push(ball);
+            }
+        }
+        if balls.len() < 2 || !any_awake {
             return None;
         }
+        Some(Self::of_balls(balls, any_elastic, inputs))
+    }
+
+    /// The members of these balls: each one's mover flag, swept sphere and leaf, in one pass.
+    fn of_balls<H>(balls: Vec<Ball<'a>>, any_elastic: bool, inputs: &PairInputs<'a, H>) -> Self {
         let policy = inputs.policy;
-        let is_mover: Vec<bool> = balls
-            .iter()
-            .map(|b| 2.0 * (b.v.norm() + b.turn_speed) > policy.resting_speed)
-            .collect();
-        let any_elastic = balls.iter().any(|b| {
-            let co = &inputs.colliders[b.collider];
-            co.restitution() >= 1.0
-                || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum
-        });
-        let movers = is_mover.iter().filter(|m| **m).count();
         let (margin, dt) = (policy.contact_margin(), inputs.dt);
         let g_len = inputs.gravity.norm();
-        let swept: Vec<f64> = balls
-            .iter()
-            .map(|b| b.radius + b.v.norm() * dt + (g_len + b.force_accel) * dt * dt + margin)
-            .collect();
-        let leaves: Vec<(u32, Aabb)> = balls
-            .iter()
-            .zip(&swept)
-            .map(|(b, swept)| {
-                let half = to_real(*swept);
-                (
-                    // A leaf is keyed by its body's arena slot (an arena index is a `u32`).
-                    b.body.slot() as u32,
-                    Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
-                )
-            })
-            .collect();
-        Some(Members {
+        let mut is_mover = Vec::with_capacity(balls.len());
+        let mut swept = Vec::with_capacity(balls.len());
+        let mut leaves = Vec::with_capacity(balls.len());
+        for b in &balls {
+            let speed = b.v.norm();
+            is_mover.push(2.0 * (speed + b.turn_speed) > policy.resting_speed);
+            let reach = b.radius + speed * dt + (g_len + b.force_accel) * dt * dt + margin;
+            swept.push(reach);
+            let half = to_real(reach);
+            leaves.push((
+                // A leaf is keyed by its body's arena slot (an arena index is a `u32`).
+                b.body.slot() as u32,
+                Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
+            ));
+        }
+        let movers = is_mover.iter().filter(|m| **m).count();
+        Members {
             balls,
             is_mover,
             movers,
             any_elastic,
             swept,
             leaves,
-        })
+        }
     }
 }
 
-/// The member of one opted-in body, or `None` when its pairs stay rapier's: not exactly one
-/// collider, a disabled or sensor collider, coefficients out of range (listed in `refused`),
-/// or a shape that is neither a centred ball (met in
+/// The member of one opted-in body, and whether its restitution can make a pair's combined
+/// restitution reach 1 (its own of 1, or a summing combine rule); or `None` when its pairs
+/// stay rapier's: not exactly one collider, a disabled or sensor collider, coefficients out
+/// of range (listed in `refused`), or a shape that is neither a centred ball (met in
 /// closed form) nor convex (parry's contact manifolds of a compound or a mesh are in their
 /// pieces' frames). Reads the body and its collider only.
 fn member<'a>(
@@ -141,7 +142,7 @@ fn member<'a>(
     rb: &RigidBody,
     colliders: &'a ColliderSet,
     refused: &mut Vec<Diagnostic>,
-) -> Option<Ball<'a>> {
+) -> Option<(Ball<'a>, bool)> {
     let [collider] = rb.colliders() else {
         return None;
     };
@@ -177,7 +178,9 @@ fn member<'a>(
         }
     };
     let com = vec_to_na(rb.center_of_mass());
-    Some(Ball {
+    let elastic = co.restitution() >= 1.0
+        || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum;
+    let ball = Ball {
         body: handle,
         collider: *collider,
         com,
@@ -191,7 +194,8 @@ fn member<'a>(
             None => 0.0,
         },
         shape,
-    })
+    };
+    Some((ball, elastic))
 }
 
 /// A member's colliders and state for a contact query: kept in the member for a shape that
