@@ -18,15 +18,15 @@ use crate::rapier::prelude::RigidBodyHandle;
 pub(crate) struct PairIndex {
     tree: Bvh,
     workspace: BvhWorkspace,
-    /// The buffers of the traversal's sort of its pairs.
-    sort: PairSort,
+    /// The step's pairs by their first ball, for the order of the list.
+    buckets: PairBuckets,
     /// How many pairs the last traversal found: the next one's list is sized for a few
     /// more, rather than grown (and copied) pair by pair.
     last_found: usize,
     /// How many times the tree was updated: its shape is optimised every other update.
     updates: u64,
-    /// The body slots with a leaf in the tree.
-    slots: Vec<bool>,
+    /// The body slots with a leaf in the tree: the last update's list.
+    listed: Vec<u32>,
     /// This step's ball (index in its list) by body slot, `u32::MAX` for none.
     ball_of: Vec<u32>,
 }
@@ -46,19 +46,20 @@ impl PairIndex {
         for (k, (slot, _)) in leaves.iter().enumerate() {
             self.ball_of[*slot as usize] = k as u32;
         }
-        for slot in 0..self.slots.len() {
-            let listed = self.ball_of.get(slot).is_some_and(|b| *b != u32::MAX);
-            if self.slots[slot] && !listed {
-                self.tree.remove(slot as u32);
-                self.slots[slot] = false;
+        // The leaves are the last list's: those not listed again go.
+        for slot in &self.listed {
+            if self
+                .ball_of
+                .get(*slot as usize)
+                .is_none_or(|b| *b == u32::MAX)
+            {
+                self.tree.remove(*slot);
             }
         }
-        if self.slots.len() < len {
-            self.slots.resize(len, false);
-        }
+        self.listed.clear();
         for (slot, aabb) in leaves {
             self.tree.insert_or_update_partially(*aabb, *slot, 0.0);
-            self.slots[*slot as usize] = true;
+            self.listed.push(*slot);
         }
         // The boxes are refitted in place: a full refit also copies the whole tree into
         // depth-first order in memory, which changes no query's result nor the tree's shape
@@ -77,14 +78,19 @@ impl PairIndex {
     /// boxes meet, in increasing order: one traversal of the tree against itself. (The tree's
     /// own order depends on its history, which a restored plugin does not have.)
     fn overlapping(&mut self, balls: usize) -> Vec<(usize, usize)> {
-        let mut out = Vec::with_capacity(self.last_found + self.last_found / 4 + 16);
-        let ball_of = &self.ball_of;
+        let (ball_of, buckets) = (&self.ball_of, &mut self.buckets);
+        buckets.prepare(balls);
         self.tree
             .traverse_bvtt_single_tree::<false>(&mut self.workspace, &mut |s1, s2| {
-                let (i, j) = (ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
-                out.push((i.min(j), i.max(j)));
+                buckets.add(ball_of[s1 as usize] as usize, ball_of[s2 as usize] as usize);
             });
-        self.sort.sort(&mut out, balls);
+        self.drain_pairs(balls)
+    }
+
+    /// The bucketed pairs of `balls` balls, in increasing order (the buckets left empty).
+    fn drain_pairs(&mut self, balls: usize) -> Vec<(usize, usize)> {
+        let mut out = Vec::with_capacity(self.last_found + self.last_found / 4 + 16);
+        self.buckets.drain_into(balls, &mut out);
         self.last_found = out.len();
         out
     }
@@ -205,76 +211,59 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
             traversed: true,
         };
     }
-    let mut pairs = Vec::new();
+    let (tree, ball_of, buckets) = (&index.tree, &index.ball_of, &mut index.buckets);
+    buckets.prepare(balls);
     for m in (0..balls).filter(|m| mover(*m)) {
-        for j in index.meeting(&members.leaves[m].1) {
+        for slot in tree.intersect_aabb(&members.leaves[m].1) {
+            let j = ball_of[slot as usize] as usize;
             if j != m && (j > m || !mover(j)) {
-                pairs.push((m.min(j), m.max(j)));
+                buckets.add(m, j);
             }
         }
     }
     // In increasing order, as the traversal's: not the tree's, which depends on its history.
-    index.sort.sort(&mut pairs, balls);
     Candidates {
-        pairs,
+        pairs: index.drain_pairs(balls),
         traversed: false,
     }
 }
 
-/// Sorts pairs of ball indices `(i, j)`, `i < j < balls`, in increasing order: placed in
-/// one bucket per first index (counted, then filled), then each bucket, a ball's few
-/// neighbours, sorted by the second. O(pairs + balls), where comparing whole pairs costs a
-/// factor of log(pairs). Its buffers are kept from step to step (`PairIndex`), so that a
-/// step's sort allocates nothing once they have grown.
+/// The pairs of a step's balls by their first (smaller) ball: each ball's bucket holds the
+/// seconds of its pairs as they are found, so that the pairs come out in increasing order by
+/// walking the buckets in order, each (a ball's few neighbours) sorted by the second. The
+/// cost is O(pairs and balls), where comparing whole pairs costs a factor of log(pairs), and
+/// no pass counts the buckets first. The buckets are kept from step to step (`PairIndex`),
+/// so that a step's pairs allocate nothing once they have grown.
 #[derive(Default)]
-struct PairSort {
-    /// Each first index's count, then where its bucket starts, then (filled) where it ends
-    /// (`u32`, half the bytes to clear each step, as the step's balls are numbered in
-    /// `PairIndex::ball_of`'s `u32`s).
-    bucket_end: Vec<u32>,
-    /// The pairs' second indices, bucket after bucket.
-    seconds: Vec<u32>,
+struct PairBuckets {
+    /// By first ball: the second balls of its pairs (`u32`, as the step's balls are numbered
+    /// in `PairIndex::ball_of`).
+    seconds: Vec<Vec<u32>>,
 }
 
-impl PairSort {
-    fn sort(&mut self, pairs: &mut [(usize, usize)], balls: usize) {
-        // More pairs than a `u32` counts: compared whole.
-        if u32::try_from(pairs.len()).is_err() {
-            pairs.sort_unstable();
-            return;
+impl PairBuckets {
+    /// Room for the pairs of `balls` balls (the buckets are empty).
+    fn prepare(&mut self, balls: usize) {
+        if self.seconds.len() < balls {
+            self.seconds.resize_with(balls, Vec::new);
         }
-        let bucket_end = &mut self.bucket_end;
-        bucket_end.clear();
-        bucket_end.resize(balls, 0);
-        for (i, _) in pairs.iter() {
-            bucket_end[*i] += 1;
-        }
-        let mut sum = 0;
-        for end in bucket_end.iter_mut() {
-            let count = *end;
-            *end = sum;
-            sum += count;
-        }
-        // Every entry is written below before it is read.
-        let seconds = &mut self.seconds;
-        if seconds.len() < pairs.len() {
-            seconds.resize(pairs.len(), 0);
-        }
-        for (i, j) in pairs.iter() {
-            seconds[bucket_end[*i] as usize] = *j as u32;
-            bucket_end[*i] += 1;
-        }
-        let mut k = 0;
-        for (i, end) in bucket_end.iter().enumerate() {
-            let end = *end as usize;
+    }
+
+    /// Adds the pair of balls `i` and `j` (either order, distinct).
+    fn add(&mut self, i: usize, j: usize) {
+        self.seconds[i.min(j)].push(i.max(j) as u32);
+    }
+
+    /// Appends the pairs `(i, j)`, `i < j < balls`, in increasing order, and empties the
+    /// buckets.
+    fn drain_into(&mut self, balls: usize, out: &mut Vec<(usize, usize)>) {
+        for (i, seconds) in self.seconds[..balls].iter_mut().enumerate() {
             // Most buckets hold one pair or none.
-            if end > k + 1 {
-                seconds[k..end].sort_unstable();
+            if seconds.len() > 1 {
+                seconds.sort_unstable();
             }
-            while k < end {
-                pairs[k] = (i, seconds[k] as usize);
-                k += 1;
-            }
+            out.extend(seconds.iter().map(|j| (i, *j as usize)));
+            seconds.clear();
         }
     }
 }
@@ -315,12 +304,12 @@ impl<'p> Around<'p> {
 
 #[cfg(test)]
 mod tests {
-    use super::PairSort;
+    use super::PairBuckets;
 
-    /// The bucket sort orders pairs as a comparison sort of the tuples does, empty buckets,
-    /// repeated first indices and a last ball without pairs included.
+    /// The buckets give pairs in the order a comparison sort of the tuples does, empty
+    /// buckets, pairs given either way round and a last ball without pairs included.
     #[test]
-    fn sort_pairs_orders_as_tuples() {
+    fn bucketed_pairs_order_as_tuples() {
         let balls = 40;
         // A fixed scramble of every pair of a few balls, and some of the others.
         let mut pairs: Vec<(usize, usize)> = (0..balls)
@@ -332,11 +321,20 @@ mod tests {
         pairs.rotate_left(third);
         let mut expected = pairs.clone();
         expected.sort_unstable();
-        let mut sort = PairSort::default();
-        sort.sort(&mut pairs, balls);
-        assert_eq!(pairs, expected);
-        let mut none: Vec<(usize, usize)> = Vec::new();
-        sort.sort(&mut none, balls);
+        let mut buckets = PairBuckets::default();
+        buckets.prepare(balls);
+        for (k, (i, j)) in pairs.iter().enumerate() {
+            if k % 2 == 0 {
+                buckets.add(*i, *j);
+            } else {
+                buckets.add(*j, *i);
+            }
+        }
+        let mut out = Vec::new();
+        buckets.drain_into(balls, &mut out);
+        assert_eq!(out, expected);
+        let mut none = Vec::new();
+        buckets.drain_into(balls, &mut none);
         assert!(none.is_empty());
     }
 }
