@@ -372,7 +372,23 @@ pub(crate) fn carries_turn(
     held: &nalgebra::UnitQuaternion<f64>,
     exact: &nalgebra::UnitQuaternion<f64>,
 ) -> bool {
-    held.angle_to(exact) <= STEERED_TURN_ROUNDINGS * to_f64(Real::EPSILON)
+    let limit = STEERED_TURN_ROUNDINGS * to_f64(Real::EPSILON);
+    let turn = held.rotation_to(exact);
+    // The turn's angle is `2 atan(s / c)` (`s`, `c`: the sine and cosine of its half, the
+    // quaternion's vector's norm and its scalar's magnitude), and `x (1 - x^2 / 3) <= atan(x)
+    // <= x`: half the limit is below 1e-6 rad, where `x^2 / 3` is below 1e-12, so a ratio a
+    // millionth inside or outside it decides as the angle does, whatever the roundings of
+    // either (a few parts in 1e16). Only between, or where the ratio is not a number, is the
+    // angle taken (an arctangent costs a hundred times the ratio).
+    let ratio = turn.imag().norm() / turn.scalar().abs();
+    let half = 0.5 * limit;
+    if ratio <= half * (1.0 - 1e-6) {
+        return true;
+    }
+    if ratio >= half * (1.0 + 1e-6) {
+        return false;
+    }
+    turn.angle() <= limit
 }
 
 impl Policy {
@@ -741,5 +757,38 @@ mod tests {
         }
         // The bound keeps a margin: the worst end is well inside the tolerance.
         assert!(worst < 0.5, "worst gap {worst} of the tolerance");
+    }
+
+    /// The turn's test decides as the angle between the two rotations does, about the limit
+    /// (within a hundredth of it either way, the millionth where the arctangent is taken),
+    /// far from it, and at a half turn.
+    #[test]
+    fn the_turn_test_decides_as_the_angle() {
+        use nalgebra::{Unit, UnitQuaternion, Vector3};
+        let limit = STEERED_TURN_ROUNDINGS * to_f64(Real::EPSILON);
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let scales = [0.0, 0.5, 0.99, 1.0 - 1e-6, 1.0, 1.0 + 1e-6, 1.01, 2.0, 1e6];
+        for case in 0..4000 {
+            let axis = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5);
+            let Some(axis) = Unit::try_new(axis, 1e-6) else {
+                continue;
+            };
+            let held = UnitQuaternion::from_euler_angles(7.0 * next(), 7.0 * next(), 7.0 * next());
+            let scale = scales[case % scales.len()] * (1.0 + 1e-7 * (next() - 0.5));
+            let angle = (limit * scale).min(std::f64::consts::PI);
+            let exact = UnitQuaternion::from_axis_angle(&axis, angle) * held;
+            assert_eq!(
+                carries_turn(&held, &exact),
+                held.angle_to(&exact) <= limit,
+                "case {case}: angle {:e} of {limit:e}",
+                held.angle_to(&exact)
+            );
+        }
     }
 }
