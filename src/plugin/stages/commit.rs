@@ -23,8 +23,7 @@ use crate::motion::State;
 use crate::plugin::bridge::convert::{rot_from_na, rot_to_na, to_f64, vec_from_na, vec_to_na};
 use crate::plugin::events::{Diagnostic, ImpactEvent, Reports};
 use crate::plugin::policy::{carries, carries_turn};
-use crate::plugin::state::handles::HandleMap;
-use crate::plugin::state::memory::Shadow;
+use crate::plugin::state::memory::{Shadow, Shadows};
 use crate::plugin::state::writes::{Now, Place, Write, Writes};
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::prelude::{RigidBody, RigidBodyHandle, RigidBodySet};
@@ -96,7 +95,7 @@ fn apply_one(write: &Write, rb: &mut RigidBody) {
 pub(crate) struct Commit<'a> {
     writes: &'a mut Writes,
     reports: &'a mut Reports,
-    shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
+    shadows: &'a mut Shadows,
     /// `Exact` mode: states of [`Origin::Model`] are remembered (of [`Origin::Roll`], in every
     /// mode).
     exact: bool,
@@ -106,7 +105,7 @@ impl<'a> Commit<'a> {
     pub fn new(
         writes: &'a mut Writes,
         reports: &'a mut Reports,
-        shadows: &'a mut HandleMap<RigidBodyHandle, Shadow>,
+        shadows: &'a mut Shadows,
         exact: bool,
     ) -> Self {
         Self {
@@ -434,7 +433,7 @@ mod tests {
             for seq in &kinds {
                 let (mut bodies, h) = body(kind);
                 let mut writes = Writes::default();
-                let (mut reports, mut shadows) = (Reports::default(), HandleMap::default());
+                let (mut reports, mut shadows) = (Reports::default(), Shadows::default());
                 let mut commit = Commit::new(&mut writes, &mut reports, &mut shadows, true);
                 for (i, k) in seq.iter().enumerate() {
                     record(&mut commit, &bodies, h, *k + i);
@@ -461,7 +460,7 @@ mod tests {
         let (bodies, h) = body(0);
         let was = read_rapier(&bodies[h]);
         let mut writes = Writes::default();
-        let (mut reports, mut shadows) = (Reports::default(), HandleMap::default());
+        let (mut reports, mut shadows) = (Reports::default(), Shadows::default());
         let mut commit = Commit::new(&mut writes, &mut reports, &mut shadows, false);
         record(&mut commit, &bodies, h, 0);
         assert_ne!(read_now(&commit.body(&bodies, h).unwrap()), was);

@@ -4,7 +4,7 @@ use crate::motion::State;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
-    HandleMap, HandleSet, PairKey, SlotTable, sorted_entries, sorted_members,
+    ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, sorted_entries, sorted_members,
 };
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::plugin::state::writes::Now;
@@ -66,13 +66,93 @@ impl Shadow {
     }
 }
 
+/// The shadows of the states a step wrote, by body: their entries in a vector, and each
+/// entry's place by the body handle's arena slot, so that a write's insert and a plan's read
+/// are an index and a handle compare (every rolling ball's shadow is written and read each
+/// step). The entries' order is their history's: a snapshot lists them in arena order
+/// ([`Self::sorted`]).
+#[derive(Default)]
+pub(crate) struct Shadows {
+    entries: Vec<(RigidBodyHandle, Shadow)>,
+    /// By a body handle's arena slot: 1 + the place in `entries` of the body's shadow, or 0.
+    places: Vec<u32>,
+}
+
+impl Shadows {
+    /// The place in `entries` of `body`'s shadow, if it has one.
+    #[inline]
+    fn place(&self, body: RigidBodyHandle) -> Option<usize> {
+        let k = *self.places.get(body.slot())? as usize;
+        (k > 0 && self.entries[k - 1].0 == body).then_some(k - 1)
+    }
+
+    /// `body`'s shadow, if it has one.
+    #[inline]
+    pub fn get(&self, body: &RigidBodyHandle) -> Option<&Shadow> {
+        self.place(*body).map(|k| &self.entries[k].1)
+    }
+
+    /// Sets `body`'s shadow. A body of another generation in the same slot (one rapier
+    /// removed) loses its own: rapier never hands its handle out again.
+    pub fn insert(&mut self, body: RigidBodyHandle, shadow: Shadow) {
+        let slot = body.slot();
+        if slot >= self.places.len() {
+            self.places.resize(slot + 1, 0);
+        }
+        match self.places[slot] as usize {
+            0 => {
+                self.entries.push((body, shadow));
+                self.places[slot] = self.entries.len() as u32;
+            }
+            k => self.entries[k - 1] = (body, shadow),
+        }
+    }
+
+    /// Removes `body`'s shadow, if it has one.
+    pub fn remove(&mut self, body: &RigidBodyHandle) {
+        let Some(k) = self.place(*body) else {
+            return;
+        };
+        self.places[body.slot()] = 0;
+        self.entries.swap_remove(k);
+        if let Some((moved, _)) = self.entries.get(k) {
+            self.places[moved.slot()] = k as u32 + 1;
+        }
+    }
+
+    /// Removes every shadow, at a cost of their number (not of the slots').
+    pub fn clear(&mut self) {
+        for (body, _) in &self.entries {
+            self.places[body.slot()] = 0;
+        }
+        self.entries.clear();
+    }
+
+    /// The shadows in arena order.
+    pub fn sorted(&self) -> Vec<(RigidBodyHandle, Shadow)> {
+        let mut entries = self.entries.clone();
+        entries.sort_unstable_by_key(|(body, _)| body.arena_order());
+        entries
+    }
+}
+
+impl FromIterator<(RigidBodyHandle, Shadow)> for Shadows {
+    fn from_iter<I: IntoIterator<Item = (RigidBodyHandle, Shadow)>>(iter: I) -> Self {
+        let mut shadows = Self::default();
+        for (body, shadow) in iter {
+            shadows.insert(body, shadow);
+        }
+        shadows
+    }
+}
+
 /// What one step leaves for the next: the shadows and the roles and holds of its
 /// pairs (the hysteresis of the resting and rolling decisions), and the step's tables kept for
 /// their allocations.
 #[derive(Default)]
 pub(crate) struct Memory {
     /// The shadows of the states written in the step (read by the next step's plan).
-    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    pub shadows: Shadows,
     /// The roles of the pairs with grounds.
     pub roles: HandleMap<PairKey, Role>,
     /// The roles of the pairs between opted-in bodies.
@@ -125,7 +205,7 @@ impl NearMarks {
 
 /// Last step's memory, read by this step's plan while this step's is written.
 pub(crate) struct LastStep {
-    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    pub shadows: Shadows,
     pub roles: HandleMap<PairKey, Role>,
     pub pair_roles: HandleMap<PairKey, Role>,
     pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
@@ -134,7 +214,7 @@ pub(crate) struct LastStep {
 /// Tables a step fills again, kept from the step before.
 #[derive(Default)]
 pub(crate) struct Spare {
-    pub shadows: HandleMap<RigidBodyHandle, Shadow>,
+    pub shadows: Shadows,
     pub roles: HandleMap<PairKey, Role>,
     pub candidates: Vec<Candidate>,
 }
@@ -215,7 +295,7 @@ impl Memory {
     /// What the next step would read.
     pub fn save(&self) -> SavedMemory {
         SavedMemory {
-            shadows: sorted_entries(&self.shadows),
+            shadows: self.shadows.sorted(),
             roles: sorted_entries(&self.roles),
             pair_roles: sorted_entries(&self.pair_roles),
             holds: sorted_members(&self.holds),
@@ -241,8 +321,54 @@ impl Memory {
 
 #[cfg(test)]
 mod tests {
-    use super::NearMarks;
+    use super::{NearMarks, Shadow, Shadows};
+    use crate::rapier::math::Vector;
     use crate::rapier::prelude::RigidBodyHandle;
+    use nalgebra::Vector3;
+
+    /// A shadow is found by its whole handle, after others are removed around it (an entry
+    /// moved into a removed one's place), replaced by another generation of its slot, and
+    /// listed in arena order whatever the order of the inserts.
+    #[test]
+    fn a_shadow_is_found_by_its_handle_and_listed_in_arena_order() {
+        let shadow = |x: f64| Shadow {
+            com: Vector3::new(x, 0.0, 0.0),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            written_translation: Vector::ZERO,
+            written_linvel: Vector::ZERO,
+            written_angvel: Vector::ZERO,
+        };
+        let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
+        let mut shadows: Shadows = [(h(7, 0), shadow(7.0)), (h(2, 0), shadow(2.0))]
+            .into_iter()
+            .collect();
+        shadows.insert(h(5, 0), shadow(5.0));
+        shadows.insert(h(2, 0), shadow(2.5));
+        assert_eq!(shadows.get(&h(2, 0)), Some(&shadow(2.5)), "replaced");
+        assert_eq!(shadows.get(&h(2, 1)), None, "another generation");
+        assert_eq!(shadows.get(&h(40, 0)), None, "beyond the slots");
+        shadows.remove(&h(7, 0));
+        shadows.remove(&h(7, 0));
+        assert_eq!(shadows.get(&h(7, 0)), None);
+        assert_eq!(
+            shadows.get(&h(5, 0)),
+            Some(&shadow(5.0)),
+            "moved in its place"
+        );
+        shadows.insert(h(5, 1), shadow(5.5));
+        assert_eq!(
+            shadows.get(&h(5, 0)),
+            None,
+            "its slot taken by another generation"
+        );
+        let listed = shadows.sorted();
+        assert_eq!(listed, vec![(h(2, 0), shadow(2.5)), (h(5, 1), shadow(5.5))]);
+        shadows.clear();
+        assert!(shadows.sorted().is_empty() && shadows.get(&h(2, 0)).is_none());
+        shadows.insert(h(2, 0), shadow(1.0));
+        assert_eq!(shadows.sorted(), vec![(h(2, 0), shadow(1.0))]);
+    }
 
     /// A mark answers for the next step only, and only for its own body: not for a body
     /// that took its slot, not two steps on, not before the plan made it.
