@@ -224,36 +224,54 @@ fn phis(c: f64, t: f64) -> (f64, f64) {
 impl Flight {
     /// The state `tau` seconds after `s`.
     pub fn advance(&self, s: &State, tau: f64) -> State {
+        let (com, v) = self.advance_centre(s, tau);
+        let (phi1_w, _) = phis(self.angular_damping, tau);
+        let (rot, w) = match &self.gyro {
+            Some(gyro) if s.w != Vector3::zeros() => {
+                let (rot, l) = gyro.rotate(&s.rot, gyro.momentum(&s.rot, &s.w), phi1_w);
+                (
+                    rot,
+                    gyro.axes(&rot) * l.component_div(&gyro.inertia) * self.spin_decay(tau),
+                )
+            }
+            _ => (
+                UnitQuaternion::from_scaled_axis(s.w * phi1_w) * s.rot,
+                self.spin_keeping_axis(&s.w, tau),
+            ),
+        };
+        State { com, rot, v, w }
+    }
+
+    /// The centre of mass's position and velocity `tau` seconds after `s`: those of
+    /// [`Self::advance`], without its rotation.
+    #[inline]
+    pub fn advance_centre(&self, s: &State, tau: f64) -> (Vector3<f64>, Vector3<f64>) {
         let (phi1, phi2) = phis(self.linear_damping, tau);
         let decay = if self.linear_damping == 0.0 {
             1.0
         } else {
             crate::math::exp(-self.linear_damping * tau)
         };
-        let (phi1_w, _) = phis(self.angular_damping, tau);
-        let decay_w = if self.angular_damping == 0.0 {
+        (
+            s.com + s.v * phi1 + self.accel * phi2,
+            s.v * decay + self.accel * phi1,
+        )
+    }
+
+    /// The spin `tau` seconds after the spin `w` of a body whose spin keeps its axis (no
+    /// gyroscopic motion, `gyro` `None`): that of [`Self::advance`].
+    #[inline]
+    pub fn spin_keeping_axis(&self, w: &Vector3<f64>, tau: f64) -> Vector3<f64> {
+        w * self.spin_decay(tau)
+    }
+
+    /// The factor angular damping leaves of the angular momentum after `tau` seconds.
+    #[inline]
+    fn spin_decay(&self, tau: f64) -> f64 {
+        if self.angular_damping == 0.0 {
             1.0
         } else {
             crate::math::exp(-self.angular_damping * tau)
-        };
-        let (rot, w) = match &self.gyro {
-            Some(gyro) if s.w != Vector3::zeros() => {
-                let (rot, l) = gyro.rotate(&s.rot, gyro.momentum(&s.rot, &s.w), phi1_w);
-                (
-                    rot,
-                    gyro.axes(&rot) * l.component_div(&gyro.inertia) * decay_w,
-                )
-            }
-            _ => (
-                UnitQuaternion::from_scaled_axis(s.w * phi1_w) * s.rot,
-                s.w * decay_w,
-            ),
-        };
-        State {
-            com: s.com + s.v * phi1 + self.accel * phi2,
-            rot,
-            v: s.v * decay + self.accel * phi1,
-            w,
         }
     }
 

@@ -339,20 +339,21 @@ impl AfterStep<'_> {
     /// and the two must agree); a body whose spin keeps its axis (isotropic inertia, or
     /// rapier's gyroscopic forces off) gets the exact spin too.
     fn fly_exactly(&mut self, now: &Now, flown: &FlownEnd) {
-        let (cand, end) = (flown.candidate(), *flown.get());
+        let (cand, (com, v)) = (flown.candidate(), *flown.centre());
         let exact_spin = cand.flight.gyro.is_none()
             && !now
                 .rb()
                 .locked_axes()
                 .intersects(LockedAxes::ROTATION_LOCKED);
         let s = State {
+            com,
             rot: rot_to_na(now.rotation()),
+            v,
             w: if exact_spin {
-                end.w
+                flown.spin_keeping_axis()
             } else {
                 vec_to_na(now.angvel())
             },
-            ..end
         };
         let body = (cand.body, now);
         let spin_steered = (exact_spin, cand.steer.is_some());

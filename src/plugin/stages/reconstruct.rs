@@ -225,12 +225,15 @@ pub(crate) fn rest_on_ground(
     true
 }
 
-/// A candidate's free flight over the whole step from its start state: computed once, when
-/// first asked (several checks of one body read it).
+/// A candidate's free flight over the whole step from its start state, as far as its checks
+/// and `Exact` mode's flight read it: the centre of mass's end, computed once, when first
+/// asked (several checks of one body read it), and the end spin of a body whose spin keeps
+/// its axis. No reader takes the flight's end rotation (`Exact` mode keeps rapier's), which
+/// costs most of the flight to compute.
 pub(crate) struct FlownEnd<'c> {
     cand: &'c Candidate,
     dt: f64,
-    end: std::cell::OnceCell<State>,
+    centre: std::cell::OnceCell<(Vector3<f64>, Vector3<f64>)>,
 }
 
 impl<'c> FlownEnd<'c> {
@@ -238,7 +241,7 @@ impl<'c> FlownEnd<'c> {
         Self {
             cand,
             dt,
-            end: std::cell::OnceCell::new(),
+            centre: std::cell::OnceCell::new(),
         }
     }
 
@@ -247,10 +250,19 @@ impl<'c> FlownEnd<'c> {
         self.cand
     }
 
-    /// The state the flight reaches at the step's end.
-    pub fn get(&self) -> &State {
-        self.end
-            .get_or_init(|| self.cand.flight.advance(&self.cand.start, self.dt))
+    /// The centre of mass's position and velocity the flight reaches at the step's end (those
+    /// of `Flight::advance`).
+    pub fn centre(&self) -> &(Vector3<f64>, Vector3<f64>) {
+        self.centre
+            .get_or_init(|| self.cand.flight.advance_centre(&self.cand.start, self.dt))
+    }
+
+    /// The spin at the step's end of a body whose spin keeps its axis (no gyroscopic
+    /// motion: `Flight::gyro` `None`), that of `Flight::advance`.
+    pub fn spin_keeping_axis(&self) -> Vector3<f64> {
+        self.cand
+            .flight
+            .spin_keeping_axis(&self.cand.start.w, self.dt)
     }
 }
 
@@ -259,7 +271,7 @@ impl<'c> FlownEnd<'c> {
 /// resting contact takes back all of `|g| dt`.
 pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd) -> bool {
     let (cand, dt) = (flown.cand, flown.dt);
-    let flown = flown.get().v;
+    let flown = flown.centre().1;
     let actual = vec_to_na(body.linvel());
     // A steered flight (`steer.rs`) changes rapier's velocity as the flight changes its own,
     // from the velocity rapier held.
@@ -284,7 +296,7 @@ pub(crate) fn ccd_consistent(body: &Now, flown: &FlownEnd, t_first: f64, step: &
     if !body.rb().is_ccd_active() {
         return true;
     }
-    let path = (&cand.start.com, &flown.get().com);
+    let path = (&cand.start.com, &flown.centre().0);
     ccd_reached(body, path, t_first / dt, cand.flight.accel.norm(), step)
 }
 
