@@ -6,12 +6,12 @@
 //! its size, how fast its body can close on anything) is the same for every ball it
 //! neighbours, so it is read once a plan and kept in [`NeighbourReads`] until the plan ends or
 //! its body is written again (a `Step` impulse of an earlier body's plan); the bound each ball
-//! then draws from it is the one read afresh would give, to the bit. Any other shape (a ground
-//! under every ball, which the test skips, a wall) is read afresh each time. Two balls are
-//! first held to the sum of how far each can move in the step in any direction
-//! ([`closing_bound_of_reaches`], never below the exact bound along their line of centres): a
-//! neighbour beyond it is beyond the exact bound too, so the answer is the exact test's, and
-//! most neighbours of a rolling ball are settled so.
+//! then draws from it is the one read afresh would give, to the bit. A ground (a floor under
+//! every ball) is skipped before it is read; any other shape (a wall) is read afresh each
+//! time. Two balls are first held to the sum of how far each can move in the step in any
+//! direction ([`closing_bound_of_reaches`], never below the exact bound along their line of
+//! centres): a neighbour beyond it is beyond the exact bound too, so the answer is the exact
+//! test's, and most neighbours of a rolling ball are settled so.
 
 use crate::parry::query;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
@@ -88,7 +88,7 @@ struct Neighbour {
 enum Read<'n, 'c> {
     /// A ball, as this plan reads it.
     Ball(&'n Neighbour),
-    /// Any other shape (most often a ground, which the test skips), read afresh and not kept.
+    /// Any other shape but a ground's (a wall), read afresh and not kept.
     Other(&'c Collider),
 }
 
@@ -230,6 +230,11 @@ pub(crate) fn within_reach_of_other(
             } else {
                 pair.collider1
             };
+            // A ground (a floor under every ball) is the plan's to meet, whatever its shape:
+            // skipped before anything else of it is read.
+            if is_ground(&other) {
+                continue;
+            }
             match neighbours.read(other, scene) {
                 None => {}
                 Some(Read::Ball(near)) => {
@@ -238,9 +243,6 @@ pub(crate) fn within_reach_of_other(
                     }
                     let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
                     let Some(a) = ball else {
-                        if is_ground(&other) {
-                            continue;
-                        }
                         let Some(oc) = colliders.get(other) else {
                             continue;
                         };
@@ -249,8 +251,7 @@ pub(crate) fn within_reach_of_other(
                         }
                         continue;
                     };
-                    // Two balls (most neighbours in a crowd): their centres, without parry; the
-                    // ground lookup only for one within reach (a ball marked as ground).
+                    // Two balls (most neighbours in a crowd): their centres, without parry.
                     let d = vec_to_na(near.translation - co.position().translation);
                     let len = d.norm();
                     let gap = len - to_f64(a.radius) - to_f64(near.radius) - skins;
@@ -265,14 +266,13 @@ pub(crate) fn within_reach_of_other(
                     // Two centres close no faster than along their line now:
                     // |d + x| >= |d| + x.d/|d| for any relative displacement x.
                     let line = (len > 0.0).then(|| d / len);
-                    if gap > closing_bound(own, &near.motion, line) || is_ground(&other) {
+                    if gap > closing_bound(own, &near.motion, line) {
                         continue;
                     }
                     return true;
                 }
                 Some(Read::Other(oc)) => {
-                    // Its own grounds (a half-space under every ball) before parry's distance.
-                    if !oc.is_enabled() || is_ground(&other) {
+                    if !oc.is_enabled() {
                         continue;
                     }
                     let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
