@@ -3,9 +3,9 @@
 //! it (rapier's resting contact), and the grounds that make up the plane under its path.
 
 use super::Planner;
-use super::body::{BodyPlan, BodyReads};
+use super::body::{BodyNear, BodyPlan, BodyReads};
 use super::role::Pair;
-use crate::motion::{Flight, Rolling, State};
+use crate::motion::{Rolling, State};
 use crate::plugin::bridge::resolve::{Inertia, Site, released};
 use crate::plugin::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, ROLLING_MIN_SLIP, Role};
 use crate::plugin::policy::{LEVEL_TOLERANCE, on_plane_through_rounding};
@@ -19,9 +19,7 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{
-    ActiveHooks, Collider, ColliderHandle, PhysicsHooks, RigidBody, RigidBodyHandle,
-};
+use crate::rapier::prelude::{ActiveHooks, Collider, ColliderHandle, PhysicsHooks};
 use nalgebra::Vector3;
 
 /// What the closed form makes of a ball resting on a plane ground (`Planner::rolling_of`).
@@ -45,36 +43,50 @@ pub(crate) enum OnPlane {
     Reached,
 }
 
-/// A ball (the body's only collider, centred) resting on the ground `gg` with normal `n`, as
-/// `Planner::rolling_of` asks it: `rb` is its rapier body, `member` whether it is a ball of an
-/// impact between bodies, `jointed` whether it has a joint (both as `BodyNear` has them),
-/// `on_ground` its state put on the ground (touching it, no normal speed), `others` the
-/// other grounds near it, `colliders` the pair's two colliders and `user` their user hook
-/// flags, `last` what the plugin kept of the last step.
+/// A ball (the body's only collider, centred) resting on the ground `gg` (the `gi`-th of the
+/// step's grounds) with normal `n`, as `Planner::rolling_of` asks it: `body` the body near its
+/// grounds (its rapier body, whether it is a ball of an impact between bodies or has a joint),
+/// `on_ground` its state put on the ground (touching it, no normal speed), `colliders` the
+/// pair's two colliders and `user` their user hook flags, `last` what the plugin kept of the
+/// last step. It borrows rather than copies, and its other grounds are gone through where
+/// asked rather than gathered: most balls resting on a ground are refused at once
+/// (`Planner::slide_of`), and most of the others are alone on it.
 struct BallOnGround<'q, 'c> {
-    handle: RigidBodyHandle,
-    rb: &'c RigidBody,
-    member: bool,
-    jointed: bool,
+    body: &'q BodyNear<'c>,
+    gi: usize,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
     colliders: (&'c Collider, &'c Collider),
     user: ActiveHooks,
     last: &'q LastStep,
-    others: &'q [&'q GroundGeom<'c>],
-    flight: &'q Flight,
     n: Vector3<f64>,
-    on_ground: State,
+    on_ground: &'q State,
 }
 
-impl BallOnGround<'_, '_> {
+impl<'q, 'c> BallOnGround<'q, 'c> {
+    /// The other grounds near it, in the step's grounds' order: most often a ball is alone
+    /// on one ground, and there are none.
+    fn others(&self) -> impl Iterator<Item = &'q GroundGeom<'c>> + use<'q, 'c> {
+        let gi = self.gi;
+        let grounds: &'q [(usize, GroundGeom<'c>)] = &self.body.grounds;
+        grounds
+            .iter()
+            .filter(move |(other, _)| *other != gi)
+            .map(|(_, g)| g)
+    }
+
+    /// Is it near no ground but its own?
+    fn alone(&self) -> bool {
+        self.others().next().is_none()
+    }
+
     /// Was its pair with its ground rapier's resting contact last step, and none of its pairs
     /// with the other grounds near it the closed form's rolling (a roll that ends on another
     /// piece of the plane is the closed form's to its stop)?
     fn rested(&self) -> bool {
         let role = |g: &GroundGeom| self.last.roles.get(&(self.part.handle, g.handle));
         role(self.gg) == Some(&Role::Resting)
-            && self.others.iter().all(|g| role(g) != Some(&Role::Rolling))
+            && self.others().all(|g| role(g) != Some(&Role::Rolling))
     }
 }
 
@@ -137,21 +149,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             v: state.v - n * n.dot(&state.v),
             ..state
         };
-        let others = other_grounds(&body.grounds, *gi);
         let ball = BallOnGround {
-            handle: body.handle,
-            rb: body.rb,
-            member: body.member,
-            jointed: body.jointed,
+            body,
+            gi: *gi,
             part,
             gg,
             colliders,
             user,
             last,
-            others: &others,
-            flight: &body.flight,
             n,
-            on_ground,
+            on_ground: &on_ground,
         };
         match self.rolling_of(scene, &ball, step) {
             Some(OnPlane::Rolls {
@@ -230,10 +237,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             part,
             gg,
             n,
-            member,
-            ref on_ground,
+            on_ground,
             ..
         } = *ball;
+        let member = ball.body.member;
         let slide = self.slide_of(ball, step)?;
         if self.reached(scene, &slide, member, step) {
             return Some(OnPlane::Reached);
@@ -247,8 +254,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // cuboid's edge, could be met inside the step, out of rapier's solver. On a moving
         // ground: its one flat face, in its frame.
         let travel = (v.norm() + on_ground.w.norm() * radius) * step.dt;
-        let inside = ball.others.is_empty() && flat_relative(part, gg, on_ground, travel, radius);
-        let inertia_ratio = Inertia::of(ball.rb).ball_ratio(radius)?;
+        let inside = ball.alone() && flat_relative(part, gg, on_ground, travel, radius);
+        let inertia_ratio = Inertia::of(ball.body.rb).ball_ratio(radius)?;
         let motion = Rolling {
             normal: n,
             radius,
@@ -256,7 +263,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             friction: slide.friction,
             rolling_resistance: slide.rolling_resistance,
             spinning_friction: slide.spinning_friction,
-            accel: ball.flight.accel,
+            accel: ball.body.flight.accel,
             ground_velocity: slide.u,
         };
         // At rest on a slope that holds it (its closed-form stop, or placed there): rapier's
@@ -328,15 +335,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Option<Slide<'b, 'q, 'c>> {
         let BallOnGround {
-            handle,
+            body,
             part,
             gg,
-            flight,
             ref n,
-            ref on_ground,
+            on_ground,
             ..
         } = *ball;
-        let (rb, member) = (ball.rb, ball.member);
+        let BodyNear {
+            handle,
+            rb,
+            member,
+            ref flight,
+            ..
+        } = *body;
         let b = part.shape.as_ball()?;
         let radius = crate::plugin::bridge::convert::to_f64(b.radius) + part.skin + gg.skin;
         let an = flight.accel.dot(n);
@@ -409,8 +421,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// sink under that body. Any other ball: [`Self::reached_by_other`].
     fn reached(&mut self, scene: &Scene, slide: &Slide, member: bool, step: &StepData) -> bool {
         if member {
-            let handle = slide.ball.handle;
-            pressed_besides(handle, slide.ball.rb, None, scene.sets, scene.registry)
+            let body = slide.ball.body;
+            pressed_besides(body.handle, body.rb, None, scene.sets, scene.registry)
         } else {
             self.reached_by_other(scene, slide, step)
         }
@@ -426,7 +438,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let (an, slip, v) = (slide.an, slide.slip, slide.v);
         let own = OwnMotion {
             v: ball.on_ground.v,
-            accel: ball.flight.accel,
+            accel: ball.body.flight.accel,
             normal: ball.n,
             pressed: -an,
             dragged: -an * slide.friction.max(slide.rolling_resistance),
@@ -439,7 +451,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             gravity: step.gravity,
             dt: step.dt,
         };
-        within_reach_of_other(ball.rb, ball.jointed, &own, scene, self.neighbours)
+        let body = ball.body;
+        within_reach_of_other(body.rb, body.jointed, &own, scene, self.neighbours)
     }
 
     /// At rest on a slope of `tilt` that holds it: `OnPlane::Held` with the grounds holding
@@ -458,7 +471,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             part,
             gg,
             n,
-            ref on_ground,
+            on_ground,
             ..
         } = *slide.ball;
         let radius = slide.radius;
@@ -489,17 +502,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Option<SmallList<ColliderHandle>> {
         let ball = slide.ball;
-        let (handle, part, gg) = (ball.handle, ball.part, ball.gg);
+        let (handle, part, gg) = (ball.body.handle, ball.part, ball.gg);
         let (colliders, friction) = (scene.colliders, slide.friction);
         let mut pieces = SmallList::One(gg.handle);
         let default = (
             self.config.rolling_resistance,
             self.config.spinning_friction,
         );
-        for og in ball.others {
+        for og in ball.others() {
             let gap = step.policy.resting_gap;
             if matches!(
-                contact_checked(part, og, &ball.on_ground, 0.0, gap),
+                contact_checked(part, og, ball.on_ground, 0.0, gap),
                 Ok(None)
             ) {
                 continue;
@@ -538,13 +551,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         dt: f64,
     ) -> Option<SmallList<ColliderHandle>> {
         let ball = slide.ball;
-        let (handle, part, gg, others, on_ground) = (
-            ball.handle,
-            ball.part,
-            ball.gg,
-            ball.others,
-            &ball.on_ground,
-        );
+        let (handle, part, gg, on_ground) = (ball.body.handle, ball.part, ball.gg, ball.on_ground);
         let colliders = scene.colliders;
         let (to_plane, friction, default) = (slide.to_plane, slide.friction, slide.default);
         // Its path's bow from the chord is below (|a_t| + mu g_n) dt^2 / 8. On level ground
@@ -571,7 +578,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 && !user.contains(ActiveHooks::MODIFY_SOLVER_CONTACTS)
         };
         let (pieces, obstacles): (Vec<&GroundGeom>, Vec<&GroundGeom>) = std::iter::once(gg)
-            .chain(others.iter().copied())
+            .chain(ball.others())
             .partition(|g| (g.handle == gg.handle || same(g)) && plane_piece_of(g, plane));
         let touching = |s: &State, t: f64| {
             obstacles
@@ -596,28 +603,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 }
 
-/// The grounds near a ball besides the one of index `gi` in the step's grounds, in their
-/// order: most often a ball is alone on one ground, and nothing is gathered.
-fn other_grounds<'g, 'c>(
-    grounds: &'g [(usize, GroundGeom<'c>)],
-    gi: usize,
-) -> SmallList<&'g GroundGeom<'c>> {
-    if grounds.len() > 1 {
-        grounds
-            .iter()
-            .filter(|(other, _)| *other != gi)
-            .map(|(_, g)| g)
-            .collect()
-    } else {
-        SmallList::Empty
-    }
-}
-
 /// The acceleration along the ground is at most gravity's along it and the friction:
 /// `|a_t| - mu a_n` (m/s^2). Pure.
 fn accel_bound(slide: &Slide) -> f64 {
     let ball = slide.ball;
-    let at = ball.flight.accel - ball.n * slide.an;
+    let at = ball.body.flight.accel - ball.n * slide.an;
     at.norm() - slide.friction * slide.an
 }
 
@@ -639,9 +629,7 @@ fn ends_on_its_face(part: &BodyPart, gg: &GroundGeom, on_ground: &State, radius:
 /// The plane under the rolling ball and how far a point of it can get in the step `dt`: its
 /// radius, its travel `|v| dt + (|a_t| - mu a_n) dt^2 / 2`, and `COPLANAR_TOLERANCE`. Pure.
 fn rolling_plane(slide: &Slide, dt: f64) -> PlaneNear {
-    let BallOnGround {
-        n, ref on_ground, ..
-    } = *slide.ball;
+    let BallOnGround { n, on_ground, .. } = *slide.ball;
     PlaneNear {
         n,
         height: n.dot(&(on_ground.com - slide.to_plane)),
