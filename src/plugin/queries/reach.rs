@@ -14,6 +14,7 @@
 //! test's, and most neighbours of a rolling ball are settled so.
 
 use crate::parry::query;
+use crate::parry::shape::Ball;
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
 use crate::plugin::policy::SPIN_UP_ALLOWANCE;
 use crate::plugin::queries::observe::Scene;
@@ -64,6 +65,15 @@ enum OtherMotion {
         /// step (m/s), whatever its velocity.
         kinematic_shift: Option<f64>,
     },
+}
+
+/// The rolling ball's collider as its plan holds it (rapier's collider of `handle` and its
+/// ball), which the test then takes rather than looking it up again.
+#[derive(Clone, Copy)]
+pub(crate) struct OwnCollider<'c> {
+    pub handle: ColliderHandle,
+    pub collider: &'c Collider,
+    pub ball: &'c Ball,
 }
 
 /// A ball of rapier's contact graph as the reach test reads it.
@@ -185,10 +195,12 @@ impl NeighbourReads {
 /// body does to the other one during the step is not bounded either: the reconstruct stage
 /// reads rapier's contact impulses after the step
 /// ([`pushed_by_other`](crate::plugin::queries::observe::pushed_by_other)). For a centred ball
-/// (`rb` must be one: its own spin is not counted); a pair parry cannot measure, and any
-/// joint (`jointed`: the body has one, as `Sets::jointed` says), is within reach.
+/// (`rb` must be one, `ball_collider` its collider as the caller holds it: its own spin is not
+/// counted); a pair parry cannot measure, and any joint (`jointed`: the body has one, as
+/// `Sets::jointed` says), is within reach.
 pub(crate) fn within_reach_of_other(
     rb: &RigidBody,
+    ball_collider: OwnCollider,
     jointed: bool,
     own: &OwnMotion,
     scene: &Scene,
@@ -220,10 +232,14 @@ pub(crate) fn within_reach_of_other(
             .map_or_else(|()| registry.grounds.contains_key(c), |e| e.is_some())
     };
     for ch in rb.colliders() {
-        let Some(co) = colliders.get(*ch) else {
-            continue;
+        let (co, ball) = if *ch == ball_collider.handle {
+            (ball_collider.collider, Some(ball_collider.ball))
+        } else {
+            let Some(co) = colliders.get(*ch) else {
+                continue;
+            };
+            (co, co.shape().as_ball())
         };
-        let ball = co.shape().as_ball();
         for pair in sets.narrow_phase.contact_pairs_with(*ch) {
             let other = if pair.collider1 == *ch {
                 pair.collider2

@@ -6,6 +6,7 @@ use super::Planner;
 use super::body::{BodyNear, BodyPlan, BodyReads};
 use super::role::Pair;
 use crate::motion::{Rolling, State};
+use crate::parry::shape::Ball;
 use crate::plugin::bridge::resolve::{Inertia, Site, released};
 use crate::plugin::policy::{HELD_SPEED, IN_PLANE_TOLERANCE, ROLLING_MIN_SLIP, Role};
 use crate::plugin::policy::{LEVEL_TOLERANCE, on_plane_through_rounding};
@@ -14,7 +15,7 @@ use crate::plugin::queries::geometry::{
     earliest_touch, flat_relative, one_plane_under, plane_piece_of,
 };
 use crate::plugin::queries::observe::{Scene, pressed_besides};
-use crate::plugin::queries::reach::{OwnMotion, within_reach_of_other};
+use crate::plugin::queries::reach::{OwnCollider, OwnMotion, within_reach_of_other};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{FirstHold, StepData};
@@ -94,6 +95,8 @@ impl<'q, 'c> BallOnGround<'q, 'c> {
 /// (`Planner::slide_of`).
 struct Slide<'b, 'q, 'c> {
     ball: &'b BallOnGround<'q, 'c>,
+    /// The ball's shape, as its collider has it.
+    shape: &'c Ball,
     /// The ball's radius, skins added (m).
     radius: f64,
     /// The acceleration along `n` (negative: towards the ground).
@@ -143,11 +146,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             user,
         } = pair;
         let (gi, _) = &body.grounds[k];
-        let state = plan.state;
+        let state = &plan.state;
         let on_ground = State {
             com: state.com - n * dist,
             v: state.v - n * n.dot(&state.v),
-            ..state
+            ..*state
         };
         let ball = BallOnGround {
             body,
@@ -400,6 +403,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
         Some(Slide {
             ball,
+            shape: b,
             radius,
             an,
             level,
@@ -451,8 +455,20 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             gravity: step.gravity,
             dt: step.dt,
         };
+        let ball_collider = OwnCollider {
+            handle: ball.part.handle,
+            collider: ball.colliders.0,
+            ball: slide.shape,
+        };
         let body = ball.body;
-        within_reach_of_other(body.rb, body.jointed, &own, scene, self.neighbours)
+        within_reach_of_other(
+            body.rb,
+            ball_collider,
+            body.jointed,
+            &own,
+            scene,
+            self.neighbours,
+        )
     }
 
     /// At rest on a slope of `tilt` that holds it: `OnPlane::Held` with the grounds holding
