@@ -76,9 +76,10 @@ impl<'q, 'c> BallOnGround<'q, 'c> {
             .map(|(_, g)| g)
     }
 
-    /// Is it near no ground but its own?
+    /// Is it near no ground but its own? Asked of every rolling ball, so kept inline.
+    #[inline]
     fn alone(&self) -> bool {
-        self.others().next().is_none()
+        self.body.grounds.iter().all(|(other, _)| *other == self.gi)
     }
 
     /// Was its pair with its ground rapier's resting contact last step, and none of its pairs
