@@ -94,6 +94,10 @@ pub(crate) struct GroundMotion {
     /// A slab of tiles: the box they form (its pose `pose0`), the shape every query asks for
     /// in place of the collider's (`handle` is its first tile).
     pub slab: Option<Cuboid>,
+    /// A still half-space: the shape's normal and its world unit normal in `f64` (`pose0`'s
+    /// rotation of it, divided by its norm, where that is positive), as every contact query
+    /// of a body on it would compute it (`GroundMotion::still_unit_normal`).
+    pub unit_normal: Option<(Vector, Vector3<f64>)>,
 }
 
 impl GroundMotion {
@@ -124,6 +128,32 @@ impl GroundMotion {
     pub fn is_still(&self) -> bool {
         self.body.is_none()
     }
+
+    /// The world unit normal of a still half-space whose shape's normal is `normal`, as
+    /// computed once with its motion (`None`: not a still half-space, its normal has changed
+    /// in place since, or it has no direction). A still ground's pose at any time of the
+    /// step is `pose0`.
+    #[inline]
+    pub fn still_unit_normal(&self, normal: Vector) -> Option<Vector3<f64>> {
+        self.unit_normal
+            .filter(|(local, _)| *local == normal)
+            .map(|(_, n)| n)
+    }
+}
+
+/// The world unit normal of a half-space of shape normal `normal` at the pose `pose`, the
+/// division by its norm done as the contact queries do it; `None` where the norm is NaN or
+/// not positive.
+pub(crate) fn half_space_unit_normal(
+    pose: &Isometry3<f64>,
+    normal: Vector,
+) -> Option<Vector3<f64>> {
+    let n = pose.rotation * vec_to_na(normal);
+    let len = n.norm();
+    if len.is_nan() || len <= 0.0 {
+        return None;
+    }
+    Some(n / len)
 }
 
 /// What a ground's motion and place were computed from. A change of `class` (the shape,
@@ -564,6 +594,7 @@ impl GroundIndex {
                 pose0: slab.pose,
                 aabb,
                 slab: Some(cuboid),
+                unit_normal: None,
                 ..first
             });
             self.places.push(Place::Tree);
@@ -812,6 +843,7 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
         aabb: Aabb::new_invalid(),
         plane: None,
         slab: None,
+        unit_normal: None,
     }
 }
 
@@ -882,6 +914,7 @@ fn motion_of(
                 aabb,
                 plane,
                 slab: None,
+                unit_normal: None,
             })
         }
         _ => {
@@ -891,18 +924,22 @@ fn motion_of(
                 pose.rotation,
                 Isometry3::identity(),
             );
+            let pose0 = start_pose(com0, rot0, &local);
+            let unit_normal = half_space
+                .and_then(|hs| Some((hs.normal, half_space_unit_normal(&pose0, hs.normal)?)));
             Some(GroundMotion {
                 handle,
                 body: None,
                 com0,
                 rot0,
                 local,
-                pose0: start_pose(com0, rot0, &local),
+                pose0,
                 v: Vector3::zeros(),
                 w: Vector3::zeros(),
                 aabb,
                 plane: plane_at(co.position()),
                 slab: None,
+                unit_normal,
             })
         }
     }

@@ -9,6 +9,7 @@ use crate::parry::query;
 use crate::parry::shape::Triangle;
 use crate::plugin::bridge::convert::{pose_from_na, to_f64, vec_to_na};
 use crate::plugin::policy::FACE_ROUNDING;
+use crate::plugin::queries::ground_index::half_space_unit_normal;
 use nalgebra::Vector3;
 
 /// Contact of one body part and one ground at time `t`, if within `prediction` (m):
@@ -156,18 +157,23 @@ fn ball_plane_contact(
         s.com + s.rot * offset
     };
     let skins = part.skin + ground.skin;
-    let pose_g = ground.pose_at(t);
     let (n, height) = match ground.shape.as_typed_shape() {
-        TypedShape::HalfSpace(hs) => {
-            let n = pose_g.rotation * vec_to_na(hs.normal);
-            let len = n.norm();
-            if len.is_nan() || len <= 0.0 {
-                return Some(None);
+        // A still half-space: its unit normal kept with its motion, its pose `pose0`.
+        TypedShape::HalfSpace(hs) => match ground.motion.still_unit_normal(hs.normal) {
+            Some(n) => (
+                n,
+                n.dot(&(centre - ground.motion.pose0.translation.vector)) - radius,
+            ),
+            None => {
+                let pose_g = ground.pose_at(t);
+                let Some(n) = half_space_unit_normal(&pose_g, hs.normal) else {
+                    return Some(None);
+                };
+                (n, n.dot(&(centre - pose_g.translation.vector)) - radius)
             }
-            let n = n / len;
-            (n, n.dot(&(centre - pose_g.translation.vector)) - radius)
-        }
+        },
         TypedShape::Cuboid(cb) => {
+            let pose_g = ground.pose_at(t);
             let half = vec_to_na(cb.half_extents);
             let p = pose_g
                 .inverse_transform_point(&nalgebra::Point3::from(centre))
@@ -494,6 +500,7 @@ mod tests {
             aabb: Aabb::new_invalid(),
             plane: None,
             slab: None,
+            unit_normal: None,
         };
         let ground = GroundGeom {
             handle: ColliderHandle::invalid(),
