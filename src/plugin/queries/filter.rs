@@ -19,8 +19,9 @@ use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::state::handles::PairKey;
 use crate::rapier::prelude::{
-    ActiveHooks, Collider, ColliderSet, ImpulseJointSet, MultibodyJointSet, PairFilterContext,
-    PhysicsHooks, RigidBodyHandle, RigidBodySet, RigidBodyType, SolverFlags,
+    ActiveCollisionTypes, ActiveHooks, Collider, ColliderSet, ImpulseJointSet, InteractionGroups,
+    MultibodyJointSet, PairFilterContext, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    RigidBodyType, SolverFlags,
 };
 
 /// Would rapier solve the pair of colliders, before the hooks and the joints? (See the
@@ -29,17 +30,50 @@ pub(crate) fn rapier_solves(bodies: &RigidBodySet, a: &Collider, b: &Collider) -
     if !(a.is_enabled() && b.is_enabled()) || a.is_sensor() || b.is_sensor() {
         return false;
     }
-    let kind = |co: &Collider| match co.parent().and_then(|p| bodies.get(p)) {
-        Some(rb) => (rb.is_enabled(), rb.body_type()),
-        None => (true, RigidBodyType::Fixed),
-    };
-    let ((enabled_a, type_a), (enabled_b, type_b)) = (kind(a), kind(b));
-    enabled_a
+    sides_solve(&FilterSide::of(bodies, a), &FilterSide::of(bodies, b))
+}
+
+/// What rapier's filtering reads of one collider of a pair (see the module's contract): a
+/// value, so that the side of a collider met by many pairs (a floor) is read once.
+#[derive(Clone, Copy)]
+pub(crate) struct FilterSide {
+    /// Enabled and not a sensor.
+    takes_part: bool,
+    /// Its body's enabled flag and type (a parentless collider: enabled, fixed).
+    body: (bool, RigidBodyType),
+    types: ActiveCollisionTypes,
+    collision_groups: InteractionGroups,
+    solver_groups: InteractionGroups,
+}
+
+impl FilterSide {
+    /// The side of `co`, its body looked up in `bodies`.
+    #[inline]
+    pub fn of(bodies: &RigidBodySet, co: &Collider) -> Self {
+        Self {
+            takes_part: co.is_enabled() && !co.is_sensor(),
+            body: match co.parent().and_then(|p| bodies.get(p)) {
+                Some(rb) => (rb.is_enabled(), rb.body_type()),
+                None => (true, RigidBodyType::Fixed),
+            },
+            types: co.active_collision_types(),
+            collision_groups: co.collision_groups(),
+            solver_groups: co.solver_groups(),
+        }
+    }
+}
+
+/// [`rapier_solves`] from the two colliders' sides.
+#[inline]
+pub(crate) fn sides_solve(a: &FilterSide, b: &FilterSide) -> bool {
+    let ((enabled_a, type_a), (enabled_b, type_b)) = (a.body, b.body);
+    a.takes_part
+        && b.takes_part
+        && enabled_a
         && enabled_b
-        && (a.active_collision_types().test(type_a, type_b)
-            || b.active_collision_types().test(type_a, type_b))
-        && a.collision_groups().test(b.collision_groups())
-        && a.solver_groups().test(b.solver_groups())
+        && (a.types.test(type_a, type_b) || b.types.test(type_a, type_b))
+        && a.collision_groups.test(b.collision_groups)
+        && a.solver_groups.test(b.solver_groups)
 }
 
 /// Does a joint between the two bodies disable their contacts (an impulse joint, or a link

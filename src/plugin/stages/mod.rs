@@ -316,6 +316,7 @@ impl<H> ImpactPlugin<H> {
         let exact = self.config.timing == TimingMode::Exact;
         let grounds = std::mem::take(&mut step.grounds);
         let mut reports = PlanReports::default();
+        let mut ground_side = None;
         self.neighbours.begin_plan(step.gravity, step.dt);
         for handle in to_plan {
             let mut planner = Planner {
@@ -328,6 +329,7 @@ impl<H> ImpactPlugin<H> {
                 writes: &self.writes,
                 reports: &mut reports,
                 neighbours: &mut self.neighbours,
+                ground_side: &mut ground_side,
             };
             let found = planner.plan_body(handle, bodies, colliders, sets, last, step);
             if !reports.is_empty() {

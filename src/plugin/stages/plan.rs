@@ -38,6 +38,7 @@ use crate::plugin::state::writes::Writes;
 use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use body::BodyReads;
 use nalgebra::Vector3;
+pub(crate) use role::GroundSide;
 
 /// Does the contact, at gap `dist` (m) with normal speed `un` and normal acceleration `an`,
 /// close within `dt`? `dist + un t + an t^2 / 2 <= 0` for some `t` in `[0, dt]`.
@@ -71,6 +72,9 @@ pub(crate) struct Planner<'a, H> {
     pub reports: &'a mut PlanReports,
     /// What the plan read so far of the balls next to its rolling balls.
     pub neighbours: &'a mut NeighbourReads,
+    /// The side of the last ground whose pairs were planned (`plan/role.rs`), kept over the
+    /// stage.
+    pub ground_side: &'a mut Option<GroundSide>,
 }
 
 /// What one body's plan leaves to be recorded through the commit, in order, once it is done:

@@ -11,7 +11,7 @@ use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::events::Diagnostic;
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::Role;
-use crate::plugin::queries::filter;
+use crate::plugin::queries::filter::{self, FilterSide};
 use crate::plugin::queries::geometry::{
     BodyPart, COPLANAR_TOLERANCE, GroundGeom, Hit, PairContact, Sweep, body_velocity_at,
     cannot_close, contact_checked, contact_from_side, part_pose,
@@ -19,7 +19,7 @@ use crate::plugin::queries::geometry::{
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::StepData;
-use crate::rapier::prelude::{ActiveHooks, Collider, PhysicsHooks};
+use crate::rapier::prelude::{ActiveHooks, Collider, ColliderHandle, PhysicsHooks};
 use nalgebra::Vector3;
 
 /// One pair of the body with a ground: the ground's index in `BodyNear::grounds`, the body's
@@ -33,6 +33,20 @@ pub(super) struct Pair<'q, 'c> {
     pub key: PairKey,
     pub colliders: (&'c Collider, &'c Collider),
     pub user: ActiveHooks,
+}
+
+/// What every pair with one ground reads of its collider, whatever the body: the hook flags
+/// the user set on it, whether its coefficients are in the plugin's ranges, and its side of
+/// rapier's filtering. rapier's sets and the hook flags are not written while the plan runs,
+/// so a ground's side read once holds for the whole plan stage; the stage keeps the last one
+/// read (`Planner::ground_side`: most bodies of a step rest on the same floor).
+#[derive(Clone, Copy)]
+pub(crate) struct GroundSide {
+    /// The ground's index in `StepData::grounds`.
+    index: usize,
+    user: ActiveHooks,
+    in_range: bool,
+    filter: FilterSide,
 }
 
 /// What a ground's pairs with the body tell the search after the step.
@@ -61,10 +75,12 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             any_impact: false,
             clear: true,
         };
+        let side = self.ground_side(*gi, gg.handle, scene);
         for part in &body.geom.parts {
             let key = (part.handle, gg.handle);
-            // Read once: the user's filter and the rolling decision both ask for them.
-            let user = self.flags.recorded_pair_flags(scene.colliders, key);
+            // Read once: the user's filter and the rolling decision both ask for them (the
+            // pair's flags: either collider's, `HookFlags::recorded_pair_flags`).
+            let user = self.flags.recorded_user_flags(scene.colliders, key.0) | side.user;
             // Both exist: the body's geometry and the ground's were read from them.
             let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
             let pair = Pair {
@@ -75,8 +91,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 colliders,
                 user,
             };
-            let role = if self.filtered(body, scene, key, colliders, user)
-                || self.coefficients_refused(key, colliders)
+            let role = if self.filtered(body, scene, key, colliders, (user, &side.filter))
+                || self.coefficients_refused(key, colliders, side.in_range)
             {
                 Role::Filtered
             } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
@@ -92,19 +108,36 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         }
     }
 
+    /// The side of the ground of index `index` (collider `ground`) in its pairs
+    /// ([`GroundSide`]): the one kept, if it is that ground's, else read and kept.
+    fn ground_side(&mut self, index: usize, ground: ColliderHandle, scene: &Scene) -> GroundSide {
+        if let Some(side) = self.ground_side.filter(|side| side.index == index) {
+            return side;
+        }
+        let co = &scene.colliders[ground];
+        let side = GroundSide {
+            index,
+            user: self.flags.recorded_user_flags(scene.colliders, ground),
+            in_range: coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction())),
+            filter: FilterSide::of(scene.bodies, co),
+        };
+        *self.ground_side = Some(side);
+        side
+    }
+
     /// Does rapier have no contact for the pair: a joint of the body with the ground's body
     /// that disables contacts, rapier's own filtering, or the user's filter (asked when `user`,
     /// the pair's user hook flags, asks for it, with the start-of-step state, so that every
     /// pair the plugin could resolve in the step is covered; rapier asks it again during the
     /// step, for the pairs its broad phase has)? `(body_co, ground_co)`: the pair's two
-    /// colliders. Reads only.
+    /// colliders; `ground_side`: the ground collider's side of rapier's filtering. Reads only.
     fn filtered(
         &self,
         body: &BodyNear,
         scene: &Scene,
         key: PairKey,
         (body_co, ground_co): (&Collider, &Collider),
-        user: ActiveHooks,
+        (user, ground_side): (ActiveHooks, &FilterSide),
     ) -> bool {
         let (bodies, colliders, sets) = (scene.bodies, scene.colliders, scene.sets);
         let joint_filtered = body.jointed
@@ -117,26 +150,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 )
             });
         joint_filtered
-            || !filter::rapier_solves(bodies, body_co, ground_co)
+            || !filter::sides_solve(&FilterSide::of(bodies, body_co), ground_side)
             || filter::user_refuses(self.user_hooks, user, bodies, colliders, key)
     }
 
     /// Is a collider of the pair out of the plugin's coefficient ranges, with no ground
     /// material to replace them? The pair is then rapier's, as a filtered one is (nothing made
     /// up for it), and each such collider is diagnosed (reported once, `Memory::reported`).
-    /// Reads the pair's two colliders (`pair_colliders`); the registry only when one is out of
-    /// range.
+    /// Reads the body's collider (`pair_colliders.0`; `ground_in_range`: whether the ground's
+    /// are in range); the registry only when one is out of range.
     fn coefficients_refused(
         &mut self,
         key: PairKey,
         pair_colliders: (&Collider, &Collider),
+        ground_in_range: bool,
     ) -> bool {
         let out = |co: &&Collider| {
             !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
         };
         let (body, ground) = (
             Some(pair_colliders.0).filter(out),
-            Some(pair_colliders.1).filter(out),
+            Some(pair_colliders.1).filter(|_| !ground_in_range),
         );
         if body.is_none() && ground.is_none()
             || self
@@ -225,18 +259,19 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                         ..plan.state
                     };
                     !body.grounds.iter().enumerate().any(|(j, (_, other))| {
+                        let other_co = &reads.scene.colliders[other.handle];
                         j != k
                             && !self.filtered(
                                 body,
                                 reads.scene,
                                 (part.handle, other.handle),
+                                (&reads.scene.colliders[part.handle], other_co),
                                 (
-                                    &reads.scene.colliders[part.handle],
-                                    &reads.scene.colliders[other.handle],
-                                ),
-                                self.flags.recorded_pair_flags(
-                                    reads.scene.colliders,
-                                    (part.handle, other.handle),
+                                    self.flags.recorded_pair_flags(
+                                        reads.scene.colliders,
+                                        (part.handle, other.handle),
+                                    ),
+                                    &FilterSide::of(reads.scene.bodies, other_co),
                                 ),
                             )
                             && contact_checked(part, other, &back, 0.0, 0.0).is_ok_and(|c| {
