@@ -14,8 +14,8 @@
 //! registry, and calls the user's filter where the colliders ask for it; [`StepData`] carries
 //! the step's thresholds, roles and candidates.
 //!
-//! The parts, by what each decides: the body's start, the grounds near it and its candidate
-//! (`plan/body.rs`); one pair's role (`plan/role.rs`); `Step` mode's start-of-step impulse
+//! The parts, by what each decides: the grounds near the body's start (its snapshot and
+//! colliders, taken by `Planner::plan_body`) and its candidate (`plan/body.rs`); one pair's role (`plan/role.rs`); `Step` mode's start-of-step impulse
 //! (`plan/impulse.rs`); whether a resting ball rolls, is held or is reached (`plan/rolling.rs`).
 
 mod body;
@@ -28,7 +28,7 @@ use crate::plugin::config::ImpactConfig;
 use crate::plugin::events::{Diagnostic, ImpactEvent};
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::queries::ground_index::GroundMotion;
-use crate::plugin::queries::observe::{Scene, Sets};
+use crate::plugin::queries::observe::{Scene, Sets, body_geom, snapshot};
 use crate::plugin::queries::reach::NeighbourReads;
 use crate::plugin::state::handles::{HandleSet, PairKey};
 use crate::plugin::state::memory::LastStep;
@@ -121,9 +121,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             grounds: self.grounds,
             writes: self.writes,
         };
-        // Used in place: a body's start is a large value, and every move of it a copy.
+        let rb = &bodies[handle];
+        // The body's snapshot and colliders are made in this frame and lent to its
+        // `BodyNear`, which is filled in place: large values, and every move of one a copy.
+        let now = self.writes.now(handle, rb);
+        let snap = snapshot(&now, step.gravity, step.dt, last.shadows.get(&handle));
+        let geom = body_geom(rb, colliders, &snap.2);
+        if geom.parts.is_empty() {
+            return None;
+        }
         let mut started = None;
-        let Some(body) = self.start_body(handle, &scene, last, step, &mut started)? else {
+        let Some(body) = self.start_body((handle, rb), &scene, (&snap, &geom), step, &mut started)
+        else {
             return Some(false);
         };
         let mut plan = body.plan();

@@ -1,5 +1,6 @@
-//! One body's start: its snapshot and geometry, the grounds near it (nearest first for a ball
-//! at a seam), the plan that the pairs' roles fill in, and the candidate it ends as.
+//! One body's start: the grounds near its snapshot and geometry (nearest first for a ball at
+//! a seam; the snapshot and geometry made by the plan and lent), the plan that the pairs'
+//! roles fill in, and the candidate it ends as.
 
 use super::Planner;
 use crate::motion::{Flight, Rolling, State};
@@ -9,9 +10,7 @@ use crate::plugin::config::TimingMode;
 use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, PairContact, contact_checked, part_pose,
 };
-use crate::plugin::queries::observe::{
-    Scene, body_geom, centred_ball, ground_geom, meets_tiles, snapshot,
-};
+use crate::plugin::queries::observe::{Scene, centred_ball, ground_geom, meets_tiles};
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, StepData};
@@ -24,16 +23,16 @@ use nalgebra::Vector3;
 pub(super) type StartContact = Result<Option<PairContact>, Unsupported>;
 
 /// What is known of a body near a ground before any of its pairs is decided: read-only for
-/// the stages of its plan.
-pub(super) struct BodyNear<'c> {
+/// the stages of its plan. Its start and geometry are lent by the plan (`BodyStart`).
+pub(super) struct BodyNear<'q, 'c> {
     pub handle: RigidBodyHandle,
     /// rapier's body (read as the step's writes leave it through `start`; looked up once).
     pub rb: &'c RigidBody,
     /// Its state at the step's start (before any `Step` impulse).
-    pub start: State,
-    pub flight: Flight,
+    pub start: &'q State,
+    pub flight: &'q Flight,
     pub local_com: Vector3<f64>,
-    pub geom: BodyGeom<'c>,
+    pub geom: &'q BodyGeom<'c>,
     /// A bound on the speed of any point of the body over the step (m/s).
     pub speed: f64,
     /// How far beyond its bounding sphere the body can reach a ground in the step (m).
@@ -54,11 +53,16 @@ pub(super) struct BodyNear<'c> {
     pub start_contacts: SmallList<Option<StartContact>>,
 }
 
+/// A body's start-of-step snapshot (`observe::snapshot`: its state, flight and centre of
+/// mass in its own frame) and its colliders: large values, made in the plan's frame and lent
+/// to its `BodyNear`, never moved.
+pub(super) type BodyStart<'q, 'c> = (&'q (State, Flight, Vector3<f64>), &'q BodyGeom<'c>);
+
 /// What one body's plan reads and never writes: the body near its grounds, rapier's world,
 /// and what the plugin kept of the last step.
 #[derive(Clone, Copy)]
 pub(super) struct BodyReads<'q, 'c> {
-    pub body: &'q BodyNear<'c>,
+    pub body: &'q BodyNear<'q, 'c>,
     pub scene: &'q Scene<'c>,
     pub last: &'q LastStep,
 }
@@ -89,11 +93,11 @@ pub(super) struct BodyPlan {
     pub released: Option<usize>,
 }
 
-impl BodyNear<'_> {
+impl BodyNear<'_, '_> {
     /// The plan before any pair is decided: the start state, nothing found.
     pub fn plan(&self) -> BodyPlan {
         BodyPlan {
-            state: self.start,
+            state: *self.start,
             touched: false,
             impact_grounds: SmallList::Empty,
             closing: false,
@@ -115,7 +119,7 @@ impl BodyNear<'_> {
             None => Some(contact_checked(
                 &self.geom.parts[0],
                 &self.grounds[k].1,
-                &self.start,
+                self.start,
                 0.0,
                 self.reach,
             )),
@@ -131,29 +135,22 @@ impl BodyNear<'_> {
 }
 
 impl<H: PhysicsHooks> Planner<'_, H> {
-    /// The body's snapshot and the grounds near it (the cheap test: its bounding sphere
-    /// swept over the step against the grounds' boxes). `None` when it has no collider to
-    /// query; `Some(None)` when no ground is near it, and then, in `Exact` mode or for a ball
-    /// of an impact between bodies, its flying candidate is pushed. Reads rapier; writes only
+    /// The grounds near the body `handle` (`rb`) from its start `(snap, geom)` (the cheap
+    /// test: its bounding sphere swept over the step against the grounds' boxes), filling
+    /// `out`. `None` when no ground is near it, and then, in `Exact` mode or for a ball of an
+    /// impact between bodies, its flying candidate is pushed. Reads rapier; writes only
     /// `step.candidates`.
-    pub(super) fn start_body<'c, 'o>(
+    pub(super) fn start_body<'q, 'c, 'o>(
         &self,
-        handle: RigidBodyHandle,
+        (handle, rb): (RigidBodyHandle, &'c RigidBody),
         scene: &Scene<'c>,
-        last: &LastStep,
+        (snap, geom): BodyStart<'q, 'c>,
         step: &mut StepData,
-        out: &'o mut Option<BodyNear<'c>>,
-    ) -> Option<Option<&'o mut BodyNear<'c>>> {
-        let rb = &scene.bodies[handle];
-        let now = scene.writes.now(handle, rb);
-        let (start, flight, local_com) =
-            snapshot(&now, step.gravity, step.dt, last.shadows.get(&handle));
-        let geom = body_geom(rb, scene.colliders, &local_com);
-        if geom.parts.is_empty() {
-            return None;
-        }
+        out: &'o mut Option<BodyNear<'q, 'c>>,
+    ) -> Option<&'o mut BodyNear<'q, 'c>> {
+        let (start, flight, local_com) = (&snap.0, &snap.1, snap.2);
         let dt = step.dt;
-        let speed = flight.max_speed(&start, dt) + flight.max_angular_speed(&start) * geom.radius;
+        let speed = flight.max_speed(start, dt) + flight.max_angular_speed(start) * geom.radius;
         let reach = speed * dt + step.policy.contact_margin();
         let sphere = Aabb::from_half_extents(
             vec_from_na(&start.com),
@@ -164,7 +161,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // Where slabs are, whether it has a joint decides which grounds it meets; asked once.
         let (near, jointed) = if index.has_slabs() {
             let jointed = scene.sets.jointed(handle);
-            let near = self.near_slabs(jointed, scene, &geom, (centre, radius), step);
+            let near = self.near_slabs(jointed, scene, geom, (centre, radius), step);
             (near, Some(jointed))
         } else {
             (index.near_ball(scene.grounds, centre, radius), None)
@@ -174,9 +171,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let takes_pairs = self.registry.takes_pairs(handle, rb);
             if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
                 step.candidates
-                    .push(Candidate::flying(handle, start, flight, local_com));
+                    .push(Candidate::flying(handle, *start, *flight, local_com));
             }
-            return Some(None);
+            return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
         let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
@@ -204,9 +201,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             start_contacts: SmallList::Empty,
         });
         if !turns_surface && body.grounds.len() > 1 {
-            body.start_contacts = nearest_first(&body.geom, &mut body.grounds, &start, reach);
+            body.start_contacts = nearest_first(body.geom, &mut body.grounds, start, reach);
         }
-        Some(Some(body))
+        Some(body)
     }
 
     /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
@@ -256,7 +253,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step.candidates.push(Candidate {
             body: body.handle,
             start: plan.state,
-            flight: body.flight,
+            flight: *body.flight,
             local_com: body.local_com,
             near: std::mem::take(&mut body.near),
             impact_grounds: std::mem::take(&mut plan.impact_grounds),

@@ -53,7 +53,7 @@ pub(crate) enum OnPlane {
 /// asked rather than gathered: most balls resting on a ground are refused at once
 /// (`Planner::slide_of`), and most of the others are alone on it.
 struct BallOnGround<'q, 'c> {
-    body: &'q BodyNear<'c>,
+    body: &'q BodyNear<'q, 'c>,
     gi: usize,
     part: &'q BodyPart<'c>,
     gg: &'q GroundGeom<'c>,
