@@ -113,6 +113,7 @@ impl BodyNear<'_, '_> {
     /// The ball's contact with its `k`-th ground at the step's start, for a ball near several
     /// grounds (`None` for any other body): the one `nearest_first` found, else queried now,
     /// with the same arguments, so the same answer.
+    #[inline]
     pub fn start_contact(&self, k: usize) -> Option<StartContact> {
         match self.start_contacts.get(k)? {
             Some(found) => Some(*found),

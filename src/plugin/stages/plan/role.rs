@@ -18,6 +18,7 @@ use crate::plugin::queries::geometry::{
 };
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
+use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::{ActiveHooks, Collider, ColliderHandle, PhysicsHooks};
 use nalgebra::Vector3;
@@ -95,8 +96,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 || self.coefficients_refused(key, colliders, side.in_range)
             {
                 Role::Filtered
-            } else if let Some(role) = rolling_piece_role(body, plan, pair, &mut verdict) {
-                role
+            } else if let Some(pieces) = &plan.rolling_pieces {
+                rolling_piece_role(body, (&plan.state, pieces), pair, &mut verdict)
             } else {
                 self.contact_role(reads, plan, pair, &mut verdict, step)
             };
@@ -131,6 +132,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// pair the plugin could resolve in the step is covered; rapier asks it again during the
     /// step, for the pairs its broad phase has)? `(body_co, ground_co)`: the pair's two
     /// colliders; `ground_side`: the ground collider's side of rapier's filtering. Reads only.
+    #[inline]
     fn filtered(
         &self,
         body: &BodyNear,
@@ -468,27 +470,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
 }
 
 /// The role of a pair of a ball already rolling in closed form on the plane of an earlier
-/// (nearer) ground, `None` when it does not roll yet. A piece of that plane: the pair is the
-/// rolling's too, out of rapier's solver (rapier's contact with a tile's edge at a flush
-/// seam would throw the ball up, and `Step` mode would bounce it). Another ground it may
-/// roll into (a slope's foot, a wall): out of rapier's solver too, and the search along the
-/// rolling finds the impact, run only if the ground is within reach (`verdict`). Reads only.
+/// (nearer) ground (from its state `state`, `pieces` the grounds of that plane); a ball that
+/// does not roll yet is not asked. A piece of that plane: the pair is the rolling's too, out
+/// of rapier's solver (rapier's contact with a tile's edge at a flush seam would throw the
+/// ball up, and `Step` mode would bounce it). Another ground it may roll into (a slope's
+/// foot, a wall): out of rapier's solver too, and the search along the rolling finds the
+/// impact, run only if the ground is within reach (`verdict`). Reads only.
 fn rolling_piece_role(
     body: &BodyNear,
-    plan: &BodyPlan,
+    (state, pieces): (&State, &SmallList<ColliderHandle>),
     pair: Pair,
     verdict: &mut GroundVerdict,
-) -> Option<Role> {
-    let pieces = plan.rolling_pieces.as_ref()?;
+) -> Role {
     let Pair { k, part, gg, .. } = pair;
     if pieces.contains(&gg.handle) {
-        return Some(Role::Rolling);
+        return Role::Rolling;
     }
     let found = body
         .start_contact(k)
-        .unwrap_or_else(|| contact_checked(part, gg, &plan.state, 0.0, body.reach));
+        .unwrap_or_else(|| contact_checked(part, gg, state, 0.0, body.reach));
     verdict.any_impact |= within_reach(&found);
-    Some(Role::Impact)
+    Role::Impact
 }
 
 /// Is the contact within reach (found, and parry could query it)?
