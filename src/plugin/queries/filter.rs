@@ -12,6 +12,9 @@
 //!   applies no impulse);
 //! - no joint between the two bodies disables their contacts ([`joint_disables_contacts`]).
 //!
+//! What these tests read of one collider is a value ([`FilterSide`]): a caller that meets one
+//! collider in many pairs (the plan, a floor) reads it once.
+//!
 //! The user's filter (`PhysicsHooks::filter_contact_pair`) is asked separately
 //! ([`user_refuses`]), where the colliders' hook flags ask for it, as rapier would.
 

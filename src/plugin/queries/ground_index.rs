@@ -5,7 +5,8 @@
 //!   writes nothing of rapier's;
 //! - [`GroundIndex::update`] (else [`GroundIndex::rebuild`]; `Registry::refresh_index` calls
 //!   them), once per step before anything asks: every ground's pose over the step
-//!   ([`GroundMotion`]: start pose, velocities, swept AABB). A still ground (parentless or on
+//!   ([`GroundMotion`]: start pose, velocities, swept AABB; a still half-space's unit normal,
+//!   which every contact query on it would compute the same). A still ground (parentless or on
 //!   a fixed body) is computed once and kept until its collider's pose, shape, flags,
 //!   coefficients or filtering change (one comparison per ground and step; a fixed body the
 //!   user moved since the last step has its colliders moved before this pass,

@@ -381,7 +381,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                             part,
                             gg,
                             &Sweep {
-                                flight: &body.flight,
+                                flight: body.flight,
                                 s: &plan.state,
                                 dt: step.dt,
                                 radius: body.geom.radius,

@@ -350,7 +350,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             handle,
             rb,
             member,
-            ref flight,
+            flight,
             ..
         } = *body;
         let b = part.shape.as_ball()?;
