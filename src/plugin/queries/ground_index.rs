@@ -133,11 +133,13 @@ impl GroundMotion {
     /// The world unit normal of a still half-space whose shape's normal is `normal`, as
     /// computed once with its motion (`None`: not a still half-space, its normal has changed
     /// in place since, or it has no direction). A still ground's pose at any time of the
-    /// step is `pose0`.
+    /// step is `pose0`. The normals are compared bit for bit: `-0.0 == 0.0`, but a rotation
+    /// can carry the sign of a zero into the computed normal.
     #[inline]
     pub fn still_unit_normal(&self, normal: Vector) -> Option<Vector3<f64>> {
+        let bits = |v: Vector| v.to_array().map(Real::to_bits);
         self.unit_normal
-            .filter(|(local, _)| *local == normal)
+            .filter(|(local, _)| bits(*local) == bits(normal))
             .map(|(_, n)| n)
     }
 }
@@ -1310,6 +1312,32 @@ mod tests {
         index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
         assert_eq!(near_at(&index, Vector::new(50.0, 0.05, -40.0)), vec![]);
         assert_eq!(near_at(&index, Vector::new(0.0, 0.15, 0.0)), vec![ground]);
+    }
+
+    /// A still half-space's kept world normal stands only for the shape's normal it was
+    /// computed from, to the bit: a zero component edited in place to `-0.0` (equal as a
+    /// float, not as bits) is computed again, as the contact query computes it, which a
+    /// rotation with a negative scalar part turns into a different sign of zero.
+    #[test]
+    fn a_half_spaces_kept_normal_answers_for_its_own_normal_bits_only() {
+        let mut world = PhysicsWorld::default();
+        let turn = crate::rapier::math::Rotation::from_xyzw(0.0, -0.0, -0.0, -1.0);
+        let ground = world.colliders.insert(
+            ColliderBuilder::new(crate::rapier::prelude::SharedShape::halfspace(Vector::Y))
+                .position(Pose::from_parts(Vector::ZERO, turn)),
+        );
+        let co = &world.colliders[ground];
+        let motion = motion_of(ground, co, &world.bodies, DT, GAP).unwrap();
+        let bits = |n: Vector3<f64>| n.map(f64::to_bits);
+        let kept = motion.still_unit_normal(Vector::Y).map(bits);
+        assert_eq!(
+            kept,
+            half_space_unit_normal(&motion.pose0, Vector::Y).map(bits)
+        );
+        let edited = Vector::new(-0.0, 1.0, -0.0);
+        let fresh = half_space_unit_normal(&motion.pose0, edited).map(bits);
+        assert_ne!(fresh, kept, "the edit changes the computed normal's bits");
+        assert_eq!(motion.still_unit_normal(edited), None);
     }
 
     #[test]
