@@ -173,7 +173,9 @@ fn move_cluster<'s>(
         };
         // A body sent off may reach a body it has no pair with: a member of the cluster, or
         // one that joins it, pairs with it in a search from here (until then, both moved as
-        // the pair plan had them apart); any other moves the cluster again with it.
+        // the pair plan had them apart); any other moves the cluster again with it. The
+        // pairs from `searched` on are those, searched from `te` as they are added.
+        let searched = run.tables.pairs.len();
         for &k in &changed[..count] {
             run.way_on(k, te, way);
             while let Some(other) = run.meets_other_body(k, way) {
@@ -190,7 +192,7 @@ fn move_cluster<'s>(
                 run.add_pair(k, j, te)?;
             }
         }
-        run.search_again(&changed[..count], te)?;
+        run.search_again(&changed[..count], te, searched)?;
     }
     run.ends()
 }
@@ -506,9 +508,10 @@ impl<'c, 'a> Run<'c, 'a> {
     }
 
     /// Searches again, from `te`, the ground of each body in `changed` and each of its pairs
-    /// (the pair of two changed bodies once; a resting pair has no touch). `None` where a
-    /// search gave up.
-    fn search_again(&mut self, changed: &[usize], te: f64) -> Option<()> {
+    /// but those from index `searched` on (added at `te` by [`Run::add_pair`], which searched
+    /// them from there with the same states: the same search), the pair of two changed
+    /// bodies once; a resting pair has no touch. `None` where a search gave up.
+    fn search_again(&mut self, changed: &[usize], te: f64, searched: usize) -> Option<()> {
         let cluster = Cluster::of(&self.context, &self.balls);
         for &k in changed {
             self.tables
@@ -523,7 +526,7 @@ impl<'c, 'a> Run<'c, 'a> {
             None => moving[b].at(te),
         };
         for (n, &k) in changed.iter().enumerate() {
-            for q in self.tables.pairs_of.of(k) {
+            for q in self.tables.pairs_of.of(k).filter(|q| *q < searched) {
                 let (a, b) = self.tables.pairs[q];
                 if n == 1 && (a == changed[0] || b == changed[0]) {
                     continue;
