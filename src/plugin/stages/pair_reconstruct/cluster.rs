@@ -33,7 +33,10 @@ pub(crate) enum Unmoved {
     GaveUp,
     /// Member `member`, sent off by an event, may meet `other`, a member of the pair plan it
     /// has no pair with in the cluster: moved as planned, it could pass into or through
-    /// `other`. The caller moves the cluster again with that pair, or leaves it.
+    /// `other`. The caller moves the cluster again with that pair, or leaves it. Where
+    /// `other` came with bodies that can be moved with the cluster but had an event of their
+    /// own before the meeting, their balls and searches from the start are the last of
+    /// [`Moved`]'s (a run again with them has them already).
     Meets {
         member: usize,
         other: RigidBodyHandle,
@@ -65,8 +68,9 @@ pub(crate) struct Joined {
 }
 
 /// What moving a cluster gave: its bodies (those it started with, then those that joined it
-/// on the way, `joined`, in that order), and their states at the step's end, or why it could
-/// not be moved alone; and its searches from the step's start, for a run again.
+/// on the way, `joined`, in that order, then those admitted that could not join, see
+/// [`Unmoved::Meets`]), and their states at the step's end, or why it could not be moved
+/// alone; and its searches from the step's start, for a run again.
 pub(crate) struct Moved<'s> {
     pub balls: Vec<ClusterBall<'s>>,
     pub joined: Vec<Joined>,
@@ -77,7 +81,8 @@ pub(crate) struct Moved<'s> {
 /// The first events, searched from the step's start, of a cluster's bodies' grounds and of
 /// its pairs, in the order of its members and of its pairs as the cluster grows (the
 /// bodies and pairs it started with, then for each group that joined it on the way, its
-/// bodies and pairs and the pair of the member that met it): a cluster moved again from its
+/// bodies and pairs and the pair of the member that met it, then those of a group admitted
+/// that could not join, [`Unmoved::Meets`]): a cluster moved again from its
 /// start with more bodies searches only theirs (each search is a function of the bodies'
 /// start states alone).
 #[derive(Default)]
@@ -622,7 +627,9 @@ impl<'c, 'a> Run<'c, 'a> {
     /// a touch of two of them): each moves from its start-of-step state by its own motion, as
     /// it would in the cluster moved again from the start with them (until `te` nothing of
     /// the cluster reached them). The met body's index in the cluster; `Some(None)` where it
-    /// cannot join here; `None` where a search gave up.
+    /// cannot join here (where admitted, its group's balls and searches from the start are
+    /// kept last in the run's, for a run again with them: the run ends); `None` where a
+    /// search gave up.
     fn join(
         &mut self,
         view: &AfterStep,
@@ -659,10 +666,6 @@ impl<'c, 'a> Run<'c, 'a> {
         let before = |e: &Option<(f64, Next)>| e.as_ref().is_some_and(|(t, _)| *t < te);
         let mut touches = self.starts.touches[again..].iter().flatten();
         if self.starts.grounds[base..].iter().any(before) || touches.any(before) {
-            self.balls.truncate(base);
-            self.tables.moving.truncate(base);
-            self.starts.grounds.truncate(base);
-            self.starts.touches.truncate(again);
             return Some(None);
         }
         // The pair of `k` and the body met is searched from `te`, not from the start.
