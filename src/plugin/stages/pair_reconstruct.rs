@@ -41,7 +41,7 @@ mod cluster;
 mod pairs_of;
 
 pub(crate) use cluster::through_pair_impacts;
-use cluster::{Admitted, Joined, Joining, RunLists, StartSearches, Unmoved};
+use cluster::{Joined, Joining, RunLists, StartSearches, Unmoved};
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::to_f64;
@@ -171,9 +171,9 @@ pub(crate) fn move_clusters(
             }
             // A body met on the way, alone or with its later cluster, that moves alone and
             // was not moved yet, joins the run.
-            let admit = |view: &AfterStep, other: RigidBodyHandle| {
+            let admit = |view: &AfterStep, other: RigidBodyHandle, balls: &mut Vec<_>| {
                 let sets = (&clusters, &cands, &written);
-                admitted(view, (bodies, colliders), sets, &absorbed, (c, other))
+                admitted(view, (bodies, colliders), sets, &absorbed, (c, other), balls)
             };
             let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
@@ -222,7 +222,8 @@ pub(crate) fn move_clusters(
 }
 
 /// What comes with `other`, met by a body of cluster `c` from outside it, where all of it
-/// moves alone and can be moved with the cluster ([`group_of`]): its bodies and their balls.
+/// moves alone and can be moved with the cluster ([`group_of`]): its bodies, their balls
+/// pushed onto `balls` (the run's, left as they were where it cannot).
 fn admitted<'c>(
     view: &AfterStep,
     (bodies, colliders): (&RigidBodySet, &'c ColliderSet),
@@ -233,18 +234,21 @@ fn admitted<'c>(
     ),
     absorbed: &[bool],
     (c, other): (usize, RigidBodyHandle),
-) -> Option<Admitted<'c>> {
+    balls: &mut Vec<ClusterBall<'c>>,
+) -> Option<Group<'static>> {
     let cands = sets.1;
     let group = group_of(sets, absorbed, c, other)?;
     let members = &group.bodies[..];
-    let mut balls = Vec::new();
-    moves_alone(view, (bodies, colliders), cands, members)
-        .then(|| cluster_balls(view, (bodies, colliders), cands, members, &mut balls))
-        .flatten()?;
-    Some(Admitted {
-        balls,
-        group: group.into_owned(),
-    })
+    if !moves_alone(view, (bodies, colliders), cands, members) {
+        return None;
+    }
+    let base = balls.len();
+    if cluster_balls(view, (bodies, colliders), cands, members, balls).is_none() {
+        // The members before the one that failed were added.
+        balls.truncate(base);
+        return None;
+    }
+    Some(group.into_owned())
 }
 
 /// Records a moved cluster's end states (`ends`, in `balls`' order; its events are the

@@ -43,17 +43,12 @@ pub(crate) enum Unmoved {
     },
 }
 
-/// Bodies from outside a cluster that may join its run where a member of it meets one of
-/// them: the body met, alone or with the rest of its own cluster (`group`), and their balls,
-/// in `group`'s order.
-pub(crate) struct Admitted<'s> {
-    pub balls: Vec<ClusterBall<'s>>,
-    pub group: Group<'static>,
-}
-
-/// The bodies that come with a body a member of a moving cluster reaches from outside it,
-/// where they can be moved with the cluster; `None` where they cannot.
-pub(crate) type Admit<'x, 's> = dyn Fn(&AfterStep, RigidBodyHandle) -> Option<Admitted<'s>> + 'x;
+/// The bodies that come with a body a member of a moving cluster reaches from outside it
+/// (the body met, alone or with the rest of its own cluster), where they can be moved with
+/// the cluster, their balls pushed onto the run's (the last argument), in the group's order;
+/// `None`, the run's balls as they were, where they cannot.
+pub(crate) type Admit<'x, 's> =
+    dyn Fn(&AfterStep, RigidBodyHandle, &mut Vec<ClusterBall<'s>>) -> Option<Group<'static>> + 'x;
 
 /// The bodies from outside a cluster that join it on the way.
 pub(crate) struct Joining<'x, 's> {
@@ -638,13 +633,12 @@ impl<'c, 'a> Run<'c, 'a> {
         body: RigidBodyHandle,
         te: f64,
     ) -> Option<Option<usize>> {
-        let Some(admitted) = (joining.admit)(view, body) else {
+        let base = self.balls.len();
+        let Some(group) = (joining.admit)(view, body, &mut self.balls) else {
             return Some(None);
         };
-        let Admitted { balls, group } = admitted;
-        let base = self.balls.len();
-        self.tables.moving.extend(balls.iter().map(start_moving));
-        self.balls.extend(balls);
+        let admitted = &self.balls[base..];
+        self.tables.moving.extend(admitted.iter().map(start_moving));
         // Searched from the start, as a run again with them would: kept for it in `starts`,
         // each pair named by its index among the cluster's pairs in a run again.
         debug_assert_eq!(self.starts.grounds.len(), base);
