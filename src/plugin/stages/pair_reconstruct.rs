@@ -41,7 +41,7 @@ mod cluster;
 mod pairs_of;
 
 pub(crate) use cluster::through_pair_impacts;
-use cluster::{Joined, Joining, RunLists, StartSearches, Unmoved};
+use cluster::{Joined, Joining, RunLists, StartSearches, Unmoved, run_room};
 
 use crate::motion::State;
 use crate::plugin::bridge::convert::to_f64;
@@ -143,11 +143,12 @@ pub(crate) fn move_clusters(
     // The later clusters taken in whole by an earlier one (moved with it).
     let mut absorbed = vec![false; clusters.len()];
     // The runs' lists, and the clusters' searches from the start, handed from one run to
-    // the next.
-    let mut lists = RunLists::default();
-    let mut starts = StartSearches::default();
-    // The list of a cluster's balls, emptied for the next cluster once it is written.
-    let mut spare_balls = Vec::new();
+    // the next, with room for the largest cluster's.
+    let (most_members, most_pairs) = clusters.largest();
+    let mut lists = RunLists::with_room(most_members, most_pairs);
+    let mut starts = StartSearches::with_room(most_members, most_pairs);
+    // The list of a cluster's balls, emptied for the next cluster once it is done with.
+    let mut spare_balls = Vec::with_capacity(run_room(most_members, most_pairs).0);
     for c in 0..clusters.len() {
         if absorbed[c] {
             continue;
@@ -173,7 +174,14 @@ pub(crate) fn move_clusters(
             // was not moved yet, joins the run.
             let admit = |view: &AfterStep, other: RigidBodyHandle, balls: &mut Vec<_>| {
                 let sets = (&clusters, &cands, &written);
-                admitted(view, (bodies, colliders), sets, &absorbed, (c, other), balls)
+                admitted(
+                    view,
+                    (bodies, colliders),
+                    sets,
+                    &absorbed,
+                    (c, other),
+                    balls,
+                )
             };
             let joining = Joining { admit: &admit };
             let context = (colliders, near, step);
@@ -186,7 +194,10 @@ pub(crate) fn move_clusters(
             starts = moved.starts;
             match moved.ends {
                 Ok(ends) => break Some((moved.balls, ends)),
-                Err(Unmoved::GaveUp) => break None,
+                Err(Unmoved::GaveUp) => {
+                    balls = moved.balls;
+                    break None;
+                }
                 Err(Unmoved::Meets { member, other }) => {
                     // The run's balls: the members', those that joined it included, and
                     // those of `other`'s group where it was admitted (the group `take_in`
@@ -206,6 +217,8 @@ pub(crate) fn move_clusters(
             for later in growing.taken {
                 absorbed[later] = false;
             }
+            spare_balls = balls;
+            spare_balls.clear();
             continue;
         };
         commit_moved(
@@ -567,6 +580,13 @@ impl Clusters {
     /// Cluster `c`'s members.
     fn members(&self, c: usize) -> &[RigidBodyHandle] {
         &self.members[self.member_starts[c]..self.member_starts[c + 1]]
+    }
+
+    /// The most members, and the most pairs, of a cluster.
+    fn largest(&self) -> (usize, usize) {
+        let most = |starts: &[usize]| starts.windows(2).map(|w| w[1] - w[0]).max();
+        let members = most(&self.member_starts).unwrap_or(0);
+        (members, most(&self.pair_starts).unwrap_or(0))
     }
 
     /// Cluster `c`'s pairs, as indices into its members.

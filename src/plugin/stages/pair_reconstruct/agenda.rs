@@ -86,6 +86,15 @@ impl Ord for Due {
 }
 
 impl Agenda {
+    /// An empty agenda with room for `bodies` bodies and `pairs` pairs.
+    pub(super) fn with_room(bodies: usize, pairs: usize) -> Self {
+        Self {
+            queue: BinaryHeap::with_capacity(bodies + pairs),
+            grounds: Vec::with_capacity(bodies),
+            touches: Vec::with_capacity(pairs),
+        }
+    }
+
     /// Empties the agenda, for `bodies` bodies and `pairs` pairs, with room for `room` of
     /// each (those added on the way); the lists' room is kept.
     pub(super) fn reset(&mut self, (bodies, pairs): (usize, usize), room: (usize, usize)) {

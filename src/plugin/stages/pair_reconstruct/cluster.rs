@@ -88,6 +88,16 @@ pub(crate) struct StartSearches {
 }
 
 impl StartSearches {
+    /// No searches, with room for those of clusters of up to `bodies` bodies and `pairs`
+    /// pairs ([`run_room`]).
+    pub fn with_room(bodies: usize, pairs: usize) -> Self {
+        let (bodies_room, pairs_room) = run_room(bodies, pairs);
+        Self {
+            grounds: Vec::with_capacity(bodies_room),
+            touches: Vec::with_capacity(pairs_room),
+        }
+    }
+
     /// No searches, the lists' room kept (for another cluster).
     pub fn clear(&mut self) {
         self.grounds.clear();
@@ -294,6 +304,36 @@ pub(crate) struct RunLists {
     way: WayOn,
 }
 
+impl RunLists {
+    /// Empty lists with room for the runs of clusters of up to `bodies` bodies and `pairs`
+    /// pairs ([`run_room`]): a step's runs allocate only where they outgrow that.
+    pub fn with_room(bodies: usize, pairs: usize) -> Self {
+        let (bodies_room, pairs_room) = run_room(bodies, pairs);
+        let mut by_slot = HandleMap::default();
+        by_slot.reserve(bodies_room);
+        RunLists {
+            tables: RunTables {
+                moving: Vec::with_capacity(bodies_room),
+                flights: Vec::with_capacity(bodies_room),
+                resting: Vec::with_capacity(pairs_room),
+                pairs: Vec::with_capacity(pairs_room),
+                pairs_of: PairsOf::with_room(bodies_room, pairs_room),
+                by_slot,
+                agenda: Agenda::with_room(bodies_room, pairs_room),
+            },
+            at_start: Vec::with_capacity(bodies),
+            way: WayOn::default(),
+        }
+    }
+}
+
+/// The room a run of a cluster of `bodies` bodies and `pairs` pairs keeps in its lists, of
+/// bodies and of pairs: as many bodies again, and as many pairs again as bodies (a run meets
+/// a few on the way, `join`, `add_pair`, and its lists then do not grow).
+pub(crate) fn run_room(bodies: usize, pairs: usize) -> (usize, usize) {
+    (2 * bodies, pairs + bodies)
+}
+
 /// A cluster in motion: each body's motion from its last event, and the agenda of what
 /// happens next.
 struct Run<'c, 'a> {
@@ -317,9 +357,7 @@ impl<'c, 'a> Run<'c, 'a> {
         lists: &mut RunLists,
     ) -> Option<Self> {
         let cluster = Cluster::of(&context, &balls);
-        // Room for as many bodies again, and as many pairs again as bodies: a run meets a
-        // few on the way (`join`, `add_pair`), and its lists then do not grow.
-        let (bodies_room, pairs_room) = (2 * balls.len(), pairs.len() + balls.len());
+        let (bodies_room, pairs_room) = run_room(balls.len(), pairs.len());
         let mut tables = std::mem::take(&mut lists.tables);
         let RunTables {
             moving,

@@ -14,6 +14,14 @@ pub(super) struct PairsOf {
 }
 
 impl PairsOf {
+    /// No bodies, with room for `bodies` bodies and `pairs` pairs.
+    pub(super) fn with_room(bodies: usize, pairs: usize) -> Self {
+        Self {
+            ends: Vec::with_capacity(bodies),
+            links: Vec::with_capacity(2 * pairs),
+        }
+    }
+
     /// `bodies` bodies without pairs, the lists' room kept.
     pub(super) fn reset(&mut self, bodies: usize) {
         self.ends.clear();
