@@ -29,6 +29,9 @@ pub(crate) struct Inertia {
 }
 
 impl Inertia {
+    /// Inlined into its callers: one that reads only part of it (a ball's ratio, which needs
+    /// no principal frame) then skips the rest, the renormalised quaternion above all.
+    #[inline]
     pub fn of(rb: &RigidBody) -> Self {
         let mp = &rb.mass_properties().local_mprops;
         let flags = rb.locked_axes();
@@ -46,6 +49,7 @@ impl Inertia {
 
     /// `I / (m r^2)` for a body of isotropic inertia (to `ISOTROPIC_TOLERANCE`) with no locked rotation axis
     /// (a ball about its centre) and contact radius `radius`, else `None`.
+    #[inline]
     pub fn ball_ratio(&self, radius: f64) -> Option<f64> {
         let inv = self.inv_principal.diagonal();
         let (lo, hi) = (inv.min(), inv.max());
