@@ -210,23 +210,35 @@ impl Rolling {
             ..*s
         };
         let mut turned = Vector3::zeros();
-        let first = if dt > 0.0 && dt < f64::INFINITY {
-            Some(self.phase(&st, &at, gn, false)?)
+        let finite_step = dt > 0.0 && dt < f64::INFINITY;
+        // The commonest step (a ball rolling or at rest on level ground, no rolling
+        // resistance): the phase's accelerations are known without the phase.
+        let level = if finite_step {
+            self.level_unresisted(&st, &at, gn)
         } else {
             None
         };
-        match first {
-            // The common step (a roll on level ground, a ball at rest): one phase of constant
-            // accelerations lasting past the step's end, taken as the phases' walk below would
-            // take it, without the walk.
-            Some(Phase {
-                kind: PhaseKind::Constant { linear, angular },
-                until,
-                ..
-            }) if until > dt => {
-                accelerate(&mut st, &mut turned, (&linear, &angular), dt);
+        if let Some((linear, angular)) = level {
+            accelerate(&mut st, &mut turned, (&linear, &angular), dt);
+        } else {
+            let first = if finite_step {
+                Some(self.phase(&st, &at, gn, false)?)
+            } else {
+                None
+            };
+            match first {
+                // The common step (a roll, a ball at rest): one phase of constant
+                // accelerations lasting past the step's end, taken as the phases' walk below
+                // would take it, without the walk.
+                Some(Phase {
+                    kind: PhaseKind::Constant { linear, angular },
+                    until,
+                    ..
+                }) if until > dt => {
+                    accelerate(&mut st, &mut turned, (&linear, &angular), dt);
+                }
+                first => self.walk_phases(&mut st, &mut turned, (&at, gn), first, dt)?,
             }
-            first => self.walk_phases(&mut st, &mut turned, (&at, gn), first, dt)?,
         }
         st.w += n * wn1;
         turned += n * turned_n;
@@ -326,6 +338,41 @@ impl Rolling {
             return Some(self.sliding(&slip, slip_speed, at, gn));
         }
         self.rolling(st, at, gn, scale)
+    }
+
+    /// The constant accelerations, linear and angular, of the phase [`Self::phase`] finds at
+    /// `st` (not after a slide) where they are known without it: no slip, no rolling
+    /// resistance (`mu_r = 0`) and a level ground, its `at` exactly `+0` (as
+    /// `accel - n (accel.n)` gives it for a normal along the acceleration), with
+    /// `1 + k > 0` and `mu g_n >= 0`. Rolling's `linear = (at - u mu_r g_n) / (1 + k)` is then
+    /// `+0` for any finite `u` (`g_n` is finite where `at` is), the friction it needs,
+    /// `|linear - at| = 0`, is within `mu N`, and neither a pursuit nor a stop follows: the
+    /// phase lasts for good, at `(+0, (n x +0) / r)` rolling and `(+0, +0)` at rest, the same
+    /// values [`Self::rolling`] returns. `None` otherwise: the phase is then asked.
+    fn level_unresisted(
+        &self,
+        st: &State,
+        at: &Vector3<f64>,
+        gn: f64,
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let level = at.iter().all(|a| a.to_bits() == 0);
+        let in_range = 1.0 + self.inertia_ratio > 0.0 && self.friction * gn >= 0.0;
+        if !level || self.rolling_resistance != 0.0 || !in_range {
+            return None;
+        }
+        let (n, r) = (self.normal, self.radius);
+        let speed = st.v.norm();
+        let scale = rest_scale(speed, r * st.w.norm(), at);
+        let slip = st.v - r * st.w.cross(&n);
+        if slip.norm() > scale {
+            return None;
+        }
+        let zero = Vector3::zeros();
+        if speed > scale {
+            Some((zero, n.cross(&zero) / r))
+        } else {
+            Some((zero, zero))
+        }
     }
 
     /// Sliding along the unit direction `u` with a slip of speed `slip_speed`, under
