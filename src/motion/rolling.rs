@@ -1231,4 +1231,55 @@ mod tests {
             }
         }
     }
+
+    /// The level, unresisted shortcut returns, bit for bit, the accelerations of the phase it
+    /// stands for, wherever it applies: rolling or at rest, on normals with signed zeros and
+    /// rounded tilts, at velocities with signed zeros.
+    #[test]
+    fn level_unresisted_is_the_phase_bit_for_bit() {
+        let bits = |v: &Vector3<f64>| v.map(f64::to_bits);
+        let normals = [
+            Vector3::y(),
+            Vector3::new(-0.0, 1.0, -0.0),
+            Vector3::new(1e-17, 1.0, -3e-18),
+            Vector3::new(0.6, 0.8, 0.0),
+        ];
+        let velocities = [
+            Vector3::new(1.5, 0.0, -0.25),
+            Vector3::new(-0.0, 0.0, -2.0),
+            Vector3::new(-1e-13, -0.0, 0.0),
+            Vector3::zeros(),
+        ];
+        let mut shortcuts = 0;
+        for n in normals {
+            let (mut rolling, _) = sliding_ball(Vector3::zeros(), Vector3::zeros(), 0.3);
+            rolling.normal = n;
+            let gn = -rolling.accel.dot(&n).min(0.0);
+            let at = rolling.accel - n * rolling.accel.dot(&n);
+            for v in velocities {
+                // Rolling without slip: w = n x v / r.
+                let st = State {
+                    com: Vector3::zeros(),
+                    rot: UnitQuaternion::identity(),
+                    v,
+                    w: n.cross(&v) / rolling.radius,
+                };
+                let Some((linear, angular)) = rolling.level_unresisted(&st, &at, gn) else {
+                    continue;
+                };
+                shortcuts += 1;
+                let phase = rolling.phase(&st, &at, gn, false).expect("a phase");
+                let PhaseKind::Constant {
+                    linear: l,
+                    angular: a,
+                } = phase.kind
+                else {
+                    panic!("not a constant phase");
+                };
+                assert!(phase.until == f64::INFINITY);
+                assert_eq!((bits(&linear), bits(&angular)), (bits(&l), bits(&a)));
+            }
+        }
+        assert!(shortcuts >= 8, "{shortcuts}");
+    }
 }
