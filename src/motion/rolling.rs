@@ -327,9 +327,7 @@ impl Rolling {
     /// acceleration `at` along it and `gn` into it; `slides`: the last phase ended where
     /// rolling needs more friction than `mu N`.
     fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64, slides: bool) -> Option<Phase> {
-        let (n, r) = (self.normal, self.radius);
-        let scale = rest_scale(st.v.norm(), r * st.w.norm(), at);
-        let slip = st.v - r * st.w.cross(&n);
+        let (slip, scale) = self.slip_and_scale(st, at);
         if slides {
             return self.slide_down(at, gn);
         }
@@ -338,6 +336,16 @@ impl Rolling {
             return Some(self.sliding(&slip, slip_speed, at, gn));
         }
         self.rolling(st, at, gn, scale)
+    }
+
+    /// The slip at `st` (the contact point's velocity, `v - r w x n`) and the speed below
+    /// which a slip or a roll counts as none (`rest_scale`): what decides whether the ball
+    /// slides, rolls or rests.
+    #[inline]
+    fn slip_and_scale(&self, st: &State, at: &Vector3<f64>) -> (Vector3<f64>, f64) {
+        let r = self.radius;
+        let scale = rest_scale(st.v.norm(), r * st.w.norm(), at);
+        (st.v - r * st.w.cross(&self.normal), scale)
     }
 
     /// The constant accelerations, linear and angular, of the phase [`Self::phase`] finds at
@@ -360,16 +368,13 @@ impl Rolling {
         if !level || self.rolling_resistance != 0.0 || !in_range {
             return None;
         }
-        let (n, r) = (self.normal, self.radius);
-        let speed = st.v.norm();
-        let scale = rest_scale(speed, r * st.w.norm(), at);
-        let slip = st.v - r * st.w.cross(&n);
+        let (slip, scale) = self.slip_and_scale(st, at);
         if slip.norm() > scale {
             return None;
         }
         let zero = Vector3::zeros();
-        if speed > scale {
-            Some((zero, n.cross(&zero) / r))
+        if st.v.norm() > scale {
+            Some((zero, self.normal.cross(&zero) / self.radius))
         } else {
             Some((zero, zero))
         }
