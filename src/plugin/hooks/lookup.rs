@@ -1,14 +1,18 @@
 //! Lookup: the per-step tables rapier's hooks read during its step.
 //!
-//! Contract: built at the end of `before_step` from the plan's roles (and the colliders of the
-//! pairs of opted-in balls) and the hook flags, read (never written) by the `PhysicsHooks` impl
-//! (`hooks/mod.rs`) while rapier steps; a lookup is an index and a handle compare, not a hash.
-//! The hook flags themselves are put in place by `hooks/flags.rs`.
+//! Contract: built at the end of `before_step` from the plan's roles, as the plan listed them
+//! with the user's hook flags it read (`StepData::ground_pairs`: what `HookFlags::
+//! recorded_user_flags` answers is the user's flags, the same before and after
+//! `HookFlags::update` puts the plugin's in place), the colliders of the pairs of opted-in
+//! balls and the hook flags; read (never written) by the `PhysicsHooks` impl (`hooks/mod.rs`)
+//! while rapier steps; a lookup is an index and a handle compare, not a hash. The hook flags
+//! themselves are put in place by `hooks/flags.rs`.
 
 use crate::plugin::hooks::flags::HookedBody;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::handles::{HandleMap, slot_of};
+use crate::plugin::state::step::GroundPair;
 use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
 
 /// What the hooks ask for every ground pair inside rapier's step, by collider index instead
@@ -63,11 +67,12 @@ pub(crate) enum Looked {
 }
 
 impl Lookup {
-    /// `user_flags`: the hook flags the user set on a collider; `far`: the colliders of the
-    /// bodies with no ground in reach (no roles); `ball_pairs`: the roles of the pairs of
-    /// opted-in balls.
+    /// `roles`: the plan's pairs with grounds, each with the user's flags the plan read
+    /// (`StepData::ground_pairs`); `user_flags`: the hook flags the user set on a collider;
+    /// `far`: the colliders of the bodies with no ground in reach (no roles); `ball_pairs`:
+    /// the roles of the pairs of opted-in balls.
     pub fn build(
-        (roles, by_tile): (&HandleMap<PairKey, Role>, &[ColliderHandle]),
+        (roles, by_tile): (&[GroundPair], &[ColliderHandle]),
         ball_pairs: &HandleMap<PairKey, Role>,
         far: &[ColliderHandle],
         hooked: &HandleMap<RigidBodyHandle, HookedBody>,
@@ -78,19 +83,15 @@ impl Lookup {
         };
         let mut out = Self {
             roles_built: true,
-            roles: vec![None; len(&mut roles.keys().map(|k| k.0).chain(far.iter().copied()))],
-            rest: Vec::new(),
-            user_flags: vec![
-                None;
-                len(&mut hooked.values().flat_map(|e| e.colliders.iter().copied()))
-            ],
-            pair_members: vec![false; len(&mut ball_pairs.keys().flat_map(|k| [k.0, k.1]))],
+            roles: vec![None; len(&mut roles.iter().map(|p| p.key.0).chain(far.iter().copied()))],
+            ..Self::default()
         };
+        // Each table is sized as it is filled: the maps are walked once.
         for c in ball_pairs.keys().flat_map(|k| [k.0, k.1]) {
-            out.pair_members[slot_of(c)] = true;
+            *grown(&mut out.pair_members, slot_of(c)) = true;
         }
         for c in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
-            out.user_flags[slot_of(c)] = Some((c, user_flags(c)));
+            *grown(&mut out.user_flags, slot_of(c)) = Some((c, user_flags(c)));
         }
         for body in far {
             let user = user_flags(*body);
@@ -104,33 +105,20 @@ impl Lookup {
                 rest: (0, 0),
             });
         }
-        // The pairs after a collider's first, by its slot, then gathered slot by slot. Most
-        // pairs share their ground with the pair before (one floor): its flags are read once.
-        let mut last_ground: Option<(ColliderHandle, ActiveHooks)> = None;
-        let mut ground_flags = |ground: ColliderHandle| match last_ground {
-            Some((g, flags)) if g == ground => flags,
-            _ => {
-                let flags = user_flags(ground);
-                last_ground = Some((ground, flags));
-                flags
-            }
-        };
+        // The pairs after a collider's first, by its slot, then gathered slot by slot.
         let mut rest = Vec::new();
-        for ((body, ground), role) in roles {
-            let slot = &mut out.roles[slot_of(*body)];
+        for pair in roles {
+            let ((body, ground), role) = (pair.key, pair.role);
+            let slot = &mut out.roles[slot_of(body)];
             match slot {
-                Some(first) => rest.push((
-                    slot_of(*body),
-                    (*ground, *role, first.body_user | ground_flags(*ground)),
-                )),
+                Some(_) => rest.push((slot_of(body), (ground, role, pair.user))),
                 None => {
-                    let body_user = user_flags(*body);
                     *slot = Some(RoleSlot {
-                        body: *body,
-                        ground: *ground,
-                        role: *role,
-                        user: body_user | ground_flags(*ground),
-                        body_user,
+                        body,
+                        ground,
+                        role,
+                        user: pair.user,
+                        body_user: pair.body_user,
                         by_tile: false,
                         rest: (0, 0),
                     })
@@ -250,4 +238,12 @@ impl Lookup {
             _ => None,
         }
     }
+}
+
+/// `table[slot]`, the table first grown with default entries to hold it.
+fn grown<T: Clone + Default>(table: &mut Vec<T>, slot: usize) -> &mut T {
+    if table.len() <= slot {
+        table.resize(slot + 1, T::default());
+    }
+    &mut table[slot]
 }

@@ -42,7 +42,7 @@ impl<H> ImpactPlugin<H> {
             .flat_map(|rb| rb.colliders().iter().copied())
             .collect();
         self.lookup = Lookup::build(
-            (&step.roles, &step.by_tile),
+            (&step.ground_pairs, &step.by_tile),
             &step.pairs.roles,
             &far_colliders,
             flags.hooked(),

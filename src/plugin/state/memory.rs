@@ -6,7 +6,7 @@ use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
     ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, sorted_entries, sorted_members,
 };
-use crate::plugin::state::step::{Candidate, StepData};
+use crate::plugin::state::step::{Candidate, GroundPair, StepData};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
@@ -216,13 +216,14 @@ pub(crate) struct LastStep {
 pub(crate) struct Spare {
     pub shadows: Shadows,
     pub roles: HandleMap<PairKey, Role>,
+    pub ground_pairs: Vec<GroundPair>,
     pub candidates: Vec<Candidate>,
 }
 
 impl Memory {
     /// Opens a step's plan: hands over last step's shadows and roles to be read (and its
     /// near marks, `NearMarks::was_near`), and gives `step` the cleared tables to fill (the
-    /// roles, the candidates).
+    /// roles and their list, the candidates).
     pub fn begin_step(&mut self, step: &mut StepData) -> LastStep {
         self.near.begin_step();
         let shadows = std::mem::replace(&mut self.shadows, std::mem::take(&mut self.spare.shadows));
@@ -230,6 +231,8 @@ impl Memory {
         let roles = std::mem::take(&mut self.roles);
         step.roles = std::mem::take(&mut self.spare.roles);
         step.roles.clear();
+        step.ground_pairs = std::mem::take(&mut self.spare.ground_pairs);
+        step.ground_pairs.clear();
         step.candidates = std::mem::take(&mut self.spare.candidates);
         step.candidates.clear();
         let pair_roles = std::mem::take(&mut self.pair_roles);
@@ -265,9 +268,11 @@ impl Memory {
         });
     }
 
-    /// After rapier's step: this step's roles and holds become what the next step reads.
+    /// After rapier's step: this step's roles and holds become what the next step reads (the
+    /// roles' list, read by the hooks only, is kept for the next step to fill).
     pub fn keep_roles(&mut self, step: &mut StepData) {
         self.roles = std::mem::take(&mut step.roles);
+        self.spare.ground_pairs = std::mem::take(&mut step.ground_pairs);
         self.pair_roles = std::mem::take(&mut step.pairs.roles);
         self.mesh_sides = std::mem::take(&mut step.mesh_sides);
         self.holds.clear();

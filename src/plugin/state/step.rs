@@ -10,7 +10,7 @@ use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::state::handles::{HandleMap, PairKey, SlotTable};
 use crate::plugin::state::small_list::SmallList;
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
+use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 
 /// A ball's first step held at rest on a slope (`OnPlane::Held`): rapier's resting contact
@@ -29,6 +29,18 @@ pub(crate) struct FirstHold {
     pub normal: Vector3<f64>,
     /// From its centre to the contact point (m).
     pub radius: f64,
+}
+
+/// A pair of a body collider and a ground as the plan decided it (`StepData::ground_pairs`).
+#[derive(Clone, Copy)]
+pub(crate) struct GroundPair {
+    /// (body collider, ground collider), the key of `StepData::roles`.
+    pub key: PairKey,
+    pub role: Role,
+    /// The hook flags the user set on the body collider (`HookFlags::recorded_user_flags`).
+    pub body_user: ActiveHooks,
+    /// The hook flags the user set on the two colliders (`body_user` and the ground's).
+    pub user: ActiveHooks,
 }
 
 /// A managed body's start-of-step snapshot.
@@ -162,6 +174,10 @@ pub(crate) struct StepData {
     /// at least 1).
     pub substeps: usize,
     pub roles: HandleMap<PairKey, Role>,
+    /// The pairs of `roles` in the order the plan decided them, each key once and with the
+    /// role `roles` holds, and the user's hook flags the plan read for them: the hooks'
+    /// tables are built from this list (`Lookup::build`), not by walking the map.
+    pub ground_pairs: Vec<GroundPair>,
     /// The colliders of the bodies planned against a slab's tiles one by one (a jointed body,
     /// or one whose pairs the user's filter decides): their roles are by tile; every other
     /// body's pair with a tile is its slab's, under the stand-in (`GroundIndex::stand_in`).

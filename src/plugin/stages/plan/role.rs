@@ -19,7 +19,7 @@ use crate::plugin::queries::geometry::{
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::small_list::SmallList;
-use crate::plugin::state::step::StepData;
+use crate::plugin::state::step::{GroundPair, StepData};
 use crate::rapier::prelude::{ActiveHooks, Collider, ColliderHandle, PhysicsHooks};
 use nalgebra::Vector3;
 
@@ -59,9 +59,10 @@ struct GroundVerdict {
 }
 
 impl<H: PhysicsHooks> Planner<'_, H> {
-    /// The roles of the body's pairs with its `k`-th ground near it (in `step.roles`, in the
-    /// order of the body's parts), and whether the search after the step runs against it
-    /// (`plan.impact_grounds`, `plan.closing`). Writes only `plan`, `step` and, in `Step`
+    /// The roles of the body's pairs with its `k`-th ground near it (in `step.roles`, and in
+    /// `step.ground_pairs` with the user's flags read for them, in the order of the body's
+    /// parts), and whether the search after the step runs against it (`plan.impact_grounds`,
+    /// `plan.closing`). Writes only `plan`, `step` and, in `Step`
     /// mode or on a release, the events; rapier is not written here.
     pub(super) fn plan_ground(
         &mut self,
@@ -81,7 +82,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let key = (part.handle, gg.handle);
             // Read once: the user's filter and the rolling decision both ask for them (the
             // pair's flags: either collider's, `HookFlags::recorded_pair_flags`).
-            let user = self.flags.recorded_user_flags(scene.colliders, key.0) | side.user;
+            let body_user = self.flags.recorded_user_flags(scene.colliders, key.0);
+            let user = body_user | side.user;
             // Both exist: the body's geometry and the ground's were read from them.
             let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
             let pair = Pair {
@@ -101,7 +103,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             } else {
                 self.contact_role(reads, plan, pair, &mut verdict, step)
             };
-            step.roles.insert(key, role);
+            let planned = GroundPair {
+                key,
+                role,
+                body_user,
+                user,
+            };
+            if step.roles.insert(key, role).is_none() {
+                step.ground_pairs.push(planned);
+            } else if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == key) {
+                // A key decided again keeps one entry, with the role the map keeps.
+                *held = planned;
+            }
         }
         if verdict.any_impact {
             plan.impact_grounds.push(*gi);
