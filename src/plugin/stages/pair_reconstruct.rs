@@ -7,8 +7,7 @@
 //! each of whose bodies moved alone in the step (no contact rapier's solver pushed it by, no joint or
 //! torque: checked by the caller) and moves every body by its own motion (`crate::motion`: free
 //! flight, or for a ball rolling in closed form on its level ground) to the cluster's earliest
-//! event: a body's ground impact (the in-step search of `queries/geometry/impact_time.rs`;
-//! from the start, none for a flight the plan found clear, `Candidate::closing`) or two bodies touching
+//! event: a body's ground impact (the in-step search of `queries/geometry/impact_time.rs`) or two bodies touching
 //! (two centred balls in closed form, `motion::meeting`; any other pair by conservative
 //! advancement on parry's distance, `body_contact.rs`), resolved by the model (`resolve.rs`; a
 //! flat face on a face as one impact at the centroid of their overlap's corners), then on to the

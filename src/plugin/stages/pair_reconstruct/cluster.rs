@@ -385,7 +385,7 @@ impl<'c, 'a> Run<'c, 'a> {
             let found = match starts.grounds.get(k) {
                 Some(found) => *found,
                 None => {
-                    let found = cluster.ground_from_start(k, m).ok()?;
+                    let found = cluster.ground(k, m, 0.0).ok()?;
                     starts.grounds.push(found);
                     found
                 }
@@ -684,7 +684,7 @@ impl<'c, 'a> Run<'c, 'a> {
         {
             let cluster = Cluster::of(&self.context, &self.balls);
             for j in base..self.balls.len() {
-                let found = cluster.ground_from_start(j, &self.tables.moving[j]).ok()?;
+                let found = cluster.ground(j, &self.tables.moving[j], 0.0).ok()?;
                 self.starts.grounds.push(found);
             }
             for (q, (i, j)) in group.pairs.iter().enumerate() {
@@ -771,18 +771,6 @@ impl<'c, 'a> Run<'c, 'a> {
 }
 
 impl Cluster<'_, '_> {
-    /// Body `k`'s first ground impact from the step's start, `m` its motion there: as
-    /// [`Cluster::ground`] from 0, and clear without a search for a flight none of whose
-    /// `Impact` grounds the plan found could close in the step (`Candidate::closing`: the
-    /// search from its start state finds it clear, as the bodies stage takes it).
-    fn ground_from_start(&self, k: usize, m: &Moving) -> Result<Option<(f64, Next)>, ()> {
-        let flies = matches!(m.motion, Motion::Flight(_));
-        if flies && !self.balls[k].cand.closing {
-            return Ok(None);
-        }
-        self.ground(k, m, 0.0)
-    }
-
     /// Body `k`'s first ground impact after `t`, `Err` where the search gave up (the cluster
     /// is not moved alone). A rolling ball meets its other grounds (a wall, a slope's foot)
     /// along its rolling, as the bodies stage's rolling ball does (`rolling_touch`), and
