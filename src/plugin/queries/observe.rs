@@ -391,9 +391,35 @@ pub(crate) fn held_or_by_unseen(
     narrow_phase: &NarrowPhase,
     looked_for: impl Fn(ColliderHandle) -> bool,
 ) -> bool {
-    any_pair(rb, narrow_phase, |other, pair| {
-        pushes(pair) || in_solver(pair) && !looked_for(other)
+    any_pair(rb, narrow_phase, |other, pair| match solver_part(pair) {
+        SolverPart::Pushed => true,
+        SolverPart::Open => !looked_for(other),
+        SolverPart::Out => false,
     })
+}
+
+/// A contact pair's part in rapier's solver in its last step, read in one pass over its
+/// manifolds: [`pushes`] gives `Pushed`, else [`in_solver`] gives `Open`, else `Out`.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum SolverPart {
+    /// No solver contact with rigid impulses.
+    Out,
+    /// Solver contacts, every impulse zero (a speculative contact that stayed open).
+    Open,
+    /// A solver contact with a nonzero impulse.
+    Pushed,
+}
+
+/// The pair's [`SolverPart`].
+fn solver_part(pair: &ContactPair) -> SolverPart {
+    let mut part = SolverPart::Out;
+    for m in pair.solver_manifolds().iter().filter(|m| solved(m)) {
+        if m.points.iter().any(|p| p.data.impulse != 0.0) {
+            return SolverPart::Pushed;
+        }
+        part = SolverPart::Open;
+    }
+    part
 }
 
 /// Did rapier's solver push the pair apart in its last step (a solver contact with a nonzero
