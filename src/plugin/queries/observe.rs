@@ -399,7 +399,7 @@ pub(crate) fn held_or_by_unseen(
 }
 
 /// A contact pair's part in rapier's solver in its last step, read in one pass over its
-/// manifolds: [`pushes`] gives `Pushed`, else [`in_solver`] gives `Open`, else `Out`.
+/// manifolds: [`pushes`] asks for `Pushed`; [`in_solver`] holds for `Open` and `Pushed`.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum SolverPart {
     /// No solver contact with rigid impulses.
@@ -425,10 +425,7 @@ fn solver_part(pair: &ContactPair) -> SolverPart {
 /// Did rapier's solver push the pair apart in its last step (a solver contact with a nonzero
 /// impulse)?
 fn pushes(pair: &ContactPair) -> bool {
-    pair.solver_manifolds()
-        .iter()
-        .filter(|m| solved(m))
-        .any(|m| m.points.iter().any(|p| p.data.impulse != 0.0))
+    solver_part(pair) == SolverPart::Pushed
 }
 
 /// What touches a body besides its grounds, from rapier's contact graph after a step.
