@@ -160,77 +160,116 @@ pub(crate) fn move_clusters(
         // builds only the bodies it took in.
         let mut balls = std::mem::take(&mut spare_balls);
         starts.clear();
-        let moved = loop {
-            let taken_in = &growing.members[balls.len()..];
-            if !moves_alone(view, (bodies, colliders), &cands, taken_in) {
-                break None;
-            }
-            let sets = (bodies, colliders);
-            if cluster_balls(view, sets, &cands, taken_in, &mut balls).is_none() {
-                break None;
-            }
-            // A body met on the way, alone or with its later cluster, that moves alone and
-            // was not moved yet, joins the run.
-            let admit = |view: &AfterStep, other: RigidBodyHandle, balls: &mut Vec<_>| {
-                let sets = (&clusters, &cands, &written);
-                admitted(
-                    view,
-                    (bodies, colliders),
-                    sets,
-                    &absorbed,
-                    (c, other),
-                    balls,
-                )
-            };
-            let joining = Joining { admit: &admit };
-            let context = (colliders, near, step);
-            runs += 1;
-            let started = (std::mem::take(&mut balls), &growing.pairs[..]);
-            let searched = std::mem::take(&mut starts);
-            let searched = (searched, &mut lists);
-            let moved = through_pair_impacts(view, context, started, searched, &joining);
-            growing.joined(moved.joined, &mut absorbed);
-            starts = moved.starts;
-            match moved.ends {
-                Ok(ends) => break Some((moved.balls, ends)),
-                Err(Unmoved::GaveUp) => {
-                    balls = moved.balls;
-                    break None;
-                }
-                Err(Unmoved::Meets { member, other }) => {
-                    // The run's balls: the members', those that joined it included, and
-                    // those of `other`'s group where it was admitted (the group `take_in`
-                    // adds: nothing it reads changed), which are then not built again.
-                    debug_assert!(moved.balls.len() >= growing.members.len());
-                    balls = moved.balls;
-                    let sets = (&clusters, &cands, &written);
-                    if !growing.take_in(sets, &mut absorbed, member, other) {
-                        break None;
-                    }
-                    debug_assert!(balls.len() <= growing.members.len());
-                }
-            }
+        let reads = StageReads {
+            bodies,
+            colliders,
+            near,
+            step,
+            cands: &cands,
+            clusters: &clusters,
         };
-        let Some((balls, ends)) = moved else {
+        let tables = (&mut lists, &mut starts, &mut absorbed);
+        let moved = run_cluster(view, &reads, &mut growing, &mut balls, tables, &written);
+        runs += moved.runs;
+        match moved.ends {
+            Some(ends) => {
+                let sets = (bodies, colliders, step);
+                commit_moved(view, sets, (&balls, ends), from, &mut written);
+            }
             // Not moved: each cluster it took in is moved on its own.
-            for later in growing.taken {
-                absorbed[later] = false;
+            None => {
+                for later in growing.taken {
+                    absorbed[later] = false;
+                }
             }
-            spare_balls = balls;
-            spare_balls.clear();
-            continue;
-        };
-        commit_moved(
-            view,
-            (bodies, colliders, step),
-            (&balls, ends),
-            from,
-            &mut written,
-        );
+        }
         spare_balls = balls;
         spare_balls.clear();
     }
     (written, runs)
+}
+
+/// What every run of a step's clusters reads: rapier's sets, the bodies near the clusters,
+/// the step, its candidates by body and its clusters.
+struct StageReads<'r, 's> {
+    bodies: &'r RigidBodySet,
+    colliders: &'s ColliderSet,
+    near: &'r NearBodies<'r>,
+    step: &'r EndOfStep<'s>,
+    cands: &'r CandidatesByBody<'s>,
+    clusters: &'r Clusters,
+}
+
+/// A cluster's runs: how many were made, and the end states of its balls (left in `balls`)
+/// where the last one moved it (`None`: it is not moved).
+struct ClusterRuns {
+    runs: usize,
+    ends: Option<Vec<State>>,
+}
+
+/// Moves `growing` from its start with `balls` (those of its first members already built),
+/// again each time it meets a body it can take in ([`Growing::take_in`]), until it is
+/// moved, gives up or meets a body it cannot take in. `tables`: the runs' lists and start
+/// searches handed from run to run, and the clusters taken in whole so far.
+fn run_cluster<'r, 's>(
+    view: &mut AfterStep,
+    reads: &StageReads<'r, 's>,
+    growing: &mut Growing<'r>,
+    balls: &mut Vec<ClusterBall<'s>>,
+    (lists, starts, absorbed): (&mut RunLists, &mut StartSearches, &mut Vec<bool>),
+    written: &HandleSet<RigidBodyHandle>,
+) -> ClusterRuns {
+    let StageReads {
+        bodies,
+        colliders,
+        near,
+        step,
+        cands,
+        clusters,
+    } = *reads;
+    let c = growing.cluster;
+    let mut runs = 0;
+    let ends = loop {
+        let taken_in = &growing.members[balls.len()..];
+        if !moves_alone(view, (bodies, colliders), cands, taken_in) {
+            break None;
+        }
+        let sets = (bodies, colliders);
+        if cluster_balls(view, sets, cands, taken_in, balls).is_none() {
+            break None;
+        }
+        // A body met on the way, alone or with its later cluster, that moves alone and
+        // was not moved yet, joins the run.
+        let admit = |view: &AfterStep, other: RigidBodyHandle, balls: &mut Vec<_>| {
+            let sets = (clusters, cands, written);
+            admitted(view, (bodies, colliders), sets, absorbed, (c, other), balls)
+        };
+        let joining = Joining { admit: &admit };
+        let context = (colliders, near, step);
+        runs += 1;
+        let started = (std::mem::take(balls), &growing.pairs[..]);
+        let searched = (std::mem::take(starts), &mut *lists);
+        let moved = through_pair_impacts(view, context, started, searched, &joining);
+        growing.joined(moved.joined, absorbed);
+        *starts = moved.starts;
+        *balls = moved.balls;
+        match moved.ends {
+            Ok(ends) => break Some(ends),
+            Err(Unmoved::GaveUp) => break None,
+            Err(Unmoved::Meets { member, other }) => {
+                // The run's balls: the members', those that joined it included, and
+                // those of `other`'s group where it was admitted (the group `take_in`
+                // adds: nothing it reads changed), which are then not built again.
+                debug_assert!(balls.len() >= growing.members.len());
+                let sets = (clusters, cands, written);
+                if !growing.take_in(sets, absorbed, member, other) {
+                    break None;
+                }
+                debug_assert!(balls.len() <= growing.members.len());
+            }
+        }
+    };
+    ClusterRuns { runs, ends }
 }
 
 /// What comes with `other`, met by a body of cluster `c` from outside it, where all of it
