@@ -351,12 +351,13 @@ impl Rolling {
     /// The constant accelerations, linear and angular, of the phase [`Self::phase`] finds at
     /// `st` (not after a slide) where they are known without it: no slip, no rolling
     /// resistance (`mu_r = 0`) and a level ground, its `at` exactly `+0` (as
-    /// `accel - n (accel.n)` gives it for a normal along the acceleration), with
-    /// `1 + k > 0` and `mu g_n >= 0`. Rolling's `linear = (at - u mu_r g_n) / (1 + k)` is then
-    /// `+0` for any finite `u` (`g_n` is finite where `at` is), the friction it needs,
-    /// `|linear - at| = 0`, is within `mu N`, and neither a pursuit nor a stop follows: the
-    /// phase lasts for good, at `(+0, (n x +0) / r)` rolling and `(+0, +0)` at rest, the same
-    /// values [`Self::rolling`] returns. `None` otherwise: the phase is then asked.
+    /// `accel - n (accel.n)` gives it for a normal along the acceleration), with `1 + k > 0`,
+    /// `mu g_n >= 0`, `g_n` finite and a positive radius. Rolling's
+    /// `linear = (at - u mu_r g_n) / (1 + k)` is then `+0` for any finite `u`, the friction
+    /// it needs, `|linear - at| = 0`, is within `mu N`, and neither a pursuit nor a stop
+    /// follows: the phase lasts for good, at `(+0, (n x +0) / r)` rolling and `(+0, +0)` at
+    /// rest, the same values [`Self::rolling`] returns. `None` otherwise: the phase is then
+    /// asked.
     fn level_unresisted(
         &self,
         st: &State,
@@ -364,7 +365,10 @@ impl Rolling {
         gn: f64,
     ) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let level = at.iter().all(|a| a.to_bits() == 0);
-        let in_range = 1.0 + self.inertia_ratio > 0.0 && self.friction * gn >= 0.0;
+        let in_range = 1.0 + self.inertia_ratio > 0.0
+            && self.friction * gn >= 0.0
+            && gn.is_finite()
+            && self.radius > 0.0;
         if !level || self.rolling_resistance != 0.0 || !in_range {
             return None;
         }
@@ -1286,5 +1290,29 @@ mod tests {
             }
         }
         assert!(shortcuts >= 8, "{shortcuts}");
+    }
+
+    /// Where the phase is not a roll at `+0` (a radius that is not positive makes the rest
+    /// scale negative and the roll's direction NaN; an infinite push into the ground makes
+    /// the rolling resistance's term NaN), the shortcut leaves the step to the phase.
+    #[test]
+    fn level_unresisted_is_asked_only_of_a_ball_of_positive_size_and_finite_push() {
+        let (mut rolling, _) = sliding_ball(Vector3::zeros(), Vector3::zeros(), 0.3);
+        let n = rolling.normal;
+        let gn = -rolling.accel.dot(&n).min(0.0);
+        let at = rolling.accel - n * rolling.accel.dot(&n);
+        let spinning = State {
+            com: Vector3::zeros(),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::zeros(),
+            w: Vector3::z(),
+        };
+        assert!(
+            rolling
+                .level_unresisted(&spinning, &at, f64::INFINITY)
+                .is_none()
+        );
+        rolling.radius = f64::NEG_INFINITY;
+        assert!(rolling.level_unresisted(&spinning, &at, gn).is_none());
     }
 }
