@@ -267,25 +267,9 @@ pub(crate) fn within_reach_of_other(
                         }
                         continue;
                     };
-                    // Two balls (most neighbours in a crowd): their centres, without parry.
-                    let d = vec_to_na(near.translation - co.position().translation);
-                    let len = d.norm();
-                    let gap = len - to_f64(a.radius) - to_f64(near.radius) - skins;
-                    // Most neighbours are out of reach by the two reaches alone, which spares
-                    // the exact bound (the same answer: the exact bound never exceeds this one
-                    // along a line of unit length, which `len` gives unless tiny or infinite).
-                    if (UNDERFLOW_LENGTH..f64::INFINITY).contains(&len)
-                        && gap > closing_bound_of_reaches(own_reach, near.reach)
-                    {
-                        continue;
+                    if balls_within_reach((co, a), near, skins, own, own_reach) {
+                        return true;
                     }
-                    // Two centres close no faster than along their line now:
-                    // |d + x| >= |d| + x.d/|d| for any relative displacement x.
-                    let line = (len > 0.0).then(|| d / len);
-                    if gap > closing_bound(own, &near.motion, line) {
-                        continue;
-                    }
-                    return true;
                 }
                 Some(Read::Other(oc)) => {
                     if !oc.is_enabled() {
@@ -302,6 +286,38 @@ pub(crate) fn within_reach_of_other(
         }
     }
     false
+}
+
+/// Two balls (most neighbours in a crowd), the own ball `a` of collider `co` and the
+/// neighbour `near`, `skins` their contact skins summed: can they touch within the step,
+/// `own` and `own_reach` the own ball's motion and reach? By their centres, without parry;
+/// a bound that is NaN is within reach.
+#[inline]
+fn balls_within_reach(
+    (co, a): (&Collider, &Ball),
+    near: &Neighbour,
+    skins: f64,
+    own: &OwnMotion,
+    own_reach: f64,
+) -> bool {
+    let d = vec_to_na(near.translation - co.position().translation);
+    let len = d.norm();
+    let gap = len - to_f64(a.radius) - to_f64(near.radius) - skins;
+    // Most neighbours are out of reach by the two reaches alone, which spares the exact bound
+    // (the same answer: the exact bound never exceeds this one along a line of unit length,
+    // which `len` gives unless tiny or infinite).
+    if (UNDERFLOW_LENGTH..f64::INFINITY).contains(&len)
+        && gap > closing_bound_of_reaches(own_reach, near.reach)
+    {
+        return false;
+    }
+    // Two centres close no faster than along their line now:
+    // |d + x| >= |d| + x.d/|d| for any relative displacement x.
+    let line = (len > 0.0).then(|| d / len);
+    if gap > closing_bound(own, &near.motion, line) {
+        return false;
+    }
+    true
 }
 
 /// parry's distance between the collider `co` (of the ball) and `other`, less their `skins`
