@@ -83,7 +83,7 @@ impl Shadows {
     #[inline]
     fn place(&self, body: RigidBodyHandle) -> Option<usize> {
         let k = *self.places.get(body.slot())? as usize;
-        (k > 0 && self.entries[k - 1].0 == body).then_some(k - 1)
+        (k > 0 && self.entries[k - 1].0 == body).then(|| k - 1)
     }
 
     /// `body`'s shadow, if it has one.
