@@ -562,7 +562,10 @@ pub(crate) fn correction(
             ImpactTiming::StepEnd
         },
         contact_points: 0,
-        approach_speed: approach.max(0.0),
+        // Not `approach.max(0.0)`: `f64::max` leaves the sign of a zero unspecified, and a
+        // body at rest (`approach` -0.0) got +0.0 from an optimised build and -0.0 from an
+        // unoptimised one.
+        approach_speed: if approach > 0.0 { approach } else { 0.0 },
         settled: true,
         material: Material::new(0.0, 0.0),
     };
