@@ -327,7 +327,7 @@ impl Rolling {
     /// acceleration `at` along it and `gn` into it; `slides`: the last phase ended where
     /// rolling needs more friction than `mu N`.
     fn phase(&self, st: &State, at: &Vector3<f64>, gn: f64, slides: bool) -> Option<Phase> {
-        let (slip, scale) = self.slip_and_scale(st, at);
+        let (slip, scale) = self.slip_and_scale(st, st.v.norm(), at);
         if slides {
             return self.slide_down(at, gn);
         }
@@ -339,12 +339,12 @@ impl Rolling {
     }
 
     /// The slip at `st` (the contact point's velocity, `v - r w x n`) and the speed below
-    /// which a slip or a roll counts as none (`rest_scale`): what decides whether the ball
-    /// slides, rolls or rests.
+    /// which a slip or a roll counts as none (`rest_scale`, `speed` the centre's, `|v|`):
+    /// what decides whether the ball slides, rolls or rests.
     #[inline]
-    fn slip_and_scale(&self, st: &State, at: &Vector3<f64>) -> (Vector3<f64>, f64) {
+    fn slip_and_scale(&self, st: &State, speed: f64, at: &Vector3<f64>) -> (Vector3<f64>, f64) {
         let r = self.radius;
-        let scale = rest_scale(st.v.norm(), r * st.w.norm(), at);
+        let scale = rest_scale(speed, r * st.w.norm(), at);
         (st.v - r * st.w.cross(&self.normal), scale)
     }
 
@@ -372,12 +372,13 @@ impl Rolling {
         if !level || self.rolling_resistance != 0.0 || !in_range {
             return None;
         }
-        let (slip, scale) = self.slip_and_scale(st, at);
+        let speed = st.v.norm();
+        let (slip, scale) = self.slip_and_scale(st, speed, at);
         if slip.norm() > scale {
             return None;
         }
         let zero = Vector3::zeros();
-        if st.v.norm() > scale {
+        if speed > scale {
             Some((zero, self.normal.cross(&zero) / self.radius))
         } else {
             Some((zero, zero))

@@ -148,6 +148,14 @@ pub(crate) fn move_clusters(
     let mut starts = StartSearches::with_room(most_members, most_pairs);
     // The list of a cluster's balls, emptied for the next cluster once it is done with.
     let mut spare_balls = Vec::with_capacity(run_room(most_members, most_pairs).0);
+    let reads = StageReads {
+        bodies,
+        colliders,
+        near,
+        step,
+        cands: &cands,
+        clusters: &clusters,
+    };
     for c in 0..clusters.len() {
         if absorbed[c] {
             continue;
@@ -160,14 +168,6 @@ pub(crate) fn move_clusters(
         // builds only the bodies it took in.
         let mut balls = std::mem::take(&mut spare_balls);
         starts.clear();
-        let reads = StageReads {
-            bodies,
-            colliders,
-            near,
-            step,
-            cands: &cands,
-            clusters: &clusters,
-        };
         let tables = (&mut lists, &mut starts, &mut absorbed);
         let moved = run_cluster(view, &reads, &mut growing, &mut balls, tables, &written);
         runs += moved.runs;
