@@ -15,8 +15,9 @@
 //! the step's thresholds, roles and candidates.
 //!
 //! The parts, by what each decides: the grounds near the body's start (its snapshot and
-//! colliders, taken by `Planner::plan_body`) and its candidate (`plan/body.rs`); one pair's role (`plan/role.rs`); `Step` mode's start-of-step impulse
-//! (`plan/impulse.rs`); whether a resting ball rolls, is held or is reached (`plan/rolling.rs`).
+//! colliders, taken by `Planner::plan_body`) and its candidate (`plan/body.rs`); one pair's
+//! role (`plan/role.rs`); `Step` mode's start-of-step impulse (`plan/impulse.rs`); whether a
+//! resting ball rolls, is held or is reached (`plan/rolling.rs`).
 
 mod body;
 mod impulse;
