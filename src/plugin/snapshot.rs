@@ -278,4 +278,93 @@ mod tests {
         assert_eq!(plugin.restore(&edited), Err(RestoreError::NotFinite));
         assert_eq!(*plugin.config(), ImpactConfig::default());
     }
+
+    /// A hand-edited snapshot naming bodies and colliders at slots near `u32::MAX` (no world
+    /// holds them: a shadow, a ground, a ground's flags, a hooked body not in the world and
+    /// a flagged collider of the world's ball, both stamped for the next step) is restored
+    /// without the plugin's tables growing to those slots, is saved again as it was given,
+    /// and steps the world bit for bit as the snapshot it was edited from: what names
+    /// nothing in the world changes nothing.
+    #[test]
+    fn handles_far_beyond_the_world_cost_no_memory_and_change_nothing() {
+        use crate::plugin::state::memory::Shadow;
+        use crate::rapier::math::Vector;
+        use crate::rapier::prelude::*;
+        use nalgebra::Vector3;
+
+        let mut world = PhysicsWorld::default();
+        let (_, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(5.0, 0.1, 5.0),
+        );
+        let (ball, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, 0.5, 0.0)),
+            ColliderBuilder::ball(0.1).restitution(0.8),
+        );
+        let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+        plugin
+            .add_ground(&world.bodies, &world.colliders, ground)
+            .unwrap();
+        for _ in 0..5 {
+            plugin.step(&mut world);
+        }
+        let saved = plugin.snapshot();
+        let far = u32::MAX - 1;
+        let mut edited = saved.clone();
+        let shadow = Shadow {
+            com: Vector3::new(1.0, 2.0, 3.0),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            written_translation: Vector::ZERO,
+            written_linvel: Vector::ZERO,
+            written_angvel: Vector::ZERO,
+        };
+        let (far_body, far_collider) = (
+            RigidBodyHandle::from_raw_parts(far, 0),
+            ColliderHandle::from_raw_parts(far, 0),
+        );
+        edited.memory.shadows.push((far_body, shadow));
+        edited.registry = edited.registry.with_ground_like_first(far_collider);
+        edited.flags = edited
+            .flags
+            .with_ground(far_collider)
+            .with_hooked_next(ball, ColliderHandle::from_raw_parts(far - 2, 0))
+            .with_hooked_next(far_body, ColliderHandle::from_raw_parts(far - 1, 0));
+        let run = |snapshot: &ImpactSnapshot, world: &PhysicsWorld| {
+            let mut world = PhysicsWorld {
+                gravity: world.gravity,
+                integration_parameters: world.integration_parameters,
+                islands: world.islands.clone(),
+                broad_phase: world.broad_phase.clone(),
+                narrow_phase: world.narrow_phase.clone(),
+                bodies: world.bodies.clone(),
+                colliders: world.colliders.clone(),
+                impulse_joints: world.impulse_joints.clone(),
+                multibody_joints: world.multibody_joints.clone(),
+                soft_bodies: world.soft_bodies.clone(),
+                ..PhysicsWorld::default()
+            };
+            let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+            plugin.restore(snapshot).unwrap();
+            assert_eq!(plugin.snapshot(), *snapshot, "saved again as given");
+            let (mut trace, mut held) = (Vec::new(), 0);
+            for _ in 0..60 {
+                plugin.step(&mut world);
+                trace.extend(
+                    world
+                        .bodies
+                        .iter()
+                        .map(|(_, rb)| (*rb.position(), rb.linvel())),
+                );
+                held = held
+                    .max(plugin.memory.shadows.slots_held())
+                    .max(plugin.flags.slots_held())
+                    .max(plugin.lookup.user_flags_slots());
+            }
+            (trace, held)
+        };
+        let (edited_trace, held) = run(&edited, &world);
+        assert!(held < 1 << 20, "a table held {held} slots");
+        assert_eq!(edited_trace, run(&saved, &world).0);
+    }
 }

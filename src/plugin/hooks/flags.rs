@@ -107,6 +107,12 @@ pub(crate) struct HookFlags {
 }
 
 impl HookFlags {
+    /// How many slots the table of flagged colliders holds (its memory, for the tests).
+    #[cfg(test)]
+    pub fn slots_held(&self) -> usize {
+        self.carried.slots_held()
+    }
+
     /// The managed bodies whose colliders carry the plugin's flags.
     pub fn hooked(&self) -> &HandleMap<RigidBodyHandle, HookedBody> {
         &self.hooked
@@ -183,14 +189,13 @@ impl HookFlags {
         }
         let mut gone = Vec::new();
         for (handle, entry) in self.hooked.iter_mut() {
-            if entry.stamp == stamp {
+            let rb = bodies.get(*handle);
+            // A body not in the world goes whatever its stamp, which a snapshot may give as any
+            // number.
+            if entry.stamp == stamp && rb.is_some() {
                 continue;
             }
-            if unmanaged
-                && bodies
-                    .get(*handle)
-                    .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
-            {
+            if unmanaged && rb.is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb)) {
                 entry.stamp = stamp;
                 continue;
             }
@@ -398,6 +403,26 @@ pub(crate) struct SavedFlags {
 /// A hooked body: its flagged colliders with the user's flags, and its stamp.
 type SavedHookedBody = (RigidBodyHandle, Vec<(ColliderHandle, u32)>, u64);
 
+#[cfg(test)]
+impl SavedFlags {
+    /// With the plugin's flags also on ground collider `c` (a hand-edited snapshot's).
+    pub fn with_ground(mut self, c: crate::rapier::prelude::ColliderHandle) -> Self {
+        self.grounds.push((c, 0));
+        self
+    }
+
+    /// With `body` hooked, the plugin's flags on collider `c`, stamped as the next step will
+    /// stamp the bodies it flags (a hand-edited snapshot's).
+    pub fn with_hooked_next(
+        mut self,
+        body: RigidBodyHandle,
+        c: crate::rapier::prelude::ColliderHandle,
+    ) -> Self {
+        self.hooked.push((body, vec![(c, 0)], self.stamp + 1));
+        self
+    }
+}
+
 impl HookFlags {
     /// Where the flags are and whose they replaced.
     pub fn save(&self) -> SavedFlags {
@@ -436,7 +461,7 @@ impl HookFlags {
                 ground: true,
                 body: None,
             };
-            if flags.carried.insert(*c, carried) {
+            if flags.carried.insert_restored(*c, carried) {
                 flags.grounds += 1;
             }
         }
@@ -458,7 +483,7 @@ impl HookFlags {
                         body: Some(*body),
                     },
                 };
-                flags.carried.insert(*c, carried);
+                flags.carried.insert_restored(*c, carried);
                 entry.colliders.push(*c);
             }
             flags.hooked.insert(*body, entry);

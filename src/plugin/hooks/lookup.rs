@@ -8,12 +8,11 @@
 //! while rapier steps; a lookup is an index and a handle compare, not a hash. The hook flags
 //! themselves are put in place by `hooks/flags.rs`.
 
-use crate::plugin::hooks::flags::HookedBody;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::handles::{HandleMap, slot_of};
 use crate::plugin::state::step::GroundPair;
-use crate::rapier::prelude::{ActiveHooks, ColliderHandle, RigidBodyHandle};
+use crate::rapier::prelude::{ActiveHooks, ColliderHandle};
 
 /// What the hooks ask for every ground pair inside rapier's step, by collider index instead
 /// of hashing: the roles as they are at the end of [`ImpactPlugin::before_step`] (they do not
@@ -67,6 +66,12 @@ pub(crate) enum Looked {
 }
 
 impl Lookup {
+    /// How many slots the table of the user's flags holds (its memory, for the tests).
+    #[cfg(test)]
+    pub fn user_flags_slots(&self) -> usize {
+        self.user_flags.len()
+    }
+
     /// `roles`: the plan's pairs with grounds, each with the user's flags the plan read
     /// (`StepData::ground_pairs`); `user_flags`: the hook flags the user set on a collider;
     /// `far`: the colliders of the bodies with no ground in reach (no roles); `ball_pairs`:
@@ -75,7 +80,7 @@ impl Lookup {
         (roles, by_tile): (&[GroundPair], &[ColliderHandle]),
         ball_pairs: &HandleMap<PairKey, Role>,
         far: &[ColliderHandle],
-        hooked: &HandleMap<RigidBodyHandle, HookedBody>,
+        hooked: impl Iterator<Item = ColliderHandle>,
         user_flags: impl Fn(ColliderHandle) -> ActiveHooks,
     ) -> Self {
         let len = |it: &mut dyn Iterator<Item = ColliderHandle>| {
@@ -90,7 +95,7 @@ impl Lookup {
         for c in ball_pairs.keys().flat_map(|k| [k.0, k.1]) {
             *grown(&mut out.pair_members, slot_of(c)) = true;
         }
-        for c in hooked.values().flat_map(|e| e.colliders.iter().copied()) {
+        for c in hooked {
             *grown(&mut out.user_flags, slot_of(c)) = Some((c, user_flags(c)));
         }
         for body in far {

@@ -45,7 +45,13 @@ impl<H> ImpactPlugin<H> {
             (&step.ground_pairs, &step.by_tile),
             &step.pairs.roles,
             &far_colliders,
-            flags.hooked(),
+            // A collider not in the world meets nothing (a snapshot may list one): its flags
+            // are never asked, and its slot may be any number.
+            flags
+                .hooked()
+                .values()
+                .flat_map(|e| e.colliders.iter().copied())
+                .filter(|c| colliders.get(*c).is_some()),
             |c| flags.recorded_user_flags(colliders, c),
         );
     }

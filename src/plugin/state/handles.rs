@@ -1,6 +1,6 @@
 //! Hash maps and sets keyed by rapier handles.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
 
 /// A small multiplicative hasher for handle keys (looked up in every hook call): the
@@ -66,11 +66,29 @@ impl Slotted for RigidBodyHandle {
     }
 }
 
+/// Whether a table indexed by arena slot ([`SlotTable`], `Shadows`) holding `entries` entries
+/// grows its vector to `slot` for an entry read from a snapshot: every slot below
+/// `SLOT_SLACK`, and `SLOTS_PER_ENTRY` more for each entry. A world's handles need no bound
+/// (rapier's arenas hand slots out from 0 up, so the world holds as many entries as the
+/// slot), but a snapshot is only data: one edited by hand can name a slot near `u32::MAX`.
+/// Such an entry is kept aside, by slot, so that the memory a snapshot costs follows its
+/// entries, not the largest slot it names.
+pub(crate) fn within_dense_reach(slot: usize, entries: usize) -> bool {
+    const SLOT_SLACK: usize = 1 << 16;
+    const SLOTS_PER_ENTRY: usize = 64;
+    slot < SLOT_SLACK.saturating_add(entries.saturating_mul(SLOTS_PER_ENTRY))
+}
+
 /// Values by handle, in a vector indexed by the handle's arena slot: a lookup is an index and
 /// a handle compare, for the tables asked in every hook call or of every body in a step.
+///
+/// Invariant: an entry is in `slots` at its slot, or in `far` when its slot is at least
+/// `slots.len()` (a restored entry beyond [`within_dense_reach`]); growing the vector moves
+/// in the far entries it reaches.
 #[derive(Clone, Debug)]
 pub(crate) struct SlotTable<K, V> {
     slots: Vec<Option<(K, V)>>,
+    far: BTreeMap<usize, (K, V)>,
     len: usize,
 }
 
@@ -78,6 +96,7 @@ impl<K, V> Default for SlotTable<K, V> {
     fn default() -> Self {
         Self {
             slots: Vec::new(),
+            far: BTreeMap::new(),
             len: 0,
         }
     }
@@ -87,8 +106,13 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
     /// The value of `k`, if it has one.
     #[inline]
     pub fn get(&self, k: K) -> Option<&V> {
-        match self.slots.get(k.slot()) {
-            Some(Some((h, v))) if *h == k => Some(v),
+        let entry = match self.slots.get(k.slot()) {
+            Some(entry) => entry.as_ref(),
+            None if self.far.is_empty() => None,
+            None => self.far.get(&k.slot()),
+        };
+        match entry {
+            Some((h, v)) if *h == k => Some(v),
             _ => None,
         }
     }
@@ -99,12 +123,19 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
         self.get(k).is_some()
     }
 
-    /// Sets the value of `k` (a handle of the same slot and another generation is replaced);
-    /// `true` if `k` had none.
+    /// Sets the value of `k`, a world's handle (a handle of the same slot and another
+    /// generation is replaced); `true` if `k` had none.
     pub fn insert(&mut self, k: K, v: V) -> bool {
         let i = k.slot();
         if i >= self.slots.len() {
             self.slots.resize(i + 1, None);
+            while let Some(entry) = self.far.first_entry() {
+                if *entry.key() > i {
+                    break;
+                }
+                let (at, moved) = entry.remove_entry();
+                self.slots[at] = Some(moved);
+            }
         }
         let slot = &mut self.slots[i];
         let new = !matches!(slot, Some((h, _)) if *h == k);
@@ -115,19 +146,46 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
         new
     }
 
+    /// Sets the value of `k`, a handle read from a snapshot, which may name a slot no world
+    /// holds: beyond [`within_dense_reach`] it is kept aside. As [`Self::insert`] otherwise.
+    pub fn insert_restored(&mut self, k: K, v: V) -> bool {
+        let i = k.slot();
+        if i < self.slots.len() || within_dense_reach(i, self.len + 1) {
+            return self.insert(k, v);
+        }
+        let replaced = self.far.insert(i, (k, v));
+        if replaced.is_none() {
+            self.len += 1;
+        }
+        !matches!(replaced, Some((h, _)) if h == k)
+    }
+
     /// Removes the value of `k`, if it has one.
     pub fn remove(&mut self, k: K) {
-        if let Some(slot) = self.slots.get_mut(k.slot()) {
-            if matches!(slot, Some((h, _)) if *h == k) {
-                *slot = None;
-                self.len -= 1;
+        let i = k.slot();
+        match self.slots.get_mut(i) {
+            Some(slot) => {
+                if matches!(slot, Some((h, _)) if *h == k) {
+                    *slot = None;
+                    self.len -= 1;
+                }
+            }
+            None => {
+                if matches!(self.far.get(&i), Some((h, _)) if *h == k) {
+                    self.far.remove(&i);
+                    self.len -= 1;
+                }
             }
         }
     }
 
     /// Every entry, by slot.
     pub fn iter(&self) -> impl Iterator<Item = (&K, &V)> {
-        self.slots.iter().flatten().map(|(h, v)| (h, v))
+        self.slots
+            .iter()
+            .flatten()
+            .chain(self.far.values())
+            .map(|(h, v)| (h, v))
     }
 
     /// How many handles have a value.
@@ -138,6 +196,12 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
     /// Is the table empty?
     pub fn is_empty(&self) -> bool {
         self.len == 0
+    }
+
+    /// How many slots the vector holds (its memory, for the tests).
+    #[cfg(test)]
+    pub fn slots_held(&self) -> usize {
+        self.slots.len()
     }
 }
 
@@ -220,5 +284,49 @@ mod tests {
         assert_eq!((table.len(), table.contains(b)), (1, false));
         table.remove(b);
         assert_eq!(table.len(), 1, "removing what is not there changes nothing");
+    }
+
+    /// A restored entry at a slot far beyond the others' (a forged snapshot's) is kept aside:
+    /// the vector does not grow to it; it is found, replaced, counted, listed by slot and removed
+    /// like any other, and moved in when the vector grows to its slot.
+    #[test]
+    fn a_slot_table_keeps_a_far_entry_aside() {
+        let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
+        let far = u32::MAX - 1;
+        let mut table = SlotTable::default();
+        assert!(table.insert_restored(h(far, 0), 1));
+        assert!(table.insert(h(2, 0), 2));
+        assert_eq!(table.slots_held(), 3);
+        assert_eq!(
+            (table.get(h(far, 0)), table.get(h(far, 1))),
+            (Some(&1), None)
+        );
+        assert!(!table.insert_restored(h(far, 0), 3), "found again");
+        assert!(
+            table.insert_restored(h(far, 1), 4),
+            "another generation is new"
+        );
+        assert_eq!((table.len(), table.get(h(far, 0))), (2, None));
+        assert!(table.insert_restored(h(200_000, 0), 5));
+        let listed: Vec<_> = table.iter().map(|(k, v)| (*k, *v)).collect();
+        assert_eq!(
+            listed,
+            vec![(h(2, 0), 2), (h(200_000, 0), 5), (h(far, 1), 4)]
+        );
+        // Enough entries bring 200 000 within reach: the vector grows and takes it in.
+        for k in 0..3000 {
+            table.insert_restored(h(10 + k, 0), 0);
+        }
+        assert!(table.insert_restored(h(199_999, 0), 6));
+        assert_eq!(table.slots_held(), 200_000);
+        // A world's handle grows the vector whatever the count.
+        assert!(table.insert(h(200_001, 0), 7));
+        assert_eq!(table.slots_held(), 200_002);
+        assert_eq!(table.get(h(200_000, 0)), Some(&5), "taken in");
+        table.remove(h(200_000, 0));
+        table.remove(h(far, 0));
+        assert_eq!(table.len(), 3004, "another generation's removal leaves it");
+        table.remove(h(far, 1));
+        assert_eq!((table.len(), table.get(h(far, 1))), (3003, None));
     }
 }

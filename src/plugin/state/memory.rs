@@ -5,12 +5,14 @@ use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
     ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, sorted_entries, sorted_members,
+    within_dense_reach,
 };
 use crate::plugin::state::step::{Candidate, GroundPair, StepData};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
 
 /// The `f64` state of a body as last written (`Exact` mode's states of the model, and in
 /// every mode a closed-form roll's end), so the next step continues from it rather than from
@@ -71,18 +73,47 @@ impl Shadow {
 /// are an index and a handle compare (every rolling ball's shadow is written and read each
 /// step). The entries' order is their history's: a snapshot lists them in arena order
 /// ([`Self::sorted`]).
+///
+/// Invariant: an entry's place is in `places` at its body's slot, or in `far` when that slot
+/// is at least `places.len()` (a restored shadow beyond [`within_dense_reach`]); growing
+/// `places` moves in the far places it reaches.
 #[derive(Default)]
 pub(crate) struct Shadows {
     entries: Vec<(RigidBodyHandle, Shadow)>,
     /// By a body handle's arena slot: 1 + the place in `entries` of the body's shadow, or 0.
     places: Vec<u32>,
+    /// The same, for the slots beyond `places`.
+    far: BTreeMap<usize, u32>,
 }
 
 impl Shadows {
+    /// 1 + the place in `entries` of the shadow of the body in arena slot `slot`, or 0.
+    #[inline]
+    fn place_at(&self, slot: usize) -> usize {
+        match self.places.get(slot) {
+            Some(k) => *k as usize,
+            None if self.far.is_empty() => 0,
+            None => self.far.get(&slot).map_or(0, |k| *k as usize),
+        }
+    }
+
+    /// Records `k` (1 + a place in `entries`, or 0 for none) for arena slot `slot`.
+    fn set_place(&mut self, slot: usize, k: usize) {
+        match self.places.get_mut(slot) {
+            Some(at) => *at = k as u32,
+            None if k == 0 => {
+                self.far.remove(&slot);
+            }
+            None => {
+                self.far.insert(slot, k as u32);
+            }
+        }
+    }
+
     /// The place in `entries` of `body`'s shadow, if it has one.
     #[inline]
     fn place(&self, body: RigidBodyHandle) -> Option<usize> {
-        let k = *self.places.get(body.slot())? as usize;
+        let k = self.place_at(body.slot());
         (k > 0 && self.entries[k - 1].0 == body).then(|| k - 1)
     }
 
@@ -92,17 +123,44 @@ impl Shadows {
         self.place(*body).map(|k| &self.entries[k].1)
     }
 
-    /// Sets `body`'s shadow. A body of another generation in the same slot (one rapier
-    /// removed) loses its own: rapier never hands its handle out again.
+    /// Sets `body`'s shadow, `body` a world's handle. A body of another generation in the same
+    /// slot (one rapier removed) loses its own: rapier never hands its handle out again.
     pub fn insert(&mut self, body: RigidBodyHandle, shadow: Shadow) {
         let slot = body.slot();
         if slot >= self.places.len() {
             self.places.resize(slot + 1, 0);
+            while let Some(entry) = self.far.first_entry() {
+                if *entry.key() > slot {
+                    break;
+                }
+                let (at, k) = entry.remove_entry();
+                self.places[at] = k;
+            }
         }
-        match self.places[slot] as usize {
+        self.put(slot, body, shadow);
+    }
+
+    /// The shadows read from a snapshot, which may name a slot no world holds: beyond
+    /// [`within_dense_reach`] a shadow's place is kept aside.
+    pub fn restored(shadows: impl IntoIterator<Item = (RigidBodyHandle, Shadow)>) -> Self {
+        let mut out = Self::default();
+        for (body, shadow) in shadows {
+            let slot = body.slot();
+            if slot < out.places.len() || within_dense_reach(slot, out.entries.len() + 1) {
+                out.insert(body, shadow);
+            } else {
+                out.put(slot, body, shadow);
+            }
+        }
+        out
+    }
+
+    /// Sets the shadow of `body`, in arena slot `slot`, where its place is recorded.
+    fn put(&mut self, slot: usize, body: RigidBodyHandle, shadow: Shadow) {
+        match self.place_at(slot) {
             0 => {
                 self.entries.push((body, shadow));
-                self.places[slot] = self.entries.len() as u32;
+                self.set_place(slot, self.entries.len());
             }
             k => self.entries[k - 1] = (body, shadow),
         }
@@ -113,18 +171,21 @@ impl Shadows {
         let Some(k) = self.place(*body) else {
             return;
         };
-        self.places[body.slot()] = 0;
+        self.set_place(body.slot(), 0);
         self.entries.swap_remove(k);
         if let Some((moved, _)) = self.entries.get(k) {
-            self.places[moved.slot()] = k as u32 + 1;
+            self.set_place(moved.slot(), k + 1);
         }
     }
 
     /// Removes every shadow, at a cost of their number (not of the slots').
     pub fn clear(&mut self) {
         for (body, _) in &self.entries {
-            self.places[body.slot()] = 0;
+            if let Some(at) = self.places.get_mut(body.slot()) {
+                *at = 0;
+            }
         }
+        self.far.clear();
         self.entries.clear();
     }
 
@@ -134,15 +195,11 @@ impl Shadows {
         entries.sort_unstable_by_key(|(body, _)| body.arena_order());
         entries
     }
-}
 
-impl FromIterator<(RigidBodyHandle, Shadow)> for Shadows {
-    fn from_iter<I: IntoIterator<Item = (RigidBodyHandle, Shadow)>>(iter: I) -> Self {
-        let mut shadows = Self::default();
-        for (body, shadow) in iter {
-            shadows.insert(body, shadow);
-        }
-        shadows
+    /// How many slots `places` holds (its memory, for the tests).
+    #[cfg(test)]
+    pub fn slots_held(&self) -> usize {
+        self.places.len()
     }
 }
 
@@ -312,7 +369,7 @@ impl Memory {
     /// The memory `saved` was taken from (less its spare allocations).
     pub fn from_saved(saved: &SavedMemory) -> Self {
         Self {
-            shadows: saved.shadows.iter().copied().collect(),
+            shadows: Shadows::restored(saved.shadows.iter().copied()),
             roles: saved.roles.iter().copied().collect(),
             pair_roles: saved.pair_roles.iter().copied().collect(),
             holds: saved.holds.iter().copied().collect(),
@@ -345,9 +402,7 @@ mod tests {
             written_angvel: Vector::ZERO,
         };
         let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
-        let mut shadows: Shadows = [(h(7, 0), shadow(7.0)), (h(2, 0), shadow(2.0))]
-            .into_iter()
-            .collect();
+        let mut shadows = Shadows::restored([(h(7, 0), shadow(7.0)), (h(2, 0), shadow(2.0))]);
         shadows.insert(h(5, 0), shadow(5.0));
         shadows.insert(h(2, 0), shadow(2.5));
         assert_eq!(shadows.get(&h(2, 0)), Some(&shadow(2.5)), "replaced");
@@ -373,6 +428,76 @@ mod tests {
         assert!(shadows.sorted().is_empty() && shadows.get(&h(2, 0)).is_none());
         shadows.insert(h(2, 0), shadow(1.0));
         assert_eq!(shadows.sorted(), vec![(h(2, 0), shadow(1.0))]);
+    }
+
+    /// A restored shadow at a slot far beyond the others' (a forged snapshot's) is kept
+    /// aside: the table's slots do not grow to it; it is found, replaced, moved and removed
+    /// like any other, and moved in when the table grows to its slot.
+    #[test]
+    fn a_shadow_far_beyond_the_others_is_kept_aside() {
+        let shadow = |x: f64| Shadow {
+            com: Vector3::new(x, 0.0, 0.0),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+            written_translation: Vector::ZERO,
+            written_linvel: Vector::ZERO,
+            written_angvel: Vector::ZERO,
+        };
+        let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
+        let (far, other) = (u32::MAX - 1, u32::MAX - 7);
+        let shadows = Shadows::restored([
+            (h(far, 0), shadow(1.0)),
+            (h(3, 0), shadow(3.0)),
+            (h(other, 0), shadow(9.0)),
+        ]);
+        assert_eq!(shadows.slots_held(), 4);
+        assert_eq!(shadows.get(&h(far, 0)), Some(&shadow(1.0)));
+        assert_eq!(shadows.get(&h(far, 1)), None, "another generation");
+        assert_eq!(shadows.get(&h(far - 1, 0)), None, "another far slot");
+        let mut shadows = Shadows::restored(
+            shadows
+                .entries
+                .iter()
+                .copied()
+                .chain([(h(far, 1), shadow(2.0))]),
+        );
+        assert_eq!(shadows.get(&h(far, 0)), None, "its slot taken");
+        assert_eq!(shadows.get(&h(far, 1)), Some(&shadow(2.0)));
+        // The far shadow is first in the entries: removing it moves the last, also far, into
+        // its place.
+        shadows.remove(&h(far, 1));
+        assert_eq!(shadows.get(&h(far, 1)), None);
+        assert_eq!(shadows.get(&h(other, 0)), Some(&shadow(9.0)), "moved");
+        assert_eq!(shadows.get(&h(3, 0)), Some(&shadow(3.0)));
+        shadows.remove(&h(other, 0));
+        assert_eq!(shadows.get(&h(other, 0)), None);
+        assert_eq!(shadows.sorted(), vec![(h(3, 0), shadow(3.0))]);
+        // Restored entries enough bring a far slot within reach: the table grows to it.
+        let mut shadows = Shadows::restored(
+            (0..600)
+                .map(|k| (h(10 + k, 0), shadow(0.0)))
+                .chain([(h(100_000, 0), shadow(4.0))]),
+        );
+        assert_eq!(shadows.slots_held(), 100_001);
+        let mut shadows_few = Shadows::restored([(h(100_000, 0), shadow(4.0))]);
+        assert_eq!(shadows_few.slots_held(), 0, "beyond reach of one entry");
+        // A world's handle grows the table whatever the count, and takes the far one in.
+        shadows_few.insert(h(100_000, 1), shadow(6.0));
+        assert_eq!(shadows_few.slots_held(), 100_001);
+        assert_eq!(
+            shadows_few.get(&h(100_000, 0)),
+            None,
+            "taken in, then replaced"
+        );
+        assert_eq!(shadows_few.get(&h(100_000, 1)), Some(&shadow(6.0)));
+        assert_eq!(shadows_few.sorted().len(), 1);
+        shadows.clear();
+        assert!(shadows.sorted().is_empty() && shadows.get(&h(100_000, 0)).is_none());
+        let mut shadows = Shadows::restored([(h(far, 0), shadow(7.0)), (h(3, 0), shadow(3.0))]);
+        shadows.clear();
+        assert!(shadows.sorted().is_empty() && shadows.get(&h(far, 0)).is_none());
+        shadows.insert(h(5, 0), shadow(8.0));
+        assert_eq!(shadows.sorted(), vec![(h(5, 0), shadow(8.0))]);
     }
 
     /// A mark answers for the next step only, and only for its own body: not for a body

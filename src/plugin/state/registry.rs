@@ -486,6 +486,17 @@ pub(crate) struct SavedRegistry {
     flags_stale: bool,
 }
 
+#[cfg(test)]
+impl SavedRegistry {
+    /// With collider `c` also a ground, with the first ground's entry (a hand-edited
+    /// snapshot's).
+    pub fn with_ground_like_first(mut self, c: ColliderHandle) -> Self {
+        let entry = self.grounds[0].1;
+        self.grounds.push((c, entry));
+        self
+    }
+}
+
 impl Registry {
     /// The registrations.
     pub fn save(&self) -> SavedRegistry {
