@@ -23,7 +23,7 @@ use crate::plugin::queries::observe::Sets;
 use crate::plugin::state::handles::PairKey;
 use crate::rapier::prelude::{
     ActiveCollisionTypes, ActiveHooks, Collider, ColliderSet, ImpulseJointSet, InteractionGroups,
-    MultibodyJointSet, PairFilterContext, PhysicsHooks, RigidBodyHandle, RigidBodySet,
+    MultibodyJointSet, PairFilterContext, PhysicsHooks, RigidBody, RigidBodyHandle, RigidBodySet,
     RigidBodyType, SolverFlags,
 };
 
@@ -53,9 +53,16 @@ impl FilterSide {
     /// The side of `co`, its body looked up in `bodies`.
     #[inline]
     pub fn of(bodies: &RigidBodySet, co: &Collider) -> Self {
+        Self::with_parent(co, co.parent().and_then(|p| bodies.get(p)))
+    }
+
+    /// The side of `co`, whose body is `parent` (`None`: parentless, or its body gone): for a
+    /// caller that holds the body already, without looking it up again.
+    #[inline]
+    pub fn with_parent(co: &Collider, parent: Option<&RigidBody>) -> Self {
         Self {
             takes_part: co.is_enabled() && !co.is_sensor(),
-            body: match co.parent().and_then(|p| bodies.get(p)) {
+            body: match parent {
                 Some(rb) => (rb.is_enabled(), rb.body_type()),
                 None => (true, RigidBodyType::Fixed),
             },

@@ -102,7 +102,9 @@ pub(crate) struct GroundMotion {
 }
 
 impl GroundMotion {
-    /// Does the ground miss the axis-aligned cube `centre ± half` over the whole step?
+    /// Does the ground miss the axis-aligned cube `centre ± half` over the whole step? Inlined:
+    /// the ground index asks it of every listed ground for every body it is asked about.
+    #[inline]
     pub fn misses_cube(&self, centre: Vector, half: Real) -> bool {
         let (lo, hi) = (centre - Vector::splat(half), centre + Vector::splat(half));
         if hi.cmplt(self.aabb.mins).any() || lo.cmpgt(self.aabb.maxs).any() {
@@ -116,6 +118,7 @@ impl GroundMotion {
     /// Does the ground miss the ball `centre ± radius` over the whole step (its swept box,
     /// and its plane, beyond the ball)? A ground that misses the cube of the same half-width
     /// misses the ball.
+    #[inline]
     pub fn misses_ball(&self, centre: Vector, radius: Real) -> bool {
         let nearest = centre.clamp(self.aabb.mins, self.aabb.maxs);
         if (nearest - centre).length_squared() > radius * radius {

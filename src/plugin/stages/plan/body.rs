@@ -169,20 +169,16 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         };
         let member = step.pairs.members.contains(handle);
         if near.is_empty() {
-            let takes_pairs = self.registry.takes_pairs(handle, rb);
-            if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
-                step.candidates
-                    .push(Candidate::flying(handle, *start, *flight, local_com));
-            }
+            self.push_flying((handle, rb), snap, member, step);
             return None;
         }
         let turns_surface = !(geom.parts.len() == 1 && centred_ball(&geom.parts[0]));
         let jointed = jointed.unwrap_or_else(|| scene.sets.jointed(handle));
-        let geom_of = |i: &usize| Some((*i, ground_geom(&scene.grounds[*i], scene.colliders)?));
         // Most bodies are near one ground: taken as it is, not collected through an iterator.
         let grounds = match &near {
-            SmallList::One(i) => geom_of(i).map_or(SmallList::Empty, SmallList::One),
-            near => near.iter().filter_map(geom_of).collect(),
+            SmallList::One(i) => ground_geom(&scene.grounds[*i], scene.colliders)
+                .map_or(SmallList::Empty, |gg| SmallList::One((*i, gg))),
+            near => grounds_of(near, scene),
         };
         // Filled in place: a body's start is a large value, and every move of it a copy.
         let body = out.get_or_insert_with(|| BodyNear {
@@ -205,6 +201,26 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             body.start_contacts = nearest_first(body.geom, &mut body.grounds, start, reach);
         }
         Some(body)
+    }
+
+    /// The flying candidate of a body near no ground (`snap` its start), pushed to
+    /// `step.candidates` where the stages after rapier's step want it (`Exact` mode, a ball
+    /// of an impact between bodies: `member`). Out of line: most bodies the plan takes are
+    /// near a ground.
+    #[cold]
+    #[inline(never)]
+    fn push_flying(
+        &self,
+        (handle, rb): (RigidBodyHandle, &RigidBody),
+        snap: &(State, Flight, Vector3<f64>),
+        member: bool,
+        step: &mut StepData,
+    ) {
+        let takes_pairs = self.registry.takes_pairs(handle, rb);
+        if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
+            step.candidates
+                .push(Candidate::flying(handle, snap.0, snap.1, snap.2));
+        }
     }
 
     /// The grounds near the body's bounding ball where some grounds are slabs: a slab, or its
@@ -269,6 +285,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             steered_roll: None,
         });
     }
+}
+
+/// The geometry of each ground of `near` (several) whose collider still exists, in
+/// `near`'s order. Out of line: most bodies are near one ground.
+#[inline(never)]
+fn grounds_of<'c>(near: &[usize], scene: &Scene<'c>) -> SmallList<(usize, GroundGeom<'c>)> {
+    near.iter()
+        .filter_map(|i| Some((*i, ground_geom(&scene.grounds[*i], scene.colliders)?)))
+        .collect()
 }
 
 /// A ball (`geom`, one centred ball) near several grounds (a seam between floor tiles): the

@@ -164,8 +164,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     ground_body,
                 )
             });
+        // The body's collider is one of `body.rb`'s (its geometry was read from them): its
+        // side takes that body as it is, not looked up again.
         joint_filtered
-            || !filter::sides_solve(&FilterSide::of(bodies, body_co), ground_side)
+            || !filter::sides_solve(
+                &FilterSide::with_parent(body_co, Some(body.rb)),
+                ground_side,
+            )
             || filter::user_refuses(self.user_hooks, user, bodies, colliders, key)
     }
 
@@ -187,11 +192,26 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             Some(pair_colliders.0).filter(out),
             Some(pair_colliders.1).filter(|_| !ground_in_range),
         );
-        if body.is_none() && ground.is_none()
-            || self
-                .registry
-                .entry(key.1)
-                .is_some_and(|g| g.material.is_some())
+        if body.is_none() && ground.is_none() {
+            return false;
+        }
+        self.coefficients_out_of_range(key, (body, ground))
+    }
+
+    /// [`Self::coefficients_refused`] for a pair with a collider out of range (`body`,
+    /// `ground`: each collider that is): refused, and diagnosed, unless the ground's material
+    /// replaces them. Out of line: colliders out of range are rare.
+    #[cold]
+    #[inline(never)]
+    fn coefficients_out_of_range(
+        &mut self,
+        key: PairKey,
+        (body, ground): (Option<&Collider>, Option<&Collider>),
+    ) -> bool {
+        if self
+            .registry
+            .entry(key.1)
+            .is_some_and(|g| g.material.is_some())
         {
             return false;
         }
@@ -463,10 +483,27 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             || measured && touched_besides_grounds(body.handle, rb, scene.sets, self.registry);
         if step.policy.rests(dist, arrival, was_resting, pressed) {
             Role::Resting
-        } else if self.config.timing == TimingMode::Step
-            && closes_within(dist, un, n.dot(&(flight.accel)), step.dt)
-            && un < 0.0
-        {
+        } else if self.config.timing == TimingMode::Step {
+            self.step_mode_role(reads, plan, pair, (dist, n, p), (un, step))
+        } else {
+            Role::Impact
+        }
+    }
+
+    /// [`Self::touching_role`] in `Step` mode for a pair that does not rest, at `contact`
+    /// with normal speed `un`: the start impulse of a contact that closes in the step
+    /// (`step_start_impulse`), else impact. Out of line: the other modes' plans skip it.
+    #[cold]
+    #[inline(never)]
+    fn step_mode_role(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        pair: Pair,
+        (dist, n, p): PairContact,
+        (un, step): (f64, &StepData),
+    ) -> Role {
+        if closes_within(dist, un, n.dot(&(reads.body.flight.accel)), step.dt) && un < 0.0 {
             let hit = Hit {
                 part: 0,
                 ground: 0,
