@@ -8,7 +8,7 @@
 //! ([`non_ground_contacts`], [`touches_other`]).
 
 use crate::motion::{Flight, Gyro, State};
-use crate::plugin::bridge::convert::{pose_to_na, rot_to_na, to_f64, to_real, vec_to_na};
+use crate::plugin::bridge::convert::{rot_to_na, to_f64, to_real, vec_to_na};
 use crate::plugin::policy::LOADED_COS;
 use crate::plugin::policy::{
     CENTRED_TOLERANCE, FAR_TEST_GROWTH, FAR_TEST_MARGIN, SPIN_UP_ALLOWANCE,
@@ -20,7 +20,7 @@ use crate::plugin::state::memory::Shadow;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::writes::{Now, Writes};
-use crate::rapier::math::{Real, Vector};
+use crate::rapier::math::{Real, Rotation, Vector};
 use crate::rapier::prelude::{
     ActiveHooks, ColliderHandle, ColliderSet, ContactManifold, ContactPair, ImpulseJointSet,
     LockedAxes, MultibodyJointSet, NarrowPhase, RigidBody, RigidBodyHandle, RigidBodySet,
@@ -160,10 +160,19 @@ pub(crate) fn body_geom<'a>(
         // frame, shifted by the centre of mass (no rotation between the two frames).
         let local = match co.position_wrt_parent() {
             Some(pose) => {
-                let pose = pose_to_na(pose);
+                // A collider not turned on its body (most): its rotation in `f64` is the
+                // identity, bit for bit what `rot_to_na` renormalises it to (a norm of 1),
+                // taken without the square root and divisions.
+                let unturned = pose.rotation.to_array().map(Real::to_bits)
+                    == Rotation::IDENTITY.to_array().map(Real::to_bits);
+                let rotation = if unturned {
+                    UnitQuaternion::identity()
+                } else {
+                    rot_to_na(pose.rotation)
+                };
                 Isometry3::from_parts(
-                    Translation3::from(pose.translation.vector - local_com),
-                    pose.rotation,
+                    Translation3::from(vec_to_na(pose.translation) - local_com),
+                    rotation,
                 )
             }
             None => {

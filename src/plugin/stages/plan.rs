@@ -146,9 +146,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.plan_ground(reads, &mut plan, k, step);
         }
         if plan.touched {
-            self.reports.touched = Some((plan.state, body.local_com));
+            self.report_touched(&plan, body.local_com);
         }
         self.push_candidate(body, &mut plan, step);
         Some(true)
+    }
+
+    /// The state a `Step` impulse or a push-out left the body in (`plan.state`, with its
+    /// centre of mass in its own frame `local_com`), reported to be written. Out of line: the
+    /// other modes' plans, and most of `Step` mode's, touch no body.
+    #[cold]
+    #[inline(never)]
+    fn report_touched(&mut self, plan: &body::BodyPlan, local_com: Vector3<f64>) {
+        self.reports.touched = Some((plan.state, local_com));
     }
 }

@@ -111,9 +111,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             };
             if step.roles.insert(key, role).is_none() {
                 step.ground_pairs.push(planned);
-            } else if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == key) {
-                // A key decided again keeps one entry, with the role the map keeps.
-                *held = planned;
+            } else {
+                decided_again(step, planned);
             }
         }
         if verdict.any_impact {
@@ -125,9 +124,22 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// The side of the ground of index `index` (collider `ground`) in its pairs
     /// ([`GroundSide`]): the one kept, if it is that ground's, else read and kept.
     fn ground_side(&mut self, index: usize, ground: ColliderHandle, scene: &Scene) -> GroundSide {
-        if let Some(side) = self.ground_side.filter(|side| side.index == index) {
-            return side;
+        match self.ground_side.filter(|side| side.index == index) {
+            Some(side) => side,
+            None => self.read_ground_side(index, ground, scene),
         }
+    }
+
+    /// [`Self::ground_side`] for a ground other than the one kept: read, and kept. Out of
+    /// line: most bodies of a step rest on the ground planned before them.
+    #[cold]
+    #[inline(never)]
+    fn read_ground_side(
+        &mut self,
+        index: usize,
+        ground: ColliderHandle,
+        scene: &Scene,
+    ) -> GroundSide {
         let co = &scene.colliders[ground];
         let side = GroundSide {
             index,
@@ -516,6 +528,18 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } else {
             Role::Impact
         }
+    }
+}
+
+/// A pair decided again in the step (its key already in `step.roles`, which now holds
+/// `planned`'s role): its entry in `step.ground_pairs` takes `planned`, so that the list keeps
+/// one entry a key, with the role the map keeps. Out of line: a pair is most often decided
+/// once.
+#[cold]
+#[inline(never)]
+fn decided_again(step: &mut StepData, planned: GroundPair) {
+    if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == planned.key) {
+        *held = planned;
     }
 }
 
