@@ -106,6 +106,9 @@ impl GroundGeom<'_> {
     }
 
     /// Velocity of the ground's material point at `p` at time `t` (m/s).
+    ///
+    /// Inlined: the plan asks it of every contact it rates.
+    #[inline]
     pub fn velocity_at(&self, p: &Vector3<f64>, t: f64) -> Vector3<f64> {
         self.motion.v + self.motion.w.cross(&(p - self.com_at(t)))
     }
@@ -162,6 +165,9 @@ pub(crate) fn part_pose(part: &BodyPart, s: &State) -> Isometry3<f64> {
 }
 
 /// Velocity of the body's material point at `p` (m/s).
+///
+/// Inlined: the plan asks it of every contact it rates.
+#[inline]
 pub(crate) fn body_velocity_at(s: &State, p: &Vector3<f64>) -> Vector3<f64> {
     s.v + s.w.cross(&(p - s.com))
 }

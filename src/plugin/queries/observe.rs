@@ -209,6 +209,9 @@ pub(crate) fn rapier_state(rb: &RigidBody) -> State {
 
 /// Is the part a ball centred on the body's centre of mass (it cannot swing about a
 /// contact)?
+///
+/// Inlined: the plan asks it of every body near a ground.
+#[inline]
 pub(crate) fn centred_ball(part: &BodyPart) -> bool {
     part.shape
         .as_ball()
@@ -238,6 +241,9 @@ pub(crate) fn meets_tiles(
 
 /// A ground's geometry for the queries, if its collider still exists (a slab's: the box of
 /// its tiles, with its first tile's skin).
+///
+/// Inlined: the plan asks it of every body near a ground.
+#[inline]
 pub(crate) fn ground_geom<'a>(
     gm: &'a GroundMotion,
     colliders: &'a ColliderSet,
@@ -507,6 +513,9 @@ pub(crate) struct Sets<'a> {
 
 impl<'a> Sets<'a> {
     /// Has `body` a joint (an impulse joint attached, or a link of a multibody)?
+    ///
+    /// Inlined: the plan asks it of every body near a ground.
+    #[inline]
     pub fn jointed(&self, body: RigidBodyHandle) -> bool {
         self.impulse_joints.attached_joints(body).next().is_some()
             || self.multibody_joints.rigid_body_link(body).is_some()

@@ -130,6 +130,9 @@ impl BodyNear<'_, '_> {
     /// How far a point of the body can move relative to a resting contact point in the step
     /// by turning, from the state `s` (for a ball about its centre: how fast rapier's contact
     /// point slides off its bottom). Pure.
+    ///
+    /// Inlined: asked of every resting pair.
+    #[inline]
     pub fn turning_reach(&self, s: &State, dt: f64) -> f64 {
         self.flight.max_angular_speed(s) * 2.0 * self.geom.radius * dt
     }
