@@ -21,7 +21,7 @@ use crate::plugin::queries::observe::{
 use crate::plugin::stages::plan::closes_within;
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::step::{PairPlan, PlannedPair};
-use crate::rapier::prelude::{PhysicsHooks, RigidBodyHandle, RigidBodySet};
+use crate::rapier::prelude::{ColliderHandle, PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 use std::cell::OnceCell;
 
@@ -38,8 +38,8 @@ const PLANE_NORMAL_SLACK: f64 = 1e-4;
 const CLOSING_ROUNDING: f64 = 1e-9;
 
 /// What deciding a pair reads: the stage's inputs, the bodies, the members and the pair
-/// index (its list the members'). Read-only but for its caches (`lying`), which hold answers
-/// that do not change within the step.
+/// index (its list the members'). Read-only but for its caches (`lying`, `grounds`,
+/// `stacks`), which hold answers that do not change within the step.
 pub(super) struct Judge<'p, 'a, H> {
     pub inputs: &'p PairInputs<'a, H>,
     pub bodies: &'p RigidBodySet,
@@ -55,6 +55,10 @@ pub(super) struct Judge<'p, 'a, H> {
     /// Member `k` against the grounds near it ([`Self::grounded`]): computed once a step, for
     /// the bodies of a pair looked at.
     grounds: Vec<OnceCell<Grounded>>,
+    /// Whether rapier's solver pushed member `k` along gravity's line through a contact with
+    /// any body but a ground (`stacked_besides`, no partner left out): computed once a step,
+    /// for the bodies of an impact looked at ([`Self::stacked`]).
+    stacks: Vec<OnceCell<bool>>,
     /// The grounds' outward normals, when there are at most [`STILL_PLANES_MAX`] grounds and
     /// each is a half-space that stays still over the step; `None` otherwise.
     still_planes: Option<Vec<Vector3<f64>>>,
@@ -106,6 +110,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                 .unwrap_or_else(Vector3::zeros),
             lying: members.balls.iter().map(|_| OnceCell::new()).collect(),
             grounds: members.balls.iter().map(|_| OnceCell::new()).collect(),
+            stacks: members.balls.iter().map(|_| OnceCell::new()).collect(),
             still_planes: still_planes(inputs.grounds),
         }
     }
@@ -263,12 +268,12 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         (closing, len - (ba.radius + bb.radius))
     }
 
-    /// How members `i` and `j` approach, or `None` when their swept spheres are apart (their
-    /// travel cannot close the gap in the step) or, for shapes other than two centred
-    /// balls, when the pair is rapier's as it is or parry finds no contact within reach.
-    fn approach(&self, i: usize, j: usize) -> Option<Approach> {
-        let (balls, swept) = (&self.members.balls, &self.members.swept);
-        let (a, b) = (&balls[i], &balls[j]);
+    /// How members `i` and `j` (`a` and `b`) approach, or `None` when their swept spheres are
+    /// apart (their travel cannot close the gap in the step) or, for shapes other than two
+    /// centred balls, when the pair is rapier's as it is or parry finds no contact within
+    /// reach.
+    fn approach(&self, (i, j): (usize, usize), (a, b): (&Ball, &Ball)) -> Option<Approach> {
+        let swept = &self.members.swept;
         let d = b.com - a.com;
         let (reach, reach_swept) = (a.radius + b.radius, swept[i] + swept[j]);
         if d.norm_squared() > reach_swept * reach_swept {
@@ -307,7 +312,8 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// of a ground at the step's start (where rapier's narrow phase may not hold the contact
     /// yet), cannot be moved alone through an impact, and out of rapier's solver the pair
     /// would be checked only at the step's end, where a fast body may have passed through:
-    /// such a pair is rapier's.
+    /// such a pair is rapier's. Out of line: two centred balls, the common pair, never ask it.
+    #[inline(never)]
     fn shapes_approach(&self, i: usize, j: usize, travel: f64) -> Option<(f64, f64, Vector3<f64>)> {
         let (bodies, sets) = (self.bodies, self.inputs.sets);
         let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
@@ -364,18 +370,19 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// one is (a slow pair's speed is read for nothing else, [`Self::evaluate`]).
     fn closing_with_bounces(
         &self,
-        (i, j): (usize, usize),
+        ((i, a), (j, b)): ((usize, &Ball), (usize, &Ball)),
         (gap, closing, normal): (f64, f64, &Vector3<f64>),
         forces: f64,
     ) -> f64 {
         let resting_speed = self.inputs.policy.resting_speed;
-        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
         let (speed_a, speed_b) = (a.v.norm(), b.v.norm());
         let fastest = speed_a + speed_b;
+        // Every test below is a comparison of numbers already at hand: evaluated whole
+        // (`&`, `|`) rather than branch by branch, the pair's outcome is one branch.
         let may_turn = self.inputs.in_step
-            && !rests_at(fastest, resting_speed)
-            && self.closes(gap, fastest, forces);
-        if !may_turn || !rests_at(closing, resting_speed) && self.closes(gap, closing, forces) {
+            & !rests_at(fastest, resting_speed)
+            & self.closes(gap, fastest, forces);
+        if !may_turn | (!rests_at(closing, resting_speed) & self.closes(gap, closing, forces)) {
             return closing;
         }
         let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
@@ -415,11 +422,21 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// left to resolve with the pile's other contacts (out of it, the pair would be settled
     /// at the step's end, one pair at a time, pushing the pile's balls into each other).
     /// `Step` mode's impulse at the step's start leaves the pair in rapier's solver.
-    fn stacked(&self, a: &Ball, b: &Ball) -> bool {
-        let (bodies, sets, registry) = (self.bodies, self.inputs.sets, self.inputs.registry);
+    fn stacked(&self, (i, j): (usize, usize), (a, b): (&Ball, &Ball)) -> bool {
         self.inputs.in_step
-            && (stacked_besides(&bodies[a.body], b.collider, sets, registry, &self.down)
-                || stacked_besides(&bodies[b.body], a.collider, sets, registry, &self.down))
+            && (self.member_stacked_besides(i, b.collider)
+                || self.member_stacked_besides(j, a.collider))
+    }
+
+    /// `stacked_besides` of member `k` with `partner` left out. A member no contact stacks
+    /// (the common case, asked once a step) is stacked besides no partner; only one that some
+    /// contact stacks walks rapier's graph again for the partner.
+    fn member_stacked_besides(&self, k: usize, partner: ColliderHandle) -> bool {
+        let (bodies, sets, registry) = (self.bodies, self.inputs.sets, self.inputs.registry);
+        let rb = &bodies[self.members.balls[k].body];
+        let stacked_at_all = |partner| stacked_besides(rb, partner, sets, registry, &self.down);
+        *self.stacks[k].get_or_init(|| stacked_at_all(ColliderHandle::invalid()))
+            && stacked_at_all(partner)
     }
 
     /// The pair of members `i < j` with its role, or `None` when its bodies are of two
@@ -427,36 +444,47 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// contact as it is (unless `chain`: side by side with a body of an impact, it may pass
     /// the impact on), or it is hooked and rapier would not solve it or the user's filter
     /// refuses it. Reads only; the caller adds the pair.
+    ///
+    /// Most pairs asked are apart or slow and leave here; the rest are decided out of line
+    /// ([`Self::role`]), so that the code every pair runs through stays small.
     pub(super) fn evaluate(&self, i: usize, j: usize, chain: bool) -> Option<PlannedPair> {
-        let (di, dj) = (
-            self.members.balls[i].dominance,
-            self.members.balls[j].dominance,
-        );
-        if !model_may_pair(di, dj) {
+        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
+        if !model_may_pair(a.dominance, b.dominance) {
             return None;
         }
-        let Approach {
-            gap,
-            closing,
-            normal,
-            reach,
-            balls_only,
-        } = self.approach(i, j)?;
-        let (inputs, policy) = (self.inputs, self.inputs.policy);
-        let (a, b) = (&self.members.balls[i], &self.members.balls[j]);
+        let approach = self.approach((i, j), (a, b))?;
         let forces = a.force_accel + b.force_accel;
-        let closes_at = |closing: f64| self.closes(gap, closing, forces);
-        // rapier's own bounce of the pair is its approach at the step's start.
-        let approaching = closing;
+        let start = (approach.gap, approach.closing, &approach.normal);
         // Exact where not slow (only whether it is slow is read of a slow pair's speed).
-        let closing = self.closing_with_bounces((i, j), (gap, closing, &normal), forces);
-        let slow = rests_at(closing, policy.resting_speed);
+        let closing = self.closing_with_bounces(((i, a), (j, b)), start, forces);
+        let slow = rests_at(closing, self.inputs.policy.resting_speed);
         // Slow, and with every restitution below 1: rapier's bounce of it (`e` times the
-        // approach) stays below the pressed speed, so `rapier_bounces` below is false and the
-        // pair is not planned; it leaves before its colliders and contacts are read.
+        // approach) stays below the pressed speed, so `rapier_bounces` in `role` is false and
+        // the pair is not planned; it leaves before its colliders and contacts are read.
         if slow && !chain && !self.members.any_elastic {
             return None;
         }
+        self.role((i, j), (a, b), &approach, (closing, forces), chain)
+    }
+
+    /// [`Self::evaluate`] for a pair that may meet in the step (`approach`) and is not slow,
+    /// or may be rapier's bounce or a chain's: its closing speed with bounces `closing`
+    /// (m/s), its user forces `forces` (m/s^2).
+    #[inline(never)]
+    fn role(
+        &self,
+        (i, j): (usize, usize),
+        (a, b): (&Ball, &Ball),
+        approach: &Approach,
+        (closing, forces): (f64, f64),
+        chain: bool,
+    ) -> Option<PlannedPair> {
+        let (inputs, policy) = (self.inputs, self.inputs.policy);
+        let (gap, normal) = (approach.gap, approach.normal);
+        let closes_at = |closing: f64| self.closes(gap, closing, forces);
+        // rapier's own bounce of the pair is its approach at the step's start.
+        let approaching = approach.closing;
+        let slow = rests_at(closing, policy.resting_speed);
         let (ca, cb) = (&inputs.colliders[a.collider], &inputs.colliders[b.collider]);
         // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
         let held_last_step = OnceCell::new();
@@ -492,7 +520,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let impact = !slow
             && closes_at(closing)
             && !policy.rests(gap, closing, was_resting(), pressed)
-            && !self.stacked(a, b);
+            && !self.stacked((i, j), (a, b));
         let hooked = impact || rapier_bounces;
         // rapier's filtering and the user's decide a pair the plugin takes out of rapier's
         // solver or changes: an impact, a pair it zeroes (one a chain takes is asked there).
@@ -505,8 +533,8 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             a: a.body,
             b: b.body,
             key,
-            balls: balls_only,
-            reach,
+            balls: approach.balls_only,
+            reach: approach.reach,
             normal,
             offset: b.com - a.com,
             relative_v: b.v - a.v,
