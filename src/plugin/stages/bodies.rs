@@ -67,10 +67,14 @@ impl<H> ImpactPlugin<H> {
         let moved_together = &step.moved_together;
         let mut view = self.after_view();
         for cand in &step.candidates {
+            // A body moved with a cluster is passed over before its body is read.
+            if !moved_together.is_empty() && moved_together.contains(&cand.body) {
+                continue;
+            }
             let awake_managed = bodies.get(cand.body).is_some_and(|rb| {
                 view.registry.manages(cand.body, rb) && !view.commit.is_sleeping(cand.body, rb)
             });
-            if moved_together.contains(&cand.body) || !awake_managed {
+            if !awake_managed {
                 continue;
             }
             if let Some((ground, motion)) = &cand.rolling {

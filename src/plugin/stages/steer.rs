@@ -88,16 +88,8 @@ impl<H> ImpactPlugin<H> {
                 let integrated = rb.angular_damping() == 0.0
                     && rb.user_torque() == Vector::ZERO
                     && rb.additional_solver_iterations() == 0;
-                let steered = integrated
-                    .then(|| steered_roll(cand, &now, (dt, substeps)))
-                    .flatten()
-                    .filter(|s| rb.is_fast_rotation_allowed() || within_spin_cap(s, dt));
-                if let Some(steered) = steered {
-                    let (linvel, angvel) = steered.velocities;
-                    let (linvel, angvel) = (vec_from_na(&linvel), vec_from_na(&angvel));
-                    if commit.velocities(cand.body, linvel, angvel) {
-                        cand.steered_roll = Some(steered);
-                    }
+                if integrated {
+                    steer_roll(&mut commit, cand, rb, &now, (dt, substeps));
                 }
                 continue;
             }
@@ -113,6 +105,29 @@ impl<H> ImpactPlugin<H> {
                 commit.velocity(cand.body, held);
             }
         }
+    }
+}
+
+/// Records the steering velocities of the rolling candidate `cand` (`rb`, held as `now`) and
+/// keeps the steering in the candidate, where [`steered_roll`] steers it and rapier leaves the
+/// spin as it is. The steering is built in place: it is moved once, into the candidate.
+fn steer_roll(
+    commit: &mut Commit,
+    cand: &mut Candidate,
+    rb: &RigidBody,
+    now: &Now,
+    (dt, substeps): (f64, f64),
+) {
+    let Some(steered) = steered_roll(cand, now, (dt, substeps)) else {
+        return;
+    };
+    if !(rb.is_fast_rotation_allowed() || within_spin_cap(&steered, dt)) {
+        return;
+    }
+    let (linvel, angvel) = steered.velocities;
+    let (linvel, angvel) = (vec_from_na(&linvel), vec_from_na(&angvel));
+    if commit.velocities(cand.body, linvel, angvel) {
+        cand.steered_roll = Some(steered);
     }
 }
 
