@@ -50,7 +50,7 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, FirstHold};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBodySet};
+use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodySet};
 use nalgebra::Vector3;
 use std::cell::OnceCell;
 
@@ -71,16 +71,17 @@ impl<H> ImpactPlugin<H> {
             if !moved_together.is_empty() && moved_together.contains(&cand.body) {
                 continue;
             }
-            let awake_managed = bodies.get(cand.body).is_some_and(|rb| {
-                view.registry.manages(cand.body, rb) && !view.commit.is_sleeping(cand.body, rb)
-            });
-            if !awake_managed {
+            let Some(rb) = bodies.get(cand.body) else {
+                continue;
+            };
+            if !view.registry.manages(cand.body, rb) || view.commit.is_sleeping(cand.body, rb) {
                 continue;
             }
+            // The route reads the body found here (`rb`), not the set again.
             if let Some((ground, motion)) = &cand.rolling {
-                view.roll(step, cand, *ground, motion, bodies, colliders);
+                view.roll(step, (cand, rb), *ground, motion, bodies, colliders);
             } else {
-                view.fly(step, cand, bodies, colliders);
+                view.fly(step, (cand, rb), bodies, colliders);
             }
             if let Some(ground) = cand.released {
                 view.released_checked(step, cand, ground, bodies, colliders);
@@ -107,15 +108,13 @@ impl AfterStep<'_> {
     fn roll(
         &mut self,
         step: &EndOfStep,
-        cand: &Candidate,
+        (cand, rb): (&Candidate, &RigidBody),
         ground: usize,
         motion: &Rolling,
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let Some(now) = self.commit.body(bodies, cand.body) else {
-            return;
-        };
+        let now = self.commit.now(cand.body, rb);
         // Something else acted on it in the step: a contact, a joint, or rapier's CCD
         // stopping it short (against a thin body).
         let sets = &step.sets;
@@ -201,7 +200,7 @@ impl AfterStep<'_> {
     fn fly(
         &mut self,
         step: &EndOfStep,
-        cand: &Candidate,
+        (cand, rb): (&Candidate, &RigidBody),
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
@@ -216,9 +215,7 @@ impl AfterStep<'_> {
         {
             return;
         }
-        let Some(now) = self.commit.body(bodies, cand.body) else {
-            return;
-        };
+        let now = self.commit.now(cand.body, rb);
         let flown = FlownEnd::new(cand, step.dt);
         // Whether it flew alone walks its contacts: asked only on the routes that read it (not
         // for a body with no ground outside `Exact` mode, whose end rapier's integrator keeps).
