@@ -388,19 +388,23 @@ mod tests {
     use crate::rapier::prelude::RigidBodyHandle;
     use nalgebra::Vector3;
 
-    /// A shadow is found by its whole handle, after others are removed around it (an entry
-    /// moved into a removed one's place), replaced by another generation of its slot, and
-    /// listed in arena order whatever the order of the inserts.
-    #[test]
-    fn a_shadow_is_found_by_its_handle_and_listed_in_arena_order() {
-        let shadow = |x: f64| Shadow {
+    /// A shadow told apart by its centre's `x`.
+    fn shadow(x: f64) -> Shadow {
+        Shadow {
             com: Vector3::new(x, 0.0, 0.0),
             v: Vector3::zeros(),
             w: Vector3::zeros(),
             written_translation: Vector::ZERO,
             written_linvel: Vector::ZERO,
             written_angvel: Vector::ZERO,
-        };
+        }
+    }
+
+    /// A shadow is found by its whole handle, after others are removed around it (an entry
+    /// moved into a removed one's place), replaced by another generation of its slot, and
+    /// listed in arena order whatever the order of the inserts.
+    #[test]
+    fn a_shadow_is_found_by_its_handle_and_listed_in_arena_order() {
         let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
         let mut shadows = Shadows::restored([(h(7, 0), shadow(7.0)), (h(2, 0), shadow(2.0))]);
         shadows.insert(h(5, 0), shadow(5.0));
@@ -435,14 +439,6 @@ mod tests {
     /// like any other, and moved in when the table grows to its slot.
     #[test]
     fn a_shadow_far_beyond_the_others_is_kept_aside() {
-        let shadow = |x: f64| Shadow {
-            com: Vector3::new(x, 0.0, 0.0),
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-            written_translation: Vector::ZERO,
-            written_linvel: Vector::ZERO,
-            written_angvel: Vector::ZERO,
-        };
         let h = |slot, generation| RigidBodyHandle::from_raw_parts(slot, generation);
         let (far, other) = (u32::MAX - 1, u32::MAX - 7);
         let shadows = Shadows::restored([
