@@ -128,14 +128,7 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
     pub fn insert(&mut self, k: K, v: V) -> bool {
         let i = k.slot();
         if i >= self.slots.len() {
-            self.slots.resize(i + 1, None);
-            while let Some(entry) = self.far.first_entry() {
-                if *entry.key() > i {
-                    break;
-                }
-                let (at, moved) = entry.remove_entry();
-                self.slots[at] = Some(moved);
-            }
+            self.grow_to(i);
         }
         let slot = &mut self.slots[i];
         let new = !matches!(slot, Some((h, _)) if *h == k);
@@ -144,6 +137,19 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
         }
         *slot = Some((k, v));
         new
+    }
+
+    /// The vector grown to hold slot `i`, the far entries it reaches moved in.
+    #[cold]
+    fn grow_to(&mut self, i: usize) {
+        self.slots.resize(i + 1, None);
+        while let Some(entry) = self.far.first_entry() {
+            if *entry.key() > i {
+                break;
+            }
+            let (at, moved) = entry.remove_entry();
+            self.slots[at] = Some(moved);
+        }
     }
 
     /// Sets the value of `k`, a handle read from a snapshot, which may name a slot no world

@@ -128,16 +128,28 @@ impl Shadows {
     pub fn insert(&mut self, body: RigidBodyHandle, shadow: Shadow) {
         let slot = body.slot();
         if slot >= self.places.len() {
-            self.places.resize(slot + 1, 0);
-            while let Some(entry) = self.far.first_entry() {
-                if *entry.key() > slot {
-                    break;
-                }
-                let (at, k) = entry.remove_entry();
-                self.places[at] = k;
-            }
+            self.grow_to(slot);
         }
-        self.put(slot, body, shadow);
+        match self.places[slot] as usize {
+            0 => {
+                self.entries.push((body, shadow));
+                self.places[slot] = self.entries.len() as u32;
+            }
+            k => self.entries[k - 1] = (body, shadow),
+        }
+    }
+
+    /// `places` grown to hold `slot`, the far places it reaches moved in.
+    #[cold]
+    fn grow_to(&mut self, slot: usize) {
+        self.places.resize(slot + 1, 0);
+        while let Some(entry) = self.far.first_entry() {
+            if *entry.key() > slot {
+                break;
+            }
+            let (at, k) = entry.remove_entry();
+            self.places[at] = k;
+        }
     }
 
     /// The shadows read from a snapshot, which may name a slot no world holds: beyond
@@ -149,20 +161,21 @@ impl Shadows {
             if slot < out.places.len() || within_dense_reach(slot, out.entries.len() + 1) {
                 out.insert(body, shadow);
             } else {
-                out.put(slot, body, shadow);
+                out.put_far(slot, body, shadow);
             }
         }
         out
     }
 
-    /// Sets the shadow of `body`, in arena slot `slot`, where its place is recorded.
-    fn put(&mut self, slot: usize, body: RigidBodyHandle, shadow: Shadow) {
-        match self.place_at(slot) {
-            0 => {
+    /// Sets the shadow of `body`, whose arena slot `slot` lies beyond `places`: its place is
+    /// kept in `far`.
+    fn put_far(&mut self, slot: usize, body: RigidBodyHandle, shadow: Shadow) {
+        match self.far.get(&slot) {
+            Some(k) => self.entries[*k as usize - 1] = (body, shadow),
+            None => {
                 self.entries.push((body, shadow));
-                self.set_place(slot, self.entries.len());
+                self.far.insert(slot, self.entries.len() as u32);
             }
-            k => self.entries[k - 1] = (body, shadow),
         }
     }
 
