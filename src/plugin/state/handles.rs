@@ -66,25 +66,42 @@ impl Slotted for RigidBodyHandle {
     }
 }
 
-/// Whether a table indexed by arena slot ([`SlotTable`], `Shadows`) holding `entries` entries
-/// grows its vector to `slot` for an entry read from a snapshot: every slot below
+/// Whether a table indexed by arena slot ([`SlotTable`], `Shadows`), whose vector holds
+/// `held` slots and which has `entries` entries with the new one, keeps an entry read from a
+/// snapshot at `slot` in its vector (grown to it if need be): a slot it holds, any below
 /// `SLOT_SLACK`, and `SLOTS_PER_ENTRY` more for each entry. A world's handles need no bound
 /// (rapier's arenas hand slots out from 0 up, so the world holds as many entries as the
 /// slot), but a snapshot is only data: one edited by hand can name a slot near `u32::MAX`.
 /// Such an entry is kept aside, by slot, so that the memory a snapshot costs follows its
 /// entries, not the largest slot it names.
-pub(crate) fn within_dense_reach(slot: usize, entries: usize) -> bool {
+pub(crate) fn restored_in_vector(slot: usize, held: usize, entries: usize) -> bool {
     const SLOT_SLACK: usize = 1 << 16;
     const SLOTS_PER_ENTRY: usize = 64;
-    slot < SLOT_SLACK.saturating_add(entries.saturating_mul(SLOTS_PER_ENTRY))
+    slot < held || slot < SLOT_SLACK.saturating_add(entries.saturating_mul(SLOTS_PER_ENTRY))
+}
+
+/// Moves into `slots` (just grown) the entries kept aside in `far` that it now reaches, as
+/// `into` makes them. Every entry left in `far` is then beyond `slots`.
+pub(crate) fn take_in_far<T, U>(
+    slots: &mut [U],
+    far: &mut BTreeMap<usize, T>,
+    into: impl Fn(T) -> U,
+) {
+    while let Some(entry) = far.first_entry() {
+        if *entry.key() >= slots.len() {
+            break;
+        }
+        let (at, moved) = entry.remove_entry();
+        slots[at] = into(moved);
+    }
 }
 
 /// Values by handle, in a vector indexed by the handle's arena slot: a lookup is an index and
 /// a handle compare, for the tables asked in every hook call or of every body in a step.
 ///
 /// Invariant: an entry is in `slots` at its slot, or in `far` when its slot is at least
-/// `slots.len()` (a restored entry beyond [`within_dense_reach`]); growing the vector moves
-/// in the far entries it reaches.
+/// `slots.len()` (a restored entry not [`restored_in_vector`]); growing the vector moves in
+/// the far entries it reaches.
 #[derive(Clone, Debug)]
 pub(crate) struct SlotTable<K, V> {
     slots: Vec<Option<(K, V)>>,
@@ -143,20 +160,14 @@ impl<K: Slotted, V: Copy> SlotTable<K, V> {
     #[cold]
     fn grow_to(&mut self, i: usize) {
         self.slots.resize(i + 1, None);
-        while let Some(entry) = self.far.first_entry() {
-            if *entry.key() > i {
-                break;
-            }
-            let (at, moved) = entry.remove_entry();
-            self.slots[at] = Some(moved);
-        }
+        take_in_far(&mut self.slots, &mut self.far, Some);
     }
 
     /// Sets the value of `k`, a handle read from a snapshot, which may name a slot no world
-    /// holds: beyond [`within_dense_reach`] it is kept aside. As [`Self::insert`] otherwise.
+    /// holds: beyond [`restored_in_vector`] it is kept aside. As [`Self::insert`] otherwise.
     pub fn insert_restored(&mut self, k: K, v: V) -> bool {
         let i = k.slot();
-        if i < self.slots.len() || within_dense_reach(i, self.len + 1) {
+        if restored_in_vector(i, self.slots.len(), self.len + 1) {
             return self.insert(k, v);
         }
         let replaced = self.far.insert(i, (k, v));

@@ -4,8 +4,8 @@ use crate::motion::State;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
-    ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, sorted_entries, sorted_members,
-    within_dense_reach,
+    ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, restored_in_vector,
+    sorted_entries, sorted_members, take_in_far,
 };
 use crate::plugin::state::step::{Candidate, GroundPair, StepData};
 use crate::plugin::state::writes::Now;
@@ -75,7 +75,7 @@ impl Shadow {
 /// ([`Self::sorted`]).
 ///
 /// Invariant: an entry's place is in `places` at its body's slot, or in `far` when that slot
-/// is at least `places.len()` (a restored shadow beyond [`within_dense_reach`]); growing
+/// is at least `places.len()` (a restored shadow not [`restored_in_vector`]); growing
 /// `places` moves in the far places it reaches.
 #[derive(Default)]
 pub(crate) struct Shadows {
@@ -143,22 +143,16 @@ impl Shadows {
     #[cold]
     fn grow_to(&mut self, slot: usize) {
         self.places.resize(slot + 1, 0);
-        while let Some(entry) = self.far.first_entry() {
-            if *entry.key() > slot {
-                break;
-            }
-            let (at, k) = entry.remove_entry();
-            self.places[at] = k;
-        }
+        take_in_far(&mut self.places, &mut self.far, |k| k);
     }
 
     /// The shadows read from a snapshot, which may name a slot no world holds: beyond
-    /// [`within_dense_reach`] a shadow's place is kept aside.
+    /// [`restored_in_vector`] a shadow's place is kept aside.
     pub fn restored(shadows: impl IntoIterator<Item = (RigidBodyHandle, Shadow)>) -> Self {
         let mut out = Self::default();
         for (body, shadow) in shadows {
             let slot = body.slot();
-            if slot < out.places.len() || within_dense_reach(slot, out.entries.len() + 1) {
+            if restored_in_vector(slot, out.places.len(), out.entries.len() + 1) {
                 out.insert(body, shadow);
             } else {
                 out.put_far(slot, body, shadow);
