@@ -189,13 +189,14 @@ impl HookFlags {
         }
         let mut gone = Vec::new();
         for (handle, entry) in self.hooked.iter_mut() {
-            let rb = bodies.get(*handle);
-            // A body not in the world goes whatever its stamp, which a snapshot may give as any
-            // number.
-            if entry.stamp == stamp && rb.is_some() {
+            if entry.stamp == stamp {
                 continue;
             }
-            if unmanaged && rb.is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb)) {
+            if unmanaged
+                && bodies
+                    .get(*handle)
+                    .is_some_and(|rb| rb.is_sleeping() && registry.manages(*handle, rb))
+            {
                 entry.stamp = stamp;
                 continue;
             }
