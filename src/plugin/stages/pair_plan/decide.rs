@@ -429,8 +429,9 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     }
 
     /// `stacked_besides` of member `k` with `partner` left out. A member no contact stacks
-    /// (the common case, asked once a step) is stacked besides no partner; only one that some
-    /// contact stacks walks rapier's graph again for the partner.
+    /// (the common case, asked once a step with `ColliderHandle::invalid()`, which names no
+    /// collider, as the partner: no contact left out) is stacked besides no partner; only one
+    /// that some contact stacks walks rapier's graph again for the partner.
     fn member_stacked_besides(&self, k: usize, partner: ColliderHandle) -> bool {
         let (bodies, sets, registry) = (self.bodies, self.inputs.sets, self.inputs.registry);
         let rb = &bodies[self.members.balls[k].body];
@@ -464,19 +465,19 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         if slow && !chain && !self.members.any_elastic {
             return None;
         }
-        self.role((i, j), (a, b), &approach, (closing, forces), chain)
+        self.role((i, j), (a, b), &approach, (closing, slow, forces), chain)
     }
 
     /// [`Self::evaluate`] for a pair that may meet in the step (`approach`) and is not slow,
     /// or may be rapier's bounce or a chain's: its closing speed with bounces `closing`
-    /// (m/s), its user forces `forces` (m/s^2).
+    /// (m/s), whether that is `slow`, its user forces `forces` (m/s^2).
     #[inline(never)]
     fn role(
         &self,
         (i, j): (usize, usize),
         (a, b): (&Ball, &Ball),
         approach: &Approach,
-        (closing, forces): (f64, f64),
+        (closing, slow, forces): (f64, bool, f64),
         chain: bool,
     ) -> Option<PlannedPair> {
         let (inputs, policy) = (self.inputs, self.inputs.policy);
@@ -484,7 +485,6 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         let closes_at = |closing: f64| self.closes(gap, closing, forces);
         // rapier's own bounce of the pair is its approach at the step's start.
         let approaching = approach.closing;
-        let slow = rests_at(closing, policy.resting_speed);
         let (ca, cb) = (&inputs.colliders[a.collider], &inputs.colliders[b.collider]);
         // Asked by both rapier's bounce and the pair's rest below: a walk of rapier's graph.
         let held_last_step = OnceCell::new();
