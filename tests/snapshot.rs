@@ -313,13 +313,17 @@ fn rapier_alone_resumes_bit_for_bit() {
 }
 
 /// A body the last step's plan found near a ground is planned without the survey's test that
-/// it is far (outside `Exact` mode and slabs). Lifted far above the floor, or left without a
+/// it is far (outside slabs). Lifted far above the floor, or left without a
 /// collider to query (made a sensor, or disabled) between steps, it steps exactly as a
 /// restored plugin steps it, whose survey tests every body afresh (a snapshot carries no such
 /// marks); the profile's counts say that the two took different paths.
 #[test]
 fn a_body_near_a_ground_last_step_steps_as_after_a_restore() {
-    for timing in [TimingMode::Step, TimingMode::TimeOfImpact] {
+    for timing in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
         let mut world = PhysicsWorld::default();
         let (_, floor) = world.insert(
             RigidBodyBuilder::fixed(),

@@ -100,8 +100,8 @@ pub struct StepCounts {
     /// Surely far from every ground (the survey's bound): not planned.
     pub far: usize,
     /// Planned: near a ground by the survey's bound, a member of a pair between bodies, or
-    /// (outside `Exact` mode and slabs) found near a ground by the last step's plan, which the
-    /// survey does not test (such a body may be far now: planned, not `near`).
+    /// (outside slabs) found near a ground by the last step's plan, which the survey does not
+    /// test (such a body may be far now: planned, not `near`).
     pub planned: usize,
     /// Planned and with a ground near it (within its swept bounding sphere; a lone ground
     /// within the sphere's bounding cube counts).

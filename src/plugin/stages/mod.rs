@@ -6,9 +6,9 @@
 //! 2. pair plan (`pair_plan/`): the pairs of opted-in bodies that may meet and their roles;
 //!    their sleeping bodies woken, and in `Step` mode their impulses at the step's start.
 //! 3. survey (`prepare.rs`): which managed bodies are asleep, far from every ground (in
-//!    `Exact` mode a flying candidate each), or to be planned (outside `Exact` mode and
-//!    slabs, a body the last step's plan found near a ground without the far test:
-//!    `NearMarks`).
+//!    `Exact` mode a flying candidate each), or to be planned (outside slabs, a body the last
+//!    step's plan found near a ground without the far test: `NearMarks`; in `Exact` mode,
+//!    after the plan, such a body found far gets its flight in the survey's place).
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body
 //!    a candidate (and in `Step` mode the impulses of the contacts that close in the step).
 //! 5. steer (`steer.rs`): the balls rolling alone over one flat face given the velocities
@@ -66,6 +66,7 @@ use crate::plugin::stages::commit::{Commit, Origin};
 use crate::plugin::stages::pair_plan::{PairInputs, StepStart, pair_key};
 use crate::plugin::stages::pair_reconstruct::NearBodies;
 use crate::plugin::stages::plan::{PlanReports, Planner};
+use crate::plugin::stages::prepare::UntestedFlights;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::HandleSet;
@@ -119,8 +120,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.stopwatch.lap(Stage::Survey);
         let to_plan = std::mem::take(&mut survey.to_plan);
         let planned_count = to_plan.len();
+        let planning = (to_plan, &mut survey.untested);
         let (near, not_near) =
-            self.plan_bodies(&mut step, to_plan, bodies, colliders, &sets, &last);
+            self.plan_bodies(&mut step, planning, bodies, colliders, &sets, &last);
+        Self::place_untested_flights(&mut step, &mut survey.untested);
         self.stopwatch.lap(Stage::Plan);
         self.stopwatch.count(|c| {
             (c.asleep, c.far, c.planned) = (step.asleep.len(), survey.far.len(), planned_count);
@@ -298,11 +301,13 @@ impl<H> ImpactPlugin<H> {
 
     /// Plans each body of `to_plan` (`plan/`) and records what its plan wrote and reported;
     /// returns those with a ground near them (marked for the next step's survey, `NearMarks`)
-    /// and the others but those without a collider to query, each in the order planned.
+    /// and the others but those without a collider to query, each in the order planned. Of
+    /// those, a body the survey planned untested gets its flight back into `untested` where
+    /// the survey would have found it far (`prepare.rs`, `Exact` mode).
     fn plan_bodies(
         &mut self,
         step: &mut StepData,
-        to_plan: Vec<RigidBodyHandle>,
+        (to_plan, untested): (Vec<RigidBodyHandle>, &mut UntestedFlights),
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
         sets: &Sets,
@@ -352,7 +357,11 @@ impl<H> ImpactPlugin<H> {
                     near.push(handle);
                     self.memory.near.mark(handle);
                 }
-                Some(false) => not_near.push(handle),
+                Some(false) => {
+                    let sets = (bodies, colliders);
+                    self.take_untested_flight(untested, (step, &grounds), handle, sets);
+                    not_near.push(handle);
+                }
                 None => {}
             }
         }

@@ -7,9 +7,11 @@
 //! ground's pose over the step (the ground index, lent to the step until its end).
 //! [`ImpactPlugin::survey`] sorts the managed bodies: asleep (checked at the step's end if
 //! rapier wakes them), surely far from every ground (no plan; only their flight in `Exact`
-//! mode), or to be planned (outside `Exact` mode and slabs, a body the last step's plan found
-//! near a ground, without the far test: most often it is near still, and the plan finds one
-//! that is not near, as the test would have found it far).
+//! mode), or to be planned (outside slabs, a body the last step's plan found near a ground,
+//! without the far test: most often it is near still, and the plan finds one that is not
+//! near, as the test would have found it far). In `Exact` mode, where the candidates' order is
+//! the order of the writes their flights make, such a body found far gets its flying
+//! candidate where the survey's test would have put it ([`UntestedFlights`]).
 //! [`ImpactPlugin::measure_ground_motion`] reads where the moving grounds went. Nothing here
 //! writes into rapier.
 
@@ -18,15 +20,32 @@ use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
+use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{snapshot, surely_far};
 use crate::plugin::stages::view::EndOfStep;
+use crate::plugin::state::handles::Slotted;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, StepData};
-use crate::rapier::math::Vector;
+use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
     ColliderHandle, ColliderSet, IntegrationParameters, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
+
+/// The flying candidates of the bodies the survey planned untested (`NearMarks`) that its far
+/// test finds surely far: in `Exact` mode, where the candidates' order is that of the writes
+/// their flights make, each goes where the survey would have pushed it.
+pub(super) struct UntestedFlights {
+    /// `Exact` mode.
+    exact: bool,
+    /// How many flying candidates the survey pushed: the first of `StepData::candidates`, in
+    /// rapier's order of the bodies.
+    flights: usize,
+    /// rapier's gravity and `dt`, in its precision, as the survey's test takes them.
+    rapier_gravity: (Vector, Real),
+    /// The candidates taken back from the plan's, in the plan's order (rapier's too).
+    surveyed_far: Vec<Candidate>,
+}
 
 /// The managed bodies as the survey sorted them.
 pub(super) struct Survey {
@@ -36,6 +55,8 @@ pub(super) struct Survey {
     /// Awake bodies with no ground in reach: no roles (see `Lookup::roles`). The survey's;
     /// `ImpactPlugin::before_step` adds those the plan found not near.
     pub far: Vec<RigidBodyHandle>,
+    /// `Exact` mode's flights of the bodies planned untested, to be put in the survey's order.
+    pub untested: UntestedFlights,
     /// A dynamic body the plugin does not manage: it decides where the hook flags go.
     pub unmanaged: bool,
 }
@@ -101,26 +122,32 @@ impl<H> ImpactPlugin<H> {
     /// no snapshot, inertia or geometry: it gets a flying candidate where
     /// [`Candidate::wanted_in_flight`] asks for one (in `Exact` mode, always); a body
     /// without collider is skipped. The members of the step's pairs are planned whatever
-    /// their distance to the grounds, and outside `Exact` mode and slabs so is a body the last
-    /// step's plan found near a ground, untested: if it is far after all, its plan finds it not
-    /// near and it joins the far bodies, or it has no collider to query and is skipped, as
+    /// their distance to the grounds, and outside slabs so is a body the last step's plan
+    /// found near a ground, untested: if it is far after all, its plan finds it not near and
+    /// it joins the far bodies (in `Exact` mode its flight is then put in the survey's place,
+    /// [`UntestedFlights`]), or it has no collider to query and is skipped, as
     /// after the test. `gravity` and `dt` are rapier's, in its precision, as the bound on a
     /// body's travel is taken in it.
     pub(super) fn survey(
         &self,
         step: &mut StepData,
-        (gravity, dt): (Vector, crate::rapier::math::Real),
+        (gravity, dt): (Vector, Real),
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
         last: &LastStep,
     ) -> Survey {
         let margin = to_real(step.policy.contact_margin());
         let g_len = gravity.length();
-        let plan_near_again =
-            self.config.timing != TimingMode::Exact && !self.registry.index.has_slabs();
+        let plan_near_again = !self.registry.index.has_slabs();
         let mut survey = Survey {
             to_plan: Vec::new(),
             far: Vec::new(),
+            untested: UntestedFlights {
+                exact: self.config.timing == TimingMode::Exact,
+                flights: 0,
+                rapier_gravity: (gravity, dt),
+                surveyed_far: Vec::new(),
+            },
             unmanaged: false,
         };
         for (handle, rb) in bodies.iter() {
@@ -138,10 +165,9 @@ impl<H> ImpactPlugin<H> {
                 continue;
             }
             let index = &self.registry.index;
-            // Near a ground last step: planned without the test (`NearMarks`). Not in `Exact`
-            // mode, whose far bodies get their candidates here, in the survey's order; nor
-            // where slabs are, as a body that meets tiles one by one lists its colliders for
-            // the hooks once planned.
+            // Near a ground last step: planned without the test (`NearMarks`). Not where slabs
+            // are, as a body that meets tiles one by one lists its colliders for the hooks
+            // once planned.
             if plan_near_again && self.memory.near.was_near(handle) {
                 survey.to_plan.push(handle);
                 continue;
@@ -162,7 +188,56 @@ impl<H> ImpactPlugin<H> {
                 None => {}
             }
         }
+        survey.untested.flights = step.candidates.len();
         survey
+    }
+
+    /// `Exact` mode, right after the plan of `handle` found no ground near it: if the survey
+    /// planned it untested (`NearMarks`) and its far test finds it surely far, as the
+    /// survey's would have, its flying candidate (the plan's last) is taken back to go among
+    /// the survey's ([`Self::place_untested_flights`]); one the test does not find surely far
+    /// would have been planned, and its candidate stays where its plan put it. The test reads
+    /// what the survey's would have: rapier's bodies and the grounds, neither written before
+    /// the commit.
+    pub(super) fn take_untested_flight(
+        &self,
+        untested: &mut UntestedFlights,
+        (step, grounds): (&mut StepData, &[GroundMotion]),
+        handle: RigidBodyHandle,
+        (bodies, colliders): (&RigidBodySet, &ColliderSet),
+    ) {
+        if !untested.exact
+            || step.pairs.members.contains(handle)
+            || !self.memory.near.was_near(handle)
+            || !step.candidates.last().is_some_and(|c| c.body == handle)
+        {
+            return;
+        }
+        let (gravity, dt) = untested.rapier_gravity;
+        let margin = to_real(step.policy.contact_margin());
+        let index = &self.registry.index;
+        let far = bodies.get(handle).is_some_and(|rb| {
+            surely_far(rb, colliders, gravity.length(), dt, margin, index, grounds) == Some(true)
+        });
+        if far {
+            untested.surveyed_far.extend(step.candidates.pop());
+        }
+    }
+
+    /// `Exact` mode: the flights [`Self::take_untested_flight`] took back put among the
+    /// survey's, each before the first of a higher slot (the survey pushes in rapier's order,
+    /// by slot), so that the candidates, and the writes their flights make, come in the order
+    /// testing every body gives. The plan's candidates are moved once, as one block.
+    pub(super) fn place_untested_flights(step: &mut StepData, untested: &mut UntestedFlights) {
+        if untested.surveyed_far.is_empty() {
+            return;
+        }
+        let flights = untested.flights;
+        let late = std::mem::take(&mut untested.surveyed_far);
+        let placed = flights + late.len();
+        step.candidates.splice(flights..flights, late);
+        // Two runs in slot order, merged (a body has one candidate: no two slots are equal).
+        step.candidates[..placed].sort_by_key(|c| c.body.slot());
     }
 
     /// The moving grounds' actual velocities over the step, from their poses after it.
@@ -182,5 +257,59 @@ impl<H> ImpactPlugin<H> {
             gm.v = (com1.coords - gm.com0) / dt;
             gm.w = (rot1 * gm.rot0.inverse()).scaled_axis() / dt;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ImpactPlugin, UntestedFlights};
+    use crate::motion::{Flight, State};
+    use crate::plugin::state::step::{Candidate, StepData};
+    use crate::rapier::math::Vector;
+    use crate::rapier::prelude::RigidBodyHandle;
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    fn flying(slot: u32) -> Candidate {
+        let start = State {
+            com: Vector3::new(f64::from(slot), 1.0, 0.0),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        };
+        let flight = Flight {
+            accel: Vector3::new(0.0, -9.81, 0.0),
+            linear_damping: 0.0,
+            angular_damping: 0.0,
+            gyro: None,
+        };
+        let body = RigidBodyHandle::from_raw_parts(slot, 0);
+        Candidate::flying(body, start, flight, Vector3::zeros())
+    }
+
+    fn slots(step: &StepData) -> Vec<u32> {
+        let slot = |c: &Candidate| c.body.into_raw_parts().0;
+        step.candidates.iter().map(slot).collect()
+    }
+
+    /// The flights taken back from the plan go among the survey's in slot order (before,
+    /// between and after them), and the plan's candidates keep theirs, after all of them.
+    #[test]
+    fn untested_flights_go_among_the_surveys_in_slot_order() {
+        let mut step = StepData {
+            candidates: [2, 5, 9, 1, 4, 8].map(flying).into(),
+            ..Default::default()
+        };
+        let mut untested = UntestedFlights {
+            exact: true,
+            flights: 3,
+            rapier_gravity: (Vector::ZERO, 0.0),
+            surveyed_far: [0, 3, 6, 10].map(flying).into(),
+        };
+        ImpactPlugin::<()>::place_untested_flights(&mut step, &mut untested);
+        assert_eq!(slots(&step), [0, 2, 3, 5, 6, 9, 10, 1, 4, 8]);
+        assert!(untested.surveyed_far.is_empty());
+        // Nothing taken back: nothing moves.
+        ImpactPlugin::<()>::place_untested_flights(&mut step, &mut untested);
+        assert_eq!(slots(&step), [0, 2, 3, 5, 6, 9, 10, 1, 4, 8]);
     }
 }
