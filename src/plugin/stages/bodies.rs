@@ -246,11 +246,27 @@ impl AfterStep<'_> {
             }
             return;
         }
+        self.fly_searched(step, (&now, &flown), free, bodies, colliders);
+    }
+
+    /// A candidate with `Impact` grounds whose step is not surely clear (see [`Self::fly`]):
+    /// the search from its start, and the route its first event decides. Out of line: most
+    /// candidates have no ground to search, and their route stays small.
+    #[inline(never)]
+    fn fly_searched(
+        &mut self,
+        step: &EndOfStep,
+        (now, flown): (&Now, &FlownEnd),
+        free: impl Fn() -> bool,
+        bodies: &RigidBodySet,
+        colliders: &ColliderSet,
+    ) {
+        let (mode, cand) = (self.config.timing, flown.candidate());
         let geom = body_geom(now.rb(), colliders, &cand.local_com);
         let grounds = self.impact_ground_geoms(&cand.impact_grounds, &geom, colliders, step);
         let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(now.rb());
-        match first_search(&now, &subject, &flown, mode != TimingMode::Step && free()) {
+        match first_search(now, &subject, flown, mode != TimingMode::Step && free()) {
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -264,7 +280,7 @@ impl AfterStep<'_> {
             }
             Some(Search::Clear) => {
                 if mode == TimingMode::Exact {
-                    self.fly_exactly(&now, &flown);
+                    self.fly_exactly(now, flown);
                 }
                 self.turned_end(bodies, colliders, cand, step);
                 self.turning_resting_checked(step, cand, bodies, colliders);
