@@ -175,7 +175,7 @@ impl<H> ImpactPlugin<H> {
             match surely_far(rb, colliders, g_len, dt, margin, index, &step.grounds) {
                 Some(true) => {
                     survey.far.push(handle);
-                    let takes_pairs = self.registry.takes_pairs(handle, rb);
+                    let takes_pairs = || self.registry.takes_pairs(handle, rb);
                     if Candidate::wanted_in_flight(self.config.timing, false, takes_pairs) {
                         let shadow = last.shadows.get(&handle);
                         let (start, flight, local_com) =

@@ -119,10 +119,15 @@ impl Candidate {
     /// its cluster; and, in `TimeOfImpact` mode, a body opted in to impacts between bodies
     /// (`takes_pairs`), so that a cluster whose body an event sends towards it can take it in
     /// and move it in the step (without a candidate the cluster is left to the step's end).
-    pub fn wanted_in_flight(timing: TimingMode, member: bool, takes_pairs: bool) -> bool {
+    /// `takes_pairs` is asked only in that mode.
+    pub fn wanted_in_flight(
+        timing: TimingMode,
+        member: bool,
+        takes_pairs: impl FnOnce() -> bool,
+    ) -> bool {
         match timing {
             TimingMode::Exact => true,
-            TimingMode::TimeOfImpact => member || takes_pairs,
+            TimingMode::TimeOfImpact => member || takes_pairs(),
             TimingMode::Step => member,
         }
     }

@@ -219,7 +219,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         member: bool,
         step: &mut StepData,
     ) {
-        let takes_pairs = self.registry.takes_pairs(handle, rb);
+        let takes_pairs = || self.registry.takes_pairs(handle, rb);
         if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
             step.candidates
                 .push(Candidate::flying(handle, snap.0, snap.1, snap.2));
