@@ -117,7 +117,7 @@ pub(crate) fn through_pair_impacts<'s>(
     view: &mut AfterStep,
     (colliders, near, step): (&ColliderSet, &NearBodies, &EndOfStep),
     (balls, pairs): (Vec<ClusterBall<'s>>, &[(usize, usize)]),
-    (starts, lists): (StartSearches, &mut RunLists),
+    (mut starts, lists): (StartSearches, &mut RunLists),
     joining: &Joining<'_, 's>,
 ) -> Moved<'s> {
     let events_from = view.commit.reported().len();
@@ -126,7 +126,7 @@ pub(crate) fn through_pair_impacts<'s>(
         near,
         step,
     };
-    let Some(mut run) = Run::start(context, (balls, pairs), starts, lists) else {
+    let Some(eventful) = lists.search_from_start(&context, (&balls, pairs), &mut starts) else {
         // Not started: no event was pushed.
         return Moved {
             balls: Vec::new(),
@@ -135,6 +135,17 @@ pub(crate) fn through_pair_impacts<'s>(
             starts: StartSearches::default(),
         };
     };
+    if !eventful {
+        // No event in the step: the run's agenda would be empty, its ends the bodies' own.
+        let ends = ends_of(step, &balls, &lists.tables.moving).ok_or(Unmoved::GaveUp);
+        return Moved {
+            balls,
+            joined: Vec::new(),
+            ends,
+            starts,
+        };
+    }
+    let mut run = Run::start(context, (balls, pairs), starts, lists);
     let mut meets = None;
     let ends = move_cluster(view, &mut run, joining, &mut lists.way, &mut meets);
     if ends.is_none() {
@@ -325,6 +336,52 @@ impl RunLists {
             way: WayOn::default(),
         }
     }
+
+    /// Every body at its start state, rolling or flying (into `tables.moving`), and the first
+    /// event of each body's ground and of each pair: those in `starts` as found there, the
+    /// others searched and kept in it. Whether any body or pair has an event in the step;
+    /// `None` where a search gave up.
+    fn search_from_start(
+        &mut self,
+        context: &Context,
+        (balls, pairs): (&[ClusterBall], &[(usize, usize)]),
+        starts: &mut StartSearches,
+    ) -> Option<bool> {
+        let cluster = Cluster::of(context, balls);
+        let moving = &mut self.tables.moving;
+        moving.clear();
+        moving.reserve(run_room(balls.len(), pairs.len()).0);
+        moving.extend(balls.iter().map(start_moving));
+        starts.grounds.reserve(balls.len() - starts.grounds.len());
+        for (k, m) in moving.iter().enumerate() {
+            if starts.grounds.get(k).is_none() {
+                let found = cluster.ground(k, m, 0.0).ok()?;
+                starts.grounds.push(found);
+            }
+        }
+        starts
+            .touches
+            .resize(starts.touches.len().max(pairs.len()), None);
+        // Each body at the start, advanced once for all its pairs.
+        let at_start = &mut self.at_start;
+        at_start.clear();
+        at_start.resize(balls.len(), None);
+        let moving = &*moving;
+        let mut at = |k: usize| *at_start[k].get_or_insert_with(|| moving[k].at(0.0));
+        for (p, pair) in pairs.iter().enumerate() {
+            if starts.touches[p].is_none() {
+                let found = cluster.touch_from(p, *pair, moving, 0.0, &mut at).ok()?;
+                starts.touches[p] = Some(found);
+            }
+        }
+        let grounds = starts.grounds[..balls.len()].iter().any(Option::is_some);
+        Some(
+            grounds
+                || starts.touches[..pairs.len()]
+                    .iter()
+                    .any(|t| t.flatten().is_some()),
+        )
+    }
 }
 
 /// The room a run of a cluster of `bodies` bodies and `pairs` pairs keeps in its lists, of
@@ -347,20 +404,19 @@ struct Run<'c, 'a> {
 }
 
 impl<'c, 'a> Run<'c, 'a> {
-    /// Every body at its start state, rolling or flying, and the first event of each body's
-    /// ground and of each pair (those in `starts` as found there, the others searched and
-    /// kept in it); `None` where a search gave up.
+    /// The run from every body's start state (`lists.tables.moving`, as
+    /// [`RunLists::search_from_start`] left it), with the first event of each body's ground
+    /// and of each pair in its agenda, as found in `starts`, which holds them all.
     fn start(
         context: Context<'c>,
         (balls, pairs): (Vec<ClusterBall<'a>>, &[(usize, usize)]),
-        mut starts: StartSearches,
+        starts: StartSearches,
         lists: &mut RunLists,
-    ) -> Option<Self> {
-        let cluster = Cluster::of(&context, &balls);
+    ) -> Self {
         let (bodies_room, pairs_room) = run_room(balls.len(), pairs.len());
         let mut tables = std::mem::take(&mut lists.tables);
         let RunTables {
-            moving,
+            moving: _,
             flights,
             resting,
             pairs: run_pairs,
@@ -368,9 +424,6 @@ impl<'c, 'a> Run<'c, 'a> {
             by_slot,
             agenda,
         } = &mut tables;
-        moving.clear();
-        moving.reserve(bodies_room);
-        moving.extend(balls.iter().map(start_moving));
         flights.clear();
         flights.reserve(bodies_room);
         flights.extend(balls.iter().map(|b| b.cand.flight));
@@ -380,37 +433,11 @@ impl<'c, 'a> Run<'c, 'a> {
             pairs_of.push(*j, p);
         }
         agenda.reset((balls.len(), pairs.len()), (bodies_room, pairs_room));
-        starts.grounds.reserve(balls.len() - starts.grounds.len());
-        for (k, m) in moving.iter().enumerate() {
-            let found = match starts.grounds.get(k) {
-                Some(found) => *found,
-                None => {
-                    let found = cluster.ground(k, m, 0.0).ok()?;
-                    starts.grounds.push(found);
-                    found
-                }
-            };
-            agenda.ground(k, found);
+        for (k, found) in starts.grounds[..balls.len()].iter().enumerate() {
+            agenda.ground(k, *found);
         }
-        starts
-            .touches
-            .resize(starts.touches.len().max(pairs.len()), None);
-        // Each body at the start, advanced once for all its pairs.
-        let at_start = &mut lists.at_start;
-        at_start.clear();
-        at_start.resize(balls.len(), None);
-        let moving = &*moving;
-        let mut at = |k: usize| *at_start[k].get_or_insert_with(|| moving[k].at(0.0));
-        for (p, pair) in pairs.iter().enumerate() {
-            let found = match starts.touches[p] {
-                Some(found) => found,
-                None => {
-                    let found = cluster.touch_from(p, *pair, moving, 0.0, &mut at).ok()?;
-                    starts.touches[p] = Some(found);
-                    found
-                }
-            };
-            agenda.touch(p, found);
+        for (p, found) in starts.touches[..pairs.len()].iter().enumerate() {
+            agenda.touch(p, found.flatten());
         }
         by_slot.clear();
         by_slot.extend(
@@ -425,13 +452,13 @@ impl<'c, 'a> Run<'c, 'a> {
         run_pairs.clear();
         run_pairs.reserve(pairs_room);
         run_pairs.extend_from_slice(pairs);
-        Some(Run {
+        Run {
             context,
             balls,
             joined: Vec::new(),
             tables,
             starts,
-        })
+        }
     }
 
     /// The run's bodies, those that joined it and its searches from the start; its lists
@@ -747,27 +774,29 @@ impl<'c, 'a> Run<'c, 'a> {
     /// its plane there (a cuboid's face it left, or a mesh, would need the ground's other
     /// faces).
     fn ends(&self) -> Option<Vec<State>> {
-        let step = self.context.step;
-        let dt = step.dt;
-        let ends: Vec<State> = self.tables.moving.iter().map(|m| m.at(dt)).collect();
-        for (k, ball) in self.balls.iter().enumerate() {
-            if let (Motion::Rolling(rolling), Some(g)) =
-                (self.tables.moving[k].motion, ball.rolling_on)
-            {
-                let hit = closest(
-                    &ball.geom,
-                    &ball.grounds[g..=g],
-                    &ends[k],
-                    dt,
-                    step.policy.resting_gap,
-                )?;
-                if !on_plane(hit.dist, &hit.normal, &rolling.normal, rolling.radius) {
-                    return None;
-                }
+        ends_of(self.context.step, &self.balls, &self.tables.moving)
+    }
+}
+
+/// Every body's state at the step's end, each moving as `moving` has it (see [`Run::ends`]).
+fn ends_of(step: &EndOfStep, balls: &[ClusterBall], moving: &[Moving]) -> Option<Vec<State>> {
+    let dt = step.dt;
+    let ends: Vec<State> = moving.iter().map(|m| m.at(dt)).collect();
+    for (k, ball) in balls.iter().enumerate() {
+        if let (Motion::Rolling(rolling), Some(g)) = (moving[k].motion, ball.rolling_on) {
+            let hit = closest(
+                &ball.geom,
+                &ball.grounds[g..=g],
+                &ends[k],
+                dt,
+                step.policy.resting_gap,
+            )?;
+            if !on_plane(hit.dist, &hit.normal, &rolling.normal, rolling.radius) {
+                return None;
             }
         }
-        Some(ends)
     }
+    Some(ends)
 }
 
 impl Cluster<'_, '_> {
