@@ -197,8 +197,10 @@ fn move_cluster<'s>(
         // the pair plan had them apart); any other moves the cluster again with it. The
         // pairs from `searched` on are those, searched from `te` as they are added.
         let searched = run.tables.pairs.len();
+        let mut at_event = AtEvent::new(&changed[..count]);
         for &k in &changed[..count] {
-            run.way_on(k, te, way);
+            let s = at_event.state(&run.tables.moving, k, te);
+            run.way_on(k, &s, te, way);
             while let Some(other) = run.meets_other_body(k, way) {
                 let j = match other {
                     Reached::Member(j) => j,
@@ -210,10 +212,10 @@ fn move_cluster<'s>(
                         }
                     },
                 };
-                run.add_pair(k, j, te)?;
+                run.add_pair(k, j, te, &mut at_event)?;
             }
         }
-        run.search_again(&changed[..count], te, searched)?;
+        run.search_again(te, searched, &mut at_event)?;
     }
     run.ends()
 }
@@ -241,6 +243,31 @@ impl<'c, 'a> Cluster<'c, 'a> {
             colliders: context.colliders,
             balls,
             step: context.step,
+        }
+    }
+}
+
+/// The bodies an event changed (one or two), and their states at its time, each advanced
+/// there once for its way on and all its pairs' searches (`Moving::at` is a function of the
+/// motion and the time: the same state however often it is asked).
+struct AtEvent<'e> {
+    changed: &'e [usize],
+    states: [Option<State>; 2],
+}
+
+impl<'e> AtEvent<'e> {
+    fn new(changed: &'e [usize]) -> Self {
+        Self {
+            changed,
+            states: [None, None],
+        }
+    }
+
+    /// Body `b`'s state at `t`, the event's time, as `moving` has it.
+    fn state(&mut self, moving: &[Moving], b: usize, t: f64) -> State {
+        match self.changed.iter().position(|k| *k == b) {
+            Some(n) => *self.states[n].get_or_insert_with(|| moving[b].at(t)),
+            None => moving[b].at(t),
         }
     }
 }
@@ -572,24 +599,21 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(([i, j], 2))
     }
 
-    /// Searches again, from `te`, the ground of each body in `changed` and each of its pairs
-    /// but those from index `searched` on (added at `te` by [`Run::add_pair`], which searched
-    /// them from there with the same states: the same search), the pair of two changed
-    /// bodies once; a resting pair has no touch. `None` where a search gave up.
-    fn search_again(&mut self, changed: &[usize], te: f64, searched: usize) -> Option<()> {
+    /// Searches again, from `te`, the ground of each body the event changed (`at_event`)
+    /// and each of its pairs but those from index `searched` on (added at `te` by
+    /// [`Run::add_pair`], which searched them from there with the same states: the same
+    /// search), the pair of two changed bodies once; a resting pair has no touch. `None`
+    /// where a search gave up.
+    fn search_again(&mut self, te: f64, searched: usize, at_event: &mut AtEvent) -> Option<()> {
+        let changed = at_event.changed;
         let cluster = Cluster::of(&self.context, &self.balls);
         for &k in changed {
             self.tables
                 .agenda
                 .ground(k, cluster.ground(k, &self.tables.moving[k], te).ok()?);
         }
-        // Each changed body at `te`, advanced once for all its pairs.
         let moving = &self.tables.moving;
-        let mut own: [Option<State>; 2] = [None, None];
-        let mut at = |b: usize| match changed.iter().position(|k| *k == b) {
-            Some(n) => *own[n].get_or_insert_with(|| moving[b].at(te)),
-            None => moving[b].at(te),
-        };
+        let mut at = |b: usize| at_event.state(moving, b, te);
         for (n, &k) in changed.iter().enumerate() {
             for q in self.tables.pairs_of.of(k).filter(|q| *q < searched) {
                 let (a, b) = self.tables.pairs[q];
@@ -607,15 +631,14 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(())
     }
 
-    /// The pair plan's members near body `k`'s way on from `t`, its motion changed there,
-    /// into `way` (see [`Run::meets_other_body`]): those whose swept box in the pair index
-    /// (its travel over the step from its start-of-step motion, the plan's margin included),
-    /// widened by `k`'s bounding radius and its acceleration's bow, the segment of `k`'s way
-    /// on (from its centre at `t` along its velocity to the step's end) crosses, `k` itself
-    /// left out, in the order of their slots. Reads only.
-    fn way_on(&self, k: usize, t: f64, way: &mut WayOn) {
+    /// The pair plan's members near body `k`'s way on from `t` (its state there `s`), its
+    /// motion changed there, into `way` (see [`Run::meets_other_body`]): those whose swept
+    /// box in the pair index (its travel over the step from its start-of-step motion, the
+    /// plan's margin included), widened by `k`'s bounding radius and its acceleration's bow,
+    /// the segment of `k`'s way on (from its centre at `t` along its velocity to the step's
+    /// end) crosses, `k` itself left out, in the order of their slots. Reads only.
+    fn way_on(&self, k: usize, s: &State, t: f64, way: &mut WayOn) {
         let (ball, step) = (&self.balls[k], self.context.step);
-        let s = self.tables.moving[k].at(t);
         let left = step.dt - t;
         let widen = ball.geom.radius + ball.cand.flight.accel.norm() * left * left;
         let path = s.v * left;
@@ -755,9 +778,10 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(Some(met))
     }
 
-    /// Joins bodies `k` and `j` of the cluster in a pair searched from `t` (before, each
-    /// moved as the pair plan had them apart). `None` where the search gave up.
-    fn add_pair(&mut self, k: usize, j: usize, t: f64) -> Option<()> {
+    /// Joins bodies `k` and `j` of the cluster in a pair searched from `t`, the time of the
+    /// event that changed `at_event`'s bodies (before, each moved as the pair plan had them
+    /// apart). `None` where the search gave up.
+    fn add_pair(&mut self, k: usize, j: usize, t: f64, at_event: &mut AtEvent) -> Option<()> {
         let p = self.tables.pairs.len();
         self.tables.pairs.push((k, j));
         self.tables.pairs_of.push(k, p);
@@ -765,7 +789,9 @@ impl<'c, 'a> Run<'c, 'a> {
         self.tables.resting.push(false);
         self.tables.agenda.add_pair();
         let cluster = Cluster::of(&self.context, &self.balls);
-        let found = cluster.touch(p, (k, j), &self.tables.moving, t).ok()?;
+        let moving = &self.tables.moving;
+        let mut at = |b: usize| at_event.state(moving, b, t);
+        let found = cluster.touch_from(p, (k, j), moving, t, &mut at).ok()?;
         self.tables.agenda.touch(p, found);
         Some(())
     }
