@@ -312,4 +312,41 @@ mod tests {
         ImpactPlugin::<()>::place_untested_flights(&mut step, &mut untested);
         assert_eq!(slots(&step), [0, 2, 3, 5, 6, 9, 10, 1, 4, 8]);
     }
+
+    /// In `Exact` mode a ball the last step found near a ground, lifted far before the next,
+    /// is planned untested, and its flight still takes the place the survey's far test gives
+    /// it: first, before the balls still near, although its slot is the highest.
+    #[test]
+    fn a_lifted_ball_s_flight_takes_the_survey_s_place() {
+        use crate::plugin::bridge::convert::to_real;
+        use crate::plugin::impact_plugin::StepSets;
+        use crate::rapier::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder};
+        use crate::{ImpactConfig, TimingMode};
+        let mut world = PhysicsWorld::default();
+        let (_, floor) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(20.0, 0.5, 20.0).translation(Vector::new(0.0, -0.5, 0.0)),
+        );
+        let config = ImpactConfig::default().with_timing(TimingMode::Exact);
+        let mut plugin = ImpactPlugin::<()>::new(config).unwrap();
+        plugin
+            .add_ground(&world.bodies, &world.colliders, floor)
+            .unwrap();
+        let balls: Vec<RigidBodyHandle> = (0..5)
+            .map(|i| {
+                let ball = RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(to_real(-2.0 + f64::from(i)), 0.1, 0.0))
+                    .linvel(Vector::new(1.0, 0.0, 0.0));
+                world.insert(ball, ColliderBuilder::ball(0.1)).0
+            })
+            .collect();
+        for _ in 0..10 {
+            plugin.step(&mut world);
+        }
+        world.bodies[balls[4]].set_translation(Vector::new(2.0, 50.0, 0.0), true);
+        let (gravity, params) = (world.gravity, world.integration_parameters);
+        plugin.before_step(gravity, &params, StepSets::from(&mut world));
+        let order: Vec<_> = plugin.step.candidates.iter().map(|c| c.body).collect();
+        assert_eq!(order, [balls[4], balls[0], balls[1], balls[2], balls[3]]);
+    }
 }
