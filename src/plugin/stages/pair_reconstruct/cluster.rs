@@ -197,9 +197,9 @@ fn move_cluster<'s>(
         // the pair plan had them apart); any other moves the cluster again with it. The
         // pairs from `searched` on are those, searched from `te` as they are added.
         let searched = run.tables.pairs.len();
-        let mut at_event = AtEvent::new(&changed[..count]);
+        let mut at_event = AtEvent::new(&changed[..count], te);
         for &k in &changed[..count] {
-            let s = at_event.state(&run.tables.moving, k, te);
+            let s = at_event.state(&run.tables.moving, k);
             run.way_on(k, &s, te, way);
             while let Some(other) = run.meets_other_body(k, way) {
                 let j = match other {
@@ -212,10 +212,10 @@ fn move_cluster<'s>(
                         }
                     },
                 };
-                run.add_pair(k, j, te, &mut at_event)?;
+                run.add_pair(k, j, &mut at_event)?;
             }
         }
-        run.search_again(te, searched, &mut at_event)?;
+        run.search_again(searched, &mut at_event)?;
     }
     run.ends()
 }
@@ -247,24 +247,28 @@ impl<'c, 'a> Cluster<'c, 'a> {
     }
 }
 
-/// The bodies an event changed (one or two), and their states at its time, each advanced
-/// there once for its way on and all its pairs' searches (`Moving::at` is a function of the
-/// motion and the time: the same state however often it is asked).
+/// The bodies an event changed (one or two) and the event's time `t`, and their states at
+/// `t`, each advanced there once for its way on and all its pairs' searches (`Moving::at` is
+/// a function of the motion and the time: the same state however often it is asked). The
+/// time is the event's own, so that a kept state is never handed out for another time.
 struct AtEvent<'e> {
     changed: &'e [usize],
+    t: f64,
     states: [Option<State>; 2],
 }
 
 impl<'e> AtEvent<'e> {
-    fn new(changed: &'e [usize]) -> Self {
+    fn new(changed: &'e [usize], t: f64) -> Self {
         Self {
             changed,
+            t,
             states: [None, None],
         }
     }
 
-    /// Body `b`'s state at `t`, the event's time, as `moving` has it.
-    fn state(&mut self, moving: &[Moving], b: usize, t: f64) -> State {
+    /// Body `b`'s state at the event's time, as `moving` has it.
+    fn state(&mut self, moving: &[Moving], b: usize) -> State {
+        let t = self.t;
         match self.changed.iter().position(|k| *k == b) {
             Some(n) => *self.states[n].get_or_insert_with(|| moving[b].at(t)),
             None => moving[b].at(t),
@@ -599,13 +603,13 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(([i, j], 2))
     }
 
-    /// Searches again, from `te`, the ground of each body the event changed (`at_event`)
-    /// and each of its pairs but those from index `searched` on (added at `te` by
-    /// [`Run::add_pair`], which searched them from there with the same states: the same
+    /// Searches again, from the event's time `te`, the ground of each body the event changed
+    /// (`at_event`) and each of its pairs but those from index `searched` on (added at `te`
+    /// by [`Run::add_pair`], which searched them from there with the same states: the same
     /// search), the pair of two changed bodies once; a resting pair has no touch. `None`
     /// where a search gave up.
-    fn search_again(&mut self, te: f64, searched: usize, at_event: &mut AtEvent) -> Option<()> {
-        let changed = at_event.changed;
+    fn search_again(&mut self, searched: usize, at_event: &mut AtEvent) -> Option<()> {
+        let (changed, te) = (at_event.changed, at_event.t);
         let cluster = Cluster::of(&self.context, &self.balls);
         for &k in changed {
             self.tables
@@ -613,7 +617,7 @@ impl<'c, 'a> Run<'c, 'a> {
                 .ground(k, cluster.ground(k, &self.tables.moving[k], te).ok()?);
         }
         let moving = &self.tables.moving;
-        let mut at = |b: usize| at_event.state(moving, b, te);
+        let mut at = |b: usize| at_event.state(moving, b);
         for (n, &k) in changed.iter().enumerate() {
             for q in self.tables.pairs_of.of(k).filter(|q| *q < searched) {
                 let (a, b) = self.tables.pairs[q];
@@ -778,10 +782,11 @@ impl<'c, 'a> Run<'c, 'a> {
         Some(Some(met))
     }
 
-    /// Joins bodies `k` and `j` of the cluster in a pair searched from `t`, the time of the
-    /// event that changed `at_event`'s bodies (before, each moved as the pair plan had them
+    /// Joins bodies `k` and `j` of the cluster in a pair searched from the time of the event
+    /// that changed `at_event`'s bodies (before, each moved as the pair plan had them
     /// apart). `None` where the search gave up.
-    fn add_pair(&mut self, k: usize, j: usize, t: f64, at_event: &mut AtEvent) -> Option<()> {
+    fn add_pair(&mut self, k: usize, j: usize, at_event: &mut AtEvent) -> Option<()> {
+        let t = at_event.t;
         let p = self.tables.pairs.len();
         self.tables.pairs.push((k, j));
         self.tables.pairs_of.push(k, p);
@@ -790,7 +795,7 @@ impl<'c, 'a> Run<'c, 'a> {
         self.tables.agenda.add_pair();
         let cluster = Cluster::of(&self.context, &self.balls);
         let moving = &self.tables.moving;
-        let mut at = |b: usize| at_event.state(moving, b, t);
+        let mut at = |b: usize| at_event.state(moving, b);
         let found = cluster.touch_from(p, (k, j), moving, t, &mut at).ok()?;
         self.tables.agenda.touch(p, found);
         Some(())
