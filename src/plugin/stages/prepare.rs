@@ -20,7 +20,7 @@ use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
-use crate::plugin::queries::ground_index::GroundMotion;
+use crate::plugin::queries::ground_index::{GroundIndex, GroundMotion};
 use crate::plugin::queries::observe::{snapshot, surely_far};
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::Slotted;
@@ -28,7 +28,7 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, IntegrationParameters, RigidBodyHandle, RigidBodySet,
+    ColliderHandle, ColliderSet, IntegrationParameters, RigidBody, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -36,15 +36,47 @@ use nalgebra::Vector3;
 /// test finds surely far: in `Exact` mode, where the candidates' order is that of the writes
 /// their flights make, each goes where the survey would have pushed it.
 pub(super) struct UntestedFlights {
-    /// `Exact` mode.
-    exact: bool,
+    /// `Exact` mode, and the survey planned near-marked bodies untested (no slabs).
+    taken_back: bool,
     /// How many flying candidates the survey pushed: the first of `StepData::candidates`, in
     /// rapier's order of the bodies.
     flights: usize,
-    /// rapier's gravity and `dt`, in its precision, as the survey's test takes them.
-    rapier_gravity: (Vector, Real),
+    /// The survey's far test, to run for a body it did not test.
+    far_test: FarTest,
     /// The candidates taken back from the plan's, in the plan's order (rapier's too).
     surveyed_far: Vec<Candidate>,
+}
+
+/// The survey's test that a body is surely far from every ground ([`surely_far`]), with the
+/// step's terms in rapier's precision, as the bound on a body's travel is taken in it.
+#[derive(Clone, Copy)]
+struct FarTest {
+    /// The length of rapier's gravity.
+    g_len: Real,
+    dt: Real,
+    /// The policy's contact margin.
+    margin: Real,
+}
+
+impl FarTest {
+    /// `surely_far` of the body `rb` against the grounds `grounds` of the registry's index.
+    fn of(
+        &self,
+        rb: &RigidBody,
+        colliders: &ColliderSet,
+        index: &GroundIndex,
+        grounds: &[GroundMotion],
+    ) -> Option<bool> {
+        surely_far(
+            rb,
+            colliders,
+            self.g_len,
+            self.dt,
+            self.margin,
+            index,
+            grounds,
+        )
+    }
 }
 
 /// The managed bodies as the survey sorted them.
@@ -136,16 +168,19 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         last: &LastStep,
     ) -> Survey {
-        let margin = to_real(step.policy.contact_margin());
-        let g_len = gravity.length();
+        let far_test = FarTest {
+            g_len: gravity.length(),
+            dt,
+            margin: to_real(step.policy.contact_margin()),
+        };
         let plan_near_again = !self.registry.index.has_slabs();
         let mut survey = Survey {
             to_plan: Vec::new(),
             far: Vec::new(),
             untested: UntestedFlights {
-                exact: self.config.timing == TimingMode::Exact,
+                taken_back: plan_near_again && self.config.timing == TimingMode::Exact,
                 flights: 0,
-                rapier_gravity: (gravity, dt),
+                far_test,
                 surveyed_far: Vec::new(),
             },
             unmanaged: false,
@@ -172,7 +207,7 @@ impl<H> ImpactPlugin<H> {
                 survey.to_plan.push(handle);
                 continue;
             }
-            match surely_far(rb, colliders, g_len, dt, margin, index, &step.grounds) {
+            match far_test.of(rb, colliders, index, &step.grounds) {
                 Some(true) => {
                     survey.far.push(handle);
                     let takes_pairs = || self.registry.takes_pairs(handle, rb);
@@ -206,19 +241,17 @@ impl<H> ImpactPlugin<H> {
         handle: RigidBodyHandle,
         (bodies, colliders): (&RigidBodySet, &ColliderSet),
     ) {
-        if !untested.exact
+        if !untested.taken_back
             || step.pairs.members.contains(handle)
             || !self.memory.near.was_near(handle)
             || !step.candidates.last().is_some_and(|c| c.body == handle)
         {
             return;
         }
-        let (gravity, dt) = untested.rapier_gravity;
-        let margin = to_real(step.policy.contact_margin());
         let index = &self.registry.index;
-        let far = bodies.get(handle).is_some_and(|rb| {
-            surely_far(rb, colliders, gravity.length(), dt, margin, index, grounds) == Some(true)
-        });
+        let far = bodies
+            .get(handle)
+            .is_some_and(|rb| untested.far_test.of(rb, colliders, index, grounds) == Some(true));
         if far {
             untested.surveyed_far.extend(step.candidates.pop());
         }
@@ -262,7 +295,7 @@ impl<H> ImpactPlugin<H> {
 
 #[cfg(test)]
 mod tests {
-    use super::{ImpactPlugin, UntestedFlights};
+    use super::{FarTest, ImpactPlugin, UntestedFlights};
     use crate::motion::{Flight, State};
     use crate::plugin::state::step::{Candidate, StepData};
     use crate::rapier::math::Vector;
@@ -300,9 +333,13 @@ mod tests {
             ..Default::default()
         };
         let mut untested = UntestedFlights {
-            exact: true,
+            taken_back: true,
             flights: 3,
-            rapier_gravity: (Vector::ZERO, 0.0),
+            far_test: FarTest {
+                g_len: 0.0,
+                dt: 0.0,
+                margin: 0.0,
+            },
             surveyed_far: [0, 3, 6, 10].map(flying).into(),
         };
         ImpactPlugin::<()>::place_untested_flights(&mut step, &mut untested);
