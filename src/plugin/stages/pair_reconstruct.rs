@@ -62,7 +62,6 @@ use crate::plugin::state::step::PlannedPair;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodyHandle, RigidBodySet};
 use std::borrow::Cow;
-use std::cell::Cell;
 
 /// Where a cluster finds the bodies outside its pairs that a body it sends off may meet: the
 /// pair plan's members, by their swept boxes (`PairIndex`), and rapier's bodies, for the
@@ -457,15 +456,10 @@ fn group_of<'c>(
     }
 }
 
-/// The step's candidates by body, and whether each moved alone in the step, once asked.
+/// The step's candidates by body.
 struct CandidatesByBody<'s> {
     step: &'s EndOfStep<'s>,
     index: CandidateIndex,
-    /// Each candidate's [`moves_alone`] verdict, by its index in the step's list, once
-    /// asked: what it reads does not change before the body is written, and a body written
-    /// is in no cluster moved later (`group_of`), so a body met by several clusters, or in a
-    /// cluster taken in by one that was not moved, is checked once.
-    alone: Vec<Cell<Option<bool>>>,
 }
 
 /// Where each body's candidate is in the step's list (the last, should a body have two).
@@ -492,8 +486,7 @@ impl<'s> CandidatesByBody<'s> {
                 let by_body = cands.iter().enumerate().map(|(k, c)| (c.body, k)).collect();
                 CandidateIndex::ByBody(by_body)
             });
-        let alone = vec![Cell::new(None); cands.len()];
-        Self { step, index, alone }
+        Self { step, index }
     }
 
     /// The index by slot of `cands`, whose slots are below `slots`; `None` where two bodies
@@ -515,19 +508,14 @@ impl<'s> CandidatesByBody<'s> {
 
     /// The candidate of `body`, if it has one.
     fn get(&self, body: &RigidBodyHandle) -> Option<&'s Candidate> {
-        self.index_of(body).map(|k| &self.step.candidates[k])
-    }
-
-    /// The index of `body`'s candidate in the step's list, if it has one.
-    fn index_of(&self, body: &RigidBodyHandle) -> Option<usize> {
         let cands = &self.step.candidates;
         match &self.index {
             CandidateIndex::BySlot(by_slot) => {
-                let k = *by_slot.get(body.slot())? as usize;
+                let k = *by_slot.get(body.slot())?;
                 // A slot's candidate is another generation's body, or none (`u32::MAX`).
-                cands.get(k).filter(|c| c.body == *body).map(|_| k)
+                cands.get(k as usize).filter(|c| c.body == *body)
             }
-            CandidateIndex::ByBody(by_body) => by_body.get(body).copied(),
+            CandidateIndex::ByBody(by_body) => by_body.get(body).map(|k| &cands[*k]),
         }
     }
 
@@ -726,8 +714,7 @@ impl Sets {
 /// any contact rapier's solver kept (a speculative contact that stayed open pushes nothing),
 /// nor held in one, even open, with a collider the cluster does not look for (neither a
 /// ground nor an opted-in body: a wall), no joint, no user torque, no `Step` impulse, and
-/// rapier's CCD consistent with its motion? Each body is checked once a step, its verdict
-/// kept in `cands`; reads only otherwise.
+/// rapier's CCD consistent with its motion? Reads only.
 fn moves_alone(
     view: &AfterStep,
     (bodies, colliders): (&RigidBodySet, &ColliderSet),
@@ -746,25 +733,17 @@ fn moves_alone(
                 .is_some_and(|(b, rb)| registry.takes_pairs(b, rb))
     };
     members.iter().all(|h| {
-        let Some(k) = cands.index_of(h) else {
+        let (Some(now), Some(cand)) = (view.commit.body(bodies, *h), cands.get(h)) else {
             return false;
         };
-        if let Some(alone) = cands.alone[k].get() {
-            return alone;
-        }
-        let cand = &step.candidates[k];
-        let alone = view.commit.body(bodies, *h).is_some_and(|now| {
-            let rb = now.rb();
-            view.registry.manages(*h, rb)
-                && !now.is_sleeping()
-                && !held_or_by_unseen(rb, sets.narrow_phase, looked_for)
-                && !sets.jointed(*h)
-                && rb.user_torque() == Vector::ZERO
-                && !cand.touched
-                && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)
-        });
-        cands.alone[k].set(Some(alone));
-        alone
+        let rb = now.rb();
+        view.registry.manages(*h, rb)
+            && !now.is_sleeping()
+            && !held_or_by_unseen(rb, sets.narrow_phase, looked_for)
+            && !sets.jointed(*h)
+            && rb.user_torque() == Vector::ZERO
+            && !cand.touched
+            && ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step)
     })
 }
 
