@@ -7,7 +7,7 @@ use super::gather::{Ball, Members, geom_state};
 use super::index::PairIndex;
 use super::{PairInputs, pair_key};
 use crate::motion::State;
-use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
+use crate::plugin::bridge::convert::{to_real, vec_to_na};
 use crate::plugin::bridge::resolve::material;
 use crate::plugin::policy::rests_at;
 use crate::plugin::policy::{LOADED_COS, Role, model_may_pair};
@@ -148,11 +148,10 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             let (inputs, policy, dt) = (self.inputs, self.inputs.policy, self.inputs.dt);
             let m = &self.members.balls[k];
             let swept = self.members.swept[k];
-            let near =
-                inputs
-                    .registry
-                    .index
-                    .near(inputs.grounds, vec_from_na(&m.com), to_real(swept));
+            let near = inputs
+                .registry
+                .index
+                .near(inputs.grounds, m.rapier_com(), to_real(swept));
             let mut found = Grounded::default();
             if near.is_empty() {
                 return found;
@@ -169,7 +168,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                         continue;
                     };
                     // The normal speed, negative approaching.
-                    let un = (m.v - gg.velocity_at(&point, 0.0)).dot(&n);
+                    let un = (m.v() - gg.velocity_at(&point, 0.0)).dot(&n);
                     if dist <= policy.resting_gap && -un <= policy.held_speed {
                         found.lies = true;
                         return found;
@@ -183,7 +182,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
                     }
                 }
             }
-            found.bounced = fastest.map(|(n, un)| m.v - n * (2.0 * un.min(0.0)));
+            found.bounced = fastest.map(|(n, un)| m.v() - n * (2.0 * un.min(0.0)));
             found
         })
     }
@@ -208,12 +207,12 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             let Some(shape) = &m.shape else {
                 return false;
             };
-            let (geom, state) = (&shape.0, &shape.1);
+            let (geom, state) = (&shape.geom, &shape.state);
             let half = to_real(m.radius + policy.resting_gap);
             inputs
                 .registry
                 .index
-                .near(inputs.grounds, vec_from_na(&m.com), half)
+                .near(inputs.grounds, m.rapier_com(), half)
                 .iter()
                 .any(|g| {
                     ground_geom(&inputs.grounds[*g], inputs.colliders).is_some_and(|gg| {
@@ -258,10 +257,10 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             &balls[self.index.ball_of_body(a)],
             &balls[self.index.ball_of_body(b)],
         );
-        let d = bb.com - ba.com;
+        let d = bb.com() - ba.com();
         let len = d.norm();
         let closing = if len > 0.0 {
-            (ba.v - bb.v).dot(&(d / len))
+            (ba.v() - bb.v()).dot(&(d / len))
         } else {
             0.0
         };
@@ -274,7 +273,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
     /// reach.
     fn approach(&self, (i, j): (usize, usize), (a, b): (&Ball, &Ball)) -> Option<Approach> {
         let swept = &self.members.swept;
-        let d = b.com - a.com;
+        let d = b.com() - a.com();
         let (reach, reach_swept) = (a.radius + b.radius, swept[i] + swept[j]);
         if d.norm_squared() > reach_swept * reach_swept {
             return None;
@@ -286,7 +285,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             // Along the line of centres: a ball's spin does not move its surface along the
             // normal.
             let closing = if len > 0.0 {
-                (a.v - b.v).dot(&(d / len))
+                (a.v() - b.v()).dot(&(d / len))
             } else {
                 0.0
             };
@@ -375,7 +374,7 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
         forces: f64,
     ) -> f64 {
         let resting_speed = self.inputs.policy.resting_speed;
-        let (speed_a, speed_b) = (a.v.norm(), b.v.norm());
+        let (speed_a, speed_b) = (a.v().norm(), b.v().norm());
         let fastest = speed_a + speed_b;
         // Every test below is a comparison of numbers already at hand: evaluated whole
         // (`&`, `|`) rather than branch by branch, the pair's outcome is one branch.
@@ -386,18 +385,18 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             return closing;
         }
         let along = |va: Vector3<f64>, vb: Vector3<f64>| (va - vb).dot(normal);
-        let base = along(a.v, b.v);
+        let base = along(a.v(), b.v());
         // A NaN closing speed (a non-finite spin of a shape's member) is replaced by any
         // bounce's in the fold below (`f64::max`), so every bounce is then asked.
         let asks =
             |speed: f64| closing.is_nan() || self.bounce_may_lift(speed, base, normal, fastest);
         let bounced_a = if asks(speed_a) {
-            self.grounded(i).bounced.map(|va| along(va, b.v))
+            self.grounded(i).bounced.map(|va| along(va, b.v()))
         } else {
             None
         };
         let bounced_b = if asks(speed_b) {
-            self.grounded(j).bounced.map(|vb| along(a.v, vb))
+            self.grounded(j).bounced.map(|vb| along(a.v(), vb))
         } else {
             None
         };
@@ -536,8 +535,8 @@ impl<'p, 'a, H: PhysicsHooks> Judge<'p, 'a, H> {
             balls: approach.balls_only,
             reach: approach.reach,
             normal,
-            offset: b.com - a.com,
-            relative_v: b.v - a.v,
+            offset: b.com() - a.com(),
+            relative_v: b.v() - a.v(),
             role: if impact { Role::Impact } else { Role::Resting },
             hooked,
         })

@@ -4,7 +4,7 @@
 
 use super::PairInputs;
 use crate::motion::State;
-use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_to_na};
 use crate::plugin::config::coefficients_in_range;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::queries::geometry::BodyGeom;
@@ -18,12 +18,15 @@ use crate::rapier::prelude::{
 use nalgebra::Vector3;
 
 /// A body that takes part in impacts between bodies, as the plan sees it at the step start
-/// (named for the common case).
+/// (named for the common case). The list of them is written for every member each step: its
+/// centre of mass and velocity are kept as rapier holds them (read in `f64`, converted exactly,
+/// through [`Self::com`] and [`Self::v`]), and what only other shapes have is boxed, so that a
+/// member takes 72 bytes in single precision.
 pub(super) struct Ball<'a> {
     pub body: RigidBodyHandle,
     pub collider: ColliderHandle,
-    pub com: Vector3<f64>,
-    pub v: Vector3<f64>,
+    com: Vector,
+    v: Vector,
     /// Radius, skin included (m): a centred ball's, or for any other shape the radius of a
     /// sphere about the centre of mass that holds it (its rotation stays inside).
     pub radius: f64,
@@ -32,12 +35,43 @@ pub(super) struct Ball<'a> {
     pub dominance: i16,
     /// The acceleration of its user force (m/s^2).
     pub force_accel: f64,
-    /// How fast its turning can move a surface point: the angular speed times the radius for
-    /// a shape that is not a ball, 0 for a ball (m/s).
-    pub turn_speed: f64,
-    /// Not a centred ball: its collider and state, for the contact queries (boxed so that
-    /// the list, rebuilt every step, stays small for the common centred balls).
-    pub shape: Option<Box<(BodyGeom<'a>, State)>>,
+    /// Not a centred ball: its collider and state, for the contact queries.
+    pub shape: Option<Box<Shape<'a>>>,
+}
+
+/// A member that is not a centred ball, as the contact queries read it.
+pub(super) struct Shape<'a> {
+    pub geom: BodyGeom<'a>,
+    pub state: State,
+    /// How fast its turning can move a surface point: the angular speed times the radius
+    /// (m/s).
+    turn_speed: f64,
+}
+
+impl Ball<'_> {
+    /// Its centre of mass at the step's start (m).
+    #[inline]
+    pub fn com(&self) -> Vector3<f64> {
+        vec_to_na(self.com)
+    }
+
+    /// Its centre of mass at the step's start in rapier's numbers (m).
+    #[inline]
+    pub fn rapier_com(&self) -> Vector {
+        self.com
+    }
+
+    /// Its velocity at the step's start (m/s).
+    #[inline]
+    pub fn v(&self) -> Vector3<f64> {
+        vec_to_na(self.v)
+    }
+
+    /// How fast its turning can move a surface point (m/s): 0 for a centred ball.
+    #[inline]
+    fn turn_speed(&self) -> f64 {
+        self.shape.as_ref().map_or(0.0, |shape| shape.turn_speed)
+    }
 }
 
 /// The step's members and what every later part of the plan reads of them. Built once by
@@ -108,15 +142,15 @@ impl<'a> Members<'a> {
         let mut swept = Vec::with_capacity(balls.len());
         let mut leaves = Vec::with_capacity(balls.len());
         for b in &balls {
-            let speed = b.v.norm();
-            is_mover.push(2.0 * (speed + b.turn_speed) > policy.resting_speed);
+            let speed = b.v().norm();
+            is_mover.push(2.0 * (speed + b.turn_speed()) > policy.resting_speed);
             let reach = b.radius + speed * dt + (g_len + b.force_accel) * dt * dt + margin;
             swept.push(reach);
             let half = to_real(reach);
             leaves.push((
                 // A leaf is keyed by its body's arena slot (an arena index is a `u32`).
                 b.body.slot() as u32,
-                Aabb::from_half_extents(vec_from_na(&b.com), Vector::splat(half)),
+                Aabb::from_half_extents(b.com, Vector::splat(half)),
             ));
         }
         let movers = is_mover.iter().filter(|m| **m).count();
@@ -174,25 +208,26 @@ fn member<'a>(
         None if !co.shape().is_convex() => return None,
         None => {
             let geom = body_geom(rb, colliders, &local_com);
-            (geom.radius, Some(Box::new((geom, rapier_state(rb)))))
+            let radius = geom.radius;
+            let shape = Shape {
+                geom,
+                state: rapier_state(rb),
+                turn_speed: to_f64(rb.angvel().length()) * radius,
+            };
+            (radius, Some(Box::new(shape)))
         }
     };
-    let com = vec_to_na(rb.center_of_mass());
     let elastic = co.restitution() >= 1.0
         || co.restitution_combine_rule() == CoefficientCombineRule::ClampedSum;
     let ball = Ball {
         body: handle,
         collider: *collider,
-        com,
-        v: vec_to_na(rb.linvel()),
+        com: rb.center_of_mass(),
+        v: rb.linvel(),
         radius,
         asleep: rb.is_sleeping(),
         dominance: rb.effective_dominance_group(),
         force_accel: to_f64(rb.user_force().length()) / to_f64(rb.mass()),
-        turn_speed: match shape {
-            Some(_) => to_f64(rb.angvel().length()) * radius,
-            None => 0.0,
-        },
         shape,
     };
     Some((ball, elastic))
@@ -206,7 +241,7 @@ pub(super) fn geom_state<'g, 'a>(
     colliders: &'a ColliderSet,
 ) -> (GeomRef<'g, 'a>, State) {
     match &m.shape {
-        Some(shape) => (GeomRef::Borrowed(&shape.0), shape.1),
+        Some(shape) => (GeomRef::Borrowed(&shape.geom), shape.state),
         None => {
             let rb = &bodies[m.body];
             let local_com = vec_to_na(rb.local_center_of_mass());
