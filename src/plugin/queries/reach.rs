@@ -207,11 +207,9 @@ pub(crate) fn within_reach_of_other(
     neighbours: &mut NeighbourReads,
 ) -> bool {
     let Scene {
-        bodies,
         colliders,
         sets,
         registry,
-        writes,
         ..
     } = *scene;
     // The memo's motions are read with the plan's gravity and step, which every ball shares.
@@ -231,16 +229,18 @@ pub(crate) fn within_reach_of_other(
             .entry(*c)
             .map_or_else(|()| registry.grounds.contains_key(c), |e| e.is_some())
     };
-    for ch in rb.colliders() {
+    // The walks are `any` rather than loops: rapier's iterator over a collider's pairs then
+    // runs as one fold, not a call per pair.
+    rb.colliders().iter().any(|ch| {
         let (co, ball) = if *ch == ball_collider.handle {
             (ball_collider.collider, Some(ball_collider.ball))
         } else {
             let Some(co) = colliders.get(*ch) else {
-                continue;
+                return false;
             };
             (co, co.shape().as_ball())
         };
-        for pair in sets.narrow_phase.contact_pairs_with(*ch) {
+        sets.narrow_phase.contact_pairs_with(*ch).any(|pair| {
             let other = if pair.collider1 == *ch {
                 pair.collider2
             } else {
@@ -248,44 +248,53 @@ pub(crate) fn within_reach_of_other(
             };
             // A ground (a floor under every ball) is the plan's to meet, whatever its shape:
             // skipped before anything else of it is read.
-            if is_ground(&other) {
-                continue;
+            !is_ground(&other)
+                && neighbour_within_reach(other, (co, ball), (own, own_reach), scene, neighbours)
+        })
+    })
+}
+
+/// Can the collider `other` (not a ground) touch the own collider `co` (`ball`, if it is a
+/// ball) within the step, `own` and `own_reach` the own ball's motion and reach? A ball as
+/// `neighbours` holds it; any other shape read afresh (see [`within_reach_of_other`]).
+#[inline]
+fn neighbour_within_reach(
+    other: ColliderHandle,
+    (co, ball): (&Collider, Option<&Ball>),
+    (own, own_reach): (&OwnMotion, f64),
+    scene: &Scene,
+    neighbours: &mut NeighbourReads,
+) -> bool {
+    let Scene {
+        bodies,
+        colliders,
+        writes,
+        ..
+    } = *scene;
+    match neighbours.read(other, scene) {
+        None => false,
+        Some(Read::Ball(near)) => {
+            if !near.enabled {
+                return false;
             }
-            match neighbours.read(other, scene) {
-                None => {}
-                Some(Read::Ball(near)) => {
-                    if !near.enabled {
-                        continue;
-                    }
-                    let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
-                    let Some(a) = ball else {
-                        let Some(oc) = colliders.get(other) else {
-                            continue;
-                        };
-                        if reached_through_parry(co, oc, skins, own, &near.motion) {
-                            return true;
-                        }
-                        continue;
-                    };
-                    if balls_within_reach((co, a), near, skins, own, own_reach) {
-                        return true;
-                    }
-                }
-                Some(Read::Other(oc)) => {
-                    if !oc.is_enabled() {
-                        continue;
-                    }
-                    let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
-                    let body = oc.parent().and_then(|p| Some((p, bodies.get(p)?)));
-                    let motion = other_motion(oc, false, body, (own.gravity, own.dt), writes);
-                    if reached_through_parry(co, oc, skins, own, &motion) {
-                        return true;
-                    }
-                }
+            let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
+            match ball {
+                Some(a) => balls_within_reach((co, a), near, skins, own, own_reach),
+                None => colliders
+                    .get(other)
+                    .is_some_and(|oc| reached_through_parry(co, oc, skins, own, &near.motion)),
             }
         }
+        Some(Read::Other(oc)) => {
+            if !oc.is_enabled() {
+                return false;
+            }
+            let skins = to_f64(co.contact_skin()) + to_f64(oc.contact_skin());
+            let body = oc.parent().and_then(|p| Some((p, bodies.get(p)?)));
+            let motion = other_motion(oc, false, body, (own.gravity, own.dt), writes);
+            reached_through_parry(co, oc, skins, own, &motion)
+        }
     }
-    false
 }
 
 /// Two balls (most neighbours in a crowd), the own ball `a` of collider `co` and the
