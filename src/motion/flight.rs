@@ -37,7 +37,7 @@ pub(crate) struct State {
 }
 
 /// What acts on a body in free flight.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Flight {
     /// Constant linear acceleration (m/s^2).
     pub accel: Vector3<f64>,
@@ -46,8 +46,9 @@ pub(crate) struct Flight {
     /// Angular damping coefficient (1/s).
     pub angular_damping: f64,
     /// Torque-free rotation of an anisotropic body; `None`: constant-axis spin (isotropic
-    /// inertia, gyroscopic forces disabled, or locked rotation axes).
-    pub gyro: Option<Gyro>,
+    /// inertia, gyroscopic forces disabled, or locked rotation axes). Boxed: most bodies
+    /// (every ball) have none, and a flight is copied into each of the step's candidates.
+    pub gyro: Option<Box<Gyro>>,
 }
 
 /// The largest angle (rad) one substep turns about the asymmetry axis (the part of the motion
@@ -337,7 +338,7 @@ mod tests {
         // Small damping agrees with the series branch.
         let g = Flight {
             linear_damping: 1e-7,
-            ..f
+            ..f.clone()
         };
         let c = g.advance(&s, 0.4);
         let d = Flight {
@@ -357,7 +358,7 @@ mod tests {
             accel: Vector3::new(0.0, -9.81, 0.0),
             linear_damping: 0.0,
             angular_damping,
-            gyro: Gyro::new(inertia, UnitQuaternion::identity(), span),
+            gyro: Gyro::new(inertia, UnitQuaternion::identity(), span).map(Box::new),
         };
         let s = State {
             com: Vector3::zeros(),
@@ -376,7 +377,7 @@ mod tests {
 
     /// Euler's equations in the body frame by classical RK4 at a tiny step: the reference.
     fn reference(f: &Flight, s: &State, tau: f64) -> (UnitQuaternion<f64>, Vector3<f64>) {
-        let g = f.gyro.unwrap();
+        let g = f.gyro.as_deref().unwrap();
         let n = 200_000;
         let h = tau / n as f64;
         // Body-frame angular velocity and world orientation of the principal axes.
@@ -415,7 +416,7 @@ mod tests {
         // order in the substep for the brick.
         for (half, tol) in [(ROD, 1e-12), (BRICK, 1e-6)] {
             let (f, s) = cuboid(half, dt, 0.0);
-            let g = f.gyro.unwrap();
+            let g = f.gyro.as_deref().unwrap();
             let l0 = g.world_momentum(&s.rot, &s.w);
             for tau in [0.3 * dt, dt] {
                 let e = f.advance(&s, tau);
@@ -437,7 +438,11 @@ mod tests {
             }
             // Constant-axis spin, for comparison: the momentum it leaves with is off at first
             // order in |w| tau.
-            let constant = Flight { gyro: None, ..f }.advance(&s, dt);
+            let constant = Flight {
+                gyro: None,
+                ..f.clone()
+            }
+            .advance(&s, dt);
             let off = (g.world_momentum(&constant.rot, &constant.w) - l0).norm() / l0.norm();
             println!("{half:?} constant-axis spin: |dL|/|L| {off:.2e}");
             assert!(off > 0.01, "{off}");
@@ -448,7 +453,7 @@ mod tests {
     fn damped_torque_free_flight_scales_the_momentum() {
         let dt = 1.0 / 60.0;
         let (f, s) = cuboid(BRICK, dt, 2.0);
-        let g = f.gyro.unwrap();
+        let g = f.gyro.as_deref().unwrap();
         let l0 = g.world_momentum(&s.rot, &s.w);
         let e = f.advance(&s, dt);
         let l = g.world_momentum(&e.rot, &e.w);
@@ -462,7 +467,11 @@ mod tests {
         let axis = s.rot * Vector3::y();
         s.w = axis * 14.0;
         let e = f.advance(&s, dt);
-        let c = Flight { gyro: None, ..f }.advance(&s, dt);
+        let c = Flight {
+            gyro: None,
+            ..f.clone()
+        }
+        .advance(&s, dt);
         assert!((e.w - c.w).norm() < 1e-12 && (e.rot.inverse() * c.rot).angle() < 1e-12);
         assert!(Gyro::new(Vector3::repeat(0.5), UnitQuaternion::identity(), dt).is_none());
         assert!(Gyro::new(Vector3::new(0.5, 0.0, 1.0), UnitQuaternion::identity(), dt).is_none());

@@ -11,7 +11,7 @@ use super::{Flight, Rolling, State};
 use nalgebra::Vector3;
 
 /// How a ball moves between impacts.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) enum Motion {
     Flight(Flight),
     Rolling(Rolling),
@@ -58,7 +58,7 @@ impl Motion {
 }
 
 /// A ball between impacts: its state at `t0` and how it moves from there.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Moving {
     pub state: State,
     pub t0: f64,
@@ -272,7 +272,7 @@ mod tests {
         let a = ball(
             Vector3::new(0.0, 0.1, 0.0),
             Vector3::new(3.0, 0.0, 0.0),
-            slide,
+            slide.clone(),
         );
         let b = ball(Vector3::new(0.6, 0.1, 0.0), Vector3::zeros(), slide);
         let t = touch(&a, &b, 0.2, 0.0, 1.0).unwrap().unwrap();

@@ -115,7 +115,7 @@ pub(crate) fn snapshot(
         accel: gravity * to_f64(rb.gravity_scale()) + vec_to_na(rb.user_force()) / mass,
         linear_damping: to_f64(rb.linear_damping()).max(0.0),
         angular_damping: to_f64(rb.angular_damping()).max(0.0),
-        gyro: gyro_of(rb, dt),
+        gyro: gyro_of(rb, dt).map(Box::new),
     };
     (state, flight, local_com)
 }

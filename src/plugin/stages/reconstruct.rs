@@ -66,7 +66,7 @@ pub(crate) fn through_impacts(
 ) -> State {
     let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
     let mut next = first;
-    let mut flight = cand.flight;
+    let mut flight = cand.flight.clone();
     let mut seg = cand.start;
     let mut seg_t0 = 0.0;
     // Where the flight stops short of the step's end, if it does.

@@ -457,7 +457,7 @@ impl<'c, 'a> Run<'c, 'a> {
         } = &mut tables;
         flights.clear();
         flights.reserve(bodies_room);
-        flights.extend(balls.iter().map(|b| b.cand.flight));
+        flights.extend(balls.iter().map(|b| b.cand.flight.clone()));
         pairs_of.reset(balls.len());
         for (p, (i, j)) in pairs.iter().enumerate() {
             pairs_of.push(*i, p);
@@ -536,8 +536,8 @@ impl<'c, 'a> Run<'c, 'a> {
         for q in self.tables.pairs_of.of(k) {
             self.tables.resting[q] = false;
         }
-        let before = self.tables.moving[k];
-        if let Motion::Rolling(_) = before.motion {
+        if let Motion::Rolling(_) = self.tables.moving[k].motion {
+            let before = self.tables.moving[k].clone();
             let cluster = Cluster::of(&self.context, &self.balls);
             self.tables.moving[k] = cluster.on_after_touch(view, k, &before, after, t)?;
             return Some(());
@@ -557,7 +557,7 @@ impl<'c, 'a> Run<'c, 'a> {
         self.tables.moving[k] = Moving {
             state: after,
             t0: t,
-            motion: Motion::Flight(self.tables.flights[k]),
+            motion: Motion::Flight(self.tables.flights[k].clone()),
         };
         Some(())
     }
@@ -757,7 +757,7 @@ impl<'c, 'a> Run<'c, 'a> {
         // The pair of `k` and the body met is searched from `te`, not from the start.
         self.starts.touches.push(None);
         for j in base..self.balls.len() {
-            self.tables.flights.push(self.balls[j].cand.flight);
+            self.tables.flights.push(self.balls[j].cand.flight.clone());
             self.tables.pairs_of.add_body();
             self.tables
                 .by_slot
@@ -814,7 +814,7 @@ fn ends_of(step: &EndOfStep, balls: &[ClusterBall], moving: &[Moving]) -> Option
     let dt = step.dt;
     let ends: Vec<State> = moving.iter().map(|m| m.at(dt)).collect();
     for (k, ball) in balls.iter().enumerate() {
-        if let (Motion::Rolling(rolling), Some(g)) = (moving[k].motion, ball.rolling_on) {
+        if let (Motion::Rolling(rolling), Some(g)) = (&moving[k].motion, ball.rolling_on) {
             let hit = closest(
                 &ball.geom,
                 &ball.grounds[g..=g],
@@ -837,7 +837,7 @@ impl Cluster<'_, '_> {
     /// never its own plane.
     fn ground(&self, k: usize, m: &Moving, t: f64) -> Result<Option<(f64, Next)>, ()> {
         let ball = &self.balls[k];
-        let flight = match m.motion {
+        let flight = match &m.motion {
             Motion::Flight(flight) => flight,
             Motion::Rolling(_) => return Ok(self.rolled_into(k, m, t)),
         };
@@ -847,7 +847,7 @@ impl Cluster<'_, '_> {
         match first_impact(
             &ball.geom,
             &ball.grounds,
-            &flight,
+            flight,
             &m.state,
             m.t0,
             t,
@@ -1043,11 +1043,11 @@ impl Cluster<'_, '_> {
         t: f64,
     ) -> Option<Moving> {
         let ball = &self.balls[k];
-        let (Motion::Rolling(rolling), Some(g)) = (before.motion, ball.rolling_on) else {
+        let (Motion::Rolling(rolling), Some(g)) = (&before.motion, ball.rolling_on) else {
             return Some(Moving {
                 state: after,
                 t0: t,
-                motion: before.motion,
+                motion: before.motion.clone(),
             });
         };
         let n = rolling.normal;
@@ -1058,7 +1058,7 @@ impl Cluster<'_, '_> {
             return Some(Moving {
                 state: after,
                 t0: t,
-                motion: Motion::Flight(ball.cand.flight),
+                motion: Motion::Flight(ball.cand.flight.clone()),
             });
         }
         // Rolling on, where the closed form reaches (on a slope: along the fall line).
@@ -1092,7 +1092,7 @@ impl Cluster<'_, '_> {
         Some(Moving {
             state: after,
             t0: t,
-            motion: Motion::Rolling(rolling),
+            motion: Motion::Rolling(*rolling),
         })
     }
 }
@@ -1105,7 +1105,7 @@ fn start_moving(ball: &ClusterBall) -> Moving {
         t0: 0.0,
         motion: match &ball.cand.rolling {
             Some((_, rolling)) => Motion::Rolling(*rolling),
-            None => Motion::Flight(ball.cand.flight),
+            None => Motion::Flight(ball.cand.flight.clone()),
         },
     }
 }

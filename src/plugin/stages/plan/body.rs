@@ -222,7 +222,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let takes_pairs = || self.registry.takes_pairs(handle, rb);
         if Candidate::wanted_in_flight(self.config.timing, member, takes_pairs) {
             step.candidates
-                .push(Candidate::flying(handle, snap.0, snap.1, snap.2));
+                .push(Candidate::flying(handle, snap.0, snap.1.clone(), snap.2));
         }
     }
 
@@ -273,7 +273,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step.candidates.push(Candidate {
             body: body.handle,
             start: plan.state,
-            flight: *body.flight,
+            flight: body.flight.clone(),
             local_com: body.local_com,
             near: std::mem::take(&mut body.near),
             impact_grounds: std::mem::take(&mut plan.impact_grounds),
