@@ -118,13 +118,14 @@ impl AfterStep<'_> {
         // Something else acted on it in the step: a contact, a joint, or rapier's CCD
         // stopping it short (against a thin body).
         let sets = &step.sets;
-        let ccd_left_it = match &cand.steered_roll {
+        let steered_roll = step.steered_roll(cand);
+        let ccd_left_it = match steered_roll {
             Some(steered) => ccd_consistent_steered(&now, cand, steered, step),
             None => ccd_consistent(&now, &FlownEnd::new(cand, step.dt), step.dt, step),
         };
         let disturbed =
             sets.jointed(cand.body) || pushed_by_other(now.rb(), sets.narrow_phase) || !ccd_left_it;
-        if let Some(steered) = &cand.steered_roll {
+        if let Some(steered) = steered_roll {
             if !disturbed {
                 // rapier's integrator carried it to the roll's end (`steer.rs`).
                 let body = (cand.body, &now);

@@ -188,6 +188,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.stopwatch.count(|c| c.events = events);
         self.registry.index.motions = std::mem::take(&mut step.data.grounds);
         self.memory.spare.candidates = std::mem::take(&mut step.data.candidates);
+        self.memory.spare.steered_rolls = std::mem::take(&mut step.data.steered_rolls);
     }
 }
 

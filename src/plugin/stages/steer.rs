@@ -51,6 +51,9 @@ use crate::rapier::math::Vector;
 use crate::rapier::prelude::{LockedAxes, RigidBody, RigidBodySet};
 use nalgebra::Vector3;
 
+/// A linear and an angular velocity (m/s, rad/s).
+type Velocities = (Vector3<f64>, Vector3<f64>);
+
 impl<H> ImpactPlugin<H> {
     /// The steer stage (see the module's contract): records the steering velocities of this
     /// step's free flights and closed-form rolls.
@@ -89,7 +92,8 @@ impl<H> ImpactPlugin<H> {
                     && rb.user_torque() == Vector::ZERO
                     && rb.additional_solver_iterations() == 0;
                 if integrated {
-                    steer_roll(&mut commit, cand, rb, &now, (dt, substeps));
+                    let steered = &mut step.steered_rolls;
+                    steer_roll(&mut commit, (cand, steered), rb, &now, (dt, substeps));
                 }
                 continue;
             }
@@ -109,33 +113,40 @@ impl<H> ImpactPlugin<H> {
 }
 
 /// Records the steering velocities of the rolling candidate `cand` (`rb`, held as `now`) and
-/// keeps the steering in the candidate, where [`steered_roll`] steers it and rapier leaves the
-/// spin as it is. The steering is built in place: it is moved once, into the candidate.
+/// keeps the steering in `steered` (`StepData::steered_rolls`), its index in the candidate,
+/// where [`steered_roll`] steers it and rapier leaves the spin as it is.
 fn steer_roll(
     commit: &mut Commit,
-    cand: &mut Candidate,
+    (cand, steered): (&mut Candidate, &mut Vec<SteeredRoll>),
     rb: &RigidBody,
     now: &Now,
     (dt, substeps): (f64, f64),
 ) {
-    let Some(steered) = steered_roll(cand, now, (dt, substeps)) else {
+    let Some((steering, (linvel, angvel))) = steered_roll(cand, now, (dt, substeps)) else {
         return;
     };
-    if !(rb.is_fast_rotation_allowed() || within_spin_cap(&steered, dt)) {
+    let Ok(index) = u32::try_from(steered.len()) else {
+        return;
+    };
+    if !(rb.is_fast_rotation_allowed() || within_spin_cap(&angvel, dt)) {
         return;
     }
-    let (linvel, angvel) = steered.velocities;
     let (linvel, angvel) = (vec_from_na(&linvel), vec_from_na(&angvel));
     if commit.velocities(cand.body, linvel, angvel) {
-        cand.steered_roll = Some(steered);
+        steered.push(steering);
+        cand.steered_roll = Some(index);
     }
 }
 
 /// The steering of a closed-form roll (see the module's contract) for the ball as rapier holds
-/// it (`now`), in a step of `dt` seconds and `substeps` substeps; `None` without a roll or
-/// where the turn is a quarter turn a substep or more (one linear quaternion step cannot
-/// reach it). Pure.
-fn steered_roll(cand: &Candidate, now: &Now, (dt, substeps): (f64, f64)) -> Option<SteeredRoll> {
+/// it (`now`), in a step of `dt` seconds and `substeps` substeps, and the velocities rapier's
+/// step starts it with (m/s, rad/s); `None` without a roll or where the turn is a quarter
+/// turn a substep or more (one linear quaternion step cannot reach it). Pure.
+fn steered_roll(
+    cand: &Candidate,
+    now: &Now,
+    (dt, substeps): (f64, f64),
+) -> Option<(SteeredRoll, Velocities)> {
     let (_, motion) = cand.rolling.as_ref()?;
     let end: State = motion.advance(&cand.start, dt);
     let from = vec_to_na(now.center_of_mass());
@@ -156,20 +167,16 @@ fn steered_roll(cand: &Candidate, now: &Now, (dt, substeps): (f64, f64)) -> Opti
         vec_to_na(now.linvel()) - linvel,
         vec_to_na(now.angvel()) - angvel,
     );
-    Some(SteeredRoll {
-        end,
-        from,
-        velocities: (linvel, angvel),
-        offsets,
-    })
+    let steered = SteeredRoll { end, from, offsets };
+    Some((steered, (linvel, angvel)))
 }
 
-/// Does rapier leave the steered spin as it is? rapier caps a body's spin at a quarter turn
-/// a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the body allows
-/// fast rotation; a faster roll is written as before.
-fn within_spin_cap(steered: &SteeredRoll, dt: f64) -> bool {
+/// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at a
+/// quarter turn a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the
+/// body allows fast rotation; a faster roll is written as before.
+fn within_spin_cap(angvel: &Vector3<f64>, dt: f64) -> bool {
     let cap = to_real(std::f64::consts::FRAC_PI_4) * (1.0 / to_real(dt));
-    vec_from_na(&steered.velocities.1).length() <= cap
+    vec_from_na(angvel).length() <= cap
 }
 
 /// A candidate that no ground can reach in the step.

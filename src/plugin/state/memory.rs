@@ -7,7 +7,7 @@ use crate::plugin::state::handles::{
     ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, restored_in_vector,
     sorted_entries, sorted_members, take_in_far,
 };
-use crate::plugin::state::step::{Candidate, GroundPair, StepData};
+use crate::plugin::state::step::{Candidate, GroundPair, SteeredRoll, StepData};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
@@ -309,6 +309,7 @@ pub(crate) struct Spare {
     pub roles: HandleMap<PairKey, Role>,
     pub ground_pairs: Vec<GroundPair>,
     pub candidates: Vec<Candidate>,
+    pub steered_rolls: Vec<SteeredRoll>,
 }
 
 impl Memory {
@@ -326,6 +327,8 @@ impl Memory {
         step.ground_pairs.clear();
         step.candidates = std::mem::take(&mut self.spare.candidates);
         step.candidates.clear();
+        step.steered_rolls = std::mem::take(&mut self.spare.steered_rolls);
+        step.steered_rolls.clear();
         let pair_roles = std::mem::take(&mut self.pair_roles);
         let mesh_sides = std::mem::take(&mut self.mesh_sides);
         LastStep {

@@ -85,21 +85,22 @@ pub(crate) struct Candidate {
     /// `Exact` mode's steering of a free flight (`stages/steer.rs`): how much lower than its
     /// own velocity rapier's step started it (m/s), `a dt / 2N`; `None` for a body not steered.
     pub steer: Option<Vector3<f64>>,
-    /// The steering of a closed-form roll (`stages/steer.rs`, every mode); `None` for a ball
+    /// The steering of a closed-form roll (`stages/steer.rs`, every mode): its index in
+    /// `StepData::steered_rolls` (read through `StepData::steered_roll`); `None` for a ball
     /// not steered.
-    pub steered_roll: Option<SteeredRoll>,
+    pub steered_roll: Option<u32>,
 }
 
 /// A closed-form roll that rapier's integrator carries (`stages/steer.rs`): rapier's step
-/// starts the ball with the velocities under which it lands on the roll's end.
+/// starts the ball with the velocities under which it lands on the roll's end. What the
+/// stages after rapier's step read of it; the steering velocities themselves are the steer
+/// stage's.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct SteeredRoll {
     /// The closed form's end of the step (from `Candidate::start`).
     pub end: State,
     /// The centre of mass rapier's step starts from (m).
     pub from: Vector3<f64>,
-    /// The velocities rapier's step starts it with (m/s, rad/s).
-    pub velocities: (Vector3<f64>, Vector3<f64>),
     /// The velocities rapier held less the ones the steering started it with (m/s, rad/s):
     /// given back to a ball something else acted on, whose end state is rapier's.
     pub offsets: (Vector3<f64>, Vector3<f64>),
@@ -203,8 +204,19 @@ pub(crate) struct StepData {
     /// (`Planner::grounds`) while it runs, and empty here meanwhile.
     pub grounds: Vec<GroundMotion>,
     pub candidates: Vec<Candidate>,
+    /// The steerings of the closed-form rolls (`Candidate::steered_roll`), apart from the
+    /// candidates: only the rolls rapier's integrator carries have one, and only the steer
+    /// stage and the bodies stage read them.
+    pub steered_rolls: Vec<SteeredRoll>,
     /// Managed bodies asleep at the start of the step (see `EndCheck::Woken`).
     pub asleep: Vec<RigidBodyHandle>,
+}
+
+impl StepData {
+    /// The steering of the candidate's closed-form roll, if rapier's integrator carries it.
+    pub fn steered_roll(&self, cand: &Candidate) -> Option<&SteeredRoll> {
+        cand.steered_roll.map(|k| &self.steered_rolls[k as usize])
+    }
 }
 
 /// A pair of bodies with a role this step.
