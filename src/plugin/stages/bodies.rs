@@ -236,7 +236,7 @@ impl AfterStep<'_> {
                 && (clear || ccd_consistent(&now, &flown, step.dt, step))
             {
                 self.fly_exactly(&now, &flown);
-            } else if let Some(steer) = cand.steer {
+            } else if let Some(steer) = cand.flight_steering(step.steering_lag) {
                 // rapier's end state stands: its velocity gets the steering's offset back.
                 let v = vec_to_na(now.linvel()) + steer;
                 self.commit.velocity(cand.body, vec_from_na(&v));
@@ -374,7 +374,7 @@ impl AfterStep<'_> {
             },
         };
         let body = (cand.body, now);
-        let spin_steered = (exact_spin, cand.steer.is_some());
+        let spin_steered = (exact_spin, cand.steered);
         self.commit.flight(body, &s, &cand.local_com, spin_steered);
     }
 
@@ -602,7 +602,7 @@ impl AfterStep<'_> {
 /// its flight does was pushed (a ball resting in a pile), and its contacts are not walked.
 fn flew_alone(body: &Now, flown: &FlownEnd, has_grounds: bool, step: &EndOfStep) -> bool {
     let (sets, rb, cand) = (&step.sets, body.rb(), flown.candidate());
-    (has_grounds || reconstruct::moved_as_flown(body, flown))
+    (has_grounds || reconstruct::moved_as_flown(body, flown, step))
         && !sets.jointed(cand.body)
         && rb.user_torque() == Vector::ZERO
         && !cand.touched

@@ -124,6 +124,7 @@ impl<H> ImpactPlugin<H> {
                 }
                 TimingMode::Step | TimingMode::Exact => 0.0,
             },
+            steering_lag: dt / (2.0 * params.num_solver_iterations.max(1) as f64),
             substeps: params.num_solver_iterations.max(1),
             down: g.try_normalize(0.0).unwrap_or_else(Vector3::zeros),
             gravity: g,

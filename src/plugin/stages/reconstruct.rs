@@ -269,13 +269,13 @@ impl<'c> FlownEnd<'c> {
 /// Did rapier's step change the body's linear velocity only as its flight does (gravity and
 /// any force, damping), to rapier's rounding? An impulse from a contact shows as more: a
 /// resting contact takes back all of `|g| dt`.
-pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd) -> bool {
+pub(crate) fn moved_as_flown(body: &Now, flown: &FlownEnd, step: &StepData) -> bool {
     let (cand, dt) = (flown.cand, flown.dt);
     let flown = flown.centre().1;
     let actual = vec_to_na(body.linvel());
     // A steered flight (`steer.rs`) changes rapier's velocity as the flight changes its own,
     // from the velocity rapier held.
-    let (from, expected) = match cand.steered_velocity().map(vec_to_na) {
+    let (from, expected) = match cand.steered_velocity(step.steering_lag).map(vec_to_na) {
         None => (cand.start.v, flown),
         Some(held) => (held, held + (flown - cand.start.v)),
     };

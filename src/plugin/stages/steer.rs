@@ -8,7 +8,7 @@
 //! position, in each), and turns it in each substep by the normalised quaternion step
 //! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
 //! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands
-//!   on the exact position. This stage records that velocity (`Candidate::steer`) for every
+//!   on the exact position. This stage records that velocity (`Candidate::steered`) for every
 //!   flying candidate that rapier integrates so: a dynamic body with no ground within
 //!   reach, no linear damping, no locked axis and no joint, not a ball of an impact between
 //!   bodies, whose last step's end was the plugin's (its `f64` shadow still held: a body
@@ -74,7 +74,6 @@ impl<H> ImpactPlugin<H> {
             exact,
         );
         let (dt, substeps) = (step.dt, step.substeps as f64);
-        let lag = dt / (2.0 * substeps);
         for cand in step.candidates.iter_mut() {
             let rolls = cand.rolls_on_one_face;
             if !(rolls || exact && flying(cand)) || step.pairs.members.contains(cand.body) {
@@ -104,8 +103,9 @@ impl<H> ImpactPlugin<H> {
             {
                 continue;
             }
-            cand.steer = Some(cand.flight.accel * lag);
-            if let Some(held) = cand.steered_velocity().filter(|v| *v != now.linvel()) {
+            cand.steered = true;
+            let held = cand.steered_velocity(step.steering_lag);
+            if let Some(held) = held.filter(|v| *v != now.linvel()) {
                 commit.velocity(cand.body, held);
             }
         }

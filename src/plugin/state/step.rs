@@ -82,9 +82,9 @@ pub(crate) struct Candidate {
     /// ground's index (in `StepData::grounds`). rapier's end state is checked against it
     /// (`EndCheck::ReleasedResting`).
     pub released: Option<usize>,
-    /// `Exact` mode's steering of a free flight (`stages/steer.rs`): how much lower than its
-    /// own velocity rapier's step started it (m/s), `a dt / 2N`; `None` for a body not steered.
-    pub steer: Option<Vector3<f64>>,
+    /// `Exact` mode's steering of a free flight (`stages/steer.rs`): rapier's step started it
+    /// lower than its own velocity, by `Candidate::flight_steering`.
+    pub steered: bool,
     /// The steering of a closed-form roll (`stages/steer.rs`, every mode): its index in
     /// `StepData::steered_rolls` (read through `StepData::steered_roll`); `None` for a ball
     /// not steered.
@@ -107,11 +107,19 @@ pub(crate) struct SteeredRoll {
 }
 
 impl Candidate {
-    /// The linear velocity rapier's step starts a steered flight from: `start.v - steer` in
-    /// rapier's precision (the steer stage writes it, and the bodies stage checks rapier's
-    /// change of velocity from it).
-    pub fn steered_velocity(&self) -> Option<Vector> {
-        self.steer
+    /// How much lower than its own velocity rapier's step started a steered flight (m/s): its
+    /// acceleration times the step's `StepData::steering_lag` (`stages/steer.rs`); `None` for
+    /// a candidate not steered so.
+    pub fn flight_steering(&self, steering_lag: f64) -> Option<Vector3<f64>> {
+        self.steered.then(|| self.flight.accel * steering_lag)
+    }
+
+    /// The linear velocity rapier's step starts a steered flight from: its start's less the
+    /// steering (`flight_steering`), in rapier's precision (the steer stage writes it, and the
+    /// bodies stage checks rapier's change of velocity from it); `None` for a candidate not
+    /// steered so.
+    pub fn steered_velocity(&self, steering_lag: f64) -> Option<Vector> {
+        self.flight_steering(steering_lag)
             .map(|offset| vec_from_na(&(self.start.v - offset)))
     }
 
@@ -154,7 +162,7 @@ impl Candidate {
             rolling: None,
             rolls_on_one_face: false,
             released: None,
-            steer: None,
+            steered: false,
             steered_roll: None,
         }
     }
@@ -176,6 +184,11 @@ pub(crate) struct StepData {
     /// where the flight moves it `a dt^2 / 2`, so `dt^2 / 2N`; 0 in the other modes (`Exact`
     /// flies exactly; `Step` does not search).
     pub integrator_lag: f64,
+    /// How much lower than its own velocity rapier's step starts a flight that `Exact` mode
+    /// steers, per unit of acceleration (s): rapier's substepped integrator moves a body by
+    /// `(N + 1) / 2N a dt^2` in `N` substeps, so started from `v0 - a dt / 2N` it lands on the
+    /// exact flight's `v0 dt + a dt^2 / 2`: `dt / 2N` (`stages/steer.rs`).
+    pub steering_lag: f64,
     /// rapier's solver substeps in the step (`IntegrationParameters::num_solver_iterations`,
     /// at least 1).
     pub substeps: usize,

@@ -284,7 +284,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             rolling: plan.rolling.take(),
             rolls_on_one_face: plan.rolls_on_one_face,
             released: plan.released,
-            steer: None,
+            steered: false,
             steered_roll: None,
         });
     }
