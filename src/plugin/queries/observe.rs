@@ -314,7 +314,7 @@ pub(crate) fn stacked_besides(
         }
         // rapier pushes the first collider's body along -normal, the second's along +normal.
         let sign = if pair.collider1 == other { 1.0 } else { -1.0 };
-        pair.solver_manifolds()
+        solver_manifolds(pair)
             .iter()
             .filter(|m| solved(m) && m.points.iter().any(|p| p.data.impulse != 0.0))
             .any(|m| (vec_to_na(m.data.normal) * sign).dot(down).abs() > LOADED_COS)
@@ -373,9 +373,16 @@ fn other_collider(pair: &ContactPair, own: ColliderHandle) -> ColliderHandle {
     }
 }
 
+/// The pair's manifolds as rapier's solver saw them: rapier's `ContactPair::solver_manifolds`,
+/// taken through the two accessors it is made of, which are inlined here where it is a call
+/// (the walks ask it of every pair they meet); a pair of two soft surfaces has none.
+fn solver_manifolds(pair: &ContactPair) -> &[ContactManifold] {
+    pair.rigid().map_or(&[], |rigid| rigid.solver_manifolds())
+}
+
 /// Has the pair solver contacts with rigid impulses (rapier's solver holds it)?
 fn in_solver(pair: &ContactPair) -> bool {
-    pair.solver_manifolds().iter().any(solved)
+    solver_manifolds(pair).iter().any(solved)
 }
 
 /// Has the manifold solver contacts with rigid impulses?
@@ -444,7 +451,7 @@ enum SolverPart {
 /// The pair's [`SolverPart`].
 fn solver_part(pair: &ContactPair) -> SolverPart {
     let mut part = SolverPart::Out;
-    for m in pair.solver_manifolds().iter().filter(|m| solved(m)) {
+    for m in solver_manifolds(pair).iter().filter(|m| solved(m)) {
         if m.points.iter().any(|p| p.data.impulse != 0.0) {
             return SolverPart::Pushed;
         }
@@ -503,7 +510,7 @@ fn non_ground_contacts(
             if is_ground(&other) {
                 continue;
             }
-            for m in pair.solver_manifolds().iter().filter(|m| solved(m)) {
+            for m in solver_manifolds(pair).iter().filter(|m| solved(m)) {
                 found.touching = true;
                 // rapier pushes the first collider's body along -normal, the second's along
                 // +normal.
