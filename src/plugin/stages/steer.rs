@@ -8,8 +8,9 @@
 //! position, in each), and turns it in each substep by the normalised quaternion step
 //! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
 //! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands
-//!   on the exact position. This stage records that velocity (`Candidate::steered`) for every
-//!   flying candidate that rapier integrates so: a dynamic body with no ground within
+//!   on the exact position. This stage writes that velocity, and marks the candidate steered
+//!   (`Candidate::steered`; its offset `a dt / 2N` is `Candidate::flight_steering`, read
+//!   again where needed), for every flying candidate that rapier integrates so: a dynamic body with no ground within
 //!   reach, no linear damping, no locked axis and no joint, not a ball of an impact between
 //!   bodies, whose last step's end was the plugin's (its `f64` shadow still held: a body
 //!   whose end rapier's contacts decided, a ball resting on others, is left alone). After
@@ -31,7 +32,8 @@
 //!   `policy::carries_turn`), and keeps the end's `f64` state as the ball's shadow in every
 //!   mode, from which its next step continues (`Commit::rolled`); a ball something else
 //!   acted on keeps rapier's end state, the steering's offsets given back on its velocities
-//!   (`Candidate::steered_roll`): its velocities are then an unsteered ball's, which flew
+//!   (the steering is kept in `StepData::steered_rolls`, which only this stage appends to,
+//!   the candidate holding its index, `Candidate::steered_roll`): its velocities are then an unsteered ball's, which flew
 //!   without its ground, and the bodies stage's check (`EndCheck::DisturbedRolling`) gives
 //!   it the ground's support and friction over the step as for one, though it ends on its
 //!   plane rather than below it.
@@ -173,7 +175,8 @@ fn steered_roll(
 
 /// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at a
 /// quarter turn a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the
-/// body allows fast rotation; a faster roll is written as before.
+/// body allows fast rotation; a faster roll is not steered, and the bodies stage writes its
+/// end.
 fn within_spin_cap(angvel: &Vector3<f64>, dt: f64) -> bool {
     let cap = to_real(std::f64::consts::FRAC_PI_4) * (1.0 / to_real(dt));
     vec_from_na(angvel).length() <= cap
