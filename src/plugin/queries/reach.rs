@@ -828,23 +828,26 @@ mod tests {
         }
     }
 
+    /// One ball moving along x at `vx` and spinning about its centre: the same handles in
+    /// every set built so.
+    fn world(vx: f64) -> (RigidBodySet, ColliderSet, RigidBodyHandle, ColliderHandle) {
+        let mut bodies = RigidBodySet::new();
+        let mut colliders = ColliderSet::new();
+        let body = bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.1, 0.0, 0.0))
+                .linvel(Vector::new(to_real(vx), 0.0, 0.0))
+                .angvel(Vector::new(0.0, 0.0, 3.0)),
+        );
+        let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
+        (bodies, colliders, body, ball)
+    }
+
     /// A neighbouring ball is read once a plan, read again once its body is written (what a
     /// ball planned after a `Step` impulse of its neighbour sees is the neighbour after it),
     /// read afresh in the next plan, and never taken for another collider in its slot.
     #[test]
     fn a_neighbour_is_read_once_a_plan_and_again_after_a_write_to_its_body() {
-        // One ball moving along x at `vx`: the same handles in every set built so.
-        let world = |vx: f64| {
-            let mut bodies = RigidBodySet::new();
-            let mut colliders = ColliderSet::new();
-            let body = bodies.insert(
-                RigidBodyBuilder::dynamic()
-                    .translation(Vector::new(0.1, 0.0, 0.0))
-                    .linvel(Vector::new(to_real(vx), 0.0, 0.0)),
-            );
-            let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
-            (bodies, colliders, body, ball)
-        };
         let (bodies, colliders, body, ball) = world(0.0);
         let (narrow_phase, joints, multibody) = (
             NarrowPhase::new(),
@@ -855,8 +858,9 @@ mod tests {
         let registry = Registry::default();
         let mut neighbours = NeighbourReads::default();
         let (gravity, dt) = (own().gravity, own().dt);
-        // The ball `handle` as the plan reads it: its reach and radius. Where the read made its
-        // entry, the motion read again from the entry is the one its reach was drawn from.
+        // The ball `handle` as the plan reads it: its reach, its radius and its motion as the
+        // pair reads it. Where the read made its entry, the motion read again from the entry
+        // is the one its reach was drawn from.
         let read = |neighbours: &mut NeighbourReads,
                     handle: ColliderHandle,
                     bodies: &RigidBodySet,
@@ -876,21 +880,20 @@ mod tests {
                         assert_eq!(n.near.motion(&scene, (gravity, dt)), Some(*motion));
                         assert_eq!(n.near.reach, motion.reach(dt));
                     }
-                    (n.near.reach, n.near.radius)
+                    (n.near.reach, n.near.radius, n.motion(&scene))
                 }
                 _ => panic!("the ball is not read as one"),
             }
         };
-        // The reach of a ball moving along x at `vx`, falling, not turning.
-        let v = |vx: f64| {
-            OtherMotion::Body {
-                linvel: vx * Vector3::x(),
-                turn: 0.0,
-                accel: Some(gravity),
-                kinematic_shift: None,
-            }
-            .reach(dt)
+        // The motion of a ball moving along x at `vx`, falling, spinning about its centre
+        // (which does not move its surface), and its reach.
+        let motion = |vx: f64| OtherMotion::Body {
+            linvel: vx * Vector3::x(),
+            turn: 0.0,
+            accel: Some(gravity),
+            kinematic_shift: None,
         };
+        let v = |vx: f64| motion(vx).reach(dt);
 
         let mut writes = Writes::default();
         neighbours.begin_plan(gravity, dt);
@@ -921,6 +924,10 @@ mod tests {
             read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
             v(-5.0)
         );
+        // Read from the entry, without a write since: the motion read again is the one its
+        // reach was drawn from, a ball's.
+        let (reach, _, again) = read(&mut neighbours, ball, &bodies, &colliders, &writes);
+        assert_eq!((reach, again), (v(-5.0), Some(motion(-5.0))));
         // Another ball in the removed one's slot, within the same plan: read as itself.
         let (mut islands, mut soft) = (IslandManager::new(), SoftBodySet::new());
         colliders.remove(ball, &mut islands, &mut bodies, &mut soft, false);
