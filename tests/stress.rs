@@ -182,7 +182,6 @@ impl Sim {
     }
 
     fn apply(&mut self, op: &Op) {
-        let (bodies, colliders) = (&self.world.bodies, &self.world.colliders);
         match op {
             Op::Ball(r, e, mu, p, v, w) => self.insert(
                 Self::moving(*p, *v, *w),
@@ -200,71 +199,11 @@ impl Sim {
                 Self::moving(*p, *v, *w),
                 ColliderBuilder::capsule_y(real(*h), real(*r)).restitution(real(*e)),
             ),
-            Op::RemoveBody(k) => {
-                if let Some(b) = self.body(*k) {
-                    self.bodies.retain(|h| *h != b);
-                    self.world.remove_body(b);
-                }
-            }
-            Op::Ground(kind, x, z) => {
-                let builder = match kind {
-                    0 => ColliderBuilder::cuboid(1.0, 0.3, 1.0)
-                        .translation(Vector::new(0.0, -0.3, 0.0)),
-                    1 => slab_ground(1.0, 0.01),
-                    2 => trimesh_ground(1.0),
-                    _ => ColliderBuilder::heightfield(
-                        rapier_impact::rapier::parry::utils::Array2::zeros(4, 4),
-                        Vector::new(2.0, 1.0, 2.0),
-                    ),
-                };
-                let rb =
-                    RigidBodyBuilder::fixed().translation(Vector::new(real(*x), 0.0, real(*z)));
-                let (_, ground) = self
-                    .world
-                    .insert(rb, builder.restitution(0.6).friction(0.8));
-                let bodies = &self.world.bodies;
-                self.plugin
-                    .add_ground(bodies, &self.world.colliders, ground)
-                    .unwrap();
-                self.grounds.push(ground);
-            }
-            Op::Tiles(n) => {
-                let side = 4.0 / f64::from(*n);
-                for i in 0..*n {
-                    for k in 0..*n {
-                        let at = |j: u8| -2.0 + (f64::from(j) + 0.5) * side;
-                        let rb = RigidBodyBuilder::fixed().translation(Vector::new(
-                            real(at(i)),
-                            -0.05,
-                            real(at(k)),
-                        ));
-                        let tile =
-                            ColliderBuilder::cuboid(real(side / 2.0), 0.05, real(side / 2.0));
-                        let (_, ground) =
-                            self.world.insert(rb, tile.restitution(0.6).friction(0.8));
-                        self.plugin
-                            .add_ground(&self.world.bodies, &self.world.colliders, ground)
-                            .unwrap();
-                        self.grounds.push(ground);
-                    }
-                }
-            }
-            Op::RemoveGround(k) => {
-                if !self.grounds.is_empty() {
-                    let g = self.grounds.remove(k % self.grounds.len());
-                    self.plugin.remove_ground(g);
-                    let parent = self.world.colliders[g].parent();
-                    if let Some(parent) = parent {
-                        self.world.remove_body(parent);
-                    }
-                }
-            }
-            Op::OptIn(k) => {
-                if let Some(b) = self.body(*k) {
-                    // A body the plugin refuses (not dynamic) is an error, not a panic.
-                    let _ = self.plugin.add_impact_body(bodies, b);
-                }
-            }
+            Op::RemoveBody(k) => self.remove_body(*k),
+            Op::Ground(kind, x, z) => self.add_ground(*kind, *x, *z),
+            Op::Tiles(n) => self.add_tiles(*n),
+            Op::RemoveGround(k) => self.remove_ground(*k),
+            Op::OptIn(k) => self.opt_in(*k),
             Op::OptOut(k) => {
                 if let Some(b) = self.body(*k) {
                     self.plugin.remove_impact_body(b);
@@ -281,70 +220,156 @@ impl Sim {
                     self.plugin.include_body(b);
                 }
             }
-            Op::GroundMaterial(k, m) => {
-                let g = if self.grounds.is_empty() {
-                    self.floor
-                } else {
-                    self.grounds[k % self.grounds.len()]
-                };
-                let m = m.map(|(e, mu)| rapier_impact::GroundMaterial::new(e, mu));
-                self.plugin.set_ground_material(g, m).unwrap();
-            }
-            Op::Coefficients(k, e, mu) => {
-                if let Some(b) = self.body(*k) {
-                    let c = bodies[b].colliders()[0];
-                    let _ = colliders;
-                    let co = &mut self.world.colliders[c];
-                    co.set_restitution(real(*e));
-                    co.set_friction(real(*mu));
-                }
-            }
-            Op::Teleport(k, p) => {
-                if let Some(b) = self.body(*k) {
-                    let t = Vector::new(real(p[0]), real(p[1]) + 0.6, real(p[2]));
-                    self.world.bodies[b].set_translation(t, true);
-                }
-            }
-            Op::Velocity(k, v, w) => {
-                if let Some(b) = self.body(*k) {
-                    let rb = &mut self.world.bodies[b];
-                    rb.set_linvel(Vector::new(real(v[0]), real(v[1]), real(v[2])), true);
-                    rb.set_angvel(Vector::new(real(w[0]), real(w[1]), real(w[2])), true);
-                }
-            }
+            Op::GroundMaterial(k, m) => self.set_ground_material(*k, *m),
+            Op::Coefficients(k, e, mu) => self.set_coefficients(*k, *e, *mu),
+            Op::Teleport(k, p) => self.teleport(*k, *p),
+            Op::Velocity(k, v, w) => self.set_velocity(*k, *v, *w),
             Op::Gravity(g) => self.world.gravity = Vector::new(0.0, real(*g), 0.0),
             Op::Dt(k) => {
                 self.world.integration_parameters.dt =
                     real([1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0][*k as usize]);
             }
-            Op::Mode(k) => {
-                let timing = [
-                    TimingMode::Step,
-                    TimingMode::TimeOfImpact,
-                    TimingMode::Exact,
-                ][*k as usize];
-                let config = self.plugin.config().clone().with_timing(timing);
-                self.plugin.set_config(config).unwrap();
-            }
-            Op::Law(k) => {
-                let law = [Law::Document, Law::Consistent, Law::Guarded][*k as usize];
-                let config = self.plugin.config().clone().with_law(law);
-                self.plugin.set_config(config).unwrap();
-            }
-            Op::SaveRestore => {
-                let snapshot = self.plugin.snapshot();
-                let copy = saved_world(&self.world);
-                let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
-                plugin.restore(&snapshot).unwrap();
-                assert_eq!(plugin.snapshot(), snapshot);
-                (self.world, self.plugin) = (copy, plugin);
-            }
+            Op::Mode(k) => self.set_timing(*k),
+            Op::Law(k) => self.set_law(*k),
+            Op::SaveRestore => self.save_and_restore(),
             Op::Step(n) => {
                 for _ in 0..*n {
                     self.step();
                 }
             }
         }
+    }
+
+    fn remove_body(&mut self, k: usize) {
+        if let Some(b) = self.body(k) {
+            self.bodies.retain(|h| *h != b);
+            self.world.remove_body(b);
+        }
+    }
+
+    /// A fixed ground of the `kind`th shape (box, slab, trimesh, heightfield) at `(x, z)`,
+    /// registered with the plugin.
+    fn add_ground(&mut self, kind: u8, x: f64, z: f64) {
+        let builder = match kind {
+            0 => ColliderBuilder::cuboid(1.0, 0.3, 1.0).translation(Vector::new(0.0, -0.3, 0.0)),
+            1 => slab_ground(1.0, 0.01),
+            2 => trimesh_ground(1.0),
+            _ => ColliderBuilder::heightfield(
+                rapier_impact::rapier::parry::utils::Array2::zeros(4, 4),
+                Vector::new(2.0, 1.0, 2.0),
+            ),
+        };
+        let rb = RigidBodyBuilder::fixed().translation(Vector::new(real(x), 0.0, real(z)));
+        let (_, ground) = self
+            .world
+            .insert(rb, builder.restitution(0.6).friction(0.8));
+        let bodies = &self.world.bodies;
+        self.plugin
+            .add_ground(bodies, &self.world.colliders, ground)
+            .unwrap();
+        self.grounds.push(ground);
+    }
+
+    /// A floor of `n` x `n` box tiles, 0.1 m thick, over the square of side 4 m about the
+    /// origin, each tile a ground of its own.
+    fn add_tiles(&mut self, n: u8) {
+        let side = 4.0 / f64::from(n);
+        for i in 0..n {
+            for k in 0..n {
+                let at = |j: u8| -2.0 + (f64::from(j) + 0.5) * side;
+                let rb = RigidBodyBuilder::fixed().translation(Vector::new(
+                    real(at(i)),
+                    -0.05,
+                    real(at(k)),
+                ));
+                let tile = ColliderBuilder::cuboid(real(side / 2.0), 0.05, real(side / 2.0));
+                let (_, ground) = self.world.insert(rb, tile.restitution(0.6).friction(0.8));
+                self.plugin
+                    .add_ground(&self.world.bodies, &self.world.colliders, ground)
+                    .unwrap();
+                self.grounds.push(ground);
+            }
+        }
+    }
+
+    fn remove_ground(&mut self, k: usize) {
+        if !self.grounds.is_empty() {
+            let g = self.grounds.remove(k % self.grounds.len());
+            self.plugin.remove_ground(g);
+            let parent = self.world.colliders[g].parent();
+            if let Some(parent) = parent {
+                self.world.remove_body(parent);
+            }
+        }
+    }
+
+    fn opt_in(&mut self, k: usize) {
+        if let Some(b) = self.body(k) {
+            // A body the plugin refuses (not dynamic) is an error, not a panic.
+            let _ = self.plugin.add_impact_body(&self.world.bodies, b);
+        }
+    }
+
+    /// Sets (or, with `None`, clears) the material of an added ground, or of the floor while
+    /// none is added.
+    fn set_ground_material(&mut self, k: usize, m: Option<(f64, f64)>) {
+        let g = if self.grounds.is_empty() {
+            self.floor
+        } else {
+            self.grounds[k % self.grounds.len()]
+        };
+        let m = m.map(|(e, mu)| rapier_impact::GroundMaterial::new(e, mu));
+        self.plugin.set_ground_material(g, m).unwrap();
+    }
+
+    fn set_coefficients(&mut self, k: usize, e: f64, mu: f64) {
+        if let Some(b) = self.body(k) {
+            let c = self.world.bodies[b].colliders()[0];
+            let co = &mut self.world.colliders[c];
+            co.set_restitution(real(e));
+            co.set_friction(real(mu));
+        }
+    }
+
+    fn teleport(&mut self, k: usize, p: [f64; 3]) {
+        if let Some(b) = self.body(k) {
+            let t = Vector::new(real(p[0]), real(p[1]) + 0.6, real(p[2]));
+            self.world.bodies[b].set_translation(t, true);
+        }
+    }
+
+    fn set_velocity(&mut self, k: usize, v: [f64; 3], w: [f64; 3]) {
+        if let Some(b) = self.body(k) {
+            let rb = &mut self.world.bodies[b];
+            rb.set_linvel(Vector::new(real(v[0]), real(v[1]), real(v[2])), true);
+            rb.set_angvel(Vector::new(real(w[0]), real(w[1]), real(w[2])), true);
+        }
+    }
+
+    fn set_timing(&mut self, k: u8) {
+        let timing = [
+            TimingMode::Step,
+            TimingMode::TimeOfImpact,
+            TimingMode::Exact,
+        ][k as usize];
+        let config = self.plugin.config().clone().with_timing(timing);
+        self.plugin.set_config(config).unwrap();
+    }
+
+    fn set_law(&mut self, k: u8) {
+        let law = [Law::Document, Law::Consistent, Law::Guarded][k as usize];
+        let config = self.plugin.config().clone().with_law(law);
+        self.plugin.set_config(config).unwrap();
+    }
+
+    /// Replaces the world and the plugin by copies restored from their saved states.
+    fn save_and_restore(&mut self) {
+        let snapshot = self.plugin.snapshot();
+        let copy = saved_world(&self.world);
+        let mut plugin = ImpactPlugin::new(ImpactConfig::default()).unwrap();
+        plugin.restore(&snapshot).unwrap();
+        assert_eq!(plugin.snapshot(), snapshot);
+        (self.world, self.plugin) = (copy, plugin);
     }
 
     /// One step and the checks.
@@ -374,18 +399,23 @@ impl Sim {
             check_pair_energy(events, &label);
         }
         check_written(world, events, &mut self.stats, &label);
-        // No body on the far side of a ground it was resolved against in the step: every
-        // ground's top is at y = 0, over its footprint (the floor's is everywhere). A body met
-        // from above (the event's normal up) ends above the top; one met from below (a body
-        // rapier let sink into the floor under a slab, then rising into its underside: the
-        // normal down) ends below the ground's bottom; a body beside a ground (pushed out of
-        // its side) is neither. Whether a body is below the top is read from its bounding box,
-        // which also holds the corner of a body hanging over the ground's edge: one so found
-        // is under the ground only if it is inside it (parry's contact) or its centre of mass
-        // is below the top (through a sheet). Every ground's underside lies inside the floor,
-        // so a body met from below is inside the floor: when the plugin also resolved it
-        // against the floor from above in the step, the floor's outside wins (the body must
-        // end above the floor, its own event's check), not the underside of the other.
+        self.check_no_body_ends_beyond_its_ground(&label);
+    }
+
+    /// No body on the far side of a ground it was resolved against in the step: every
+    /// ground's top is at y = 0, over its footprint (the floor's is everywhere). A body met
+    /// from above (the event's normal up) ends above the top; one met from below (a body
+    /// rapier let sink into the floor under a slab, then rising into its underside: the
+    /// normal down) ends below the ground's bottom; a body beside a ground (pushed out of
+    /// its side) is neither. Whether a body is below the top is read from its bounding box,
+    /// which also holds the corner of a body hanging over the ground's edge: one so found
+    /// is under the ground only if it is inside it (parry's contact) or its centre of mass
+    /// is below the top (through a sheet). Every ground's underside lies inside the floor,
+    /// so a body met from below is inside the floor: when the plugin also resolved it
+    /// against the floor from above in the step, the floor's outside wins (the body must
+    /// end above the floor, its own event's check), not the underside of the other.
+    fn check_no_body_ends_beyond_its_ground(&self, label: &str) {
+        let (world, events) = (&self.world, self.plugin.events());
         let allowed = wide(world.integration_parameters.allowed_linear_error());
         let slack = allowed + penetration_rounding(1.0);
         for ev in events.iter().filter(|ev| ev.body2.is_none()) {
