@@ -78,6 +78,57 @@ fn cases() -> u32 {
         .unwrap_or(1_000)
 }
 
+/// The half-space ground with the given material and the bodies above it, at `hz`.
+fn scene(
+    bodies: &[BodySpec],
+    hz: f64,
+    ground_e: f64,
+    ground_mu: f64,
+    pairs: bool,
+) -> (PhysicsWorld, ColliderHandle) {
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(1.0 / hz);
+    let (_, ground) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::halfspace(up())
+            .restitution(real(ground_e))
+            .friction(real(ground_mu)),
+    );
+    for (i, b) in bodies.iter().enumerate() {
+        insert_body(&mut world, i, b, pairs);
+    }
+    (world, ground)
+}
+
+/// The `i`th body of the scene, lifted clear of the ground by its largest size.
+fn insert_body(world: &mut PhysicsWorld, i: usize, b: &BodySpec, pairs: bool) {
+    let collider = if b.ball {
+        ColliderBuilder::ball(real(b.size[0]))
+    } else {
+        ColliderBuilder::cuboid(real(b.size[0]), real(b.size[1]), real(b.size[2]))
+    };
+    let lift = b.size.iter().cloned().fold(0.0, f64::max) * 1.8;
+    // Spread horizontally so that the bodies start apart; with impacts between bodies
+    // opted in, close enough to meet.
+    let x = b.pos[0] + if pairs { 1.2 } else { 7.0 } * i as f64;
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(real(x), real(b.pos[1] + lift), real(b.pos[2])))
+            .linvel(Vector::new(real(b.vel[0]), real(b.vel[1]), real(b.vel[2])))
+            .angvel(Vector::new(
+                real(b.spin[0]),
+                real(b.spin[1]),
+                real(b.spin[2]),
+            )),
+        collider
+            .density(real(b.density))
+            .restitution(real(b.e))
+            .friction(real(b.mu))
+            .restitution_combine_rule(rule(b.rule))
+            .friction_combine_rule(rule(b.rule)),
+    );
+}
+
 fn run(
     bodies: &[BodySpec],
     timing: TimingMode,
@@ -89,41 +140,7 @@ fn run(
     let label = format!(
         "{timing:?} at {hz:.0} Hz, ground e {ground_e:.3} mu {ground_mu:.3}, pairs {pairs}"
     );
-    let mut world = PhysicsWorld::default();
-    world.integration_parameters.dt = real(1.0 / hz);
-    let (_, ground) = world.insert(
-        RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(up())
-            .restitution(real(ground_e))
-            .friction(real(ground_mu)),
-    );
-    for (i, b) in bodies.iter().enumerate() {
-        let collider = if b.ball {
-            ColliderBuilder::ball(real(b.size[0]))
-        } else {
-            ColliderBuilder::cuboid(real(b.size[0]), real(b.size[1]), real(b.size[2]))
-        };
-        let lift = b.size.iter().cloned().fold(0.0, f64::max) * 1.8;
-        // Spread horizontally so that the bodies start apart; with impacts between bodies
-        // opted in, close enough to meet.
-        let x = b.pos[0] + if pairs { 1.2 } else { 7.0 } * i as f64;
-        world.insert(
-            RigidBodyBuilder::dynamic()
-                .translation(Vector::new(real(x), real(b.pos[1] + lift), real(b.pos[2])))
-                .linvel(Vector::new(real(b.vel[0]), real(b.vel[1]), real(b.vel[2])))
-                .angvel(Vector::new(
-                    real(b.spin[0]),
-                    real(b.spin[1]),
-                    real(b.spin[2]),
-                )),
-            collider
-                .density(real(b.density))
-                .restitution(real(b.e))
-                .friction(real(b.mu))
-                .restitution_combine_rule(rule(b.rule))
-                .friction_combine_rule(rule(b.rule)),
-        );
-    }
+    let (mut world, ground) = scene(bodies, hz, ground_e, ground_mu, pairs);
     let mut p = plugin_on(&world, ground, timing);
     p.set_all_dynamic_bodies_impact(pairs);
     let mut stats = Stats::new();
