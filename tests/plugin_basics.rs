@@ -1254,6 +1254,19 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
     let mut p = plugin(TimingMode::Exact);
+    ground_materials_out_of_range_are_refused(&world, &mut p, ground);
+    configs_out_of_range_are_refused();
+    body_settings_out_of_range_are_refused(&mut world, &mut p);
+    invalid_curve_points_are_refused();
+}
+
+/// Each ground material field out of its range is refused when the ground is added, and the
+/// ground is not kept; the ends of the ranges are taken.
+fn ground_materials_out_of_range_are_refused(
+    world: &PhysicsWorld,
+    p: &mut ImpactPlugin,
+    ground: ColliderHandle,
+) {
     let with = |restitution, friction, rolling: Option<f64>| {
         let mut material = GroundMaterial::new(restitution, friction);
         material.rolling_resistance = rolling;
@@ -1302,7 +1315,10 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
         with(10.0, 100.0, Some(100.0)),
     )
     .unwrap();
+}
 
+/// Each configuration field out of its range is refused by the plugin's constructor.
+fn configs_out_of_range_are_refused() {
     let bad = |config: ImpactConfig| ImpactPlugin::new(config).err();
     let base = ImpactConfig::default();
     for (config, field) in [
@@ -1340,6 +1356,11 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
             "{e}"
         );
     }
+}
+
+/// A body's own rolling settings, tangential restitution and restitution curve out of range
+/// are refused at the call, and nothing of them is kept.
+fn body_settings_out_of_range_are_refused(world: &mut PhysicsWorld, p: &mut ImpactPlugin) {
     let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
     assert!(matches!(
         p.set_body_rolling(ball, Some(RollingSettings::new(0.1, 1e300))),
@@ -1374,6 +1395,9 @@ fn values_too_large_are_refused_naming_the_field_and_its_range() {
     assert_eq!(p.body_restitution_curve(ball), Some(&curve(&[(0.0, 10.0)])));
     p.set_body_tangential_restitution(ball, None).unwrap();
     assert_eq!(p.body_tangential_restitution(ball), None);
+}
+
+fn invalid_curve_points_are_refused() {
     // A curve's own points are refused where it is built.
     for points in [
         &[][..],
