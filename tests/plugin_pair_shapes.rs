@@ -314,90 +314,18 @@ fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
     let (h, e, mu, speed) = (0.05, 0.6, 0.5, 2.0);
     let tilt = UnitQuaternion::from_euler_angles(0.3, 0.5, 0.7);
     for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        let mut w = world();
-        let zero = Vector3::zeros();
-        let spin = Vector3::new(1.0, -2.0, 3.0);
-        let (a, _) = body(
-            &mut w,
-            cube(h, e, mu),
-            Vector3::new(0.0, 0.01, -0.02),
-            tilt,
-            Vector3::x() * speed,
-            spin,
-        );
-        let (b, _) = body(
-            &mut w,
-            cube(h, e, mu),
-            Vector3::x() * 0.4,
-            UnitQuaternion::identity(),
-            zero,
-            zero,
-        );
-        let momenta = |w: &PhysicsWorld| {
-            let mut p = Vector3::zeros();
-            let mut l = Vector3::zeros();
-            let mut energy = 0.0;
-            for h in [a, b] {
-                let rb = &w.bodies[h];
-                let (m, inertia) = (wide(rb.mass()), world_inertia(w, h));
-                let (v, om) = (na(rb.linvel()), na(rb.angvel()));
-                let c = na(rb.center_of_mass());
-                p += v * m;
-                l += c.cross(&(v * m)) + inertia * om;
-                energy += 0.5 * m * v.norm_squared() + 0.5 * om.dot(&(inertia * om));
-            }
-            (p, l, energy)
-        };
-        let (p0, l0, e0) = momenta(&w);
+        let (mut w, a, b) = cube_corner_scene(h, e, mu, speed, tilt);
+        let (p0, l0, e0) = momenta(&w, [a, b]);
         let mut p = plugin(mode);
-        // Up to the step of the first impact, keeping the state before it.
-        let mut seen = Vec::new();
-        let mut steps = 0;
-        let mut before = None;
-        while seen.is_empty() && steps < 30 {
-            let rb = &w.bodies[a];
-            before = Some((
-                na(rb.center_of_mass()),
-                rot_of(rb),
-                na(rb.linvel()),
-                na(rb.angvel()),
-            ));
-            seen = run(&mut p, &mut w, 1);
-            steps += 1;
-        }
+        let (mut seen, steps, before) = up_to_the_first_impact(&mut p, &mut w, a);
         assert_eq!(
             seen.len(),
             2,
             "{mode:?}: the first impact, an event each: {seen:?}"
         );
         let (c0, q0, v0, w0) = before.unwrap();
-        // The analytic first touch from the state before that step (no gravity: the centre
-        // moves straight, the isotropic cube turns at constant spin): the lowest corner's x
-        // reaches b's face, found by bisection.
-        let corner = |t: f64| {
-            let q = UnitQuaternion::from_scaled_axis(w0 * t) * q0;
-            let c = c0 + v0 * t;
-            let mut best = Vector3::repeat(f64::INFINITY);
-            for k in 0..8 {
-                let sign = |bit: usize| if k & bit == 0 { -h } else { h };
-                let x = c + q * Vector3::new(sign(1), sign(2), sign(4));
-                if x.x > best.x || best.x.is_infinite() {
-                    best = x;
-                }
-            }
-            (best, c)
-        };
-        let face = 0.4 - h;
-        let (mut lo, mut hi) = (0.0, wide(w.integration_parameters.dt));
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if corner(mid).0.x < face {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        let (point, centre) = corner(hi);
+        let dt = wide(w.integration_parameters.dt);
+        let (hi, point, centre) = first_corner_touch((c0, q0, v0, w0), h, dt);
         let ev = seen[0].1;
         assert!(
             abs_diff_eq!(ev.time, hi, epsilon = T_TOL),
@@ -446,7 +374,7 @@ fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
         // next step: two impacts, each the model's (rapier's contact would not conserve the
         // angular momentum: its speculative impulses act at two points apart).
         assert_eq!(seen.len(), 4, "{mode:?}: {seen:?}");
-        let (p1, l1, e1) = momenta(&w);
+        let (p1, l1, e1) = momenta(&w, [a, b]);
         let scale = p0.norm();
         let tol = if F64 { 1e-12 } else { 1e-5 };
         assert!((p1 - p0).norm() <= tol * scale, "{mode:?}: p {p0} -> {p1}");
@@ -462,6 +390,118 @@ fn a_cube_corner_into_a_cube_conserves_momentum_and_meets_at_the_corner() {
             "{mode:?}: the cube hit turns"
         );
     }
+}
+
+/// A cube of half side `h` turned by `tilt` and spinning, at `speed` along x towards a cube at
+/// rest 0.4 m away, its centre slightly off the other's axis.
+fn cube_corner_scene(
+    h: f64,
+    e: f64,
+    mu: f64,
+    speed: f64,
+    tilt: UnitQuaternion<f64>,
+) -> (PhysicsWorld, RigidBodyHandle, RigidBodyHandle) {
+    let mut w = world();
+    let zero = Vector3::zeros();
+    let spin = Vector3::new(1.0, -2.0, 3.0);
+    let (a, _) = body(
+        &mut w,
+        cube(h, e, mu),
+        Vector3::new(0.0, 0.01, -0.02),
+        tilt,
+        Vector3::x() * speed,
+        spin,
+    );
+    let (b, _) = body(
+        &mut w,
+        cube(h, e, mu),
+        Vector3::x() * 0.4,
+        UnitQuaternion::identity(),
+        zero,
+        zero,
+    );
+    (w, a, b)
+}
+
+/// The linear and angular momentum (about the origin) and the kinetic energy of `bodies`.
+fn momenta(w: &PhysicsWorld, bodies: [RigidBodyHandle; 2]) -> (Vector3<f64>, Vector3<f64>, f64) {
+    let mut p = Vector3::zeros();
+    let mut l = Vector3::zeros();
+    let mut energy = 0.0;
+    for h in bodies {
+        let rb = &w.bodies[h];
+        let (m, inertia) = (wide(rb.mass()), world_inertia(w, h));
+        let (v, om) = (na(rb.linvel()), na(rb.angvel()));
+        let c = na(rb.center_of_mass());
+        p += v * m;
+        l += c.cross(&(v * m)) + inertia * om;
+        energy += 0.5 * m * v.norm_squared() + 0.5 * om.dot(&(inertia * om));
+    }
+    (p, l, energy)
+}
+
+/// The cube's state at the start of a step: its centre, orientation, velocity and spin.
+type Motion = (
+    Vector3<f64>,
+    UnitQuaternion<f64>,
+    Vector3<f64>,
+    Vector3<f64>,
+);
+
+/// Steps up to the step of the first impact (at most 30): its events, the steps taken, and the
+/// state of `a` before that step.
+fn up_to_the_first_impact(
+    p: &mut ImpactPlugin,
+    w: &mut PhysicsWorld,
+    a: RigidBodyHandle,
+) -> (Vec<(f64, ImpactEvent)>, usize, Option<Motion>) {
+    let mut seen = Vec::new();
+    let mut steps = 0;
+    let mut before = None;
+    while seen.is_empty() && steps < 30 {
+        let rb = &w.bodies[a];
+        before = Some((
+            na(rb.center_of_mass()),
+            rot_of(rb),
+            na(rb.linvel()),
+            na(rb.angvel()),
+        ));
+        seen = run(p, w, 1);
+        steps += 1;
+    }
+    (seen, steps, before)
+}
+
+/// The analytic first touch from the state `before` a step of `dt` (no gravity: the centre
+/// moves straight, the isotropic cube turns at constant spin): the lowest corner's x reaches
+/// the face of the cube at rest, found by bisection. The time, the corner and the centre then.
+fn first_corner_touch(before: Motion, h: f64, dt: f64) -> (f64, Vector3<f64>, Vector3<f64>) {
+    let (c0, q0, v0, w0) = before;
+    let corner = |t: f64| {
+        let q = UnitQuaternion::from_scaled_axis(w0 * t) * q0;
+        let c = c0 + v0 * t;
+        let mut best = Vector3::repeat(f64::INFINITY);
+        for k in 0..8 {
+            let sign = |bit: usize| if k & bit == 0 { -h } else { h };
+            let x = c + q * Vector3::new(sign(1), sign(2), sign(4));
+            if x.x > best.x || best.x.is_infinite() {
+                best = x;
+            }
+        }
+        (best, c)
+    };
+    let face = 0.4 - h;
+    let (mut lo, mut hi) = (0.0, dt);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if corner(mid).0.x < face {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let (point, centre) = corner(hi);
+    (hi, point, centre)
 }
 
 /// `Step` mode resolves the pair at the step's start; the cubes then leave at the closed-form
