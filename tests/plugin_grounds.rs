@@ -90,25 +90,8 @@ fn first_impact(
 fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() {
     let (e, h) = (0.8, 0.5);
     let mut world = PhysicsWorld::default();
-    // A fixed body's half-space... (balls far apart so each lands on its own ground)
-    let (_, g_body) = world.insert(
-        RigidBodyBuilder::fixed(),
-        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
-            .translation(Vector::new(0.0, -0.5, 0.0))
-            .restitution(real(e)),
-    );
-    // ... a parentless collider ...
-    let g_free = world.colliders.insert(
-        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
-            .translation(Vector::new(20.0, -0.5, 0.0))
-            .restitution(real(e)),
-    );
-    // ... and a kinematic platform, not fixed: ground only when marked by hand.
-    let (_, g_kin) = world.insert(
-        RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(40.0, -0.5, 0.0)),
-        ColliderBuilder::cuboid(2.0, 0.5, 2.0).restitution(real(e)),
-    );
-    let balls = [0.0, 20.0, 40.0].map(|x| ball(&mut world, [x, 0.1 + h, 0.0], 0.1, e, 0.0));
+    let (grounds, balls) = grounds_of_each_kind_with_a_ball_over_each(&mut world, e, h);
+    let [g_body, g_free, g_kin] = grounds;
     let mut p = plugin(TimingMode::Exact);
     p.set_all_fixed_colliders_ground(true);
     p.step(&mut world);
@@ -134,15 +117,7 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
     );
     let late = ball(&mut world, [60.0, 0.1 + h, 0.0], 0.1, e, 0.0);
     let dt = wide(world.integration_parameters.dt);
-    let mut first: Vec<Option<f64>> = vec![None; 4];
-    let all = [balls[0], balls[1], balls[2], late];
-    for k in 1..60 {
-        p.step(&mut world);
-        for ev in p.events() {
-            let i = all.iter().position(|b| *b == ev.body).unwrap();
-            first[i].get_or_insert(k as f64 * dt + ev.time);
-        }
-    }
+    let first = first_impact_times(&mut p, &mut world, [balls[0], balls[1], balls[2], late]);
     assert!(
         p.is_ground(g_late),
         "a fixed collider added later is not ground"
@@ -168,10 +143,73 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
         let got = first[i].unwrap_or(f64::NAN);
         assert_abs_diff_eq!(got, expected, epsilon = tt);
     }
-    // Off: the automatic grounds are ordinary colliders again, their flags back to the
-    // user's from the next step; the ground marked by hand stays.
+    turning_the_mode_off_unmarks_only_the_automatic_grounds(
+        &mut p,
+        &mut world,
+        [g_body, g_free, g_late, g_kin],
+        balls[2],
+    );
+}
+
+/// A fixed body's box, a parentless box and a kinematic platform (20 m apart, their tops at
+/// y = 0), with a ball `h` above each: the grounds and the balls.
+fn grounds_of_each_kind_with_a_ball_over_each(
+    world: &mut PhysicsWorld,
+    e: f64,
+    h: f64,
+) -> ([ColliderHandle; 3], [RigidBodyHandle; 3]) {
+    // A fixed body's half-space... (balls far apart so each lands on its own ground)
+    let (_, g_body) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
+            .translation(Vector::new(0.0, -0.5, 0.0))
+            .restitution(real(e)),
+    );
+    // ... a parentless collider ...
+    let g_free = world.colliders.insert(
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0)
+            .translation(Vector::new(20.0, -0.5, 0.0))
+            .restitution(real(e)),
+    );
+    // ... and a kinematic platform, not fixed: ground only when marked by hand.
+    let (_, g_kin) = world.insert(
+        RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(40.0, -0.5, 0.0)),
+        ColliderBuilder::cuboid(2.0, 0.5, 2.0).restitution(real(e)),
+    );
+    let balls = [0.0, 20.0, 40.0].map(|x| ball(world, [x, 0.1 + h, 0.0], 0.1, e, 0.0));
+    ([g_body, g_free, g_kin], balls)
+}
+
+/// Steps 59 times after the first step: each ball's first impact time, counted from the
+/// start of the first step.
+fn first_impact_times(
+    p: &mut ImpactPlugin,
+    world: &mut PhysicsWorld,
+    all: [RigidBodyHandle; 4],
+) -> Vec<Option<f64>> {
+    let dt = wide(world.integration_parameters.dt);
+    let mut first: Vec<Option<f64>> = vec![None; 4];
+    for k in 1..60 {
+        p.step(world);
+        for ev in p.events() {
+            let i = all.iter().position(|b| *b == ev.body).unwrap();
+            first[i].get_or_insert(k as f64 * dt + ev.time);
+        }
+    }
+    first
+}
+
+/// Off: the automatic grounds are ordinary colliders again, their flags back to the user's
+/// from the next step; the ground marked by hand stays, and only the ball on it (`on_kept`)
+/// still has plugin impacts.
+fn turning_the_mode_off_unmarks_only_the_automatic_grounds(
+    p: &mut ImpactPlugin,
+    world: &mut PhysicsWorld,
+    [g_body, g_free, g_late, g_kin]: [ColliderHandle; 4],
+    on_kept: RigidBodyHandle,
+) {
     p.set_all_fixed_colliders_ground(false);
-    p.step(&mut world);
+    p.step(world);
     for (label, c, ground) in [
         ("fixed body", g_body, false),
         ("parentless", g_free, false),
@@ -190,12 +228,12 @@ fn every_fixed_collider_is_ground_and_turning_the_mode_off_unmarks_only_those() 
     }
     let mut later = Vec::new();
     for _ in 0..120 {
-        p.step(&mut world);
+        p.step(world);
         later.extend(p.events().iter().map(|ev| ev.body));
     }
     println!("events after the mode is off, by body: {later:?}");
     assert!(
-        later.iter().all(|b| *b == balls[2]),
+        later.iter().all(|b| *b == on_kept),
         "a ball on an unmarked ground still got plugin impacts"
     );
 }
@@ -579,8 +617,29 @@ impl PhysicsHooks for Conveyor {
     }
 }
 
-#[test]
-fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
+/// The conveyor scene: the bodies and colliders the checks read.
+struct ConveyorScene {
+    world: PhysicsWorld,
+    /// The managed ground, a conveyor too.
+    ground: ColliderHandle,
+    /// A conveyor platform that is not ground, and the box resting on it.
+    platform: ColliderHandle,
+    on_platform: RigidBodyHandle,
+    on_platform_co: ColliderHandle,
+    /// A box resting on the ground (a managed resting pair).
+    on_ground: RigidBodyHandle,
+    /// A box on the ground that the plugin is to exclude.
+    excluded: RigidBodyHandle,
+    excluded_co: ColliderHandle,
+    /// A ball that bounces on the ground.
+    bouncer: RigidBodyHandle,
+    bouncer_co: ColliderHandle,
+    /// A ball the user's filter lets fall through the ground.
+    ghost: RigidBodyHandle,
+    ghost_co: ColliderHandle,
+}
+
+fn conveyor_scene() -> ConveyorScene {
     let both = ActiveHooks::FILTER_CONTACT_PAIRS | ActiveHooks::MODIFY_SOLVER_CONTACTS;
     let mut world = PhysicsWorld::default();
     // The managed ground, a conveyor ground too (its user flags ask for both hooks).
@@ -618,6 +677,38 @@ fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
         RigidBodyBuilder::dynamic().translation(Vector::new(5.0, 0.6, 0.0)),
         ColliderBuilder::ball(0.1).restitution(0.5),
     );
+    ConveyorScene {
+        world,
+        ground,
+        platform,
+        on_platform,
+        on_platform_co,
+        on_ground,
+        excluded,
+        excluded_co,
+        bouncer,
+        bouncer_co,
+        ghost,
+        ghost_co,
+    }
+}
+
+#[test]
+fn a_wrapped_hooks_filter_and_contact_modification_still_apply() {
+    let ConveyorScene {
+        mut world,
+        ground,
+        platform,
+        on_platform,
+        on_platform_co,
+        on_ground,
+        excluded,
+        excluded_co,
+        bouncer,
+        bouncer_co,
+        ghost,
+        ghost_co,
+    } = conveyor_scene();
     let hooks = Conveyor {
         filter: GhostFilter::new(ghost_co),
         modified: Pairs::default(),
