@@ -138,11 +138,11 @@ fn run(timing: TimingMode, steps: usize) -> Run {
     let mut stats = Stats::new();
     let mut trace = Vec::with_capacity(steps);
     let mut rest_step = None;
-    let allowed = wide(world.integration_parameters.allowed_linear_error());
-    // Deepest a body touching another dynamic body went (`stats.max_penetration`: the others).
-    let mut max_pressed: f64 = 0.0;
-    // The last step each body touched another dynamic body.
-    let mut last_pressed: std::collections::HashMap<RigidBodyHandle, usize> = Default::default();
+    let mut pressing = Pressing {
+        allowed: wide(world.integration_parameters.allowed_linear_error()),
+        max_pressed: 0.0,
+        last_pressed: Default::default(),
+    };
     let start = Instant::now();
     let kicked: Vec<RigidBodyHandle> = world
         .bodies
@@ -153,14 +153,7 @@ fn run(timing: TimingMode, steps: usize) -> Run {
         .collect();
     for k in 0..steps {
         if k % KICK_EVERY == KICK_EVERY / 2 {
-            // Wake the scene: a third of the bodies thrown up again, with spin.
-            for (i, h) in kicked.iter().enumerate() {
-                let rb = &mut world.bodies[*h];
-                let m = rb.mass();
-                let s = real(1.0 + (i % 3) as f64);
-                rb.apply_impulse(Vector::new(0.5 * s, 4.0, -0.3 * s) * m, true);
-                rb.set_angvel(Vector::new(3.0 * s, -2.0, s), true);
-            }
+            kick(&mut world, &kicked);
         }
         p.step(&mut world);
         stats.steps += 1;
@@ -168,60 +161,9 @@ fn run(timing: TimingMode, steps: usize) -> Run {
         for ev in p.events() {
             check_event(ev, &mut stats, &label);
         }
-        // Resting pairs and contacts with the walls and other bodies are rapier's. A body
-        // touching only the ground and walls stays within the allowed linear error (before
-        // the step-end check of bodies turning about a resting contact, `EndCheck::TurningResting`, a box
-        // wedged against a wall went 7.8 mm deep in f64 and a capsule swinging down at a wall
-        // 11.1 mm in f32). A body pressed into the ground by another is held by rapier's
-        // solver alone: the 20 cm ball (64 times the mass of the 5 cm one) falling at 1.6 m/s
-        // onto the 5 cm ball lying on the ground pressed it 8.8 mm deep (f32, step 75 106,
-        // its ground pair resting, no event; 11.2 mm in an earlier version, 1.8 mm in
-        // another whose trajectory missed the fall), and rapier's position correction took
-        // it back within the allowed error over the next steps. Such a body, pressed in the
-        // last second, is reported, and only asserted not to sink by a quarter of its size
-        // (no tunnelling).
-        for (h, rb) in world.bodies.iter() {
-            if !rb.is_dynamic() {
-                continue;
-            }
-            let (mut depth, mut size) = (f64::NEG_INFINITY, f64::INFINITY);
-            for c in rb.colliders() {
-                let aabb = world.colliders[*c].compute_aabb();
-                depth = depth.max(-wide(aabb.mins.y));
-                size = size.min(wide((aabb.maxs - aabb.mins).min_element()));
-            }
-            if touches_a_body(&world, h) {
-                last_pressed.insert(h, k);
-            }
-            let pressed = last_pressed
-                .get(&h)
-                .is_some_and(|at| k - at < PRESSED_MEMORY);
-            if pressed {
-                max_pressed = max_pressed.max(depth);
-            } else {
-                stats.max_penetration = stats.max_penetration.max(depth);
-            }
-            let bound = if pressed { 0.25 * size } else { allowed };
-            assert!(
-                depth <= bound,
-                "{label}: step {k}: body {h:?} {depth:e} m below the ground (pressed by another body in the last second: {pressed})"
-            );
-        }
+        check_depths(&world, k, &mut pressing, &mut stats, &label);
         trace.push(state_hash(&world) ^ events_hash(p.events()).rotate_left(1));
-        let mut resting = true;
-        for (h, rb) in world.bodies.iter() {
-            if !rb.is_dynamic() {
-                continue;
-            }
-            let t = rb.translation();
-            assert!(
-                t.x.abs() < 5.0 && t.z.abs() < 5.0 && t.y < 10.0,
-                "{label}: step {k}: body {h:?} left the region: {t:?}"
-            );
-            if rb.is_dynamic() && !rb.is_sleeping() && wide(rb.linvel().length()) > 1e-3 {
-                resting = false;
-            }
-        }
+        let resting = all_resting_in_the_region(&world, k, &label);
         match (resting, rest_step) {
             (true, None) => rest_step = Some(k),
             (false, Some(_)) => rest_step = None,
@@ -242,12 +184,108 @@ fn run(timing: TimingMode, steps: usize) -> Run {
     Run {
         trace,
         stats,
-        max_pressed,
+        max_pressed: pressing.max_pressed,
         rest_step,
         asleep_at_end,
         bodies,
         seconds,
     }
+}
+
+/// Wakes the scene: the `kicked` bodies (a third of them) thrown up again, with spin.
+fn kick(world: &mut PhysicsWorld, kicked: &[RigidBodyHandle]) {
+    for (i, h) in kicked.iter().enumerate() {
+        let rb = &mut world.bodies[*h];
+        let m = rb.mass();
+        let s = real(1.0 + (i % 3) as f64);
+        rb.apply_impulse(Vector::new(0.5 * s, 4.0, -0.3 * s) * m, true);
+        rb.set_angvel(Vector::new(3.0 * s, -2.0, s), true);
+    }
+}
+
+/// What the depth check keeps from step to step.
+struct Pressing {
+    /// Rapier's allowed linear error (m).
+    allowed: f64,
+    /// Deepest a body touching another dynamic body went (`stats.max_penetration`: the others).
+    max_pressed: f64,
+    /// The last step each body touched another dynamic body.
+    last_pressed: std::collections::HashMap<RigidBodyHandle, usize>,
+}
+
+/// Checks how deep each dynamic body is below the ground after step `k`.
+///
+/// Resting pairs and contacts with the walls and other bodies are rapier's. A body
+/// touching only the ground and walls stays within the allowed linear error (before
+/// the step-end check of bodies turning about a resting contact, `EndCheck::TurningResting`, a box
+/// wedged against a wall went 7.8 mm deep in f64 and a capsule swinging down at a wall
+/// 11.1 mm in f32). A body pressed into the ground by another is held by rapier's
+/// solver alone: the 20 cm ball (64 times the mass of the 5 cm one) falling at 1.6 m/s
+/// onto the 5 cm ball lying on the ground pressed it 8.8 mm deep (f32, step 75 106,
+/// its ground pair resting, no event; 11.2 mm in an earlier version, 1.8 mm in
+/// another whose trajectory missed the fall), and rapier's position correction took
+/// it back within the allowed error over the next steps. Such a body, pressed in the
+/// last second, is reported, and only asserted not to sink by a quarter of its size
+/// (no tunnelling).
+fn check_depths(
+    world: &PhysicsWorld,
+    k: usize,
+    pressing: &mut Pressing,
+    stats: &mut Stats,
+    label: &str,
+) {
+    for (h, rb) in world.bodies.iter() {
+        if !rb.is_dynamic() {
+            continue;
+        }
+        let (mut depth, mut size) = (f64::NEG_INFINITY, f64::INFINITY);
+        for c in rb.colliders() {
+            let aabb = world.colliders[*c].compute_aabb();
+            depth = depth.max(-wide(aabb.mins.y));
+            size = size.min(wide((aabb.maxs - aabb.mins).min_element()));
+        }
+        if touches_a_body(world, h) {
+            pressing.last_pressed.insert(h, k);
+        }
+        let pressed = pressing
+            .last_pressed
+            .get(&h)
+            .is_some_and(|at| k - at < PRESSED_MEMORY);
+        if pressed {
+            pressing.max_pressed = pressing.max_pressed.max(depth);
+        } else {
+            stats.max_penetration = stats.max_penetration.max(depth);
+        }
+        let bound = if pressed {
+            0.25 * size
+        } else {
+            pressing.allowed
+        };
+        assert!(
+            depth <= bound,
+            "{label}: step {k}: body {h:?} {depth:e} m below the ground (pressed by another body in the last second: {pressed})"
+        );
+    }
+}
+
+/// Whether every dynamic body is asleep or below 1 mm/s after step `k`; each must be in the
+/// region.
+fn all_resting_in_the_region(world: &PhysicsWorld, k: usize, label: &str) -> bool {
+    let mut resting = true;
+    for (h, rb) in world.bodies.iter() {
+        if !rb.is_dynamic() {
+            continue;
+        }
+        let t = rb.translation();
+        assert!(
+            t.x.abs() < 5.0 && t.z.abs() < 5.0 && t.y < 10.0,
+            "{label}: step {k}: body {h:?} left the region: {t:?}"
+        );
+        if rb.is_dynamic() && !rb.is_sleeping() && wide(rb.linvel().length()) > 1e-3 {
+            resting = false;
+        }
+    }
+    resting
 }
 
 #[test]
