@@ -44,6 +44,29 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
         .with_rolling_resistance(0.02)
         .with_tangential_restitution(0.2);
     let mut plugin = ImpactPlugin::new(config).unwrap();
+    drop_crowd(&mut world, &mut plugin);
+    add_boxes_with_their_own_restitution(&mut world, &mut plugin);
+    add_rolling_balls(&mut world, &mut plugin);
+    let slope = add_slope_with_a_ball_at_rest(&mut world);
+    let platform = add_moving_platform_with_a_ball_over_it(&mut world);
+    add_ball_left_to_rapier(&mut world, &mut plugin);
+    for ground in [floor, slope] {
+        plugin
+            .add_ground(&world.bodies, &world.colliders, ground)
+            .unwrap();
+    }
+    // A ground with its own tangential restitution and curve.
+    let material = GroundMaterial::new(0.6, 0.5)
+        .with_tangential_restitution(0.7)
+        .with_restitution_curve(RestitutionCurve::threshold(0.3, 0.8).unwrap());
+    plugin
+        .add_ground_with_material(&world.bodies, &world.colliders, platform, material)
+        .unwrap();
+    (world, plugin)
+}
+
+/// 24 opted-in balls dropped into the box of walls, thrown sideways and spinning.
+fn drop_crowd(world: &mut PhysicsWorld, plugin: &mut ImpactPlugin) {
     let mut next = jitter(7, 0.05);
     for i in 0..24 {
         let (x, z) = (
@@ -64,7 +87,10 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
         );
         plugin.add_impact_body(&world.bodies, body).unwrap();
     }
-    // Boxes with their own tangential restitution and restitution curve.
+}
+
+/// Boxes with their own tangential restitution and restitution curve.
+fn add_boxes_with_their_own_restitution(world: &mut PhysicsWorld, plugin: &mut ImpactPlugin) {
     let curve = RestitutionCurve::new(vec![(0.5, 0.0), (0.5, 0.6), (4.0, 0.3)]).unwrap();
     for i in 0..3 {
         let (body, _) = world.insert(
@@ -80,6 +106,10 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .set_body_restitution_curve(body, Some(curve.clone()))
             .unwrap();
     }
+}
+
+/// Two balls rolling on the floor, the first with its own rolling resistance.
+fn add_rolling_balls(world: &mut PhysicsWorld, plugin: &mut ImpactPlugin) {
     let (slow, _) = world.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(-3.0, 0.1, -3.0))
@@ -97,6 +127,10 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .angvel(Vector::new(20.0, 0.0, 0.0)),
         ColliderBuilder::ball(0.1).restitution(0.8),
     );
+}
+
+/// A fixed 10-degree slope with a ball at rest on it: the slope, a ground to be.
+fn add_slope_with_a_ball_at_rest(world: &mut PhysicsWorld) -> ColliderHandle {
     let tilt = Vector::new(0.0, 0.0, real(10f64.to_radians()));
     let (_, slope) = world.insert(
         RigidBodyBuilder::fixed()
@@ -109,6 +143,11 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
         RigidBodyBuilder::dynamic().translation(Vector::new(6.0, 0.5, -4.0) + n * 0.15),
         ColliderBuilder::ball(0.1).restitution(0.3).friction(0.9),
     );
+    slope
+}
+
+/// A kinematic platform moving under a ball: the platform, a ground to be.
+fn add_moving_platform_with_a_ball_over_it(world: &mut PhysicsWorld) -> ColliderHandle {
     let (_, platform) = world.insert(
         RigidBodyBuilder::kinematic_velocity_based()
             .translation(Vector::new(-6.0, 0.3, 4.0))
@@ -119,6 +158,11 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
         RigidBodyBuilder::dynamic().translation(Vector::new(-6.0, 1.0, 4.0)),
         ColliderBuilder::ball(0.1).restitution(0.7),
     );
+    platform
+}
+
+/// A ball with user hook flags that the plugin excludes.
+fn add_ball_left_to_rapier(world: &mut PhysicsWorld, plugin: &mut ImpactPlugin) {
     let (left, _) = world.insert(
         RigidBodyBuilder::dynamic().translation(Vector::new(6.0, 1.5, 6.0)),
         ColliderBuilder::ball(0.1)
@@ -126,19 +170,6 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
             .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
     );
     plugin.exclude_body(left);
-    for ground in [floor, slope] {
-        plugin
-            .add_ground(&world.bodies, &world.colliders, ground)
-            .unwrap();
-    }
-    // A ground with its own tangential restitution and curve.
-    let material = GroundMaterial::new(0.6, 0.5)
-        .with_tangential_restitution(0.7)
-        .with_restitution_curve(RestitutionCurve::threshold(0.3, 0.8).unwrap());
-    plugin
-        .add_ground_with_material(&world.bodies, &world.colliders, platform, material)
-        .unwrap();
-    (world, plugin)
 }
 
 /// A step's record: every body bit for bit, the events bit for bit and as values.
