@@ -1160,76 +1160,82 @@ fn every_phase_follows_the_closed_form_at_its_times_in_every_mode() {
     for case in &cases {
         for hz in [30.0, 60.0, 240.0] {
             for mode in MODES {
-                let th = case.slope.to_radians();
-                let (n, down) = (
-                    Vector3::new(th.sin(), th.cos(), 0.0),
-                    Vector3::new(th.cos(), -th.sin(), 0.0),
-                );
-                let (mut w, ground, ball, _) = scene(case.slope, case.v0);
-                w.integration_parameters.dt = real(1.0 / hz);
-                for (_, co) in w.colliders.iter_mut() {
-                    co.set_friction(real(case.mu));
-                }
-                let m = wide(w.bodies[ball].mass());
-                let ball_collider = w.bodies[ball].colliders()[0];
-                w.colliders[ball_collider].set_mass_properties(MassProperties::new(
-                    Vector::ZERO,
-                    real(m),
-                    Vector::splat(real(case.k * m * R * R)),
-                ));
-                let spin = n.cross(&(down * case.v0)) / R * case.spin;
-                let rb = &mut w.bodies[ball];
-                rb.recompute_mass_properties_from_colliders(&w.colliders);
-                rb.set_angvel(Vector::new(0.0, 0.0, real(spin.z)), true);
-                let mut p = ImpactPlugin::new(config(mode, case.mu_r, 0.0)).unwrap();
-                p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
-                let start = na(w.bodies[ball].center_of_mass());
-                let energy = |w: &PhysicsWorld| {
-                    let rb = &w.bodies[ball];
-                    let (v, om) = (na(rb.linvel()), na(rb.angvel()));
-                    0.5 * m * v.norm_squared()
-                        + 0.5 * case.k * m * R * R * om.norm_squared()
-                        + m * G * na(rb.center_of_mass()).y
-                };
-                // The energy's scale: the start's kinetic energy and a fall of a radius.
-                let e_scale = 0.5 * (1.0 + case.k) * m * case.v0 * case.v0 + m * G * R;
-                let mut e_last = energy(&w);
-                let mut done = 0;
-                for t in case.times() {
-                    let steps = (t * hz).round() as usize;
-                    let tol = X_TOL;
-                    let at = |t: f64| format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
-                    for i in done..steps {
-                        p.step(&mut w);
-                        let e = energy(&w);
-                        assert!(
-                            e <= e_last + X_TOL * e_scale,
-                            "{}: the energy rose by {:e} of its scale",
-                            at(i as f64 / hz),
-                            (e - e_last) / e_scale
-                        );
-                        e_last = e;
-                    }
-                    done = steps;
-                    let t = steps as f64 / hz;
-                    let (x_cf, v_cf) = case.at(t);
-                    let x = (na(w.bodies[ball].center_of_mass()) - start).dot(&down);
-                    let v = na(w.bodies[ball].linvel()).dot(&down);
-                    // Relative to the speed (at least 1 m/s: near a stop, to the start's).
-                    let scale = v_cf.abs().max(case.v0).max(1.0);
-                    assert!(
-                        abs_diff_eq!(x, x_cf, epsilon = tol * x_cf.abs().max(1e-3)),
-                        "{}: x {x} vs {x_cf}",
-                        at(t)
-                    );
-                    assert!(
-                        abs_diff_eq!(v, v_cf, epsilon = tol * scale),
-                        "{}: v {v} vs {v_cf}",
-                        at(t)
-                    );
-                }
+                follows_the_closed_form(case, hz, mode);
             }
         }
+    }
+}
+
+/// One case at one rate in one mode: the ball's position and speed along the slope at the
+/// case's times against the closed form, and its energy at every step.
+fn follows_the_closed_form(case: &AlongCase, hz: f64, mode: TimingMode) {
+    let th = case.slope.to_radians();
+    let (n, down) = (
+        Vector3::new(th.sin(), th.cos(), 0.0),
+        Vector3::new(th.cos(), -th.sin(), 0.0),
+    );
+    let (mut w, ground, ball, _) = scene(case.slope, case.v0);
+    w.integration_parameters.dt = real(1.0 / hz);
+    for (_, co) in w.colliders.iter_mut() {
+        co.set_friction(real(case.mu));
+    }
+    let m = wide(w.bodies[ball].mass());
+    let ball_collider = w.bodies[ball].colliders()[0];
+    w.colliders[ball_collider].set_mass_properties(MassProperties::new(
+        Vector::ZERO,
+        real(m),
+        Vector::splat(real(case.k * m * R * R)),
+    ));
+    let spin = n.cross(&(down * case.v0)) / R * case.spin;
+    let rb = &mut w.bodies[ball];
+    rb.recompute_mass_properties_from_colliders(&w.colliders);
+    rb.set_angvel(Vector::new(0.0, 0.0, real(spin.z)), true);
+    let mut p = ImpactPlugin::new(config(mode, case.mu_r, 0.0)).unwrap();
+    p.add_ground(&w.bodies, &w.colliders, ground).unwrap();
+    let start = na(w.bodies[ball].center_of_mass());
+    let energy = |w: &PhysicsWorld| {
+        let rb = &w.bodies[ball];
+        let (v, om) = (na(rb.linvel()), na(rb.angvel()));
+        0.5 * m * v.norm_squared()
+            + 0.5 * case.k * m * R * R * om.norm_squared()
+            + m * G * na(rb.center_of_mass()).y
+    };
+    // The energy's scale: the start's kinetic energy and a fall of a radius.
+    let e_scale = 0.5 * (1.0 + case.k) * m * case.v0 * case.v0 + m * G * R;
+    let mut e_last = energy(&w);
+    let mut done = 0;
+    for t in case.times() {
+        let steps = (t * hz).round() as usize;
+        let tol = X_TOL;
+        let at = |t: f64| format!("{}, {mode:?} at {hz} Hz, t = {t}", case.name);
+        for i in done..steps {
+            p.step(&mut w);
+            let e = energy(&w);
+            assert!(
+                e <= e_last + X_TOL * e_scale,
+                "{}: the energy rose by {:e} of its scale",
+                at(i as f64 / hz),
+                (e - e_last) / e_scale
+            );
+            e_last = e;
+        }
+        done = steps;
+        let t = steps as f64 / hz;
+        let (x_cf, v_cf) = case.at(t);
+        let x = (na(w.bodies[ball].center_of_mass()) - start).dot(&down);
+        let v = na(w.bodies[ball].linvel()).dot(&down);
+        // Relative to the speed (at least 1 m/s: near a stop, to the start's).
+        let scale = v_cf.abs().max(case.v0).max(1.0);
+        assert!(
+            abs_diff_eq!(x, x_cf, epsilon = tol * x_cf.abs().max(1e-3)),
+            "{}: x {x} vs {x_cf}",
+            at(t)
+        );
+        assert!(
+            abs_diff_eq!(v, v_cf, epsilon = tol * scale),
+            "{}: v {v} vs {v_cf}",
+            at(t)
+        );
     }
 }
 
