@@ -36,11 +36,9 @@ struct Pile {
 const PILE_R: f64 = 0.05;
 const PILE_T: f64 = 4.0;
 
-/// The accuracy sweep's pile (`examples/accuracy_sweep.rs`): 125 balls R = 5 cm in five
-/// layers into a walled box (the walls are not ground), e = 0.5, mu = 0.5, 4 s on a
-/// half-space; with the plugin (every step checked) or rapier alone.
-fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
-    let label = format!("pile dt {dt:.5} {timing:?}");
+/// The pile's scene at time step `dt`: the half-space ground, the four walls of the box and
+/// the 125 balls in five layers above it, a little jittered.
+fn pile_scene(dt: f64) -> (PhysicsWorld, ColliderHandle, Vec<RigidBodyHandle>) {
     let mut world = PhysicsWorld::default();
     world.integration_parameters.dt = real(dt);
     let (_, ground) = world.insert(
@@ -88,6 +86,15 @@ fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
         );
         balls.push(b);
     }
+    (world, ground, balls)
+}
+
+/// The accuracy sweep's pile (`examples/accuracy_sweep.rs`): 125 balls R = 5 cm in five
+/// layers into a walled box (the walls are not ground), e = 0.5, mu = 0.5, 4 s on a
+/// half-space; with the plugin (every step checked) or rapier alone.
+fn pile(dt: f64, timing: Option<TimingMode>) -> Pile {
+    let label = format!("pile dt {dt:.5} {timing:?}");
+    let (mut world, ground, balls) = pile_scene(dt);
     let mut plugin = timing.map(|t| plugin_on(&world, ground, t));
     let steps = (PILE_T / dt).ceil() as usize;
     let mut out = Pile {
