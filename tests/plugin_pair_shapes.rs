@@ -1046,6 +1046,53 @@ fn a_die_spinning_about_the_contact_normal_does_not_close_on_the_face_it_touches
     }
 }
 
+/// A die with a non-finite spin (the user's, which the plan reads as it is) falling beside a
+/// ball onto the table, 5 mm apart side by side, both 1 cm above it at 2 m/s: the pair's
+/// closing speed at the step's start, which counts what the die's turn adds, is NaN. In the
+/// modes that resolve impacts in the step the pair is then judged by its members' bounces
+/// off the table, which it meets in the step: both straight up, across the pair's level
+/// normal, so the pair stays slower than the resting speed and is in no plan, as without
+/// the spin. A NaN closing speed decides no pair by itself. (`Step` mode resolves pairs at
+/// the step's start, before any bounce.)
+#[test]
+fn a_pair_with_a_non_finite_spin_is_judged_by_its_bounces_off_the_table() {
+    let h = 0.05;
+    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+        for turn in [0.0, f64::INFINITY] {
+            let (mut w, table) = lane_world();
+            let none = UnitQuaternion::identity();
+            let down = Vector3::y() * -2.0;
+            let above = h + 0.01;
+            let spin = Vector3::new(0.0, 0.0, turn);
+            body(
+                &mut w,
+                cube(h, 0.5, 0.3),
+                Vector3::y() * above,
+                none,
+                down,
+                spin,
+            );
+            let ball = ColliderBuilder::ball(real(h)).restitution(0.5);
+            let at = Vector3::new(2.0 * h + 0.005, above, 0.0);
+            let (ball, _) = body(&mut w, ball, at, none, down, Vector3::zeros());
+            let mut p = plugin(mode);
+            p.add_ground(&w.bodies, &w.colliders, table).unwrap();
+            p.set_profiling(true);
+            let seen = run(&mut p, &mut w, 1);
+            let label = format!("{mode:?}, spin {turn} rad/s");
+            let planned = p.profile().unwrap().counts.body_pairs;
+            assert_eq!(planned, 0, "{label}: the pair is planned");
+            assert!(seen.is_empty(), "{label}: {seen:?}");
+            assert!(p.diagnostics().is_empty(), "{label}: {:?}", p.diagnostics());
+            let (v, om) = velocity(&w, ball);
+            assert!(
+                v.iter().chain(om.iter()).all(|x| x.is_finite()) && v.y > 0.0,
+                "{label}: the ball left the table at {v}, {om}"
+            );
+        }
+    }
+}
+
 /// A cube turning fast against the face of a cube it touches, in `Step` mode (the impulse at
 /// the step's start, where the two touch): its face is flat on the other's to within the flat
 /// tolerance, but its turn (about the axis across the normal) drives the face's one edge in
