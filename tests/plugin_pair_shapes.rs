@@ -12,7 +12,9 @@ use plugin_support::{F64, MODES, na, real, wide};
 use rapier_impact::model::{self, Body, BodyVelocity, Material, PairContact, PairImpact};
 use rapier_impact::na::{Matrix3, UnitQuaternion, Vector3};
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
+use rapier_impact::{
+    Diagnostic, EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode,
+};
 
 /// Tolerance on velocities, relative to the speed: parry's contact in rapier's precision.
 const V_TOL: f64 = if F64 { 1e-12 } else { 2e-6 };
@@ -1052,8 +1054,10 @@ fn a_die_spinning_about_the_contact_normal_does_not_close_on_the_face_it_touches
 /// modes that resolve impacts in the step the pair is then judged by its members' bounces
 /// off the table, which it meets in the step: both straight up, across the pair's level
 /// normal, so the pair stays slower than the resting speed and is in no plan, as without
-/// the spin. A NaN closing speed decides no pair by itself. (`Step` mode resolves pairs at
-/// the step's start, before any bounce.)
+/// the spin: in these modes a NaN closing speed decides no pair by itself. (`Step` mode
+/// resolves pairs at the step's start, before any bounce, and plans this pair `Resting`.)
+/// What the plugin does with the die's own non-finite state is not this test's concern; the
+/// ball's must stay finite.
 #[test]
 fn a_pair_with_a_non_finite_spin_is_judged_by_its_bounces_off_the_table() {
     let h = 0.05;
@@ -1083,7 +1087,10 @@ fn a_pair_with_a_non_finite_spin_is_judged_by_its_bounces_off_the_table() {
             let planned = p.profile().unwrap().counts.body_pairs;
             assert_eq!(planned, 0, "{label}: the pair is planned");
             assert!(seen.is_empty(), "{label}: {seen:?}");
-            assert!(p.diagnostics().is_empty(), "{label}: {:?}", p.diagnostics());
+            let of_ball =
+                |d: &&Diagnostic| matches!(d, Diagnostic::NonFiniteState { body } if *body == ball);
+            let ball_refused: Vec<_> = p.diagnostics().iter().filter(of_ball).collect();
+            assert!(ball_refused.is_empty(), "{label}: {ball_refused:?}");
             let (v, om) = velocity(&w, ball);
             assert!(
                 v.iter().chain(om.iter()).all(|x| x.is_finite()) && v.y > 0.0,
