@@ -1359,7 +1359,8 @@ fn configs_out_of_range_are_refused() {
 }
 
 /// A body's own rolling settings, tangential restitution and restitution curve out of range
-/// are refused at the call, and nothing of them is kept.
+/// are refused at the call, and nothing of them is kept; the ends of the ranges are taken and
+/// kept, and `None` clears them.
 fn body_settings_out_of_range_are_refused(world: &mut PhysicsWorld, p: &mut ImpactPlugin) {
     let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
     assert!(matches!(

@@ -158,7 +158,7 @@ fn grounds_of_each_kind_with_a_ball_over_each(
     e: f64,
     h: f64,
 ) -> ([ColliderHandle; 3], [RigidBodyHandle; 3]) {
-    // A fixed body's half-space... (balls far apart so each lands on its own ground)
+    // A fixed body's box (balls far apart so each lands on its own ground).
     let (_, g_body) = world.insert(
         RigidBodyBuilder::fixed(),
         ColliderBuilder::cuboid(2.0, 0.5, 2.0)

@@ -475,7 +475,7 @@ fn up_to_the_first_impact(
 }
 
 /// The analytic first touch from the state `before` a step of `dt` (no gravity: the centre
-/// moves straight, the isotropic cube turns at constant spin): the lowest corner's x reaches
+/// moves straight, the isotropic cube turns at constant spin): the corner farthest along x reaches
 /// the face of the cube at rest, found by bisection. The time, the corner and the centre then.
 fn first_corner_touch(before: Motion, h: f64, dt: f64) -> (f64, Vector3<f64>, Vector3<f64>) {
     let (c0, q0, v0, w0) = before;

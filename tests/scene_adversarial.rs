@@ -100,7 +100,8 @@ fn scene(
     (world, ground)
 }
 
-/// The `i`th body of the scene, lifted clear of the ground by its largest size.
+/// The `i`th body of the scene, lifted clear of the ground by 1.8 times its largest
+/// half-extent (a ball's radius).
 fn insert_body(world: &mut PhysicsWorld, i: usize, b: &BodySpec, pairs: bool) {
     let collider = if b.ball {
         ColliderBuilder::ball(real(b.size[0]))
