@@ -3,16 +3,15 @@
 //! Contract: [`within_reach_of_other`] reads rapier's contact graph, colliders and bodies (each
 //! body as the step's writes so far leave it) and writes nothing of rapier's or the plugin's
 //! state besides its own memo. What it reads of a neighbouring ball ([`Neighbour`]: its place,
-//! its size, how far its body can move in the step) is the same for every ball it
+//! its size, how fast its body can close on anything) is the same for every ball it
 //! neighbours, so it is read once a plan and kept in [`NeighbourReads`] until the plan ends or
-//! its body is written again (a `Step` impulse of an earlier body's plan); its motion, which
-//! only a pair the reaches leave open needs, is read again from the same collider, body and
-//! writes. The bound each ball then draws is the one read afresh would give, to the bit. A
-//! ground (a floor under every ball) is skipped before it is read; any other shape (a wall)
-//! is read afresh each time. Two balls are first held to the sum of how far each can move in
-//! the step in any direction ([`closing_bound_of_reaches`], never below the exact bound along
-//! their line of centres): a neighbour beyond it is beyond the exact bound too, so the answer
-//! is the exact test's, and most neighbours of a rolling ball are settled so.
+//! its body is written again (a `Step` impulse of an earlier body's plan); the bound each ball
+//! then draws from it is the one read afresh would give, to the bit. A ground (a floor under
+//! every ball) is skipped before it is read; any other shape (a wall) is read afresh each
+//! time. Two balls are first held to the sum of how far each can move in the step in any
+//! direction ([`closing_bound_of_reaches`], never below the exact bound along their line of
+//! centres): a neighbour beyond it is beyond the exact bound too, so the answer is the exact
+//! test's, and most neighbours of a rolling ball are settled so.
 
 use crate::parry::query;
 use crate::parry::shape::Ball;
@@ -48,7 +47,7 @@ pub(crate) struct OwnMotion {
 
 /// How fast a collider's surface can move over the step, from its body's motion: what
 /// [`closing_bound`] needs of the other side of a pair, whoever the ball on this side is.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 enum OtherMotion {
     /// A collider without a body: it stays where it is.
     Still,
@@ -77,11 +76,7 @@ pub(crate) struct OwnCollider<'c> {
     pub ball: &'c Ball,
 }
 
-/// A ball of rapier's contact graph as the reach test reads it: what every pair with it
-/// reads, in 56 bytes. The plan's memo is written afresh each plan, after rapier's step has
-/// pushed it out of the cache, so each byte kept costs a cache line written. Its motion,
-/// which only a pair the reaches leave open reads, is not kept but read again when needed
-/// ([`Neighbour::motion`]).
+/// A ball of rapier's contact graph as the reach test reads it.
 #[derive(Clone, Copy, Debug)]
 struct Neighbour {
     handle: ColliderHandle,
@@ -93,45 +88,16 @@ struct Neighbour {
     skin: Real,
     translation: Vector,
     radius: Real,
+    motion: OtherMotion,
     /// Its side of [`closing_bound_of_reaches`]: how far its surface can move in the step,
     /// whatever the direction.
     reach: f64,
 }
 
-impl Neighbour {
-    /// Its motion over a step of `dt` (s) under the world's `gravity` (m/s^2), read from its
-    /// collider, its body and the writes: while the entry holds (its body's write mark
-    /// unchanged, within the plan that read it, which changes none of rapier's sets) the
-    /// motion its reach was drawn from, to the bit. `None` if its collider no longer exists.
-    fn motion(&self, scene: &Scene, (gravity, dt): (Vector3<f64>, f64)) -> Option<OtherMotion> {
-        let oc = scene.colliders.get(self.handle)?;
-        let body = self.body.and_then(|p| Some((p, scene.bodies.get(p)?)));
-        Some(other_motion(oc, true, body, (gravity, dt), scene.writes))
-    }
-}
-
-/// A ball as [`NeighbourReads::read`] gives it: its entry, its motion where this read made
-/// the entry, and the plan's gravity and step, to read it again with.
-struct BallRead<'n> {
-    near: &'n Neighbour,
-    motion: Option<&'n OtherMotion>,
-    plan: &'n (Vector3<f64>, f64),
-}
-
-impl BallRead<'_> {
-    /// The ball's motion, as its entry's reach was drawn from (`None` if its collider no
-    /// longer exists).
-    fn motion(&self, scene: &Scene) -> Option<OtherMotion> {
-        self.motion
-            .copied()
-            .or_else(|| self.near.motion(scene, *self.plan))
-    }
-}
-
 /// A collider of rapier's contact graph, as [`NeighbourReads::read`] gives it.
 enum Read<'n, 'c> {
     /// A ball, as this plan reads it.
-    Ball(BallRead<'n>),
+    Ball(&'n Neighbour),
     /// Any other shape but a ground's (a wall), read afresh and not kept.
     Other(&'c Collider),
 }
@@ -146,16 +112,15 @@ pub(crate) struct NeighbourReads {
     /// By collider slot: where in `read` that slot's ball is, if it was read in this plan.
     by_slot: Vec<u32>,
     /// The plan's world gravity (m/s^2) and step (s), which a neighbour's motion is read with.
-    plan: (Vector3<f64>, f64),
-    /// The motion of the ball read last (not kept in its entry: [`Neighbour`]).
-    last_motion: Option<OtherMotion>,
+    gravity: Vector3<f64>,
+    dt: f64,
 }
 
 impl NeighbourReads {
     /// A new plan, of a step of `dt` (s) under the world's `gravity` (m/s^2): every neighbour
     /// is read afresh.
     pub fn begin_plan(&mut self, gravity: Vector3<f64>, dt: f64) {
-        self.plan = (gravity, dt);
+        (self.gravity, self.dt) = (gravity, dt);
         self.read.clear();
     }
 
@@ -180,20 +145,14 @@ impl NeighbourReads {
             n.mark == n.body.map_or(0, |b| scene.writes.mark(b))
         });
         if let Some(k) = fresh {
-            return Some(Read::Ball(BallRead {
-                near: &self.read[k],
-                motion: None,
-                plan: &self.plan,
-            }));
+            return Some(Read::Ball(&self.read[k]));
         }
         let oc = scene.colliders.get(handle)?;
         let Some(radius) = oc.shape().as_ball().map(|b| b.radius) else {
             return Some(Read::Other(oc));
         };
         let body = oc.parent().and_then(|p| Some((p, scene.bodies.get(p)?)));
-        let motion = self
-            .last_motion
-            .insert(other_motion(oc, true, body, self.plan, scene.writes));
+        let motion = other_motion(oc, true, body, (self.gravity, self.dt), scene.writes);
         let neighbour = Neighbour {
             handle,
             body: body.map(|(p, _)| p),
@@ -202,7 +161,8 @@ impl NeighbourReads {
             skin: oc.contact_skin(),
             translation: oc.position().translation,
             radius,
-            reach: motion.reach(self.plan.1),
+            motion,
+            reach: motion.reach(self.dt),
         };
         // Read again after a write to its body: in place.
         let k = match entry {
@@ -219,11 +179,7 @@ impl NeighbourReads {
                 self.read.len() - 1
             }
         };
-        Some(Read::Ball(BallRead {
-            near: &self.read[k],
-            motion: self.last_motion.as_ref(),
-            plan: &self.plan,
-        }))
+        Some(Read::Ball(&self.read[k]))
     }
 }
 
@@ -257,12 +213,12 @@ pub(crate) fn within_reach_of_other(
         ..
     } = *scene;
     // The memo's motions are read with the plan's gravity and step, which every ball shares.
-    debug_assert!((own.gravity, own.dt) == neighbours.plan);
+    debug_assert!(own.gravity == neighbours.gravity && own.dt == neighbours.dt);
     if jointed {
         return true;
     }
     // Each side's reach is drawn with the plan's step, which a neighbour's was read with.
-    let own_reach = if own.dt == neighbours.plan.1 {
+    let own_reach = if own.dt == neighbours.dt {
         own.reach()
     } else {
         f64::INFINITY
@@ -317,18 +273,16 @@ fn neighbour_within_reach(
     } = *scene;
     match neighbours.read(other, scene) {
         None => false,
-        Some(Read::Ball(read)) => {
-            let near = read.near;
+        Some(Read::Ball(near)) => {
             if !near.enabled {
                 return false;
             }
             let skins = to_f64(co.contact_skin()) + to_f64(near.skin);
-            let motion = || read.motion(scene);
             match ball {
-                Some(a) => balls_within_reach((co, a), (near, motion), skins, own, own_reach),
-                None => colliders.get(other).is_some_and(|oc| {
-                    motion().is_none_or(|m| reached_through_parry(co, oc, skins, own, &m))
-                }),
+                Some(a) => balls_within_reach((co, a), near, skins, own, own_reach),
+                None => colliders
+                    .get(other)
+                    .is_some_and(|oc| reached_through_parry(co, oc, skins, own, &near.motion)),
             }
         }
         Some(Read::Other(oc)) => {
@@ -344,14 +298,13 @@ fn neighbour_within_reach(
 }
 
 /// Two balls (most neighbours in a crowd), the own ball `a` of collider `co` and the
-/// neighbour `near` (`motion` reads its motion, `None` if its collider no longer exists),
-/// `skins` their contact skins summed: can they touch within the step, `own` and `own_reach`
-/// the own ball's motion and reach? By their centres, without parry; a bound that is NaN,
-/// or a neighbour without a motion, is within reach.
+/// neighbour `near`, `skins` their contact skins summed: can they touch within the step,
+/// `own` and `own_reach` the own ball's motion and reach? By their centres, without parry;
+/// a bound that is NaN is within reach.
 #[inline]
 fn balls_within_reach(
     (co, a): (&Collider, &Ball),
-    (near, motion): (&Neighbour, impl FnOnce() -> Option<OtherMotion>),
+    near: &Neighbour,
     skins: f64,
     own: &OwnMotion,
     own_reach: f64,
@@ -370,10 +323,7 @@ fn balls_within_reach(
     // Two centres close no faster than along their line now:
     // |d + x| >= |d| + x.d/|d| for any relative displacement x.
     let line = (len > 0.0).then(|| d / len);
-    let Some(motion) = motion() else {
-        return true;
-    };
-    if gap > closing_bound(own, &motion, line) {
+    if gap > closing_bound(own, &near.motion, line) {
         return false;
     }
     true
@@ -828,19 +778,11 @@ mod tests {
         }
     }
 
-    /// One ball moving along x at `vx` and spinning about its centre: the same handles in
-    /// every set built so.
-    fn world(vx: f64) -> (RigidBodySet, ColliderSet, RigidBodyHandle, ColliderHandle) {
-        let mut bodies = RigidBodySet::new();
-        let mut colliders = ColliderSet::new();
-        let body = bodies.insert(
-            RigidBodyBuilder::dynamic()
-                .translation(Vector::new(0.1, 0.0, 0.0))
-                .linvel(Vector::new(to_real(vx), 0.0, 0.0))
-                .angvel(Vector::new(0.0, 0.0, 3.0)),
-        );
-        let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
-        (bodies, colliders, body, ball)
+    fn linvel(n: &Neighbour) -> Vector3<f64> {
+        match n.motion {
+            OtherMotion::Body { linvel, .. } => linvel,
+            OtherMotion::Still => panic!("a ball of a body read as still"),
+        }
     }
 
     /// A neighbouring ball is read once a plan, read again once its body is written (what a
@@ -848,6 +790,18 @@ mod tests {
     /// read afresh in the next plan, and never taken for another collider in its slot.
     #[test]
     fn a_neighbour_is_read_once_a_plan_and_again_after_a_write_to_its_body() {
+        // One ball moving along x at `vx`: the same handles in every set built so.
+        let world = |vx: f64| {
+            let mut bodies = RigidBodySet::new();
+            let mut colliders = ColliderSet::new();
+            let body = bodies.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.1, 0.0, 0.0))
+                    .linvel(Vector::new(to_real(vx), 0.0, 0.0)),
+            );
+            let ball = colliders.insert_with_parent(ColliderBuilder::ball(0.02), body, &mut bodies);
+            (bodies, colliders, body, ball)
+        };
         let (bodies, colliders, body, ball) = world(0.0);
         let (narrow_phase, joints, multibody) = (
             NarrowPhase::new(),
@@ -858,9 +812,7 @@ mod tests {
         let registry = Registry::default();
         let mut neighbours = NeighbourReads::default();
         let (gravity, dt) = (own().gravity, own().dt);
-        // The ball `handle` as the plan reads it: its reach, its radius and its motion as the
-        // pair reads it. Where the read made its entry, the motion read again from the entry
-        // is the one its reach was drawn from.
+        // The ball `handle` as the plan reads it: its linear velocity and radius.
         let read = |neighbours: &mut NeighbourReads,
                     handle: ColliderHandle,
                     bodies: &RigidBodySet,
@@ -875,25 +827,11 @@ mod tests {
                 writes,
             };
             match neighbours.read(handle, &scene) {
-                Some(Read::Ball(n)) => {
-                    if let Some(motion) = n.motion {
-                        assert_eq!(n.near.motion(&scene, (gravity, dt)), Some(*motion));
-                        assert_eq!(n.near.reach, motion.reach(dt));
-                    }
-                    (n.near.reach, n.near.radius, n.motion(&scene))
-                }
+                Some(Read::Ball(n)) => (linvel(n), n.radius),
                 _ => panic!("the ball is not read as one"),
             }
         };
-        // The motion of a ball moving along x at `vx`, falling, spinning about its centre
-        // (which does not move its surface), and its reach.
-        let motion = |vx: f64| OtherMotion::Body {
-            linvel: vx * Vector3::x(),
-            turn: 0.0,
-            accel: Some(gravity),
-            kinematic_shift: None,
-        };
-        let v = |vx: f64| motion(vx).reach(dt);
+        let v = |x: f64| x * Vector3::x();
 
         let mut writes = Writes::default();
         neighbours.begin_plan(gravity, dt);
@@ -924,10 +862,6 @@ mod tests {
             read(&mut neighbours, ball, &bodies, &colliders, &writes).0,
             v(-5.0)
         );
-        // Read from the entry, without a write since: the motion read again is the one its
-        // reach was drawn from, a ball's.
-        let (reach, _, again) = read(&mut neighbours, ball, &bodies, &colliders, &writes);
-        assert_eq!((reach, again), (v(-5.0), Some(motion(-5.0))));
         // Another ball in the removed one's slot, within the same plan: read as itself.
         let (mut islands, mut soft) = (IslandManager::new(), SoftBodySet::new());
         colliders.remove(ball, &mut islands, &mut bodies, &mut soft, false);
