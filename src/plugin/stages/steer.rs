@@ -8,16 +8,16 @@
 //! position, in each), and turns it in each substep by the normalised quaternion step
 //! `(w h / 2, 1)`, an angle of `2 atan(|w| h / 2)` about `w` (`h = dt / N`).
 //! - A free flight (`Exact` mode): started from `v0 - a dt / 2N` instead of `v0`, it lands
-//!   on the exact position. This stage writes that velocity, and marks the candidate steered
-//!   (`Candidate::steered`; its offset `a dt / 2N` is `Candidate::flight_steering`, read
-//!   again where needed), for every flying candidate that rapier integrates so: a dynamic body with no ground within
-//!   reach, no linear damping, no locked axis and no joint, not a ball of an impact between
-//!   bodies, whose last step's end was the plugin's (its `f64` shadow still held: a body
-//!   whose end rapier's contacts decided, a ball resting on others, is left alone). After
-//!   rapier's step the bodies stage gives the body its own velocity back, and writes its
-//!   exact translation only where rapier's drifted beyond a few roundings (`bodies.rs`,
-//!   `fly_exactly`; `policy::carries`); a steered body that something else touched gets the
-//!   offset back on rapier's end velocity.
+//!   on the exact position. This stage writes that velocity, and marks the candidate
+//!   steered (`Candidate::steered`; its offset `a dt / 2N` is `Candidate::flight_steering`,
+//!   read again where needed), for every flying candidate that rapier integrates so: a
+//!   dynamic body with no ground within reach, no linear damping, no locked axis and no
+//!   joint, not a ball of an impact between bodies, whose last step's end was the plugin's
+//!   (its `f64` shadow still held: a body whose end rapier's contacts decided, a ball
+//!   resting on others, is left alone). After rapier's step the bodies stage gives the body
+//!   its own velocity back, and writes its exact translation only where rapier's drifted
+//!   beyond a few roundings (`bodies.rs`, `fly_exactly`; `policy::carries`); a steered body
+//!   that something else touched gets the offset back on rapier's end velocity.
 //! - A closed-form roll (every mode) alone over one flat face of a still ground
 //!   (`Candidate::rolls_on_one_face`), of a ball rapier integrates as above (also no
 //!   angular damping and no user torque): the roll's end of the step is computed here, and
@@ -33,10 +33,10 @@
 //!   mode, from which its next step continues (`Commit::rolled`); a ball something else
 //!   acted on keeps rapier's end state, the steering's offsets given back on its velocities
 //!   (the steering is kept in `StepData::steered_rolls`, which only this stage appends to,
-//!   the candidate holding its index, `Candidate::steered_roll`): its velocities are then an unsteered ball's, which flew
-//!   without its ground, and the bodies stage's check (`EndCheck::DisturbedRolling`) gives
-//!   it the ground's support and friction over the step as for one, though it ends on its
-//!   plane rather than below it.
+//!   the candidate holding its index, `Candidate::steered_roll`): its velocities are then
+//!   an unsteered ball's, which flew without its ground, and the bodies stage's check
+//!   (`EndCheck::DisturbedRolling`) gives it the ground's support and friction over the
+//!   step as for one, though it ends on its plane rather than below it.
 //!
 //! Between steps rapier holds the body's own velocities, always.
 
