@@ -1,16 +1,15 @@
 //! Save and resume: [`ImpactSnapshot`], taken by [`ImpactPlugin::snapshot`] and given back
 //! by [`ImpactPlugin::restore`].
 //!
-//! Contract: a snapshot holds everything one step leaves for the next (the configuration,
-//! the registrations, the `f64` shadows, the roles and holds of last step's pairs,
-//! where the plugin's hook flags are and the user's flags they replaced, the colliders already
-//! reported out of range, and the last step's events), and nothing that is built again from it and the world (the ground index, the
-//! pair index, the hooks' tables, the step's own tables): a plugin restored from it, stepping
-//! the world saved with it, steps bit for bit as the plugin it was taken from. Its tables are
-//! listed in arena order, so that the same state gives the same snapshot whatever the
-//! history of the hash maps it came from. The user's hook and the profile are not part of it.
-//! Every value a setter would refuse is refused by [`ImpactPlugin::restore`] too, before
-//! anything changes.
+//! Contract: a snapshot holds everything one step leaves for the next (the configuration, the
+//! registrations, the `f64` shadows, the roles and holds of last step's pairs, where the plugin's
+//! hook flags are and the user's flags they replaced, the colliders already reported out of range,
+//! and the last step's events), and nothing that is built again from it and the world (the ground
+//! index, the pair index, the hooks' tables, the step's own tables): a plugin restored from it,
+//! stepping the world saved with it, steps bit for bit as the plugin it was taken from. Its tables
+//! are listed in arena order, so that the same state gives the same snapshot whatever the history
+//! of the hash maps it came from. The user's hook and the profile are not part of it. Every value a
+//! setter would refuse is refused by [`ImpactPlugin::restore`] too, before anything changes.
 
 use crate::plugin::config::{ConfigError, ImpactConfig};
 use crate::plugin::events::ImpactEvent;
@@ -164,11 +163,11 @@ impl<H> ImpactPlugin<H> {
         }
     }
 
-    /// Puts the plugin in the state `snapshot` was taken in, its hook and profiling aside:
-    /// stepping the world saved with it then goes on bit for bit as the run it was taken
-    /// from. Everything the plugin held before is replaced ([`Self::diagnostics`] is empty). Refused, with the plugin left
-    /// as it was, when the snapshot has another layout, was taken inside a step, or holds a
-    /// value the setters refuse.
+    /// Puts the plugin in the state `snapshot` was taken in, its hook and profiling aside: stepping
+    /// the world saved with it then goes on bit for bit as the run it was taken from. Everything
+    /// the plugin held before is replaced ([`Self::diagnostics`] is empty). Refused, with the
+    /// plugin left as it was, when the snapshot has another layout, was taken inside a step, or
+    /// holds a value the setters refuse.
     pub fn restore(&mut self, snapshot: &ImpactSnapshot) -> Result<(), RestoreError> {
         if snapshot.layout != LAYOUT {
             return Err(RestoreError::Layout {

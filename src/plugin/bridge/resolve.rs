@@ -47,8 +47,8 @@ impl Inertia {
         }
     }
 
-    /// `I / (m r^2)` for a body of isotropic inertia (to `ISOTROPIC_TOLERANCE`) with no locked rotation axis
-    /// (a ball about its centre) and contact radius `radius`, else `None`.
+    /// `I / (m r^2)` for a body of isotropic inertia (to `ISOTROPIC_TOLERANCE`) with no locked
+    /// rotation axis (a ball about its centre) and contact radius `radius`, else `None`.
     #[inline]
     pub fn ball_ratio(&self, radius: f64) -> Option<f64> {
         let inv = self.inv_principal.diagonal();
@@ -230,10 +230,10 @@ impl<'h> GroundContactAt<'h> {
     }
 }
 
-/// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the
-/// contact `at.point` (a landing point, see [`crate::plugin::queries::geometry::landing_point`]) with the
-/// hit's normal. Returns the state after and the event, or `None` when the point does not
-/// approach the ground or the model refuses the input.
+/// Resolves the impact of the body at state `s` (time `t` in the step) on a ground at the contact
+/// `at.point` (a landing point, see [`crate::plugin::queries::geometry::landing_point`]) with the
+/// hit's normal. Returns the state after and the event, or `None` when the point does not approach
+/// the ground or the model refuses the input.
 pub(crate) fn resolve(
     input: &ImpactInput,
     geom: &BodyGeom,

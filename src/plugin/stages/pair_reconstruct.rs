@@ -4,32 +4,31 @@
 //!
 //! Contract: [`move_clusters`] finds the clusters whose every body moved alone in the step and
 //! commits what [`through_pair_impacts`] gives for each; [`through_pair_impacts`] takes a cluster
-//! each of whose bodies moved alone in the step (no contact rapier's solver pushed it by, no joint or
-//! torque: checked by the caller) and moves every body by its own motion (`crate::motion`: free
+//! each of whose bodies moved alone in the step (no contact rapier's solver pushed it by, no joint
+//! or torque: checked by the caller) and moves every body by its own motion (`crate::motion`: free
 //! flight, or for a ball rolling in closed form on its level ground) to the cluster's earliest
-//! event: a body's ground impact (the in-step search of `queries/geometry/impact_time.rs`) or two bodies touching
-//! (two centred balls in closed form, `motion::meeting`; any other pair by conservative
-//! advancement on parry's distance, `body_contact.rs`), resolved by the model (`resolve.rs`; a
-//! flat face on a face as one impact at the centroid of their overlap's corners), then on to the
-//! next, in time order, both bodies of a pair updated between events (each body's and pair's
-//! next event is searched once and again only when one of its bodies changed, so an event
-//! costs the searches of its two bodies, not of the whole cluster): a chain (a ball passing an
-//! impact on to the one it touches) is a sequence of impacts at the same time, in the order the
+//! event: a body's ground impact (the in-step search of `queries/geometry/impact_time.rs`) or two
+//! bodies touching (two centred balls in closed form, `motion::meeting`; any other pair by
+//! conservative advancement on parry's distance, `body_contact.rs`), resolved by the model
+//! (`resolve.rs`; a flat face on a face as one impact at the centroid of their overlap's corners),
+//! then on to the next, in time order, both bodies of a pair updated between events (each body's
+//! and pair's next event is searched once and again only when one of its bodies changed, so an
+//! event costs the searches of its two bodies, not of the whole cluster): a chain (a ball passing
+//! an impact on to the one it touches) is a sequence of impacts at the same time, in the order the
 //! touches are found; a touch slower than the resting speed is a resting contact from there on
 //! (rapier's next step). A ball rolling on its ground that an impact lifts flies from there;
-//! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls
-//! on. It returns every body's state at the step's end and reports every impulse as an event,
-//! or why the cluster cannot be moved alone as it is (`Unmoved`): a search that stalls, more
-//! events than `max_impacts_per_step` per body, a rolling ball leaving its plane, a body sent
-//! off by an event reaching a ground it was not planned against, or reaching a member of the
-//! pair plan it has no pair with (by that body's swept box in the pair index). In that last
-//! case the body, alone or with the whole of its own cluster, joins the run where it is met,
-//! with the pair, when they can be moved with the cluster and none of them has an event of
-//! its own before (nothing of the cluster reached them sooner: the same run as the cluster
-//! moved again from its start with them); where one has, [`move_clusters`] adds them and the
-//! pair and moves the cluster again; otherwise, and in every other case, the cluster's events
-//! are withdrawn, rapier's end state stands, and the settle stage checks the pairs. It writes
-//! nothing into rapier.
+//! pressed into the ground, the ground takes the normal speed (a `Settle` event) and it rolls on.
+//! It returns every body's state at the step's end and reports every impulse as an event, or why
+//! the cluster cannot be moved alone as it is (`Unmoved`): a search that stalls, more events than
+//! `max_impacts_per_step` per body, a rolling ball leaving its plane, a body sent off by an event
+//! reaching a ground it was not planned against, or reaching a member of the pair plan it has no
+//! pair with (by that body's swept box in the pair index). In that last case the body, alone or
+//! with the whole of its own cluster, joins the run where it is met, with the pair, when they can
+//! be moved with the cluster and none of them has an event of its own before (nothing of the
+//! cluster reached them sooner: the same run as the cluster moved again from its start with them);
+//! where one has, [`move_clusters`] adds them and the pair and moves the cluster again; otherwise,
+//! and in every other case, the cluster's events are withdrawn, rapier's end state stands, and the
+//! settle stage checks the pairs. It writes nothing into rapier.
 //!
 //! Its parts: forming the clusters and committing their end states (here), the cluster's
 //! motion event by event (`cluster.rs`), the agenda of its next events (`agenda.rs`), and

@@ -52,19 +52,19 @@ impl<H> ImpactPlugin<H> {
 }
 
 impl<'v> AfterStep<'v> {
-    /// After the step, for an `Impact` pair of balls not moved together (something else
-    /// touched one, or a search gave up): rapier's end state, in which the pair was out of
-    /// its solver, so that the balls may have passed into, or right through, each other. If
-    /// they met in the step (they overlap, their straight relative motion or the straight
-    /// path between their start and end offsets came within reach, or their centres crossed
-    /// the line of centres they started on while their relative motion bent), the model's impulse
-    /// along the line of centres where they touched, on the straight way from their start
-    /// offset to their end offset (`entry_normal`; else the line now, or the one they started
-    /// on if they crossed) (`ImpactTiming::StepEnd`; no bounce slower than the resting speed,
-    /// or the pressed speed for a ball touching something else), and both balls moved apart
-    /// along it until their offset along it is the touching distance (off the line of
-    /// centres now, they end a little apart), on the sides they started on, each by its
-    /// inverse-mass share, with a `PushOut` event each. Other shapes: [`AfterStep::pair_end_bodies`].
+    /// After the step, for an `Impact` pair of balls not moved together (something else touched
+    /// one, or a search gave up): rapier's end state, in which the pair was out of its solver, so
+    /// that the balls may have passed into, or right through, each other. If they met in the step
+    /// (they overlap, their straight relative motion or the straight path between their start and
+    /// end offsets came within reach, or their centres crossed the line of centres they started on
+    /// while their relative motion bent), the model's impulse along the line of centres where they
+    /// touched, on the straight way from their start offset to their end offset (`entry_normal`;
+    /// else the line now, or the one they started on if they crossed) (`ImpactTiming::StepEnd`; no
+    /// bounce slower than the resting speed, or the pressed speed for a ball touching something
+    /// else), and both balls moved apart along it until their offset along it is the touching
+    /// distance (off the line of centres now, they end a little apart), on the sides they started
+    /// on, each by its inverse-mass share, with a `PushOut` event each. Other shapes:
+    /// [`AfterStep::pair_end_bodies`].
     pub fn pair_end(
         &mut self,
         bodies: &RigidBodySet,

@@ -48,14 +48,14 @@ pub(crate) fn earliest_touch(dt: f64, touches: impl Fn(f64) -> bool) -> Option<f
 /// face once, and a sample every 16th of a step finds it.
 const TOUCH_SAMPLES: usize = 16;
 
-/// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of
-/// mass, so its rotation does not move it) without linear damping against grounds whose
-/// every query over the flight is one face's plane ([`flat_relative`] of a still ground) and towards which
-/// the acceleration does not point (`n.a <= 0`: a concave gap, so the approach, once
-/// started, ends on the ground): the gap to each plane is `d + un t + an t^2 / 2`, exactly,
-/// and the impact is its downward root. `None` where that does not apply, or where the
-/// search could decide otherwise (a start inside a ground and separating; a contact within
-/// the touching tolerance at the end of the interval): the search then runs.
+/// [`first_impact`] in closed form for a ball (one collider, a ball centred on the centre of mass,
+/// so its rotation does not move it) without linear damping against grounds whose every query over
+/// the flight is one face's plane ([`flat_relative`] of a still ground) and towards which the
+/// acceleration does not point (`n.a <= 0`: a concave gap, so the approach, once started, ends on
+/// the ground): the gap to each plane is `d + un t + an t^2 / 2`, exactly, and the impact is its
+/// downward root. `None` where that does not apply, or where the search could decide otherwise (a
+/// start inside a ground and separating; a contact within the touching tolerance at the end of the
+/// interval): the search then runs.
 fn ball_on_flat(fly: &Flying, t_from: f64, t_to: f64) -> Option<Search> {
     let Flying {
         body,

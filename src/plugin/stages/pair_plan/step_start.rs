@@ -41,13 +41,13 @@ pub(crate) struct StepStart<'a> {
 /// A pair's impulse: both states after, and the two events.
 type Resolved = Option<(State, State, [ImpactEvent; 2])>;
 
-/// `Step` mode: the impulses of the step's `Impact` pairs at the step's start, to the
-/// velocities there: every pair that closes within the step and approaches faster than the
-/// resting speed gets the model's impulse, in the plan's order, and again in turn while one
-/// approaches (a chain along a row), at most `max_impacts` passes per member and twice that
-/// many events. Writes the bodies' velocities (their poses written back as read); the pairs are then
-/// rapier's resting contacts for the step (`Resting`, e = 0), so it never bounces them a
-/// second time. Writes and reports through `commit`.
+/// `Step` mode: the impulses of the step's `Impact` pairs at the step's start, to the velocities
+/// there: every pair that closes within the step and approaches faster than the resting speed gets
+/// the model's impulse, in the plan's order, and again in turn while one approaches (a chain along
+/// a row), at most `max_impacts` passes per member and twice that many events. Writes the bodies'
+/// velocities (their poses written back as read); the pairs are then rapier's resting contacts for
+/// the step (`Resting`, e = 0), so it never bounces them a second time. Writes and reports through
+/// `commit`.
 pub(crate) fn step_start_impulses(
     plan: &mut PairPlan,
     bodies: &RigidBodySet,

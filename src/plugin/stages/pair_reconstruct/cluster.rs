@@ -105,14 +105,14 @@ impl StartSearches {
     }
 }
 
-/// The cluster's states at the step's end (see the module's contract). `pairs` are the
-/// cluster's `Impact` pairs as indices into `balls`; `near` finds the pair plan's members
-/// a body sent off by an event may meet. A body so met from outside the cluster, alone or with
-/// the rest of its own cluster as `joining` admits it, joins the run there where none of them
-/// has an event of its own before the meeting (the run goes on: moved again from the start
-/// with them, it would be the same run); any other ends the run (`Unmoved::Meets`). Pushes the cluster's events into the
-/// step's events (`view.commit`), and withdraws them all when the cluster is not moved;
-/// writes nothing into rapier.
+/// The cluster's states at the step's end (see the module's contract). `pairs` are the cluster's
+/// `Impact` pairs as indices into `balls`; `near` finds the pair plan's members a body sent off by
+/// an event may meet. A body so met from outside the cluster, alone or with the rest of its own
+/// cluster as `joining` admits it, joins the run there where none of them has an event of its own
+/// before the meeting (the run goes on: moved again from the start with them, it would be the same
+/// run); any other ends the run (`Unmoved::Meets`). Pushes the cluster's events into the step's
+/// events (`view.commit`), and withdraws them all when the cluster is not moved; writes nothing
+/// into rapier.
 pub(crate) fn through_pair_impacts<'s>(
     view: &mut AfterStep,
     (colliders, near, step): (&ColliderSet, &NearBodies, &EndOfStep),
@@ -904,9 +904,9 @@ impl Cluster<'_, '_> {
         Ok(found.map(|(tc, touch)| (tc, Next::Touch(p, touch))))
     }
 
-    /// The model's impulse for the pair of bodies `i` and `j` touching at `te`, the bodies where `moving` has them
-    /// then: along the line of centres for two centred balls, at parry's contact `touch`
-    /// (with the flat-landing points of `touch_point`) otherwise; `Err` for a touch slower
+    /// The model's impulse for the pair of bodies `i` and `j` touching at `te`, the bodies where
+    /// `moving` has them then: along the line of centres for two centred balls, at parry's contact
+    /// `touch` (with the flat-landing points of `touch_point`) otherwise; `Err` for a touch slower
     /// than the resting speed. Reads only.
     ///
     /// A touch slower than the resting speed is a resting contact from here: the next step
@@ -1030,10 +1030,11 @@ impl Cluster<'_, '_> {
             })
     }
 
-    /// How body `k` moves on after an impact with another body (or, rolling, with a ground
-    /// besides its plane) left it at `after` (time `t`): as before, but a ball rolling on its ground flies when lifted off it, and rolls
-    /// on when pressed into it (the ground takes the normal speed: a `Settle` event, pushed).
-    /// `None` where the closed form of its rolling does not reach the step's end.
+    /// How body `k` moves on after an impact with another body (or, rolling, with a ground besides
+    /// its plane) left it at `after` (time `t`): as before, but a ball rolling on its ground flies
+    /// when lifted off it, and rolls on when pressed into it (the ground takes the normal speed: a
+    /// `Settle` event, pushed). `None` where the closed form of its rolling does not reach the
+    /// step's end.
     fn on_after_touch(
         &self,
         view: &mut AfterStep,
