@@ -192,6 +192,9 @@ fn main() {
     for n in 0..rows {
         let t_exp = if n == 0 {
             t1
+        } else if e == 1.0 {
+            // The closed form is 0/0 at e = 1: its limit, n equal flights of 2 t1.
+            t1 + 2.0 * t1 * n as f64
         } else {
             t1 + 2.0 * t1 * e * (1.0 - e.powi(n as i32)) / (1.0 - e)
         };
