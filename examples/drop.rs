@@ -100,9 +100,15 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
     let dt = f64::from(world.integration_parameters.dt);
     let steps = (args.duration / dt).ceil() as usize;
     let mut csv = csv.map(|path| {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("create CSV"));
-        writeln!(f, "t,x,y,z,vx,vy,vz,wx,wy,wz").unwrap();
-        f
+        let mut f = std::io::BufWriter::new(common::or_exit(
+            std::fs::File::create(path),
+            &format!("cannot create {path}"),
+        ));
+        common::or_exit(
+            writeln!(f, "t,x,y,z,vx,vy,vz,wx,wy,wz"),
+            &format!("cannot write {path}"),
+        );
+        (f, path)
     });
     let mut impacts: Vec<f64> = Vec::new();
     let mut apexes: Vec<f64> = Vec::new();
@@ -126,13 +132,15 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
         }
         let rb = &world.bodies[ball];
         let (p, v, w) = (rb.center_of_mass(), rb.linvel(), rb.angvel());
-        if let Some(f) = csv.as_mut() {
-            writeln!(
-                f,
-                "{t:.9},{},{},{},{},{},{},{},{},{}",
-                p.x, p.y, p.z, v.x, v.y, v.z, w.x, w.y, w.z
-            )
-            .unwrap();
+        if let Some((f, path)) = csv.as_mut() {
+            common::or_exit(
+                writeln!(
+                    f,
+                    "{t:.9},{},{},{},{},{},{},{},{},{}",
+                    p.x, p.y, p.z, v.x, v.y, v.z, w.x, w.y, w.z
+                ),
+                &format!("cannot write {path}"),
+            );
         }
         let (y, vy) = (f64::from(p.y), f64::from(v.y));
         if plugin.is_none() && prev_vy < 0.0 && vy > 0.0 {
@@ -149,8 +157,8 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
         }
         prev_vy = vy;
     }
-    if let Some(mut f) = csv {
-        f.flush().unwrap();
+    if let Some((mut f, path)) = csv {
+        common::or_exit(f.flush(), &format!("cannot write {path}"));
     }
     // The first "apex" is the release height: skip it.
     let apexes = apexes.into_iter().skip(1).collect();
