@@ -21,7 +21,7 @@
 mod common;
 
 use clap::Parser;
-use common::{LawChoice, Mode, real, wide};
+use common::{Coefficient, LawChoice, Mode, real, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin};
@@ -181,7 +181,13 @@ fn build(args: &Args, v: Vector3<f64>, w: Vector3<f64>, n: Vector3<f64>) -> Scen
                 table,
                 GroundMaterial::new(0.0, mu_cloth),
             )
-            .expect("the table exists");
+            // The table exists: only the material's range can refuse it.
+            .unwrap_or_else(|e| {
+                common::fail::<Args>(format!(
+                    "--cloth-friction {mu_cloth} is outside the plugin's range ({e}); \
+                     --mode rapier takes it"
+                ))
+            });
             p.add_impact_body(&world.bodies, cue)
                 .expect("a dynamic body");
             p.add_impact_body(&world.bodies, object)
@@ -343,6 +349,17 @@ fn run(args: &Args, scene: &mut Scene) -> Option<After> {
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.f64);
+    common::check_coefficients::<Args>(
+        args.mode,
+        &[
+            (
+                "--ball-restitution",
+                Coefficient::Restitution,
+                args.ball_restitution,
+            ),
+            ("--ball-friction", Coefficient::Friction, args.ball_friction),
+        ],
+    );
     let (speed, cut, r, m) = (args.speed, args.cut, args.radius, args.mass);
     let topspin = args.topspin.unwrap_or(speed / r);
     let sidespin = args.sidespin;

@@ -18,7 +18,7 @@
 mod common;
 
 use clap::Parser;
-use common::{Mode, real, wide};
+use common::{Coefficient, Mode, real, wide};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
 
@@ -50,6 +50,10 @@ struct Args {
 
 fn main() {
     let args: Args = common::parse();
+    common::check_coefficients::<Args>(
+        args.mode,
+        &[("--restitution", Coefficient::Restitution, args.restitution)],
+    );
     let n = args.balls as usize;
     let (speed, e, dt, mode) = (args.speed, args.restitution, args.dt, args.mode);
     let (r, m) = (0.025, 0.1);

@@ -18,7 +18,7 @@
 mod common;
 
 use clap::Parser;
-use common::Mode;
+use common::{Coefficient, Mode};
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
 use std::io::Write;
@@ -172,6 +172,13 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.common.f64);
+    common::check_coefficients::<Args>(
+        args.common.mode,
+        &[
+            ("--restitution", Coefficient::Restitution, args.restitution),
+            ("--friction", Coefficient::Friction, args.friction),
+        ],
+    );
     let g = 9.81;
     let run = drop_ball(&args, args.common.mode, args.csv.as_deref());
     // Rapier alone on the same drop, beside a plugin mode.

@@ -17,7 +17,7 @@
 mod common;
 
 use clap::Parser;
-use common::{Mode, Shell, TraceCsv, real, wide};
+use common::{Coefficient, Mode, Shell, TraceCsv, real, wide};
 use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{ImpactConfig, ImpactPlugin};
@@ -292,6 +292,10 @@ fn run(
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.common.f64);
+    common::check_coefficients::<Args>(
+        args.common.mode,
+        &[("--friction", Coefficient::Friction, args.friction)],
+    );
     let (v0, r, mu, mu_r, mu_sp) = (
         args.speed,
         args.radius,

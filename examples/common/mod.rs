@@ -12,7 +12,7 @@ use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, ValueEnum};
 use rapier_impact::model::{Fallback, Law, Regime};
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
+use rapier_impact::{GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, TimingMode};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 
@@ -108,6 +108,40 @@ pub fn fail<C: CommandFactory>(message: impl std::fmt::Display) -> ! {
     C::command()
         .error(ErrorKind::ValueValidation, message)
         .exit()
+}
+
+/// A collider coefficient set by a flag, as the plugin ranges it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coefficient {
+    /// A restitution, in `[0, 10]`.
+    Restitution,
+    /// A friction, in `[0, 100]`.
+    Friction,
+}
+
+/// In a plugin mode, exits as on a bad command line (status 2) when a flag's coefficient is
+/// outside the plugin's range: the plugin would leave every contact of such a collider to
+/// rapier (reporting only a diagnostic), and the scene would print rapier's result under the
+/// plugin's mode. Rapier alone (`--mode rapier`) takes any value. `flags`: the flag, what it
+/// sets, its value.
+pub fn check_coefficients<C: CommandFactory>(mode: Mode, flags: &[(&str, Coefficient, f64)]) {
+    if mode == Mode::Rapier {
+        return;
+    }
+    for &(flag, coefficient, value) in flags {
+        // The plugin checks a collider's coefficient against a ground material's ranges, on
+        // the value the collider holds: the flag's, rounded to `Real`.
+        let held = wide(real(value));
+        let material = match coefficient {
+            Coefficient::Restitution => GroundMaterial::new(held, 0.0),
+            Coefficient::Friction => GroundMaterial::new(0.0, held),
+        };
+        if let Err(e) = material.validate() {
+            fail::<C>(format!(
+                "{flag} {value} is outside the plugin's range ({e}); --mode rapier takes it"
+            ));
+        }
+    }
 }
 
 /// `--f64`: the precision is chosen at build time, so in an `f32` build the switch is refused
