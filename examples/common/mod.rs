@@ -34,8 +34,9 @@ pub fn wide(x: Real) -> f64 {
 // ---------------------------------------------------------------------------------------------
 // Command-line values (parsers for clap's `value_parser`, value enums, checks)
 
-/// A finite number. `1/60` style fractions are accepted too, so that a time step can be
-/// given exactly as users think of it.
+/// A finite number, finite in the build's precision too: the scenes hand their values to
+/// rapier as `Real`, where in the `f32` build `1e300` is infinite. `1/60` style fractions are
+/// accepted too, so that a time step can be given exactly as users think of it.
 pub fn number(text: &str) -> Result<f64, String> {
     let parsed = match text.split_once('/') {
         Some((a, b)) => match (a.trim().parse::<f64>(), b.trim().parse::<f64>()) {
@@ -44,9 +45,18 @@ pub fn number(text: &str) -> Result<f64, String> {
         },
         None => text.parse::<f64>().ok(),
     };
-    parsed
+    let x = parsed
         .filter(|x| x.is_finite())
-        .ok_or_else(|| "not a finite number (a fraction such as 1/60 is accepted)".to_string())
+        .ok_or_else(|| "not a finite number (a fraction such as 1/60 is accepted)".to_string())?;
+    if real(x).is_finite() {
+        Ok(x)
+    } else {
+        Err(format!(
+            "infinite in this build's precision, {PRECISION} (the largest is {:e}; the f64 \
+             build, --features f64, takes larger numbers)",
+            Real::MAX
+        ))
+    }
 }
 
 /// A finite number `> 0`.
