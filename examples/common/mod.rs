@@ -225,7 +225,9 @@ impl ValueEnum for Mode {
     fn to_possible_value(&self) -> Option<PossibleValue> {
         let help = match self {
             Mode::Rapier => "Rapier alone, no plugin",
-            Mode::Plugin(TimingMode::Step) => "The plugin, impulses at the step's end",
+            Mode::Plugin(TimingMode::Step) => {
+                "The plugin, impulses at the start of the step in which the contact closes"
+            }
             Mode::Plugin(TimingMode::TimeOfImpact) => "The plugin, impulses at the impact's time",
             Mode::Plugin(TimingMode::Exact) => "The plugin, with exact flight too",
         };
