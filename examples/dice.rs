@@ -142,8 +142,9 @@ fn main() {
     }
 
     println!(
-        "dice: seed {seed}, edge {size} m, e = {e}, mu = {mu}, law {law:?}, mode {}, dt = {dt:.7} s, \
+        "dice: seed {seed}, edge {size} m, e = {e}, mu = {mu}, law {}, mode {}, dt = {dt:.7} s, \
          precision {}",
+        args.law.name(),
         mode.name(),
         common::PRECISION
     );

@@ -186,9 +186,9 @@ fn main() {
     let (h0, e, dt, radius) = (args.height, args.restitution, run.dt, args.radius);
     let t1 = (2.0 * h0 / g).sqrt();
     println!(
-        "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {:?}, precision = {}",
+        "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {}, precision = {}",
         args.friction,
-        args.common.mode,
+        args.common.mode.name(),
         if cfg!(feature = "f64") { "f64" } else { "f32" }
     );
     let mut header = format!(

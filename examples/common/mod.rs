@@ -246,6 +246,17 @@ pub enum LawChoice {
     Guarded,
 }
 
+impl LawChoice {
+    /// The name used on the command line (and in the scenes' headers).
+    pub fn name(self) -> &'static str {
+        match self {
+            LawChoice::Document => "document",
+            LawChoice::Consistent => "consistent",
+            LawChoice::Guarded => "guarded",
+        }
+    }
+}
+
 impl From<LawChoice> for Law {
     fn from(choice: LawChoice) -> Law {
         match choice {
