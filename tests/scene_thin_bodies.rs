@@ -252,14 +252,14 @@ fn a_light_ball_struck_by_a_heavy_one_over_a_thin_slab_stays_on_it() {
 
 #[test]
 fn a_capsule_rapiers_resting_contact_lets_through_a_mesh_is_put_back_on_top() {
-    // Throw 71 of the capsules at the trimesh, `Step` mode, 30 Hz (`f32`): it comes to rest
-    // across the mesh's diagonal, where rapier's resting contact lets it fall through at one
-    // step (rapier alone from the same state falls too). The next step finds it on the
-    // other side of the mesh than it was and puts it back.
+    // Throw 262 of the capsules at the trimesh, `Step` mode, 30 Hz (`f32`): at one step
+    // rapier's resting contact lets it through the mesh. The next step finds it on the other
+    // side of the mesh than it was and puts it back. (Of the first 400 throws, 262, 354 and
+    // 379 cross so.)
     let mut world = PhysicsWorld::default();
     world.integration_parameters.dt = real(1.0 / 30.0);
     let (_, g) = world.insert(RigidBodyBuilder::fixed(), ground("trimesh"));
-    let (rb, co) = thrown(false, 71);
+    let (rb, co) = thrown(false, 262);
     let (b, _) = world.insert(rb, co);
     let mut p = plugin_on(&world, g, TimingMode::Step);
     let mut put_back = 0;

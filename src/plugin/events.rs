@@ -42,7 +42,9 @@ pub enum EventKind {
     /// resting contact, or its integrator, left it deeper than the resting gap); for a ball,
     /// also its speed into the ground removed.
     PushOut,
-    /// The body's velocities scaled down by one factor, so that a push-out does not add
+    /// The body's velocity along the normal and its spin scaled down by one factor, all but
+    /// its velocity along the ground and its angular momentum about the normal (those too, by
+    /// a factor of their own, only where the rest cannot pay), so that a push-out does not add
     /// energy: its mechanical energy is held to the step start's.
     EnergyCap,
     /// A ball the closed form stopped on a slope that holds it (`tan(theta) <= mu_r` and

@@ -198,7 +198,7 @@ pub fn touches_a_body(world: &PhysicsWorld, body: RigidBodyHandle) -> bool {
 }
 
 /// Checks one event: finite, a pushing normal impulse (an energy cap scales the velocity
-/// along its own direction, so its momentum change may point anywhere), friction inside the
+/// along the normal down, whichever way it points, so its change may pull), friction inside the
 /// cone, and no kinetic-energy gain when `e <= 1` (on a fixed ground); a correction (push-out,
 /// settle, energy cap) never gains kinetic energy.
 pub fn check_event(ev: &ImpactEvent, stats: &mut Stats, label: &str) {

@@ -12,7 +12,7 @@
 //!
 //! The pure state corrections are free functions: [`put_on_ground`] moves a state out of the
 //! ground along a contact normal (for a ball, also removing its speed into the ground);
-//! [`capped_energy`] scales a state's velocities so that its mechanical energy is no more
+//! [`capped_energy`] scales a state's velocities down so that its mechanical energy is no more
 //! than another's.
 
 use crate::motion::{Flight, State};
@@ -56,17 +56,25 @@ pub(crate) fn put_on_ground(
     }
 }
 
-/// `end` with its velocities scaled down by one factor (directions kept) so that its
-/// mechanical energy `1/2 m v^2 + 1/2 w.I w - m a.x` (`a` the flight's constant acceleration)
-/// is no more than `start`'s, or `None` when it already is (within the rounding of the
-/// potential at rapier's precision, so that `f32` positions far from the origin do not
-/// drain a slow body). When even the potential energy exceeds the start's energy, the body
-/// is left at rest.
+/// `end` with its mechanical energy `1/2 m v^2 + 1/2 w.I w - m a.x` (`a` the flight's constant
+/// acceleration) brought down to `start`'s, or `None` when it is no more already (within the
+/// rounding of the potential at rapier's precision, so that `f32` positions far from the
+/// origin do not drain a slow body). The excess is taken from the motion a frictionless
+/// contact of normal `normal` (unit) can change, scaled down by one factor: the velocity along
+/// the normal, and the spin but for the part that carries the angular momentum about the
+/// normal (`w* = n (n.I w) / (n.I n)`, the least spin with that momentum; for a cube or a
+/// ball, the spin about the normal). The velocity along the ground and that angular momentum
+/// are what no such contact changes, and taking from them would brake a body sliding or
+/// spinning on a frictionless ground, step after step, as friction does; they are scaled, by
+/// a factor of their own, only for what the rest cannot pay. The two parts' energies add up
+/// (`w*.I (w - w*) = 0`). A body that cannot turn about some axis keeps no spin apart. When
+/// even the potential energy exceeds the start's energy, the body is left at rest.
 pub(crate) fn capped_energy(
     start: &State,
     end: &State,
     flight: &Flight,
     inertia: &Inertia,
+    normal: &Vector3<f64>,
 ) -> Option<State> {
     let energy = |s: &State| {
         let velocity = crate::model::BodyVelocity {
@@ -85,10 +93,41 @@ pub(crate) fn capped_energy(
     if !(end_total > start_total + rounding && end_kinetic > 0.0) {
         return None;
     }
-    let scale = ((end_kinetic - (end_total - start_total)).max(0.0) / end_kinetic).sqrt();
+    let excess = end_total - start_total;
+    let along_normal = normal * normal.dot(&end.v);
+    let along_ground = end.v - along_normal;
+    // `w*` and its energy `1/2 (n.I w)^2 / (n.I n)`.
+    let (spin_kept, spin_kept_energy) = inertia
+        .body_at(&end.rot)
+        .inv_inertia
+        .try_inverse()
+        .map(|i| i * normal)
+        .filter(|i_n| normal.dot(i_n) > 0.0)
+        .map_or((Vector3::zeros(), 0.0), |i_n| {
+            let (momentum, n_i_n) = (i_n.dot(&end.w), normal.dot(&i_n));
+            (
+                normal * (momentum / n_i_n),
+                0.5 * momentum * momentum / n_i_n,
+            )
+        });
+    let spin_rest = end.w - spin_kept;
+    let kept_kinetic = 0.5 * inertia.mass * along_ground.norm_squared() + spin_kept_energy;
+    let contact_kinetic = end_kinetic - kept_kinetic;
+    let (kept_scale, contact_scale) = if contact_kinetic >= excess {
+        (1.0, ((contact_kinetic - excess) / contact_kinetic).sqrt())
+    } else {
+        // Below `kept_kinetic`, as the contact's part could not pay the excess.
+        let left = (end_kinetic - excess).max(0.0);
+        let kept_scale = if kept_kinetic > 0.0 {
+            (left / kept_kinetic).sqrt().min(1.0)
+        } else {
+            0.0
+        };
+        (kept_scale, 0.0)
+    };
     Some(State {
-        v: end.v * scale,
-        w: end.w * scale,
+        v: along_ground * kept_scale + along_normal * contact_scale,
+        w: spin_kept * kept_scale + spin_rest * contact_scale,
         ..*end
     })
 }
@@ -252,7 +291,13 @@ impl AfterStep<'_> {
             .rev()
             .find(|e| e.body == checked.body)
             .map(Site::of)?;
-        let capped = capped_energy(&cand.start, end, &cand.flight, checked.inertia)?;
+        let capped = capped_energy(
+            &cand.start,
+            end,
+            &cand.flight,
+            checked.inertia,
+            &site.normal,
+        )?;
         self.commit.event(correction(
             EventKind::EnergyCap,
             &site,
@@ -539,8 +584,19 @@ mod tests {
         inertia.body_at(&s.rot).kinetic_energy(&velocity) - inertia.mass * flight.accel.dot(&s.com)
     }
 
+    /// The ground's normal in the tests.
+    fn up() -> Vector3<f64> {
+        Vector3::y()
+    }
+
+    /// The angular momentum about the normal `n.I w` of a body of `inertia` turned by `rot`.
+    fn momentum_about_up(inertia: &Inertia, rot: &UnitQuaternion<f64>, w: &Vector3<f64>) -> f64 {
+        let i = inertia.body_at(rot).inv_inertia.try_inverse().unwrap();
+        up().dot(&(i * w))
+    }
+
     #[test]
-    fn a_lift_that_adds_energy_is_paid_from_the_speeds() {
+    fn a_lift_is_paid_from_the_speed_along_the_normal_and_the_spin_about_other_axes() {
         let (inertia, flight) = brick();
         let rot = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.7);
         let start = State {
@@ -554,17 +610,58 @@ mod tests {
             com: Vector3::new(0.01, 0.104, 0.0),
             ..start
         };
-        let capped = capped_energy(&start, &end, &flight, &inertia).expect("energy was gained");
+        let capped =
+            capped_energy(&start, &end, &flight, &inertia, &up()).expect("energy was gained");
         let (e0, e1) = (
             total_energy(&start, &inertia, &flight),
             total_energy(&capped, &inertia, &flight),
         );
         assert!((e1 - e0).abs() <= 1e-12 * e0.abs(), "{e0} -> {e1}");
-        // One factor for both velocities, below 1; the pose untouched.
-        let k = capped.v.norm() / end.v.norm();
+        // The velocity along the ground and the angular momentum about the normal kept.
+        assert_eq!((capped.v.x, capped.v.z), (end.v.x, end.v.z));
+        let (l0, l1) = (
+            momentum_about_up(&inertia, &rot, &end.w),
+            momentum_about_up(&inertia, &rot, &capped.w),
+        );
+        assert!((l1 - l0).abs() <= 1e-14 * l0.abs(), "{l0} -> {l1}");
+        // The velocity along the normal scaled by one factor below 1, the spin changed
+        // along the brick's axes, not its momentum about the normal; the pose untouched.
+        let k = capped.v.y / end.v.y;
         assert!(k < 1.0 && k > 0.0);
-        assert!((capped.v - end.v * k).norm() < 1e-15 && (capped.w - end.w * k).norm() < 1e-14);
+        assert!((capped.w - end.w).norm() > 0.1);
         assert_eq!((capped.com, capped.rot), (end.com, end.rot));
+    }
+
+    #[test]
+    fn a_lift_beyond_the_normal_speed_and_spin_is_paid_from_the_speed_along_the_ground() {
+        let (inertia, flight) = brick();
+        let start = State {
+            com: Vector3::new(0.0, 0.1, 0.0),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::new(0.6, -0.1, -0.8),
+            w: Vector3::new(0.3, 0.5, 0.0),
+        };
+        // Lifted 1 cm: 0.098 J/kg, more than the speed along the normal and the spin about
+        // the other axes hold, less than the whole kinetic energy.
+        let end = State {
+            com: Vector3::new(0.0, 0.11, 0.0),
+            ..start
+        };
+        let capped =
+            capped_energy(&start, &end, &flight, &inertia, &up()).expect("energy was gained");
+        let (e0, e1) = (
+            total_energy(&start, &inertia, &flight),
+            total_energy(&capped, &inertia, &flight),
+        );
+        assert!((e1 - e0).abs() <= 1e-12 * e0.abs(), "{e0} -> {e1}");
+        // Unrotated, the brick's axes are the world's: the spin about the normal carries all
+        // the momentum about it. It and the velocity along the ground are scaled down by one
+        // factor, their directions kept; the rest is gone.
+        assert_eq!((capped.v.y, capped.w.x, capped.w.z), (0.0, 0.0, 0.0));
+        let k = capped.v.x / end.v.x;
+        assert!(k < 1.0 && k > 0.0);
+        assert!((capped.v.z - end.v.z * k).abs() < 1e-15);
+        assert!((capped.w.y - end.w.y * k).abs() < 1e-15);
     }
 
     #[test]
@@ -581,19 +678,25 @@ mod tests {
             com: Vector3::new(0.0, 0.09, 0.0),
             ..start
         };
-        assert_eq!(capped_energy(&start, &lower, &flight, &inertia), None);
+        assert_eq!(
+            capped_energy(&start, &lower, &flight, &inertia, &up()),
+            None
+        );
         // Lifted 1 cm: more than 1/2 v^2 / g = 4.6 mm can pay for.
         let lifted = State {
             com: Vector3::new(0.0, 0.11, 0.0),
             ..start
         };
-        let capped = capped_energy(&start, &lifted, &flight, &inertia).unwrap();
+        let capped = capped_energy(&start, &lifted, &flight, &inertia, &up()).unwrap();
         assert_eq!((capped.v, capped.w), (Vector3::zeros(), Vector3::zeros()));
         // At rest and lifted: nothing to scale, nothing done.
         let resting = State {
             v: Vector3::zeros(),
             ..lifted
         };
-        assert_eq!(capped_energy(&start, &resting, &flight, &inertia), None);
+        assert_eq!(
+            capped_energy(&start, &resting, &flight, &inertia, &up()),
+            None
+        );
     }
 }
