@@ -133,6 +133,46 @@ impl Body {
         Ok(())
     }
 
+    /// The part `w*` of the angular velocity `w` that carries its angular momentum about the
+    /// unit axis `n`, `n . I w`, with the least rotational energy, and that energy (J): `w* =
+    /// P n (n . I w) / (n . I n)`, `P` the projection on the axes the body can turn about and
+    /// `I` its inertia there (the inverse of `I^-1` on them, as [`Self::kinetic_energy`] takes
+    /// it). The rest of `w` carries no momentum about `n`, and the two energies add up
+    /// (`w* . I (w - w*) = 0`). Zero for a body that cannot turn about `n` at all.
+    pub fn spin_about(&self, n: &Vector3<f64>, w: &Vector3<f64>) -> (Vector3<f64>, f64) {
+        let a = &self.inv_inertia;
+        let scale = a.m11.max(a.m22).max(a.m33);
+        if scale.is_nan() || scale <= 0.0 {
+            return (Vector3::zeros(), 0.0);
+        }
+        // `I n` and `P n`: by the inverse where `I^-1` is well conditioned (the test of
+        // `rotational_energy`), else on its eigen-decomposition without its null axes.
+        let invertible = a.determinant() > 1e-9 * scale * scale * scale;
+        let (i_n, p_n) = match a.try_inverse().filter(|_| invertible) {
+            Some(inertia) => (inertia * n, *n),
+            None => {
+                let eig = a.symmetric_eigen();
+                let (mut i_n, mut p_n) = (Vector3::zeros(), Vector3::zeros());
+                for k in 0..3 {
+                    let lambda = eig.eigenvalues[k];
+                    if lambda > 1e-12 * scale {
+                        let e = eig.eigenvectors.column(k);
+                        let along = e.dot(n);
+                        i_n += e * (along / lambda);
+                        p_n += e * along;
+                    }
+                }
+                (i_n, p_n)
+            }
+        };
+        let n_i_n = n.dot(&i_n);
+        if n_i_n.is_nan() || n_i_n <= 0.0 {
+            return (Vector3::zeros(), 0.0);
+        }
+        let momentum = i_n.dot(w);
+        (p_n * (momentum / n_i_n), 0.5 * momentum * momentum / n_i_n)
+    }
+
     /// Kinetic energy `1/2 m |v|^2 + 1/2 w . I_w w` (J). The rotational term is computed
     /// by solving with the inverse inertia on the axes where the body can rotate. Zero for
     /// a [`Body::fixed`] (prescribed motion).

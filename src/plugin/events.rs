@@ -42,10 +42,10 @@ pub enum EventKind {
     /// resting contact, or its integrator, left it deeper than the resting gap); for a ball,
     /// also its speed into the ground removed.
     PushOut,
-    /// The body's velocity along the normal and its spin scaled down by one factor, all but
-    /// its velocity along the ground and its angular momentum about the normal (those too, by
-    /// a factor of their own, only where the rest cannot pay), so that a push-out does not add
-    /// energy: its mechanical energy is held to the step start's.
+    /// The body's velocity along the normal and the part of its spin that carries no angular
+    /// momentum about the normal scaled down by one factor (its velocity along the ground and
+    /// that momentum too, by a factor of their own, only where those cannot pay), so that a
+    /// push-out does not add energy: its mechanical energy is held to the step start's.
     EnergyCap,
     /// A ball the closed form stopped on a slope that holds it (`tan(theta) <= mu_r` and
     /// `<= mu`) put back where it stopped, at rest, after its first step in rapier's resting

@@ -62,13 +62,12 @@ pub(crate) fn put_on_ground(
 /// origin do not drain a slow body). The excess is taken from the motion a frictionless
 /// contact of normal `normal` (unit) can change, scaled down by one factor: the velocity along
 /// the normal, and the spin but for the part that carries the angular momentum about the
-/// normal (`w* = n (n.I w) / (n.I n)`, the least spin with that momentum; for a cube or a
-/// ball, the spin about the normal). The velocity along the ground and that angular momentum
-/// are what no such contact changes, and taking from them would brake a body sliding or
-/// spinning on a frictionless ground, step after step, as friction does; they are scaled, by
-/// a factor of their own, only for what the rest cannot pay. The two parts' energies add up
-/// (`w*.I (w - w*) = 0`). A body that cannot turn about some axis keeps no spin apart. When
-/// even the potential energy exceeds the start's energy, the body is left at rest.
+/// normal (`Body::spin_about`; for a cube or a ball, the spin about the normal). The velocity
+/// along the ground and that angular momentum are what no such contact changes, and taking
+/// from them would brake a body sliding or spinning on a frictionless ground, step after
+/// step, as friction does; they are scaled, by a factor of their own, only for what the rest
+/// cannot pay. When even the potential energy exceeds the start's energy, the body is left
+/// at rest.
 pub(crate) fn capped_energy(
     start: &State,
     end: &State,
@@ -96,20 +95,7 @@ pub(crate) fn capped_energy(
     let excess = end_total - start_total;
     let along_normal = normal * normal.dot(&end.v);
     let along_ground = end.v - along_normal;
-    // `w*` and its energy `1/2 (n.I w)^2 / (n.I n)`.
-    let (spin_kept, spin_kept_energy) = inertia
-        .body_at(&end.rot)
-        .inv_inertia
-        .try_inverse()
-        .map(|i| i * normal)
-        .filter(|i_n| normal.dot(i_n) > 0.0)
-        .map_or((Vector3::zeros(), 0.0), |i_n| {
-            let (momentum, n_i_n) = (i_n.dot(&end.w), normal.dot(&i_n));
-            (
-                normal * (momentum / n_i_n),
-                0.5 * momentum * momentum / n_i_n,
-            )
-        });
+    let (spin_kept, spin_kept_energy) = inertia.body_at(&end.rot).spin_about(normal, &end.w);
     let spin_rest = end.w - spin_kept;
     let kept_kinetic = 0.5 * inertia.mass * along_ground.norm_squared() + spin_kept_energy;
     let contact_kinetic = end_kinetic - kept_kinetic;
@@ -624,12 +610,57 @@ mod tests {
             momentum_about_up(&inertia, &rot, &capped.w),
         );
         assert!((l1 - l0).abs() <= 1e-14 * l0.abs(), "{l0} -> {l1}");
-        // The velocity along the normal scaled by one factor below 1, the spin changed
-        // along the brick's axes, not its momentum about the normal; the pose untouched.
+        // The velocity along the normal and the spin but its part carrying that momentum
+        // (`n (n.I w) / (n.I n)`, computed here from the inertia) scaled by one factor below
+        // 1; the pose untouched.
         let k = capped.v.y / end.v.y;
         assert!(k < 1.0 && k > 0.0);
+        let i_n = inertia.body_at(&rot).inv_inertia.try_inverse().unwrap() * up();
+        let kept = up() * (i_n.dot(&end.w) / up().dot(&i_n));
+        assert!(((capped.w - kept) - (end.w - kept) * k).norm() < 1e-14 * end.w.norm());
         assert!((capped.w - end.w).norm() > 0.1);
         assert_eq!((capped.com, capped.rot), (end.com, end.rot));
+    }
+
+    #[test]
+    fn a_body_that_turns_only_about_the_normal_keeps_its_spin() {
+        // The brick with its x and z rotations locked: it can only spin about the normal, so
+        // a cap takes nothing from that spin (the inverse inertia is singular there).
+        let mut world = crate::rapier::prelude::PhysicsWorld::default();
+        let (handle, _) = world.insert(
+            RigidBodyBuilder::dynamic().locked_axes(
+                crate::rapier::prelude::LockedAxes::ROTATION_LOCKED_X
+                    | crate::rapier::prelude::LockedAxes::ROTATION_LOCKED_Z,
+            ),
+            ColliderBuilder::cuboid(0.15, 0.1, 0.05),
+        );
+        let inertia = Inertia::of(&world.bodies[handle]);
+        let (_, flight) = brick();
+        let start = State {
+            com: Vector3::new(0.0, 0.1, 0.0),
+            rot: UnitQuaternion::identity(),
+            v: Vector3::new(0.5, -0.2, 0.1),
+            w: Vector3::new(0.0, 3.0, 0.0),
+        };
+        // Lifted 1 mm: 9.8e-3 J/kg, less than the speed along the normal holds (0.02).
+        let end = State {
+            com: Vector3::new(0.0, 0.101, 0.0),
+            ..start
+        };
+        let capped =
+            capped_energy(&start, &end, &flight, &inertia, &up()).expect("energy was gained");
+        let (e0, e1) = (
+            total_energy(&start, &inertia, &flight),
+            total_energy(&capped, &inertia, &flight),
+        );
+        assert!((e1 - e0).abs() <= 1e-12 * e0.abs(), "{e0} -> {e1}");
+        assert!(
+            (capped.w - end.w).norm() <= 1e-15 * end.w.norm(),
+            "{:?}",
+            capped.w
+        );
+        assert_eq!((capped.v.x, capped.v.z), (end.v.x, end.v.z));
+        assert!(capped.v.y > end.v.y && capped.v.y < 0.0);
     }
 
     #[test]
