@@ -59,13 +59,19 @@ pub fn number(text: &str) -> Result<f64, String> {
     }
 }
 
-/// A finite number `> 0`.
+/// A finite number `> 0`, and not zero in the build's precision.
 pub fn positive(text: &str) -> Result<f64, String> {
     let x = number(text)?;
-    if x > 0.0 {
-        Ok(x)
-    } else {
+    if x <= 0.0 {
         Err(format!("must be > 0, got {x}"))
+    } else if real(x) == 0.0 {
+        // A time step of zero would never end a run.
+        Err(format!(
+            "zero in this build's precision, {PRECISION} (the smallest is {:e})",
+            Real::from_bits(1)
+        ))
+    } else {
+        Ok(x)
     }
 }
 
@@ -123,9 +129,9 @@ pub fn fail<C: CommandFactory>(message: impl std::fmt::Display) -> ! {
 /// A collider coefficient set by a flag, as the plugin ranges it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Coefficient {
-    /// A restitution, in `[0, 10]`.
+    /// A restitution, as a ground material ranges it.
     Restitution,
-    /// A friction, in `[0, 100]`.
+    /// A friction, as a ground material ranges it.
     Friction,
 }
 

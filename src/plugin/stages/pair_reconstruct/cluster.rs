@@ -291,10 +291,9 @@ enum Reached {
 /// Invariant: every leaf of `near` before `next` is met by no body (`meets_other_body` would
 /// pass it by), and `partners` holds, sorted, the slots of the bodies the changed body has a
 /// pair with in the cluster (once `partners_known`). So each search goes on from where the
-/// last one stopped, and asks of a leaf whether it is a partner in `log` of the partners
-/// rather than through all of them: a search from the first leaf each time, through every
-/// pair, cost the square of the bodies near a fast body's way, times its pairs (seconds for
-/// a step of 1 000 balls landing at 10 Hz).
+/// last one stopped, and asks of a leaf whether it is a partner by a binary search: a search
+/// from the first leaf each time, through every pair, would cost the square of the bodies
+/// near a fast body's way, times its pairs.
 pub(super) struct WayOn {
     com: nalgebra::Vector3<f64>,
     v: nalgebra::Vector3<f64>,
