@@ -182,12 +182,7 @@ fn build(args: &Args, v: Vector3<f64>, w: Vector3<f64>, n: Vector3<f64>) -> Scen
                 GroundMaterial::new(0.0, mu_cloth),
             )
             // The table exists: only the material's range can refuse it.
-            .unwrap_or_else(|e| {
-                common::fail::<Args>(format!(
-                    "--cloth-friction {mu_cloth} is outside the plugin's range ({e}); \
-                     --mode rapier takes it"
-                ))
-            });
+            .unwrap_or_else(|e| common::out_of_range::<Args>("--cloth-friction", mu_cloth, e));
             p.add_impact_body(&world.bodies, cue)
                 .expect("a dynamic body");
             p.add_impact_body(&world.bodies, object)

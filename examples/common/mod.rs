@@ -153,11 +153,17 @@ pub fn check_coefficients<C: CommandFactory>(mode: Mode, flags: &[(&str, Coeffic
             Coefficient::Friction => GroundMaterial::new(0.0, held),
         };
         if let Err(e) = material.validate() {
-            fail::<C>(format!(
-                "{flag} {value} is outside the plugin's range ({e}); --mode rapier takes it"
-            ));
+            out_of_range::<C>(flag, value, e);
         }
     }
+}
+
+/// Exits as on a bad command line (status 2): the flag's value is outside the plugin's range,
+/// as its check `error` says.
+pub fn out_of_range<C: CommandFactory>(flag: &str, value: f64, error: impl std::fmt::Display) -> ! {
+    fail::<C>(format!(
+        "{flag} {value} is outside the plugin's range ({error}); --mode rapier takes it"
+    ))
 }
 
 /// `--f64`: the precision is chosen at build time, so in an `f32` build the switch is refused
