@@ -372,7 +372,9 @@ fn shoot_plugin(
         });
     }
     Err(format!(
-        "no impact at incidence {incidence} deg within {MAX_STEPS} steps"
+        "no impact at incidence {incidence} deg within {MAX_STEPS} steps (a contact approaching \
+         no faster than the plugin's resting speed, ImpactConfig::resting_speed, is a resting \
+         contact, not an impact)"
     ))
 }
 
