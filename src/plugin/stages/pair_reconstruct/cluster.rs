@@ -290,7 +290,7 @@ enum Reached {
 ///
 /// Invariant: every leaf of `near` before `next` is met by no body (`meets_other_body` would
 /// pass it by), and `partners` holds, sorted, the slots of the bodies the changed body has a
-/// pair with in the cluster (once `partners_known`). So each search goes on from where the
+/// pair with in the cluster (left empty while `near` is). So each search goes on from where the
 /// last one stopped, and asks of a leaf whether it is a partner by a binary search: a search
 /// from the first leaf each time, through every pair, would cost the square of the bodies
 /// near a fast body's way, times its pairs.
@@ -300,7 +300,6 @@ pub(super) struct WayOn {
     near: Vec<NearLeaf>,
     next: usize,
     partners: Vec<u32>,
-    partners_known: bool,
 }
 
 impl Default for WayOn {
@@ -311,7 +310,6 @@ impl Default for WayOn {
             near: Vec::new(),
             next: 0,
             partners: Vec::new(),
-            partners_known: false,
         }
     }
 }
@@ -654,7 +652,8 @@ impl<'c, 'a> Run<'c, 'a> {
     /// box in the pair index (its travel over the step from its start-of-step motion, the
     /// plan's margin included), widened by `k`'s bounding radius and its acceleration's bow,
     /// the segment of `k`'s way on (from its centre at `t` along its velocity to the step's
-    /// end) crosses, `k` itself left out, in the order of their slots. Reads only.
+    /// end) crosses, `k` itself left out, in the order of their slots; and, where there are
+    /// any, the slots of the bodies `k` has a pair with in the cluster, sorted. Reads only.
     fn way_on(&self, k: usize, s: &State, t: f64, way: &mut WayOn) {
         let (ball, step) = (&self.balls[k], self.context.step);
         let left = step.dt - t;
@@ -667,7 +666,7 @@ impl<'c, 'a> Run<'c, 'a> {
         );
         let own = ball.cand.body.slot() as u32;
         (way.com, way.v) = (s.com, s.v);
-        (way.next, way.partners_known) = (0, false);
+        way.next = 0;
         way.partners.clear();
         way.near.clear();
         way.near.extend(
@@ -685,6 +684,13 @@ impl<'c, 'a> Run<'c, 'a> {
         // The lowest slot first: the tree's order depends on its history, which a restored
         // plugin does not have.
         way.near.sort_unstable_by_key(|leaf| leaf.slot);
+        if !way.near.is_empty() {
+            way.partners.extend(self.tables.pairs_of.of(k).map(|q| {
+                let (a, b) = self.tables.pairs[q];
+                self.balls[if a == k { b } else { a }].cand.body.slot() as u32
+            }));
+            way.partners.sort_unstable();
+        }
     }
 
     /// A body that body `k`, its motion changed where `way` was found ([`Run::way_on`]), may
@@ -699,26 +705,15 @@ impl<'c, 'a> Run<'c, 'a> {
     /// passed by for), or from the first leaf where it joins from outside (a body that joins
     /// with it may be one passed by for not closing, now a member). Reads only, besides `way`.
     fn meets_other_body(&self, k: usize, way: &mut WayOn) -> Option<Reached> {
-        let balls = &self.balls;
-        let body_k = balls[k].cand.body;
+        let body_k = self.balls[k].cand.body;
         let WayOn {
             com,
             v,
             near: leaves,
             next,
             partners,
-            partners_known,
         } = way;
-        if !*partners_known {
-            partners.extend(self.tables.pairs_of.of(k).map(|q| {
-                let (a, b) = self.tables.pairs[q];
-                balls[if a == k { b } else { a }].cand.body.slot() as u32
-            }));
-            partners.sort_unstable();
-            *partners_known = true;
-        }
-        let (com, v) = (*com, *v);
-        let partners = &*partners;
+        let (com, v, partners) = (*com, *v, &*partners);
         let found = leaves[*next..]
             .iter_mut()
             .enumerate()
