@@ -15,7 +15,7 @@
 mod common;
 
 use clap::Parser;
-use common::{Coefficient, DiceThrow, EventsCsv, LawChoice, Mode, TraceCsv, real, wide};
+use common::{DiceThrow, EventsCsv, LawChoice, Mode, TraceCsv, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 
@@ -80,13 +80,7 @@ const FACES: [([f64; 3], u32); 6] = [
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.f64);
-    common::check_coefficients::<Args>(
-        args.mode,
-        &[
-            ("--restitution", Coefficient::Restitution, args.restitution),
-            ("--friction", Coefficient::Friction, args.friction),
-        ],
-    );
+    common::check_material::<Args>(args.mode, args.restitution, args.friction);
     let (seed, e, mu, size) = (args.seed, args.restitution, args.friction, args.size);
     let (law, mode): (Law, Mode) = (args.law.into(), args.mode);
     let (dt, duration) = (args.dt, args.duration);

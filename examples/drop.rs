@@ -18,7 +18,7 @@
 mod common;
 
 use clap::Parser;
-use common::{Coefficient, Mode};
+use common::Mode;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin};
 use std::io::Write;
@@ -172,13 +172,7 @@ fn drop_ball(args: &Args, mode: Mode, csv: Option<&str>) -> Drop {
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.common.f64);
-    common::check_coefficients::<Args>(
-        args.common.mode,
-        &[
-            ("--restitution", Coefficient::Restitution, args.restitution),
-            ("--friction", Coefficient::Friction, args.friction),
-        ],
-    );
+    common::check_material::<Args>(args.common.mode, args.restitution, args.friction);
     let g = 9.81;
     let run = drop_ball(&args, args.common.mode, args.csv.as_deref());
     // Rapier alone on the same drop, beside a plugin mode.
@@ -189,7 +183,7 @@ fn main() {
         "drop: h0 = {h0} m, R = {radius} m, e = {e}, mu = {}, dt = {dt:.7} s, mode = {}, precision = {}",
         args.friction,
         args.common.mode.name(),
-        if cfg!(feature = "f64") { "f64" } else { "f32" }
+        common::PRECISION
     );
     let mut header = format!(
         "{:>3} {:>12} {:>12} {:>10} {:>12} {:>12} {:>10}",

@@ -39,7 +39,7 @@
 mod common;
 
 use clap::{Parser, ValueEnum};
-use common::{Coefficient, Mode, Rng, TraceCsv, real, wide};
+use common::{Mode, Rng, TraceCsv, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, ImpactConfig, ImpactPlugin, Stage, StepProfile};
@@ -280,13 +280,7 @@ fn run(
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.f64);
-    common::check_coefficients::<Args>(
-        args.mode,
-        &[
-            ("--restitution", Coefficient::Restitution, args.restitution),
-            ("--friction", Coefficient::Friction, args.friction),
-        ],
-    );
+    common::check_material::<Args>(args.mode, args.restitution, args.friction);
     let mut world = common::world(args.dt);
     let ground = floor(&mut world, args.tiles, args.restitution, args.friction);
     let first = insert_balls(&mut world, &args);

@@ -30,7 +30,7 @@
 mod common;
 
 use clap::Parser;
-use common::{Coefficient, Mode, Shell, TraceCsv, real, wide};
+use common::{Mode, Shell, TraceCsv, real, wide};
 use rapier_impact::model::Law;
 use rapier_impact::rapier::prelude::*;
 
@@ -212,13 +212,7 @@ fn fly(
 fn main() {
     let args: Args = common::parse();
     common::check_precision::<Args>(args.common.f64);
-    common::check_coefficients::<Args>(
-        args.common.mode,
-        &[
-            ("--restitution", Coefficient::Restitution, args.restitution),
-            ("--friction", Coefficient::Friction, args.friction),
-        ],
-    );
+    common::check_material::<Args>(args.common.mode, args.restitution, args.friction);
     let (radius, e, mu, k) = (
         args.radius,
         args.restitution,

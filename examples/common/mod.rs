@@ -158,6 +158,17 @@ pub fn check_coefficients<C: CommandFactory>(mode: Mode, flags: &[(&str, Coeffic
     }
 }
 
+/// [`check_coefficients`] of a scene's `--restitution` and `--friction`.
+pub fn check_material<C: CommandFactory>(mode: Mode, restitution: f64, friction: f64) {
+    check_coefficients::<C>(
+        mode,
+        &[
+            ("--restitution", Coefficient::Restitution, restitution),
+            ("--friction", Coefficient::Friction, friction),
+        ],
+    );
+}
+
 /// Exits as on a bad command line (status 2): the flag's value is outside the plugin's range,
 /// as its check `error` says.
 pub fn out_of_range<C: CommandFactory>(flag: &str, value: f64, error: impl std::fmt::Display) -> ! {
