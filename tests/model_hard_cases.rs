@@ -996,3 +996,71 @@ fn pure_normal_approach_is_the_same_impact_in_every_frame() {
         );
     }
 }
+
+/// A spin about a locked rotation axis (a null axis of `I^-1`) moves the contact point, but
+/// no impulse changes it and it holds none of the body's energy: under every law, `ke_after`
+/// is the kinetic energy of the velocity the impact leaves, for one body on the ground and
+/// for each body of a pair, to 1e-12. Bodies: x and z locked (rapier's zeroed rows and
+/// columns), the same turned off the axes, and a body that does not rotate at all. Before,
+/// the impulse's work against that spin was counted as the body's: an impact reported
+/// `ke_after` below zero.
+#[test]
+fn an_impact_counts_no_energy_for_a_spin_about_a_locked_axis() {
+    use rapier_impact::model::{PairContact, resolve_pair};
+    use rapier_impact::na::Rotation3;
+    let turn = Rotation3::from_axis_angle(&Vector3::x_axis(), 0.4)
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), 0.7);
+    let only_y = Matrix3::from_diagonal(&Vector3::new(0.0, 250.0, 0.0));
+    let bodies = [
+        Body::new(0.012, only_y),
+        Body::new(0.012, turn.matrix() * only_y * turn.matrix().transpose()),
+        Body::new(0.012, Matrix3::zeros()),
+    ];
+    let velocity = v(Vector3::new(0.3, -2.0, 0.1), Vector3::new(5.0, 5.0, 5.0));
+    let offset = Vector3::new(-0.3, -0.05, 0.08);
+    let close = |x: f64, y: f64| abs_diff_eq!(x, y, epsilon = 1e-12 * x.abs().max(y.abs()));
+    for (k, body) in bodies.iter().enumerate() {
+        assert!(body.locked_spin(&velocity.angular).norm() > 1.0, "body {k}");
+        for law in LAWS {
+            let impact = resolve(
+                law,
+                body,
+                &velocity,
+                &Contact::fixed(Vector3::y(), offset),
+                &mat(0.8, 0.5),
+            )
+            .unwrap();
+            let after = body.kinetic_energy(&impact.velocity);
+            assert!(
+                impact.normal_impulse > 0.0
+                    && close(impact.ke_before, body.kinetic_energy(&velocity))
+                    && close(impact.ke_after, after),
+                "body {k}, {law:?}: ke_after {:e} J, the velocity left holds {after:e} J: {impact:?}",
+                impact.ke_after
+            );
+            let other = Body::isotropic(0.2, 1e-3);
+            let still = v(Vector3::zeros(), Vector3::zeros());
+            let contact = PairContact {
+                normal: -Vector3::y(),
+                offset_a: offset,
+                offset_b: Vector3::new(0.0, 0.1, 0.0),
+            };
+            let pair = resolve_pair(
+                law,
+                body,
+                &velocity,
+                &other,
+                &still,
+                &contact,
+                &mat(0.8, 0.5),
+            )
+            .unwrap();
+            let after = body.kinetic_energy(&pair.a) + other.kinetic_energy(&pair.b);
+            assert!(
+                pair.normal_impulse > 0.0 && close(pair.ke_after, after),
+                "pair, body {k}, {law:?}: ke_after {:e} J, the velocities left hold {after:e} J",
+                pair.ke_after
+            );
+        }
+    }
+}

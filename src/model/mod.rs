@@ -346,8 +346,15 @@ impl Approach<'_> {
         // dKE = P . (u_B1 + u_B2) / 2, u_B the body's contact-point velocities: exact for
         // one impulse at r, and free of the cancellation of subtracting two energies. With
         // u_B2 = u_B1 + K P it is P . u_B1 + P . K P / 2, and P . K P = |P|^2/m + (r × P) . dw,
-        // a sum of non-negative terms.
-        let point_before = u1 + contact.ground_velocity;
+        // a sum of non-negative terms. A spin about a locked axis (`Body::locked_spin`) moves
+        // the contact point but holds no energy of the body's: its share of the work,
+        // P . (w_locked × r) = (r × P) . w_locked, is left out.
+        let mut point_work = impulse.dot(&(u1 + contact.ground_velocity));
+        match iso {
+            Some(a) if a > 0.0 => {}
+            Some(_) => point_work -= r_p.dot(&velocity.angular),
+            None => point_work -= r_p.dot(&body.locked_spin(&velocity.angular)),
+        }
         let pkp = impulse.dot(&dv) + r_p.dot(&dw);
         let u2 = u1 + dv + dw.cross(r);
         let impact = Impact {
@@ -359,7 +366,7 @@ impl Approach<'_> {
             law,
             fallback,
             ke_before,
-            ke_after: ke_before + (impulse.dot(&point_before) + 0.5 * pkp),
+            ke_after: ke_before + (point_work + 0.5 * pkp),
         };
         // The impulse's work in the frame of the ground's contact point: P . (u1 + u2) / 2.
         let work = impulse.dot(u1) + 0.5 * pkp;

@@ -248,13 +248,15 @@ impl Sides<'_> {
         };
         // Each body's energy change is P . (its contact point's velocity) + P.K P / 2 with
         // its own K (a sum of non-negative terms): exact for one impulse, and free of the
-        // cancellation of subtracting energies. A fixed body's is none.
+        // cancellation of subtracting energies. A fixed body's is none. A spin about a
+        // locked axis holds none of the body's energy (`Body::locked_spin`): its share,
+        // (r × P) . w_locked, is left out, as for one body and the ground.
         let gain = |body: &Body, v: &BodyVelocity, r: &Vector3<f64>, q: &Vector3<f64>| {
             if body.is_fixed() {
                 0.0
             } else {
                 let rq = r.cross(q);
-                q.dot(&point_velocity(v, r))
+                q.dot(&point_velocity(v, r)) - rq.dot(&body.locked_spin(&v.angular))
                     + 0.5 * (q.norm_squared() / body.mass + rq.dot(&(body.inv_inertia * rq)))
             }
         };

@@ -147,7 +147,7 @@ impl Body {
         }
         // `I n` and `P n`: by the inverse where `I^-1` is well conditioned (the test of
         // `rotational_energy`), else on its eigen-decomposition without its null axes.
-        let invertible = a.determinant() > 1e-9 * scale * scale * scale;
+        let invertible = a.determinant() > INVERTIBLE * scale * scale * scale;
         let (i_n, p_n) = match a.try_inverse().filter(|_| invertible) {
             Some(inertia) => (inertia * n, *n),
             None => {
@@ -155,7 +155,7 @@ impl Body {
                 let (mut i_n, mut p_n) = (Vector3::zeros(), Vector3::zeros());
                 for k in 0..3 {
                     let lambda = eig.eigenvalues[k];
-                    if lambda > 1e-12 * scale {
+                    if lambda > NULL_EIGENVALUE * scale {
                         let e = eig.eigenvectors.column(k);
                         let along = e.dot(n);
                         i_n += e * (along / lambda);
@@ -173,6 +173,33 @@ impl Body {
         (p_n * (momentum / n_i_n), 0.5 * momentum * momentum / n_i_n)
     }
 
+    /// The part of the angular velocity `w` about the axes the body cannot turn about: its
+    /// projection on the null space of `I^-1` (a locked rotation, infinite inertia). No
+    /// impulse changes it and [`Self::kinetic_energy`] gives it no energy: such a spin is
+    /// prescribed, as a kinematic body's motion is, and an impulse's work against it goes to
+    /// whatever holds the axis. Zero when `I^-1` is invertible; the null space is found as
+    /// `rotational_energy` finds it.
+    pub fn locked_spin(&self, w: &Vector3<f64>) -> Vector3<f64> {
+        let a = &self.inv_inertia;
+        if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
+            let locked = |ai: f64, wi: f64| if ai > 0.0 { 0.0 } else { wi };
+            return Vector3::new(locked(a.m11, w.x), locked(a.m22, w.y), locked(a.m33, w.z));
+        }
+        let scale = a.m11.max(a.m22).max(a.m33);
+        if a.determinant() > INVERTIBLE * scale * scale * scale {
+            return Vector3::zeros();
+        }
+        let eig = a.symmetric_eigen();
+        let mut locked = Vector3::zeros();
+        for k in 0..3 {
+            if eig.eigenvalues[k] <= NULL_EIGENVALUE * scale {
+                let e = eig.eigenvectors.column(k);
+                locked += e * e.dot(w);
+            }
+        }
+        locked
+    }
+
     /// Kinetic energy `1/2 m |v|^2 + 1/2 w . I_w w` (J). The rotational term is computed
     /// by solving with the inverse inertia on the axes where the body can rotate. Zero for
     /// a [`Body::fixed`] (prescribed motion).
@@ -184,6 +211,13 @@ impl Body {
             + 0.5 * rotational_energy(&self.inv_inertia, &velocity.angular)
     }
 }
+
+/// `I^-1` is taken as invertible when its determinant exceeds this times the cube of its
+/// largest diagonal entry; otherwise its eigen-decomposition is used.
+const INVERTIBLE: f64 = 1e-9;
+/// An eigenvalue of `I^-1` at most this times its largest diagonal entry is a null axis: the
+/// body cannot turn about it.
+const NULL_EIGENVALUE: f64 = 1e-12;
 
 /// `1/2 w . I w` given `I^-1` (J, without the 1/2): `w . I w = w . (I^-1)^-1 w`.
 /// With a singular `I^-1` (locked rotations) only the rotatable part of `w` carries
@@ -207,7 +241,7 @@ fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
     let c23 = a.m12 * a.m13 - a.m11 * a.m23;
     let det = a.m11 * c11 + a.m12 * c12 + a.m13 * c13;
     let scale = a.m11.max(a.m22).max(a.m33);
-    if det > 1e-9 * scale * scale * scale {
+    if det > INVERTIBLE * scale * scale * scale {
         let quad = c11 * w.x * w.x
             + c22 * w.y * w.y
             + c33 * w.z * w.z
@@ -218,7 +252,7 @@ fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
     let mut sum = 0.0;
     for k in 0..3 {
         let lambda = eig.eigenvalues[k];
-        if lambda > 1e-12 * scale {
+        if lambda > NULL_EIGENVALUE * scale {
             let c = eig.eigenvectors.column(k).dot(w);
             sum += c * c / lambda;
         }
