@@ -37,8 +37,8 @@ struct Args {
     /// Backspin (rad/s; 0: no spin, negative: topspin)
     #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
     backspin: f64,
-    /// Start rolling without slip (instead of --backspin)
-    #[arg(long)]
+    /// Start rolling without slip (the spin is then v/R: not with --backspin)
+    #[arg(long, conflicts_with = "backspin")]
     rolling: bool,
     /// Spin about the ground normal (rad/s)
     #[arg(long, value_name = "W", default_value = "0", value_parser = common::number)]
