@@ -364,15 +364,44 @@ pub fn check_written(world: &PhysicsWorld, events: &[ImpactEvent], stats: &mut S
 /// rotation, in `f64`: rapier's own `kinetic_energy` inverts its world inverse inertia in
 /// `Real` (ill-conditioned for a thin body: 1e-5 off for a 4 mm capsule 30 cm long) and that
 /// inertia is the one of the last step's rotation until the next step.
+///
+/// A spin about a locked rotation axis holds no energy (no impulse changes it): for a body
+/// with one, the rotational energy is the model's, on the world inverse inertia with the
+/// locked axes' rows and columns zeroed, as rapier's solver takes it.
 pub fn kinetic_energy_f64(rb: &RigidBody) -> f64 {
     let m = &rb.mass_properties().local_mprops;
     let v = rb.linvel();
     let w = rb.angvel();
     let frame = *rb.rotation() * m.principal_inertia_local_frame;
-    // The spin in the principal frame.
-    let wl = frame.inverse() * w;
     let i = m.principal_inertia();
     let linear = wide(rb.mass()) * (wide(v.x).powi(2) + wide(v.y).powi(2) + wide(v.z).powi(2));
+    let locked = [
+        LockedAxes::ROTATION_LOCKED_X,
+        LockedAxes::ROTATION_LOCKED_Y,
+        LockedAxes::ROTATION_LOCKED_Z,
+    ]
+    .map(|axis| rb.locked_axes().contains(axis));
+    if locked.contains(&true) {
+        use rapier_impact::model::{Body, BodyVelocity};
+        use rapier_impact::na::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+        let (x, y, z, s) = (wide(frame.x), wide(frame.y), wide(frame.z), wide(frame.w));
+        let turn =
+            UnitQuaternion::from_quaternion(Quaternion::new(s, x, y, z)).to_rotation_matrix();
+        let principal = Vector3::new(1.0 / wide(i.x), 1.0 / wide(i.y), 1.0 / wide(i.z));
+        let mut inv =
+            turn.matrix() * Matrix3::from_diagonal(&principal) * turn.matrix().transpose();
+        for (axis, _) in locked.iter().enumerate().filter(|(_, l)| **l) {
+            inv.row_mut(axis).fill(0.0);
+            inv.column_mut(axis).fill(0.0);
+        }
+        let spin = BodyVelocity {
+            linear: Vector3::zeros(),
+            angular: Vector3::new(wide(w.x), wide(w.y), wide(w.z)),
+        };
+        return 0.5 * linear + Body::new(1.0, inv).kinetic_energy(&spin);
+    }
+    // The spin in the principal frame.
+    let wl = frame.inverse() * w;
     let angular = wide(i.x) * wide(wl.x).powi(2)
         + wide(i.y) * wide(wl.y).powi(2)
         + wide(i.z) * wide(wl.z).powi(2);
