@@ -129,7 +129,8 @@ pub struct ImpactEvent {
     pub friction: f64,
     /// Walton's tangential restitution `beta0` used (0 is Coulomb's stick).
     pub tangential_restitution: f64,
-    /// Kinetic energy of the body before the impact (J).
+    /// Kinetic energy of the body before the impact (J); a spin about a locked rotation axis
+    /// holds none ([`crate::model::Body::locked_spin`]).
     pub ke_before: f64,
     /// Kinetic energy of the body after the impact (J).
     pub ke_after: f64,
