@@ -433,16 +433,39 @@ fn shoot_rapier(setup: &Setup, incidence: f64) -> Shot {
 }
 
 /// Every angle of `setup` in `mode` with tangential restitution `beta0` (rapier alone has
-/// none of its own: its closed form is `beta0 = 0`'s).
+/// none of its own: its closed form is `beta0 = 0`'s). An incidence with no impact (a slow
+/// approach is a resting contact) is left out, and its reason kept in `missed`; `Err` when
+/// no incidence had one.
+fn run_each(
+    setup: &Setup,
+    mode: Mode,
+    beta0: f64,
+    missed: &mut Vec<String>,
+) -> Result<Vec<Shot>, String> {
+    let mut shots = Vec::new();
+    for &a in &setup.angles {
+        match mode {
+            Mode::Rapier => shots.push(shoot_rapier(setup, a)),
+            Mode::Plugin(t) => match shoot_plugin(setup, t, beta0, a) {
+                Ok(shot) => shots.push(shot),
+                Err(why) => missed.push(why),
+            },
+        }
+    }
+    if shots.is_empty() {
+        let last = missed.last().cloned().unwrap_or_default();
+        return Err(format!(
+            "none of the {} incidences had an impact; {last}",
+            missed.len()
+        ));
+    }
+    Ok(shots)
+}
+
+/// [`run_each`], where the incidences left out are not reported (the plot's series: the
+/// table's run reports them).
 fn run(setup: &Setup, mode: Mode, beta0: f64) -> Result<Vec<Shot>, String> {
-    setup
-        .angles
-        .iter()
-        .map(|&a| match mode {
-            Mode::Rapier => Ok(shoot_rapier(setup, a)),
-            Mode::Plugin(t) => shoot_plugin(setup, t, beta0, a),
-        })
-        .collect()
+    run_each(setup, mode, beta0, &mut Vec::new())
 }
 
 /// The incidences in `[0, 90)` deg where the closed form's regime changes, each with `true`
@@ -869,7 +892,14 @@ fn describe(setup: &Setup) -> String {
 fn main() {
     let args: Args = common::parse();
     let setup = setup(&args);
-    let shots = or_exit(run(&setup, setup.mode, setup.beta0), "oblique");
+    let mut missed = Vec::new();
+    let shots = or_exit(
+        run_each(&setup, setup.mode, setup.beta0, &mut missed),
+        "oblique",
+    );
+    for why in &missed {
+        eprintln!("oblique: {why}: left out");
+    }
     let about = describe(&setup);
     println!(
         "oblique: {about}, mode = {}, precision = {}",
