@@ -174,11 +174,10 @@ impl Body {
     }
 
     /// The part of the angular velocity `w` about the axes the body cannot turn about: its
-    /// projection on the null space of `I^-1` (a locked rotation, infinite inertia). No
-    /// impulse changes it and [`Self::kinetic_energy`] gives it no energy: such a spin is
-    /// prescribed, as a kinematic body's motion is, and an impulse's work against it goes to
-    /// whatever holds the axis. Zero when `I^-1` is invertible; the null space is found as
-    /// `rotational_energy` finds it.
+    /// projection on the null space of `I^-1` (a locked rotation, infinite inertia). It moves
+    /// the contact point, but no impulse changes it and [`Self::kinetic_energy`] gives it no
+    /// energy: an impulse's work against it goes to whatever holds the axis. Zero when
+    /// `I^-1` is invertible; the null space is found as `rotational_energy` finds it.
     pub fn locked_spin(&self, w: &Vector3<f64>) -> Vector3<f64> {
         let a = &self.inv_inertia;
         if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
