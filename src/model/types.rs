@@ -465,9 +465,11 @@ pub struct Impact {
     pub law: Law,
     /// Set when `Guarded` fell back to `Consistent`, with the reason.
     pub fallback: Option<Fallback>,
-    /// Kinetic energy before the impact (J).
+    /// Kinetic energy before the impact (J, [`Body::kinetic_energy`]: a spin about a locked
+    /// axis holds none).
     pub ke_before: f64,
-    /// Kinetic energy after the impact (J).
+    /// Kinetic energy after the impact (J): that of [`Self::velocity`] to rounding, computed
+    /// as `ke_before` plus the impulse's work on the body.
     pub ke_after: f64,
 }
 
