@@ -176,8 +176,10 @@ impl Body {
     /// The part of the angular velocity `w` about the axes the body cannot turn about: its
     /// projection on the null space of `I^-1` (a locked rotation, infinite inertia). It moves
     /// the contact point, but no impulse changes it and [`Self::kinetic_energy`] gives it no
-    /// energy: an impulse's work against it goes to whatever holds the axis. Zero when
-    /// `I^-1` is invertible; the null space is found as `rotational_energy` finds it.
+    /// energy: an impulse's work against it goes to whatever holds the axis. The null space
+    /// is found as `rotational_energy` finds it: the diagonal's zero entries for a diagonal
+    /// `I^-1`; none when its determinant passes the `INVERTIBLE` test; else the eigenvectors
+    /// of eigenvalues at most `NULL_EIGENVALUE` of the largest diagonal entry.
     pub fn locked_spin(&self, w: &Vector3<f64>) -> Vector3<f64> {
         let a = &self.inv_inertia;
         if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
@@ -400,7 +402,9 @@ pub enum Law {
     /// [`ModelError::Jam`].
     Document,
     /// Impulse-space integration (Routh) with Stronge's energetic restitution: slip may
-    /// stop, stick, reverse and swerve. Never gains energy for `e <= 1`.
+    /// stop, stick, reverse and swerve. Never gains energy for `e <= 1`: its impulse does no
+    /// positive work at the contact, `P . (u1 + u2) / 2`, which is the body's energy change
+    /// on a still ground without spin about a locked axis (`docs/model.md`, "Energy").
     Consistent,
     /// `Document`, falling back to `Consistent` exactly where the document's result is
     /// unphysical (see [`Fallback`]).

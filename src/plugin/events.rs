@@ -132,7 +132,8 @@ pub struct ImpactEvent {
     /// Kinetic energy of the body before the impact (J); a spin about a locked rotation axis
     /// holds none ([`crate::model::Body::locked_spin`]).
     pub ke_before: f64,
-    /// Kinetic energy of the body after the impact (J).
+    /// Kinetic energy of the body after the impact (J); a spin about a locked rotation axis
+    /// holds none.
     pub ke_after: f64,
 }
 
