@@ -999,11 +999,11 @@ fn pure_normal_approach_is_the_same_impact_in_every_frame() {
 
 /// A spin about a locked rotation axis (a null axis of `I^-1`) moves the contact point, but
 /// no impulse changes it and it holds none of the body's energy: under every law, `ke_after`
-/// is the kinetic energy of the velocity the impact leaves, for one body on the ground and
-/// for each body of a pair, to 1e-12. Bodies: x and z locked (rapier's zeroed rows and
-/// columns), the same turned off the axes, and a body that does not rotate at all. Before,
-/// the impulse's work against that spin was counted as the body's: an impact reported
-/// `ke_after` below zero.
+/// is the kinetic energy of the velocity the impact leaves, to 1e-12: on a still and on a
+/// moving ground, and in a pair, the body as either side. Bodies: x and z locked (rapier's
+/// zeroed rows and columns), the same turned off the axes, and a body that does not rotate at
+/// all. Before, the impulse's work against that spin was counted as the body's: an impact
+/// reported `ke_after` below zero.
 #[test]
 fn an_impact_counts_no_energy_for_a_spin_about_a_locked_axis() {
     use rapier_impact::model::{PairContact, resolve_pair};
@@ -1018,49 +1018,63 @@ fn an_impact_counts_no_energy_for_a_spin_about_a_locked_axis() {
     ];
     let velocity = v(Vector3::new(0.3, -2.0, 0.1), Vector3::new(5.0, 5.0, 5.0));
     let offset = Vector3::new(-0.3, -0.05, 0.08);
+    let grounds = [
+        Contact::fixed(Vector3::y(), offset),
+        Contact::new(Vector3::y(), offset, Vector3::new(0.4, 0.3, -0.2)),
+    ];
+    // A ball below the body, still; its contact point is 0.1 m above its centre.
+    let (other, still) = (
+        Body::isotropic(0.2, 1e-3),
+        v(Vector3::zeros(), Vector3::zeros()),
+    );
+    let below = Vector3::new(0.0, 0.1, 0.0);
     let close = |x: f64, y: f64| abs_diff_eq!(x, y, epsilon = 1e-12 * x.abs().max(y.abs()));
     for (k, body) in bodies.iter().enumerate() {
         assert!(body.locked_spin(&velocity.angular).norm() > 1.0, "body {k}");
         for law in LAWS {
-            let impact = resolve(
-                law,
-                body,
-                &velocity,
-                &Contact::fixed(Vector3::y(), offset),
-                &mat(0.8, 0.5),
-            )
-            .unwrap();
-            let after = body.kinetic_energy(&impact.velocity);
-            assert!(
-                impact.normal_impulse > 0.0
-                    && close(impact.ke_before, body.kinetic_energy(&velocity))
-                    && close(impact.ke_after, after),
-                "body {k}, {law:?}: ke_after {:e} J, the velocity left holds {after:e} J: {impact:?}",
-                impact.ke_after
-            );
-            let other = Body::isotropic(0.2, 1e-3);
-            let still = v(Vector3::zeros(), Vector3::zeros());
-            let contact = PairContact {
+            for (g, ground) in grounds.iter().enumerate() {
+                let impact = resolve(law, body, &velocity, ground, &mat(0.8, 0.5)).unwrap();
+                let after = body.kinetic_energy(&impact.velocity);
+                assert!(
+                    impact.normal_impulse > 0.0 && close(impact.ke_after, after),
+                    "body {k}, ground {g}, {law:?}: ke_after {:e} J, the velocity left holds \
+                     {after:e} J: {impact:?}",
+                    impact.ke_after
+                );
+            }
+            // The body as `a` (the normal from it down to the ball) and as `b`.
+            let as_a = PairContact {
                 normal: -Vector3::y(),
                 offset_a: offset,
-                offset_b: Vector3::new(0.0, 0.1, 0.0),
+                offset_b: below,
             };
-            let pair = resolve_pair(
-                law,
-                body,
-                &velocity,
-                &other,
-                &still,
-                &contact,
-                &mat(0.8, 0.5),
-            )
-            .unwrap();
-            let after = body.kinetic_energy(&pair.a) + other.kinetic_energy(&pair.b);
-            assert!(
-                pair.normal_impulse > 0.0 && close(pair.ke_after, after),
-                "pair, body {k}, {law:?}: ke_after {:e} J, the velocities left hold {after:e} J",
-                pair.ke_after
-            );
+            let as_b = PairContact {
+                normal: Vector3::y(),
+                offset_a: below,
+                offset_b: offset,
+            };
+            let m = mat(0.8, 0.5);
+            for (side, pair) in [
+                resolve_pair(law, body, &velocity, &other, &still, &as_a, &m),
+                resolve_pair(law, &other, &still, body, &velocity, &as_b, &m),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let pair = pair.unwrap();
+                let (va, vb) = if side == 0 {
+                    (body.kinetic_energy(&pair.a), other.kinetic_energy(&pair.b))
+                } else {
+                    (other.kinetic_energy(&pair.a), body.kinetic_energy(&pair.b))
+                };
+                assert!(
+                    pair.normal_impulse > 0.0 && close(pair.ke_after, va + vb),
+                    "pair, body {k} as side {side}, {law:?}: ke_after {:e} J, the velocities \
+                     left hold {:e} J",
+                    pair.ke_after,
+                    va + vb
+                );
+            }
         }
     }
 }
