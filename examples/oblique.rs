@@ -318,13 +318,13 @@ fn scene(
 /// A shot with the plugin: steps until it reports the ball's impact, then takes the state
 /// before the impact from the step start (the approach speed from the event: with gravity
 /// the ball gained speed in the step) and the state after from the step end, less the
-/// gravity of the rest of the step.
+/// gravity of the rest of the step. `None` when no impact comes within [`MAX_STEPS`].
 fn shoot_plugin(
     setup: &Setup,
     timing: TimingMode,
     beta0: f64,
     incidence: f64,
-) -> Result<Shot, String> {
+) -> Result<Option<Shot>, String> {
     let (mut world, ball, ground) = scene(setup, incidence, setup.restitution);
     let mut config = ImpactConfig::default();
     config.timing = timing;
@@ -363,19 +363,15 @@ fn shoot_plugin(
             ..after
         };
         let closed = closed_form(setup, beta0, vin);
-        return Ok(Shot {
+        return Ok(Some(Shot {
             incidence,
             vin,
             vout,
             label,
             closed,
-        });
+        }));
     }
-    Err(format!(
-        "no impact at incidence {incidence} deg within {MAX_STEPS} steps (a contact approaching \
-         no faster than the plugin's resting speed, ImpactConfig::resting_speed, is a resting \
-         contact, not an impact)"
-    ))
+    Ok(None)
 }
 
 /// A shot with rapier alone, its restitution the curve's at this shot's approach speed. The
@@ -432,40 +428,37 @@ fn shoot_rapier(setup: &Setup, incidence: f64) -> Shot {
     }
 }
 
+/// Why a shot with the plugin is left out: no impact within [`MAX_STEPS`].
+const NO_IMPACT: &str = "a contact approaching no faster than the plugin's resting speed, \
+                         ImpactConfig::resting_speed, is a resting contact, not an impact";
+
 /// Every angle of `setup` in `mode` with tangential restitution `beta0` (rapier alone has
 /// none of its own: its closed form is `beta0 = 0`'s). An incidence with no impact (a slow
-/// approach is a resting contact) is left out, and its reason kept in `missed`; `Err` when
-/// no incidence had one.
-fn run_each(
-    setup: &Setup,
-    mode: Mode,
-    beta0: f64,
-    missed: &mut Vec<String>,
-) -> Result<Vec<Shot>, String> {
+/// approach is a resting contact) is left out, and named on stderr after `series` where that
+/// is given (`None`: a run another one reported). `Err` when no incidence had an impact, or
+/// the plugin refused the setup.
+fn run(setup: &Setup, mode: Mode, beta0: f64, series: Option<&str>) -> Result<Vec<Shot>, String> {
     let mut shots = Vec::new();
+    let mut missed = Vec::new();
     for &a in &setup.angles {
         match mode {
             Mode::Rapier => shots.push(shoot_rapier(setup, a)),
-            Mode::Plugin(t) => match shoot_plugin(setup, t, beta0, a) {
-                Ok(shot) => shots.push(shot),
-                Err(why) => missed.push(why),
+            Mode::Plugin(t) => match shoot_plugin(setup, t, beta0, a)? {
+                Some(shot) => shots.push(shot),
+                None => missed.push(a),
             },
         }
     }
+    let why = format!("within {MAX_STEPS} steps ({NO_IMPACT})");
     if shots.is_empty() {
-        let last = missed.last().cloned().unwrap_or_default();
-        return Err(format!(
-            "none of the {} incidences had an impact; {last}",
-            missed.len()
-        ));
+        return Err(format!("no impact at any incidence {why}"));
+    }
+    if let Some(series) = series {
+        for a in missed {
+            eprintln!("oblique: {series}: no impact at incidence {a} deg {why}: left out");
+        }
     }
     Ok(shots)
-}
-
-/// [`run_each`], where the incidences left out are not reported (the plot's series: the
-/// table's run reports them).
-fn run(setup: &Setup, mode: Mode, beta0: f64) -> Result<Vec<Shot>, String> {
-    run_each(setup, mode, beta0, &mut Vec::new())
 }
 
 /// The incidences in `[0, 90)` deg where the closed form's regime changes, each with `true`
@@ -706,23 +699,28 @@ fn plot_series(setup: &Setup) -> Result<Vec<Series>, String> {
         Mode::Rapier => TimingMode::Exact,
     };
     let name = Mode::Plugin(timing).name();
+    // What a run leaves out is named once: the table's run is the second series in a plugin
+    // mode, and the first series is the second when beta0 is 0.
+    let table_ran = setup.mode != Mode::Rapier;
+    let first = (!(table_ran && setup.beta0 == 0.0)).then_some("plot, beta0 = 0");
+    let second = (!table_ran && setup.beta0 != 0.0).then_some("plot");
     Ok(vec![
         Series {
             name: format!("plugin ({name}), beta0 = 0"),
             color: RGBColor(30, 110, 200),
-            shots: run(setup, Mode::Plugin(timing), 0.0)?,
+            shots: run(setup, Mode::Plugin(timing), 0.0, first)?,
             closed_beta0: Some(0.0),
         },
         Series {
             name: format!("plugin ({name}), beta0 = {}", setup.beta0),
             color: RGBColor(200, 30, 30),
-            shots: run(setup, Mode::Plugin(timing), setup.beta0)?,
+            shots: run(setup, Mode::Plugin(timing), setup.beta0, second)?,
             closed_beta0: Some(setup.beta0),
         },
         Series {
             name: "rapier alone (its closed form: beta0 = 0)".into(),
             color: RGBColor(20, 150, 60),
-            shots: run(setup, Mode::Rapier, 0.0)?,
+            shots: run(setup, Mode::Rapier, 0.0, None)?,
             closed_beta0: None,
         },
     ])
@@ -892,14 +890,10 @@ fn describe(setup: &Setup) -> String {
 fn main() {
     let args: Args = common::parse();
     let setup = setup(&args);
-    let mut missed = Vec::new();
     let shots = or_exit(
-        run_each(&setup, setup.mode, setup.beta0, &mut missed),
+        run(&setup, setup.mode, setup.beta0, Some("table")),
         "oblique",
     );
-    for why in &missed {
-        eprintln!("oblique: {why}: left out");
-    }
     let about = describe(&setup);
     println!(
         "oblique: {about}, mode = {}, precision = {}",
