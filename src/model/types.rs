@@ -140,31 +140,10 @@ impl Body {
     /// it). The rest of `w` carries no momentum about `n`, and the two energies add up
     /// (`w* . I (w - w*) = 0`). Zero for a body that cannot turn about `n` at all.
     pub fn spin_about(&self, n: &Vector3<f64>, w: &Vector3<f64>) -> (Vector3<f64>, f64) {
-        let a = &self.inv_inertia;
-        let scale = a.m11.max(a.m22).max(a.m33);
-        if scale.is_nan() || scale <= 0.0 {
+        let Some((inertia, projection)) = rotatable_axes(&self.inv_inertia) else {
             return (Vector3::zeros(), 0.0);
-        }
-        // `I n` and `P n`: by the inverse where `I^-1` is well conditioned (the test of
-        // `rotational_energy`), else on its eigen-decomposition without its null axes.
-        let invertible = a.determinant() > INVERTIBLE * scale * scale * scale;
-        let (i_n, p_n) = match a.try_inverse().filter(|_| invertible) {
-            Some(inertia) => (inertia * n, *n),
-            None => {
-                let eig = a.symmetric_eigen();
-                let (mut i_n, mut p_n) = (Vector3::zeros(), Vector3::zeros());
-                for k in 0..3 {
-                    let lambda = eig.eigenvalues[k];
-                    if lambda > NULL_EIGENVALUE * scale {
-                        let e = eig.eigenvectors.column(k);
-                        let along = e.dot(n);
-                        i_n += e * (along / lambda);
-                        p_n += e * along;
-                    }
-                }
-                (i_n, p_n)
-            }
         };
+        let (i_n, p_n) = (inertia * n, projection * n);
         let n_i_n = n.dot(&i_n);
         if n_i_n.is_nan() || n_i_n <= 0.0 {
             return (Vector3::zeros(), 0.0);
@@ -177,28 +156,18 @@ impl Body {
     /// projection on the null space of `I^-1` (a locked rotation, infinite inertia). It moves
     /// the contact point, but no impulse changes it and [`Self::kinetic_energy`] gives it no
     /// energy: an impulse's work against it goes to whatever holds the axis. The null space
-    /// is found as `rotational_energy` finds it: the diagonal's zero entries for a diagonal
-    /// `I^-1`; none when its determinant passes the `INVERTIBLE` test; else the eigenvectors
-    /// of eigenvalues at most `NULL_EIGENVALUE` of the largest diagonal entry.
+    /// is found as [`Self::kinetic_energy`] finds it: the diagonal's zero entries for a
+    /// diagonal `I^-1`, else as `rotatable_axes` says.
     pub fn locked_spin(&self, w: &Vector3<f64>) -> Vector3<f64> {
         let a = &self.inv_inertia;
         if a.m12 == 0.0 && a.m13 == 0.0 && a.m23 == 0.0 {
             let locked = |ai: f64, wi: f64| if ai > 0.0 { 0.0 } else { wi };
             return Vector3::new(locked(a.m11, w.x), locked(a.m22, w.y), locked(a.m33, w.z));
         }
-        let scale = a.m11.max(a.m22).max(a.m33);
-        if a.determinant() > INVERTIBLE * scale * scale * scale {
-            return Vector3::zeros();
+        match rotatable_axes(a) {
+            Some((_, projection)) => w - projection * w,
+            None => *w,
         }
-        let eig = a.symmetric_eigen();
-        let mut locked = Vector3::zeros();
-        for k in 0..3 {
-            if eig.eigenvalues[k] <= NULL_EIGENVALUE * scale {
-                let e = eig.eigenvectors.column(k);
-                locked += e * e.dot(w);
-            }
-        }
-        locked
     }
 
     /// Kinetic energy `1/2 m |v|^2 + 1/2 w . I_w w` (J). The rotational term is computed
@@ -219,6 +188,35 @@ const INVERTIBLE: f64 = 1e-9;
 /// An eigenvalue of `I^-1` at most this times its largest diagonal entry is a null axis: the
 /// body cannot turn about it.
 const NULL_EIGENVALUE: f64 = 1e-12;
+
+/// The inertia `I` on the axes a body of inverse inertia `a` can turn about (the inverse of
+/// `a` there, zero on its null axes) and the projection `P` on those axes: `a` inverted and
+/// the identity when its determinant passes [`INVERTIBLE`], else from its eigen-decomposition
+/// without the eigenvalues [`NULL_EIGENVALUE`] takes as zero. `None` for a body that turns
+/// about no axis (or an `a` that is not finite).
+fn rotatable_axes(a: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
+    let scale = a.m11.max(a.m22).max(a.m33);
+    if scale.is_nan() || scale <= 0.0 {
+        return None;
+    }
+    if a.determinant() > INVERTIBLE * scale * scale * scale {
+        if let Some(inertia) = a.try_inverse() {
+            return Some((inertia, Matrix3::identity()));
+        }
+    }
+    let eig = a.symmetric_eigen();
+    let (mut inertia, mut projection) = (Matrix3::zeros(), Matrix3::zeros());
+    for k in 0..3 {
+        let lambda = eig.eigenvalues[k];
+        if lambda > NULL_EIGENVALUE * scale {
+            let e = eig.eigenvectors.column(k);
+            let outer = e * e.transpose();
+            inertia += outer / lambda;
+            projection += outer;
+        }
+    }
+    Some((inertia, projection))
+}
 
 /// `1/2 w . I w` given `I^-1` (J, without the 1/2): `w . I w = w . (I^-1)^-1 w`.
 /// With a singular `I^-1` (locked rotations) only the rotatable part of `w` carries
@@ -249,16 +247,8 @@ fn rotational_energy(inv_inertia: &Matrix3<f64>, w: &Vector3<f64>) -> f64 {
             + 2.0 * (c12 * w.x * w.y + c13 * w.x * w.z + c23 * w.y * w.z);
         return quad / det;
     }
-    let eig = a.symmetric_eigen();
-    let mut sum = 0.0;
-    for k in 0..3 {
-        let lambda = eig.eigenvalues[k];
-        if lambda > NULL_EIGENVALUE * scale {
-            let c = eig.eigenvectors.column(k).dot(w);
-            sum += c * c / lambda;
-        }
-    }
-    sum
+    // Singular (locked rotations), or nearly: the pseudo-inverse on the rotatable axes.
+    rotatable_axes(a).map_or(0.0, |(inertia, _)| w.dot(&(inertia * w)))
 }
 
 /// Linear and angular velocity of a body's centre of mass, world frame.
