@@ -725,9 +725,9 @@ impl<'c, 'a> Run<'c, 'a> {
                 Some((i, leaf.slot, reached))
             });
         let (i, slot, reached) = found?;
-        if let Err(at) = way.partners.binary_search(&slot) {
-            way.partners.insert(at, slot);
-        }
+        // Not a partner yet (partners are passed by above): kept sorted.
+        let at = way.partners.partition_point(|p| *p < slot);
+        way.partners.insert(at, slot);
         way.next = match reached {
             Reached::Member(_) => way.next + i + 1,
             Reached::Outside(_) => 0,
