@@ -4,7 +4,8 @@
 //! - bodies and colliders removed and re-added, grounds removed, re-marked, and their
 //!   colliders removed, while balls bounce;
 //! - a bouncing body made kinematic, then fixed, then dynamic again;
-//! - a ground collider moved (teleported) by the user: bodies bounce on it where it is now;
+//! - a ground collider moved (teleported) by the user: bodies bounce on it where it is now,
+//!   also when a step of no length follows the move;
 //! - an empty world, a world with only ground, a plugin with no ground.
 
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
@@ -219,6 +220,65 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
         );
         assert!(bounces_on_moved > 0, "{label}");
         assert_abs_diff_eq!(y, 1.1, epsilon = 0.01);
+    }
+}
+
+/// The plugin reads which grounds the user wrote from rapier's change flags, which every
+/// rapier step clears, a step of no length too (the plugin's pass skips such a step). A
+/// parentless ground collider is lifted 1 m (the ball with it) just before such a step: the
+/// ball is then dropped on it, and its bounces are met at its new height. With the flags
+/// trusted across that step, the plugin would meet the ground at its old place: no bounce of
+/// its own, rapier's contact instead.
+#[test]
+fn a_ground_moved_before_a_step_of_no_length_is_met_where_it_is() {
+    for timing in MODES {
+        let label = format!("ground moved before a step of no length {timing:?}");
+        let mut world = PhysicsWorld::default();
+        let ground = world.colliders.insert(
+            ColliderBuilder::cuboid(5.0, 0.5, 5.0)
+                .translation(Vector::new(0.0, -0.5, 0.0))
+                .restitution(0.5),
+        );
+        let (b, _) = ball(&mut world, 0.0, 2.0);
+        let mut p = plugin_on(&world, ground, timing);
+        let mut stats = Stats::new();
+        let mut ground_y = 0.0;
+        let mut bounces_on_moved = 0;
+        for k in 0..300 {
+            if k == 100 {
+                world.colliders[ground].set_translation(Vector::new(0.0, 0.5, 0.0));
+                ground_y = 1.0;
+                world.bodies[b].set_translation(Vector::new(0.0, 2.1, 0.0), true);
+                world.bodies[b].set_linvel(Vector::ZERO, true);
+                let dt = world.integration_parameters.dt;
+                world.integration_parameters.dt = 0.0;
+                p.step(&mut world);
+                world.integration_parameters.dt = dt;
+            }
+            step_checked(&mut world, &mut p, ground_y, &mut stats, &label);
+            if k >= 100 {
+                // Step mode meets a contact at the start of the step it closes in: up to a
+                // step's travel at the impact speed (from 1 m) above the ground.
+                let tol = if timing == TimingMode::Step {
+                    (2.0 * 9.81_f64).sqrt() * wide(world.integration_parameters.dt) + 1e-3
+                } else {
+                    1e-3
+                };
+                for e in p.events() {
+                    bounces_on_moved += usize::from(!e.settled);
+                    assert!(
+                        abs_diff_eq!(wide(e.point.y), ground_y, epsilon = tol),
+                        "{label}: impact at y = {} on the ground at {ground_y}",
+                        e.point.y
+                    );
+                }
+            }
+        }
+        println!("{label}: {bounces_on_moved} bounces on the moved ground");
+        assert!(
+            bounces_on_moved > 0,
+            "{label}: no bounce on the moved ground"
+        );
     }
 }
 
