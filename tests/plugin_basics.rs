@@ -1351,9 +1351,23 @@ fn configs_out_of_range_are_refused() {
             matches!(e, ConfigError::InvalidConfig { field: f, .. } if f == field),
             "{e:?}"
         );
+        let message = e.to_string();
+        assert!(message.contains(&format!("ImpactConfig::{field}")), "{e}");
+        // A huge value is shown in scientific notation, not as its 301 digits.
         assert!(
-            e.to_string().contains(&format!("ImpactConfig::{field}")),
-            "{e}"
+            message.len() < 100 && !message.contains("0000000"),
+            "{message}"
+        );
+    }
+    // So is one the model refuses, and a tiny one.
+    for (value, shown) in [(-1e300, "-1e300"), (-1e-300, "-1e-300")] {
+        let message = rapier_impact::model::Material::new(value, 0.5)
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.ends_with(&format!("got {shown}")),
+            "{value:e}: {message}"
         );
     }
 }

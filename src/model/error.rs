@@ -64,9 +64,9 @@ impl fmt::Display for ModelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::NotFinite { what } => write!(f, "{what} is not finite (NaN or infinite)"),
-            Self::NonPositiveMass(m) => write!(f, "mass must be > 0 kg, got {m}"),
+            Self::NonPositiveMass(m) => write!(f, "mass must be > 0 kg, got {}", Shown(*m)),
             Self::NonPositiveInertia(i) => {
-                write!(f, "moment of inertia must be > 0 kg m^2, got {i}")
+                write!(f, "moment of inertia must be > 0 kg m^2, got {}", Shown(*i))
             }
             Self::AsymmetricInertia(a) => {
                 write!(
@@ -78,13 +78,25 @@ impl fmt::Display for ModelError {
                 write!(f, "inverse inertia tensor is not positive semi-definite")
             }
             Self::NegativeRestitution(e) => {
-                write!(f, "coefficient of restitution must be >= 0, got {e}")
+                write!(
+                    f,
+                    "coefficient of restitution must be >= 0, got {}",
+                    Shown(*e)
+                )
             }
             Self::NegativeFriction(mu) => {
-                write!(f, "coefficient of friction must be >= 0, got {mu}")
+                write!(
+                    f,
+                    "coefficient of friction must be >= 0, got {}",
+                    Shown(*mu)
+                )
             }
             Self::TangentialRestitutionOutOfRange(b) => {
-                write!(f, "tangential restitution must be in [-1, 1], got {b}")
+                write!(
+                    f,
+                    "tangential restitution must be in [-1, 1], got {}",
+                    Shown(*b)
+                )
             }
             Self::EmptyRestitutionCurve => {
                 write!(f, "a restitution curve needs at least one (speed, e) point")
@@ -95,11 +107,17 @@ impl fmt::Display for ModelError {
                 restitution,
             } => write!(
                 f,
-                "restitution curve point {index} (speed {speed} m/s, e {restitution}) is refused: \
-                 speeds and e must be finite and >= 0, speeds in increasing order"
+                "restitution curve point {index} (speed {} m/s, e {}) is refused: \
+                 speeds and e must be finite and >= 0, speeds in increasing order",
+                Shown(*speed),
+                Shown(*restitution)
             ),
             Self::NonUnitNormal(len) => {
-                write!(f, "contact normal must have unit length, got length {len}")
+                write!(
+                    f,
+                    "contact normal must have unit length, got length {}",
+                    Shown(*len)
+                )
             }
             Self::Jam { denominator } => write!(
                 f,
@@ -111,6 +129,22 @@ impl fmt::Display for ModelError {
 }
 
 impl std::error::Error for ModelError {}
+
+/// A value as an error message shows it: as Rust prints it where that is short, and in
+/// scientific notation where that would run to many digits (Rust prints `1e300` with all
+/// 301 of them, `1e-300` with 299 zeros after the point).
+pub(crate) struct Shown(pub f64);
+
+impl fmt::Display for Shown {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
 
 /// `Ok(())` if `x` is finite, else [`ModelError::NotFinite`] naming `what`.
 pub(crate) fn finite(x: f64, what: &'static str) -> Result<(), ModelError> {

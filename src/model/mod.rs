@@ -21,6 +21,7 @@ mod types;
 
 pub use consistent::SWERVE_TOLERANCE;
 pub use error::ModelError;
+pub(crate) use error::Shown;
 pub use pair::{PairContact, PairImpact, resolve_pair};
 pub use restitution::RestitutionCurve;
 pub use types::{Body, BodyVelocity, Contact, Fallback, Impact, Law, Material, Regime};

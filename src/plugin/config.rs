@@ -1,7 +1,7 @@
 //! The plugin's configuration, the per-ground material override, and the error a bad
 //! setting or registration returns at the call that made it.
 
-use crate::model::{Law, Material, ModelError, RestitutionCurve};
+use crate::model::{Law, Material, ModelError, RestitutionCurve, Shown};
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use core::fmt;
 
@@ -452,13 +452,15 @@ impl fmt::Display for ConfigError {
         match self {
             Self::InvalidConfig { field, value } => write!(
                 f,
-                "ImpactConfig::{field} is {value}, outside its range {}",
+                "ImpactConfig::{field} is {}, outside its range {}",
+                Shown(*value),
                 range_of(field)
             ),
             Self::Material(e) => write!(f, "invalid material: {e}"),
             Self::MaterialOutOfRange { field, value } => write!(
                 f,
-                "GroundMaterial::{field} is {value}, outside its range {}",
+                "GroundMaterial::{field} is {}, outside its range {}",
+                Shown(*value),
                 range_of(field)
             ),
             Self::NotACollider(h) => write!(f, "{h:?} is not a collider of this collider set"),
