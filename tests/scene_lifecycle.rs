@@ -5,7 +5,8 @@
 //!   colliders removed, while balls bounce;
 //! - a bouncing body made kinematic, then fixed, then dynamic again;
 //! - a ground collider moved (teleported) by the user: bodies bounce on it where it is now,
-//!   also when a step of no length follows the move;
+//!   also when a step of no length follows the move, or when it is moved relative to its
+//!   body; and a ground whose body is disabled and enabled again;
 //! - an empty world, a world with only ground, a plugin with no ground.
 
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
@@ -223,40 +224,82 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
     }
 }
 
-/// The plugin reads which grounds the user wrote from rapier's change flags, which every
-/// rapier step clears, a step of no length too (the plugin's pass skips such a step). A
-/// parentless ground collider is lifted 1 m (the ball with it) just before such a step: the
-/// ball is then dropped on it, and its bounces are met at its new height. With the flags
-/// trusted across that step, the plugin would meet the ground at its old place: no bounce of
-/// its own, rapier's contact instead.
+/// The ways a ground changes that reach its collider only through rapier's step, or around
+/// a step the plugin's pass skips (`ground_changed_between_steps_is_met_where_it_is`).
+#[derive(Clone, Copy, Debug)]
+enum GroundChange {
+    /// A parentless ground lifted 1 m just before a step of no length.
+    LiftedBeforeAStepOfNoLength,
+    /// A ground on a fixed body lifted 1 m by its pose relative to the body
+    /// (`set_translation_wrt_parent`): rapier moves the collider in its next step.
+    LiftedRelativeToItsBody,
+    /// A ground's fixed body disabled for a step, then enabled again: rapier passes the
+    /// body's state on to the collider in its steps.
+    BodyDisabledThenEnabled,
+}
+
+/// A ball rests on a ground; at step 100 the ground changes (`GroundChange`), and the ball is
+/// dropped 1 m onto where the ground now is: the plugin bounces it there, every impact at
+/// the ground's height.
 #[test]
-fn a_ground_moved_before_a_step_of_no_length_is_met_where_it_is() {
-    for timing in MODES {
-        let label = format!("ground moved before a step of no length {timing:?}");
-        let mut world = PhysicsWorld::default();
-        let ground = world.colliders.insert(
-            ColliderBuilder::cuboid(5.0, 0.5, 5.0)
+fn ground_changed_between_steps_is_met_where_it_is() {
+    use GroundChange::*;
+    for change in [
+        LiftedBeforeAStepOfNoLength,
+        LiftedRelativeToItsBody,
+        BodyDisabledThenEnabled,
+    ] {
+        for timing in MODES {
+            let label = format!("{change:?} {timing:?}");
+            let mut world = PhysicsWorld::default();
+            let cuboid = ColliderBuilder::cuboid(5.0, 0.5, 5.0)
                 .translation(Vector::new(0.0, -0.5, 0.0))
-                .restitution(0.5),
-        );
-        let (b, _) = ball(&mut world, 0.0, 2.0);
-        let mut p = plugin_on(&world, ground, timing);
-        let mut stats = Stats::new();
-        let mut ground_y = 0.0;
-        let mut bounces_on_moved = 0;
-        for k in 0..300 {
-            if k == 100 {
-                world.colliders[ground].set_translation(Vector::new(0.0, 0.5, 0.0));
-                ground_y = 1.0;
-                world.bodies[b].set_translation(Vector::new(0.0, 2.1, 0.0), true);
-                world.bodies[b].set_linvel(Vector::ZERO, true);
-                let dt = world.integration_parameters.dt;
-                world.integration_parameters.dt = 0.0;
-                p.step(&mut world);
-                world.integration_parameters.dt = dt;
-            }
-            step_checked(&mut world, &mut p, ground_y, &mut stats, &label);
-            if k >= 100 {
+                .restitution(0.5);
+            let (body, ground) = match change {
+                LiftedBeforeAStepOfNoLength => (None, world.colliders.insert(cuboid)),
+                _ => {
+                    let (body, ground) = world.insert(RigidBodyBuilder::fixed(), cuboid);
+                    (Some(body), ground)
+                }
+            };
+            let (b, _) = ball(&mut world, 0.0, 2.0);
+            let mut p = plugin_on(&world, ground, timing);
+            let mut stats = Stats::new();
+            let (mut ground_y, mut dropped_at) = (0.0, 100);
+            let mut bounces_after = 0;
+            for k in 0..300 {
+                match (change, k, body) {
+                    (LiftedBeforeAStepOfNoLength, 100, _) => {
+                        world.colliders[ground].set_translation(Vector::new(0.0, 0.5, 0.0));
+                        ground_y = 1.0;
+                        let dt = world.integration_parameters.dt;
+                        world.integration_parameters.dt = 0.0;
+                        p.step(&mut world);
+                        world.integration_parameters.dt = dt;
+                    }
+                    (LiftedRelativeToItsBody, 100, _) => {
+                        world.colliders[ground]
+                            .set_translation_wrt_parent(Vector::new(0.0, 0.5, 0.0));
+                        ground_y = 1.0;
+                    }
+                    (BodyDisabledThenEnabled, 100, Some(body)) => {
+                        world.bodies[body].set_enabled(false);
+                    }
+                    (BodyDisabledThenEnabled, 101, Some(body)) => {
+                        world.bodies[body].set_enabled(true);
+                        dropped_at = 101;
+                    }
+                    _ => {}
+                }
+                if k == dropped_at {
+                    let y = real(ground_y + 1.1);
+                    world.bodies[b].set_translation(Vector::new(0.0, y, 0.0), true);
+                    world.bodies[b].set_linvel(Vector::ZERO, true);
+                }
+                step_checked(&mut world, &mut p, ground_y, &mut stats, &label);
+                if k < dropped_at {
+                    continue;
+                }
                 // Step mode meets a contact at the start of the step it closes in: up to a
                 // step's travel at the impact speed (from 1 m) above the ground.
                 let tol = if timing == TimingMode::Step {
@@ -265,7 +308,7 @@ fn a_ground_moved_before_a_step_of_no_length_is_met_where_it_is() {
                     1e-3
                 };
                 for e in p.events() {
-                    bounces_on_moved += usize::from(!e.settled);
+                    bounces_after += usize::from(!e.settled);
                     assert!(
                         abs_diff_eq!(wide(e.point.y), ground_y, epsilon = tol),
                         "{label}: impact at y = {} on the ground at {ground_y}",
@@ -273,12 +316,9 @@ fn a_ground_moved_before_a_step_of_no_length_is_met_where_it_is() {
                     );
                 }
             }
+            println!("{label}: {bounces_after} bounces after the change");
+            assert!(bounces_after > 0, "{label}: no bounce after the change");
         }
-        println!("{label}: {bounces_on_moved} bounces on the moved ground");
-        assert!(
-            bounces_on_moved > 0,
-            "{label}: no bounce on the moved ground"
-        );
     }
 }
 

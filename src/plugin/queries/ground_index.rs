@@ -8,13 +8,10 @@
 //!   ([`GroundMotion`]: start pose, velocities, swept AABB; a still half-space's unit normal,
 //!   which every contact query on it would compute the same). A still ground (parentless or on
 //!   a fixed body) is computed once and kept until its collider's pose, shape, flags,
-//!   coefficients or filtering change; a ground on a kinematic body is computed afresh each
-//!   step, and a change of the step's length recomputes only those. A ground nothing wrote
-//!   costs one read a step: only a ground whose collider or parent body rapier has flagged as
-//!   written since its last step (`WriteFlags`) is compared with what its
-//!   motion was computed from (a fixed body the user moved has its colliders moved, and so
-//!   flagged, before this pass, `ImpactPlugin::before_step`); every ground is compared after
-//!   a step this pass did not see ([`GroundIndex::compare_all_next`]);
+//!   coefficients or filtering change (one comparison per ground and step; a fixed body the
+//!   user moved since the last step has its colliders moved before this pass,
+//!   `ImpactPlugin::before_step`); a ground on a kinematic body is computed afresh each step,
+//!   and a change of the step's length recomputes only those;
 //! - [`GroundIndex::near`]: the grounds whose swept AABB meets a cube, from a BVH over the
 //!   still bounded grounds (parry's) and a short list of the others (half-spaces, whose AABB
 //!   is the whole number range, and moving grounds). Its cost grows with the grounds near the
@@ -42,7 +39,6 @@ use crate::plugin::bridge::convert::{
 };
 use crate::plugin::queries::slabs::{Slab, Tile, find_slabs};
 use crate::plugin::state::small_list::SmallList;
-use crate::rapier::data::HasModifiedFlag;
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
@@ -233,7 +229,7 @@ impl Basis {
 
     /// Is `co` still what this was taken from (`Basis::of(co, bodies) == *self`)? Field by
     /// field from the collider, without building a second basis: the index's pass asks it of
-    /// every ground rapier flags as written.
+    /// every ground every step.
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
@@ -300,9 +296,6 @@ pub(crate) struct GroundIndex {
     /// compared every ground; after a rebuild, any may have changed).
     hooks_changed: Vec<ColliderHandle>,
     hooks_known: bool,
-    /// rapier's change flags hold every write to a ground since this index's last pass
-    /// (`WriteFlags`): false before the first pass and after a step no pass saw.
-    flags_cover: bool,
 }
 
 /// A ground's entry in the hooks' table, and the slab it is a tile of (the slab's index and
@@ -323,13 +316,6 @@ impl GroundIndex {
     /// next [`Self::rebuild`]; until then [`Self::entry`] answers `None` (ask the registry).
     pub fn invalidate(&mut self) {
         self.stale = true;
-    }
-
-    /// rapier stepped, or is about to, without this index's pass (a step of no length): its
-    /// step clears the change flags of what was written before it, so the next pass compares
-    /// every ground in full.
-    pub fn compare_all_next(&mut self) {
-        self.flags_cover = false;
     }
 
     /// The ground entry of a collider from the table built with the index, or `Err(())` when
@@ -429,8 +415,7 @@ impl GroundIndex {
     /// Brings every ground's motion to this step in place, if it can: `false` when the index
     /// must be rebuilt instead (the registry changed, or a ground changed its place: its
     /// collider removed, disabled, given a new shape, its body's type switched, a tile of a
-    /// slab moved or changed). A ground rapier flags as written (`WriteFlags`), or any after a
-    /// step this pass did not see, is compared with what its motion was computed from.
+    /// slab moved or changed). One comparison per ground: what its motion was computed from.
     pub fn update(
         &mut self,
         bodies: &RigidBodySet,
@@ -446,8 +431,6 @@ impl GroundIndex {
         // time that varies): only the moving grounds', computed below with it.
         self.dt = dt;
         self.hooks_changed.clear();
-        let flags_cover = self.flags_cover;
-        let mut flags = WriteFlags::default();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
             let (before, co) = match (&self.bases[i], colliders.get(handle)) {
@@ -457,7 +440,7 @@ impl GroundIndex {
                 // Removed, or back.
                 _ => return false,
             };
-            if flags_cover && !flags.written(co, bodies) || before.matches(co, bodies) {
+            if before.matches(co, bodies) {
                 continue;
             }
             let now = Basis::of(co, bodies);
@@ -521,7 +504,6 @@ impl GroundIndex {
             }
         }
         self.hooks_known = true;
-        self.flags_cover = true;
         true
     }
 
@@ -653,7 +635,6 @@ impl GroundIndex {
         self.handles = handles;
         self.hooks_known = false;
         self.stale = false;
-        self.flags_cover = true;
         self.dt = dt;
         self.gap = gap;
     }
@@ -875,40 +856,6 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
 /// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
 /// would not collide with it this step (disabled, a sensor, on a disabled body) or it is on a
 /// dynamic body.
-/// Reads whether anything of a collider or of its parent body has been written since
-/// rapier's last step. rapier flags a collider or a body at every mutable access to it
-/// (`HasModifiedFlag`: `get_mut`, `IndexMut`, `iter_mut`, `set_parent`, a body's removal that
-/// detaches its colliders, and `RigidBodySet::propagate_modified_body_positions_to_colliders`),
-/// and its step clears the flags: an unflagged collider on an unflagged body is as that step
-/// left it. The last parent's flag is kept: a body's grounds are most often next to each
-/// other in the index's order (a floor of tiles on one body), and the flags do not change
-/// while it reads them.
-#[derive(Default)]
-struct WriteFlags {
-    last_parent: Option<(RigidBodyHandle, bool)>,
-}
-
-impl WriteFlags {
-    /// Has `co` or its parent body been written since rapier's last step?
-    #[inline]
-    fn written(&mut self, co: &Collider, bodies: &RigidBodySet) -> bool {
-        if co.has_modified_flag() {
-            return true;
-        }
-        let Some(parent) = co.parent() else {
-            return false;
-        };
-        match self.last_parent {
-            Some((p, written)) if p == parent => written,
-            _ => {
-                let written = bodies.get(parent).is_some_and(|rb| rb.has_modified_flag());
-                self.last_parent = Some((parent, written));
-                written
-            }
-        }
-    }
-}
-
 fn motion_of(
     handle: ColliderHandle,
     co: &Collider,

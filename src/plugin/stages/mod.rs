@@ -98,9 +98,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// Prepares a step: call it right before rapier's `PhysicsPipeline::step` with the same
     /// gravity, parameters and sets. Clears the events, reads the managed bodies near a
     /// ground, and in `Step` mode applies the impulses of the contacts that close in this
-    /// step. Frame every rapier step of the world with it and [`Self::after_step`]: the
-    /// plugin finds the grounds you changed since the last step by rapier's change flags,
-    /// which each rapier step clears.
+    /// step.
     pub fn before_step(&mut self, gravity: Vector, params: &IntegrationParameters, sets: StepSets) {
         self.stopwatch.start_step();
         let (bodies, colliders, sets) = sets.into_parts();

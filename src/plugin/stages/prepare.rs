@@ -131,8 +131,6 @@ impl<H> ImpactPlugin<H> {
             ..Default::default()
         };
         if !step.active {
-            // rapier's step of no length clears its change flags all the same.
-            self.registry.index.compare_all_next();
             return step;
         }
         // A tile whose contacts its slab's stand-in would not carry stays a ground of its own:
