@@ -14,8 +14,8 @@
 mod scene_support;
 
 use approx::{abs_diff_eq, assert_abs_diff_eq};
-use rapier_impact::TimingMode;
 use rapier_impact::rapier::prelude::*;
+use rapier_impact::{EventKind, TimingMode};
 use scene_support::*;
 
 const MODES: [TimingMode; 3] = [
@@ -364,5 +364,51 @@ fn empty_worlds_and_ground_only_worlds_step() {
             world.bodies[b].translation().y
         );
         assert_eq!(stats.events, 0);
+    }
+}
+
+/// A ball rolling on a ground lifted 2 cm under it, by its body's pose or by its pose
+/// relative to the body (which rapier gives the collider only in its step): the plugin meets
+/// the ground where rapier's step has it, and pushes the ball out at once (`PushOut`), never
+/// rolling it on inside the ground.
+#[test]
+fn a_ground_lifted_under_a_rolling_ball_pushes_it_out() {
+    for by_body in [true, false] {
+        for timing in MODES {
+            let label =
+                format!("ground lifted under a rolling ball, by its body {by_body}, {timing:?}");
+            let mut world = PhysicsWorld::default();
+            let (body, ground) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::cuboid(50.0, 0.5, 50.0)
+                    .translation(Vector::new(0.0, -0.5, 0.0))
+                    .restitution(0.5),
+            );
+            let (b, _) = ball(&mut world, 0.0, 0.1);
+            world.bodies[b].set_linvel(Vector::new(1.0, 0.0, 0.0), true);
+            world.bodies[b].set_angvel(Vector::new(0.0, 0.0, -10.0), true);
+            let mut p = plugin_on(&world, ground, timing);
+            let mut stats = Stats::new();
+            let mut ground_y = 0.0;
+            for k in 0..60 {
+                if k == 30 {
+                    if by_body {
+                        world.bodies[body].set_translation(Vector::new(0.0, 0.02, 0.0), true);
+                    } else {
+                        world.colliders[ground]
+                            .set_translation_wrt_parent(Vector::new(0.0, -0.48, 0.0));
+                    }
+                    ground_y = 0.02;
+                }
+                step_checked(&mut world, &mut p, ground_y, &mut stats, &label);
+                if k == 30 {
+                    assert!(
+                        p.events().iter().any(|e| e.kind == EventKind::PushOut),
+                        "{label}: no push-out in the step of the lift: {:?}",
+                        p.events()
+                    );
+                }
+            }
+        }
     }
 }

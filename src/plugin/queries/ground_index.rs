@@ -39,6 +39,7 @@ use crate::plugin::bridge::convert::{
 };
 use crate::plugin::queries::slabs::{Slab, Tile, find_slabs};
 use crate::plugin::state::small_list::SmallList;
+use crate::rapier::data::HasModifiedFlag;
 use crate::rapier::math::{Pose, Real, Vector};
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::parry::partitioning::{Bvh, BvhBuildStrategy};
@@ -203,7 +204,9 @@ unsafe impl Send for Class {}
 unsafe impl Sync for Class {}
 
 impl Basis {
-    fn of(co: &Collider, bodies: &RigidBodySet) -> Self {
+    /// What a ground's motion is computed from: the collider `co`, its body in `bodies`, and
+    /// the pose rapier's step gives it (`pose_in_step`).
+    fn of(co: &Collider, bodies: &RigidBodySet, pose: Pose) -> Self {
         Self {
             class: Class {
                 shape: co.shape() as *const _ as *const (),
@@ -214,7 +217,7 @@ impl Basis {
                     .and_then(|p| bodies.get(p))
                     .map(|rb| (rb.body_type(), rb.is_enabled())),
             },
-            pose: *co.position(),
+            pose,
             skin: co.contact_skin(),
             props: Props {
                 friction: co.friction(),
@@ -227,13 +230,13 @@ impl Basis {
         }
     }
 
-    /// Is `co` still what this was taken from (`Basis::of(co, bodies) == *self`)? Field by
-    /// field from the collider, without building a second basis: the index's pass asks it of
-    /// every ground every step.
+    /// Is `co` still what this was taken from (`Basis::of` of it, its body and its step pose,
+    /// equal to `self`)? Field by field from the collider, without building a second basis:
+    /// the index's pass asks it of every ground every step.
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
-        *co.position() == self.pose
+        pose_in_step(co, bodies, Some(&self.pose)) == self.pose
             && co.contact_skin() == self.skin
             && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
             && co.is_enabled() == class.enabled
@@ -443,7 +446,8 @@ impl GroundIndex {
             if before.matches(co, bodies) {
                 continue;
             }
-            let now = Basis::of(co, bodies);
+            let pose = pose_in_step(co, bodies, Some(&before.pose));
+            let now = Basis::of(co, bodies, pose);
             if now.props.hooks != before.props.hooks {
                 self.hooks_changed.push(handle);
             }
@@ -472,7 +476,7 @@ impl GroundIndex {
             }
             // A still ground moved, or changed its skin or coefficients: computed again in
             // place.
-            let Some(m) = motion_of(handle, co, bodies, dt, gap) else {
+            let Some(m) = motion_of(handle, (co, pose), bodies, dt, gap) else {
                 return false;
             };
             // A cuboid that may now form a slab with a cuboid it meets (a change undone, a
@@ -495,10 +499,11 @@ impl GroundIndex {
         for k in 0..self.moving.len() {
             let i = self.moving[k];
             let handle = self.handles[i];
-            match colliders
-                .get(handle)
-                .and_then(|co| motion_of(handle, co, bodies, dt, gap))
-            {
+            let last = self.bases[i].as_ref().map(|b| &b.pose);
+            match colliders.get(handle).and_then(|co| {
+                let pose = pose_in_step(co, bodies, last);
+                motion_of(handle, (co, pose), bodies, dt, gap)
+            }) {
                 Some(m) if !m.is_still() => self.motions[i] = m,
                 _ => return false,
             }
@@ -534,6 +539,19 @@ impl GroundIndex {
         }
     }
 
+    /// The step pose the index last took for the ground `c` (its last build or pass), if it
+    /// was one.
+    fn last_pose(&self, c: ColliderHandle) -> Option<Pose> {
+        match self.by_slot.get(slot_of(c)) {
+            Some(Some(slot)) if slot.handle == c => self
+                .bases
+                .get(slot.index as usize)?
+                .as_ref()
+                .map(|b| b.pose),
+            _ => None,
+        }
+    }
+
     /// The grounds whose hook flags the user changed since the plugin last wrote them (or,
     /// for a ground the plugin has not written, since the last step's pass), or `None` when
     /// that is not known (the index was rebuilt since).
@@ -553,15 +571,21 @@ impl GroundIndex {
         let mut handles: Vec<ColliderHandle> = registry.keys().copied().collect();
         // Deterministic order, whatever the hash map's.
         handles.sort_by_key(|h| h.into_raw_parts());
+        // The step poses the last build or pass took (`pose_in_step` reads a relative pose
+        // waiting for the step from them).
+        let last: Vec<Option<Pose>> = handles.iter().map(|h| self.last_pose(*h)).collect();
         self.motions.clear();
         self.places.clear();
         self.bases.clear();
         self.listed.clear();
         self.moving.clear();
         let mut leaves = Vec::new();
-        for &handle in &handles {
+        for (&handle, last) in handles.iter().zip(&last) {
             let co = colliders.get(handle);
-            let motion = co.and_then(|co| motion_of(handle, co, bodies, dt, gap));
+            let pose = co.map(|co| pose_in_step(co, bodies, last.as_ref()));
+            let motion = co
+                .zip(pose)
+                .and_then(|(co, pose)| motion_of(handle, (co, pose), bodies, dt, gap));
             let i = self.motions.len();
             let (motion, place) = match motion {
                 Some(m) if m.is_still() && m.plane.is_none() => {
@@ -581,7 +605,8 @@ impl GroundIndex {
             self.places.push(place);
             // Absent grounds keep what they were computed from too, so that a change (the
             // collider enabled again) is seen.
-            self.bases.push(co.map(|co| Basis::of(co, bodies)));
+            self.bases
+                .push(co.zip(pose).map(|(co, pose)| Basis::of(co, bodies, pose)));
         }
         self.slabs = self.find_slabs(registry, colliders, &handles, lone);
         let mut tiles = Vec::new();
@@ -853,12 +878,32 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
     }
 }
 
+/// The pose rapier's step gives the collider `co`, whose step pose at the index's last pass
+/// was `last` (`None`: not known). A pose set relative to its body reaches the collider only
+/// in the step (`set_position_wrt_parent`: the step moves it to its body's pose times that
+/// relative pose); a world pose set on it, or its body's (carried to it before the pass,
+/// `ImpactPlugin::before_step`), is its own at once. Either write leaves it flagged as
+/// modified until the step (`HasModifiedFlag`). So an unflagged collider's own pose is the
+/// step's, and so is a flagged one's that moved since `last`; a flagged one still at `last`
+/// whose body's pose times its relative pose differs has that relative pose waiting.
+#[inline]
+fn pose_in_step(co: &Collider, bodies: &RigidBodySet, last: Option<&Pose>) -> Pose {
+    let own = *co.position();
+    if co.has_modified_flag() && last == Some(&own) {
+        let parent = co.parent().and_then(|p| bodies.get(p));
+        if let (Some(rb), Some(relative)) = (parent, co.position_wrt_parent()) {
+            return *rb.position() * *relative;
+        }
+    }
+    own
+}
+
 /// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
 /// would not collide with it this step (disabled, a sensor, on a disabled body) or it is on a
 /// dynamic body.
 fn motion_of(
     handle: ColliderHandle,
-    co: &Collider,
+    (co, pose): (&Collider, Pose),
     bodies: &RigidBodySet,
     dt: f64,
     gap: f64,
@@ -868,7 +913,7 @@ fn motion_of(
     }
     let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
     let loosen = to_real(gap + to_f64(co.contact_skin()));
-    let mut aabb = co.compute_aabb().loosened(loosen);
+    let mut aabb = co.shape().compute_aabb(&pose).loosened(loosen);
     // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
     let half_space = co.shape().as_halfspace();
     let plane_at = |pose: &Pose| {
@@ -904,7 +949,7 @@ fn motion_of(
             let end_pose = pose_from_na(&end);
             aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
             // A turning half-space sweeps too much for one plane: AABB only.
-            let plane = match (plane_at(co.position()), plane_at(&end_pose)) {
+            let plane = match (plane_at(&pose), plane_at(&end_pose)) {
                 (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => Some((n, d0.max(d1))),
                 _ => None,
             };
@@ -924,7 +969,8 @@ fn motion_of(
             })
         }
         _ => {
-            let pose = pose_to_na(co.position());
+            let plane = plane_at(&pose);
+            let pose = pose_to_na(&pose);
             let (com0, rot0, local) = (
                 pose.translation.vector,
                 pose.rotation,
@@ -943,7 +989,7 @@ fn motion_of(
                 v: Vector3::zeros(),
                 w: Vector3::zeros(),
                 aabb,
-                plane: plane_at(co.position()),
+                plane,
                 slab: None,
                 unit_normal,
             })
@@ -1210,6 +1256,9 @@ mod tests {
         type Change = (&'static str, fn(&mut Collider));
         let changes: Vec<Change> = vec![
             ("pose", |co| co.set_translation(Vector::new(0.0, 1e-6, 0.0))),
+            ("pose relative to the body", |co| {
+                co.set_translation_wrt_parent(Vector::new(0.0, 1e-6, 0.0))
+            }),
             ("skin", |co| co.set_contact_skin(0.01)),
             ("shape", |co| {
                 co.set_shape(SharedShape::cuboid(0.5, 0.1, 0.5))
@@ -1241,15 +1290,20 @@ mod tests {
                 RigidBodyBuilder::fixed(),
                 ColliderBuilder::cuboid(0.5, 0.1, 0.5),
             );
-            let before = Basis::of(&w.colliders[c], &w.bodies);
+            let before = Basis::of(&w.colliders[c], &w.bodies, *w.colliders[c].position());
             assert!(before.matches(&w.colliders[c], &w.bodies), "{what}");
             change(&mut w.colliders[c]);
             let co = &w.colliders[c];
             assert!(!before.matches(co, &w.bodies), "{what} not seen");
-            assert!(Basis::of(co, &w.bodies) != before, "{what}");
+            let pose = pose_in_step(co, &w.bodies, Some(&before.pose));
+            assert!(Basis::of(co, &w.bodies, pose) != before, "{what}");
         }
         // The parent's type.
-        let before = Basis::of(&world.colliders[c], &world.bodies);
+        let before = Basis::of(
+            &world.colliders[c],
+            &world.bodies,
+            *world.colliders[c].position(),
+        );
         let parent = world.colliders[c].parent().unwrap();
         world.bodies[parent].set_body_type(RigidBodyType::KinematicPositionBased, true);
         assert!(!before.matches(&world.colliders[c], &world.bodies));
@@ -1330,7 +1384,7 @@ mod tests {
                 .position(Pose::from_parts(Vector::ZERO, turn)),
         );
         let co = &world.colliders[ground];
-        let motion = motion_of(ground, co, &world.bodies, DT, GAP).unwrap();
+        let motion = motion_of(ground, (co, *co.position()), &world.bodies, DT, GAP).unwrap();
         let bits = |n: Vector3<f64>| n.map(f64::to_bits);
         let kept = motion.still_unit_normal(Vector::Y).map(bits);
         assert_eq!(
