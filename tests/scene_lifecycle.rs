@@ -24,6 +24,13 @@ const MODES: [TimingMode; 3] = [
     TimingMode::Exact,
 ];
 
+/// A floor `2 half` m wide and 1 m thick, its top at y = 0, e = 0.5.
+fn floor(half: f64) -> ColliderBuilder {
+    ColliderBuilder::cuboid(real(half), 0.5, real(half))
+        .translation(Vector::new(0.0, -0.5, 0.0))
+        .restitution(0.5)
+}
+
 fn ball(world: &mut PhysicsWorld, x: f64, y: f64) -> (RigidBodyHandle, ColliderHandle) {
     world.insert(
         RigidBodyBuilder::dynamic().translation(Vector::new(real(x), real(y), 0.0)),
@@ -175,12 +182,7 @@ fn a_ground_moved_by_the_user_is_bounced_on_where_it_is() {
     for timing in MODES {
         let label = format!("moved ground {timing:?}");
         let mut world = PhysicsWorld::default();
-        let (gb, ground) = world.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::cuboid(5.0, 0.5, 5.0)
-                .translation(Vector::new(0.0, -0.5, 0.0))
-                .restitution(0.5),
-        );
+        let (gb, ground) = world.insert(RigidBodyBuilder::fixed(), floor(5.0));
         let (b, _) = ball(&mut world, 0.0, 2.0);
         let mut p = plugin_on(&world, ground, timing);
         let mut stats = Stats::new();
@@ -252,13 +254,10 @@ fn ground_changed_between_steps_is_met_where_it_is() {
         for timing in MODES {
             let label = format!("{change:?} {timing:?}");
             let mut world = PhysicsWorld::default();
-            let cuboid = ColliderBuilder::cuboid(5.0, 0.5, 5.0)
-                .translation(Vector::new(0.0, -0.5, 0.0))
-                .restitution(0.5);
             let (body, ground) = match change {
-                LiftedBeforeAStepOfNoLength => (None, world.colliders.insert(cuboid)),
+                LiftedBeforeAStepOfNoLength => (None, world.colliders.insert(floor(5.0))),
                 _ => {
-                    let (body, ground) = world.insert(RigidBodyBuilder::fixed(), cuboid);
+                    let (body, ground) = world.insert(RigidBodyBuilder::fixed(), floor(5.0));
                     (Some(body), ground)
                 }
             };
@@ -378,12 +377,7 @@ fn a_ground_lifted_under_a_rolling_ball_pushes_it_out() {
             let label =
                 format!("ground lifted under a rolling ball, by its body {by_body}, {timing:?}");
             let mut world = PhysicsWorld::default();
-            let (body, ground) = world.insert(
-                RigidBodyBuilder::fixed(),
-                ColliderBuilder::cuboid(50.0, 0.5, 50.0)
-                    .translation(Vector::new(0.0, -0.5, 0.0))
-                    .restitution(0.5),
-            );
+            let (body, ground) = world.insert(RigidBodyBuilder::fixed(), floor(50.0));
             let (b, _) = ball(&mut world, 0.0, 0.1);
             world.bodies[b].set_linvel(Vector::new(1.0, 0.0, 0.0), true);
             world.bodies[b].set_angvel(Vector::new(0.0, 0.0, -10.0), true);

@@ -609,32 +609,7 @@ impl GroundIndex {
                 .push(co.zip(pose).map(|(co, pose)| Basis::of(co, bodies, pose)));
         }
         self.slabs = self.find_slabs(registry, colliders, &handles, lone);
-        let mut tiles = Vec::new();
-        for slab in &self.slabs {
-            let s = self.motions.len();
-            let first = self.motions[slab.members[0]];
-            let cuboid = Cuboid::new(vec_from_na(&slab.half));
-            let mut aabb = cuboid.aabb(&pose_from_na(&slab.pose));
-            // Loosened as each tile's box is (the same skin, by the slab's rule).
-            let skin = self.bases[slab.members[0]].map_or(0.0, |b| to_f64(b.skin));
-            aabb = aabb.loosened(to_real(gap + skin));
-            self.motions.push(GroundMotion {
-                com0: slab.pose.translation.vector,
-                rot0: slab.pose.rotation,
-                local: Isometry3::identity(),
-                pose0: slab.pose,
-                aabb,
-                slab: Some(cuboid),
-                unit_normal: None,
-                ..first
-            });
-            self.places.push(Place::Tree);
-            leaves.push((s, aabb));
-            for &m in &slab.members {
-                self.places[m] = Place::Tile;
-                tiles.push((m, self.motions[m].aabb));
-            }
-        }
+        let tiles = self.place_slabs(gap, &mut leaves);
         leaves.retain(|(i, _)| self.places[*i] == Place::Tree);
         self.tree = build_bvh(leaves);
         self.tiles = build_bvh(tiles);
@@ -662,6 +637,40 @@ impl GroundIndex {
         self.stale = false;
         self.dt = dt;
         self.gap = gap;
+    }
+
+    /// Each slab just found (`self.slabs`) as a ground of its own after the others (its
+    /// motion its first tile's, its shape the box, loosened by `gap` and the tiles' skin), a
+    /// leaf of the BVH in `leaves`; its tiles taken out of the BVH (`Place::Tile`). Returns
+    /// the tiles' leaves, for the BVH over them.
+    fn place_slabs(&mut self, gap: f64, leaves: &mut Vec<(usize, Aabb)>) -> Vec<(usize, Aabb)> {
+        let mut tiles = Vec::new();
+        for slab in &self.slabs {
+            let s = self.motions.len();
+            let first = self.motions[slab.members[0]];
+            let cuboid = Cuboid::new(vec_from_na(&slab.half));
+            let mut aabb = cuboid.aabb(&pose_from_na(&slab.pose));
+            // Loosened as each tile's box is (the same skin, by the slab's rule).
+            let skin = self.bases[slab.members[0]].map_or(0.0, |b| to_f64(b.skin));
+            aabb = aabb.loosened(to_real(gap + skin));
+            self.motions.push(GroundMotion {
+                com0: slab.pose.translation.vector,
+                rot0: slab.pose.rotation,
+                local: Isometry3::identity(),
+                pose0: slab.pose,
+                aabb,
+                slab: Some(cuboid),
+                unit_normal: None,
+                ..first
+            });
+            self.places.push(Place::Tree);
+            leaves.push((s, aabb));
+            for &m in &slab.members {
+                self.places[m] = Place::Tile;
+                tiles.push((m, self.motions[m].aabb));
+            }
+        }
+        tiles
     }
 
     /// The slabs among the still cuboid grounds just placed in the BVH (`slabs.rs`): tiles
