@@ -171,7 +171,10 @@ pub(crate) fn half_space_unit_normal(
 #[derive(Clone, Copy, PartialEq)]
 struct Basis {
     class: Class,
+    /// The pose rapier's step gives it (`pose_in_step`).
     pose: Pose,
+    /// Its pose relative to its body, if it has one.
+    relative: Option<Pose>,
     skin: Real,
     /// What a slab's tiles must share beyond their shape: a change moves a tile out of (or
     /// into) a slab, so a tile of one rebuilds the index.
@@ -218,6 +221,7 @@ impl Basis {
                     .map(|rb| (rb.body_type(), rb.is_enabled())),
             },
             pose,
+            relative: co.position_wrt_parent().copied(),
             skin: co.contact_skin(),
             props: Props {
                 friction: co.friction(),
@@ -236,7 +240,8 @@ impl Basis {
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
-        pose_in_step(co, bodies, Some(&self.pose)) == self.pose
+        pose_in_step(co, bodies, self.relative.as_ref()) == self.pose
+            && co.position_wrt_parent() == self.relative.as_ref()
             && co.contact_skin() == self.skin
             && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
             && co.is_enabled() == class.enabled
@@ -434,6 +439,9 @@ impl GroundIndex {
         // time that varies): only the moving grounds', computed below with it.
         self.dt = dt;
         self.hooks_changed.clear();
+        // Written once the pass has gone through: a pass that fails leaves the bases as the
+        // last one did, for the rebuild to read the relative poses they had (`pose_in_step`).
+        let mut new_bases = Vec::new();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
             let (before, co) = match (&self.bases[i], colliders.get(handle)) {
@@ -446,7 +454,7 @@ impl GroundIndex {
             if before.matches(co, bodies) {
                 continue;
             }
-            let pose = pose_in_step(co, bodies, Some(&before.pose));
+            let pose = pose_in_step(co, bodies, before.relative.as_ref());
             let now = Basis::of(co, bodies, pose);
             if now.props.hooks != before.props.hooks {
                 self.hooks_changed.push(handle);
@@ -465,13 +473,14 @@ impl GroundIndex {
                     ..now
                 } == *before;
                 if hooks_only && !lone(handle) {
-                    self.bases[i] = Some(now);
+                    new_bases.push((i, now));
                     continue;
                 }
                 return false;
             }
             // Moving grounds are computed below; absent ones have nothing to compute.
             if self.places[i] == Place::Absent || !self.motions[i].is_still() {
+                new_bases.push((i, now));
                 continue;
             }
             // A still ground moved, or changed its skin or coefficients: computed again in
@@ -490,7 +499,7 @@ impl GroundIndex {
                 return false;
             }
             self.motions[i] = m;
-            self.bases[i] = Some(now);
+            new_bases.push((i, now));
             if self.places[i] == Place::Tree {
                 self.tree.remove(i as u32);
                 self.tree.insert(m.aabb, i as u32);
@@ -499,7 +508,7 @@ impl GroundIndex {
         for k in 0..self.moving.len() {
             let i = self.moving[k];
             let handle = self.handles[i];
-            let last = self.bases[i].as_ref().map(|b| &b.pose);
+            let last = self.bases[i].as_ref().and_then(|b| b.relative.as_ref());
             match colliders.get(handle).and_then(|co| {
                 let pose = pose_in_step(co, bodies, last);
                 motion_of(handle, (co, pose), bodies, dt, gap)
@@ -507,6 +516,9 @@ impl GroundIndex {
                 Some(m) if !m.is_still() => self.motions[i] = m,
                 _ => return false,
             }
+        }
+        for (i, basis) in new_bases {
+            self.bases[i] = Some(basis);
         }
         self.hooks_known = true;
         true
@@ -539,15 +551,13 @@ impl GroundIndex {
         }
     }
 
-    /// The step pose the index last took for the ground `c` (its last build or pass), if it
-    /// was one.
-    fn last_pose(&self, c: ColliderHandle) -> Option<Pose> {
+    /// The pose relative to its body that the index's last build or pass saw for the ground
+    /// `c`, if it was one and has a body.
+    fn last_relative(&self, c: ColliderHandle) -> Option<Pose> {
         match self.by_slot.get(slot_of(c)) {
-            Some(Some(slot)) if slot.handle == c => self
-                .bases
-                .get(slot.index as usize)?
-                .as_ref()
-                .map(|b| b.pose),
+            Some(Some(slot)) if slot.handle == c => {
+                self.bases.get(slot.index as usize)?.as_ref()?.relative
+            }
             _ => None,
         }
     }
@@ -571,9 +581,9 @@ impl GroundIndex {
         let mut handles: Vec<ColliderHandle> = registry.keys().copied().collect();
         // Deterministic order, whatever the hash map's.
         handles.sort_by_key(|h| h.into_raw_parts());
-        // The step poses the last build or pass took (`pose_in_step` reads a relative pose
-        // waiting for the step from them).
-        let last: Vec<Option<Pose>> = handles.iter().map(|h| self.last_pose(*h)).collect();
+        // The relative poses the last build or pass saw (`pose_in_step` finds a relative
+        // pose waiting for the step by them).
+        let last: Vec<Option<Pose>> = handles.iter().map(|h| self.last_relative(*h)).collect();
         self.motions.clear();
         self.places.clear();
         self.bases.clear();
@@ -887,24 +897,25 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
     }
 }
 
-/// The pose rapier's step gives the collider `co`, whose step pose at the index's last pass
-/// was `last` (`None`: not known). A pose set relative to its body reaches the collider only
-/// in the step (`set_position_wrt_parent`: the step moves it to its body's pose times that
-/// relative pose); a world pose set on it, or its body's (carried to it before the pass,
-/// `ImpactPlugin::before_step`), is its own at once. Either write leaves it flagged as
-/// modified until the step (`HasModifiedFlag`). So an unflagged collider's own pose is the
-/// step's, and so is a flagged one's that moved since `last`; a flagged one still at `last`
-/// whose body's pose times its relative pose differs has that relative pose waiting.
+/// The pose rapier's step gives the collider `co`, whose pose relative to its body was
+/// `last_relative` at the index's last pass (`None`: not known, or it has no body). A pose
+/// set relative to the body reaches the collider's world pose only in rapier's step
+/// (`set_position_wrt_parent`: the step moves it to its body's pose times the relative pose);
+/// a world pose set on it, or its body's (carried to it before the pass,
+/// `ImpactPlugin::before_step`), is its own at once and kept. So the step's pose is its own,
+/// unless its relative pose changed since the last pass and no step has applied it yet (a
+/// write leaves the collider flagged as modified until rapier's step, `HasModifiedFlag`):
+/// then its body's pose times that relative pose, as rapier computes it.
 #[inline]
-fn pose_in_step(co: &Collider, bodies: &RigidBodySet, last: Option<&Pose>) -> Pose {
-    let own = *co.position();
-    if co.has_modified_flag() && last == Some(&own) {
-        let parent = co.parent().and_then(|p| bodies.get(p));
-        if let (Some(rb), Some(relative)) = (parent, co.position_wrt_parent()) {
-            return *rb.position() * *relative;
+fn pose_in_step(co: &Collider, bodies: &RigidBodySet, last_relative: Option<&Pose>) -> Pose {
+    if let (Some(last), Some(relative)) = (last_relative, co.position_wrt_parent()) {
+        if relative != last && co.has_modified_flag() {
+            if let Some(rb) = co.parent().and_then(|p| bodies.get(p)) {
+                return *rb.position() * *relative;
+            }
         }
     }
-    own
+    *co.position()
 }
 
 /// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
@@ -1304,7 +1315,7 @@ mod tests {
             change(&mut w.colliders[c]);
             let co = &w.colliders[c];
             assert!(!before.matches(co, &w.bodies), "{what} not seen");
-            let pose = pose_in_step(co, &w.bodies, Some(&before.pose));
+            let pose = pose_in_step(co, &w.bodies, before.relative.as_ref());
             assert!(Basis::of(co, &w.bodies, pose) != before, "{what}");
         }
         // The parent's type.
@@ -1316,6 +1327,54 @@ mod tests {
         let parent = world.colliders[c].parent().unwrap();
         world.bodies[parent].set_body_type(RigidBodyType::KinematicPositionBased, true);
         assert!(!before.matches(&world.colliders[c], &world.bodies));
+    }
+
+    /// The index plans each step with the pose rapier's step gives a ground on a fixed body
+    /// (compared after that step), when its pose relative to the body is set (which rapier
+    /// applies in the step), when a world pose set directly on it is kept by rapier and the
+    /// collider is then written again for something else, and when the pass that sees the
+    /// relative pose fails on another ground and the index is rebuilt.
+    #[test]
+    fn a_ground_is_planned_where_rapiers_step_puts_it() {
+        type Write = fn(&mut PhysicsWorld, ColliderHandle, ColliderHandle, usize);
+        let cases: [(&str, Write); 3] = [
+            ("relative pose", |w, a, _, k| {
+                if k == 1 {
+                    w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0));
+                }
+            }),
+            ("world pose, then friction", |w, a, _, k| match k {
+                1 => w.colliders[a].set_translation(Vector::new(0.0, 1.0, 0.0)),
+                3 => w.colliders[a].set_friction(0.3),
+                _ => {}
+            }),
+            ("relative pose, the pass failing after it", |w, a, b, k| {
+                if k == 1 {
+                    w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0));
+                    w.colliders[b].set_enabled(false);
+                }
+            }),
+        ];
+        for (what, write) in cases {
+            let mut world = PhysicsWorld::default();
+            let (_, a) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::cuboid(0.5, 0.1, 0.5),
+            );
+            let b = world.colliders.insert(
+                ColliderBuilder::cuboid(0.5, 0.1, 0.5).translation(Vector::new(3.0, 0.0, 0.0)),
+            );
+            let reg = registry(&[a, b]);
+            let mut index = GroundIndex::default();
+            for k in 0..5 {
+                write(&mut world, a, b, k);
+                index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
+                let planned = index.motions[0].pose0.translation.vector.y;
+                world.step();
+                let stepped = to_f64(world.colliders[a].translation().y);
+                assert_eq!(planned, stepped, "{what}, step {k}");
+            }
+        }
     }
 
     #[test]
