@@ -551,6 +551,17 @@ impl GroundIndex {
         }
     }
 
+    /// rapier is about to take a step without this index's pass (a step of no length): that
+    /// step applies the relative poses written since the last pass, so each ground's is
+    /// noted as seen (`pose_in_step` compares the next writes with them).
+    pub fn note_relative_poses(&mut self, colliders: &ColliderSet) {
+        for (base, handle) in self.bases.iter_mut().zip(&self.handles) {
+            if let (Some(base), Some(co)) = (base.as_mut(), colliders.get(*handle)) {
+                base.relative = co.position_wrt_parent().copied();
+            }
+        }
+    }
+
     /// The pose relative to its body that the index's last build or pass saw for the ground
     /// `c`, if it was one and has a body.
     fn last_relative(&self, c: ColliderHandle) -> Option<Pose> {
@@ -897,15 +908,23 @@ fn absent(handle: ColliderHandle) -> GroundMotion {
     }
 }
 
-/// The pose rapier's step gives the collider `co`, whose pose relative to its body was
-/// `last_relative` at the index's last pass (`None`: not known, or it has no body). A pose
-/// set relative to the body reaches the collider's world pose only in rapier's step
+/// The pose rapier's step gives the collider `co`, whose pose relative to its body the index
+/// last saw as `last_relative` (`None`: not known, or it has no body). A pose set relative to
+/// the body reaches the collider's world pose only in rapier's step
 /// (`set_position_wrt_parent`: the step moves it to its body's pose times the relative pose);
 /// a world pose set on it, or its body's (carried to it before the pass,
 /// `ImpactPlugin::before_step`), is its own at once and kept. So the step's pose is its own,
-/// unless its relative pose changed since the last pass and no step has applied it yet (a
-/// write leaves the collider flagged as modified until rapier's step, `HasModifiedFlag`):
-/// then its body's pose times that relative pose, as rapier computes it.
+/// unless the collider was written since rapier's last step (it is then flagged as modified,
+/// `HasModifiedFlag`) and its relative pose differs from `last_relative` (kept through steps
+/// without a pass, [`GroundIndex::note_relative_poses`]): then its body's pose times that
+/// relative pose, as rapier computes it.
+///
+/// rapier's own record of a relative pose waiting for its step is not public, and two writes
+/// look from here like the world pose they are not: a relative pose written with the value it
+/// already had, after a world pose was written on the collider directly (which rapier's docs
+/// reserve for colliders without a body); and a relative pose written in the step the
+/// collider is first marked as ground (`last_relative` unknown). rapier's step gives each its
+/// relative pose; the index takes it a step late.
 #[inline]
 fn pose_in_step(co: &Collider, bodies: &RigidBodySet, last_relative: Option<&Pose>) -> Pose {
     if let (Some(last), Some(relative)) = (last_relative, co.position_wrt_parent()) {
@@ -1332,28 +1351,57 @@ mod tests {
     /// The index plans each step with the pose rapier's step gives a ground on a fixed body
     /// (compared after that step), when its pose relative to the body is set (which rapier
     /// applies in the step), when a world pose set directly on it is kept by rapier and the
-    /// collider is then written again for something else, and when the pass that sees the
-    /// relative pose fails on another ground and the index is rebuilt.
+    /// collider is then written again for something else, when the pass that sees the
+    /// relative pose fails on another ground and the index is rebuilt, and when a step of no
+    /// length (no pass, as in `prepare`) applies a relative pose before the next write.
     #[test]
     fn a_ground_is_planned_where_rapiers_step_puts_it() {
-        type Write = fn(&mut PhysicsWorld, ColliderHandle, ColliderHandle, usize);
-        let cases: [(&str, Write); 3] = [
+        // Writes `a` (and `b`) before step `k`; `true`: step `k` has no length.
+        type Write = fn(&mut PhysicsWorld, ColliderHandle, ColliderHandle, usize) -> bool;
+        let cases: [(&str, Write); 5] = [
             ("relative pose", |w, a, _, k| {
                 if k == 1 {
                     w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0));
                 }
+                false
             }),
-            ("world pose, then friction", |w, a, _, k| match k {
-                1 => w.colliders[a].set_translation(Vector::new(0.0, 1.0, 0.0)),
-                3 => w.colliders[a].set_friction(0.3),
-                _ => {}
+            ("world pose, then friction", |w, a, _, k| {
+                match k {
+                    1 => w.colliders[a].set_translation(Vector::new(0.0, 1.0, 0.0)),
+                    3 => w.colliders[a].set_friction(0.3),
+                    _ => {}
+                }
+                false
             }),
             ("relative pose, the pass failing after it", |w, a, b, k| {
                 if k == 1 {
                     w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0));
                     w.colliders[b].set_enabled(false);
                 }
+                false
             }),
+            (
+                "relative pose, a step of no length, the relative pose back",
+                |w, a, _, k| {
+                    match k {
+                        1 => w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0)),
+                        2 => w.colliders[a].set_translation_wrt_parent(Vector::ZERO),
+                        _ => {}
+                    }
+                    k == 1
+                },
+            ),
+            (
+                "relative pose, a step of no length, a world pose",
+                |w, a, _, k| {
+                    match k {
+                        1 => w.colliders[a].set_translation_wrt_parent(Vector::new(0.0, 1.0, 0.0)),
+                        2 => w.colliders[a].set_translation(Vector::new(0.0, 2.0, 0.0)),
+                        _ => {}
+                    }
+                    k == 1
+                },
+            ),
         ];
         for (what, write) in cases {
             let mut world = PhysicsWorld::default();
@@ -1366,8 +1414,16 @@ mod tests {
             );
             let reg = registry(&[a, b]);
             let mut index = GroundIndex::default();
-            for k in 0..5 {
-                write(&mut world, a, b, k);
+            index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
+            world.step();
+            for k in 1..6 {
+                if write(&mut world, a, b, k) {
+                    index.note_relative_poses(&world.colliders);
+                    world.integration_parameters.dt = 0.0;
+                    world.step();
+                    world.integration_parameters.dt = to_real(DT);
+                    continue;
+                }
                 index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| true);
                 let planned = index.motions[0].pose0.translation.vector.y;
                 world.step();

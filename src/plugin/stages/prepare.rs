@@ -131,6 +131,9 @@ impl<H> ImpactPlugin<H> {
             ..Default::default()
         };
         if !step.active {
+            // rapier's step applies the relative poses written since, without the index's
+            // pass.
+            self.registry.index.note_relative_poses(colliders);
             return step;
         }
         // A tile whose contacts its slab's stand-in would not carry stays a ground of its own:
