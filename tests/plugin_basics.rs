@@ -387,15 +387,26 @@ fn invalid_settings_are_refused_where_they_are_set() {
         .unwrap_err();
     println!("{e}");
     assert!(matches!(e, ConfigError::Material(_)));
-    assert!(matches!(
-        p.add_ground_with_material(
+    // The message says the coefficient's range too.
+    assert!(
+        e.to_string()
+            .ends_with("; GroundMaterial::restitution takes [0, 10]"),
+        "{e}"
+    );
+    let e = p
+        .add_ground_with_material(
             &world.bodies,
             &world.colliders,
             ground,
-            material(0.5, f64::NAN)
-        ),
-        Err(ConfigError::Material(_))
-    ));
+            material(0.5, f64::NAN),
+        )
+        .unwrap_err();
+    assert!(matches!(e, ConfigError::Material(_)));
+    assert!(
+        e.to_string()
+            .ends_with("; GroundMaterial::friction takes [0, 100]"),
+        "{e}"
+    );
     assert!(
         !p.is_ground(ground),
         "a refused ground must not be registered"

@@ -456,7 +456,23 @@ impl fmt::Display for ConfigError {
                 Shown(*value),
                 range_of(field)
             ),
-            Self::Material(e) => write!(f, "invalid material: {e}"),
+            Self::Material(e) => {
+                write!(f, "invalid material: {e}")?;
+                // A coefficient the model refuses (NaN, infinite, negative) is one of a
+                // `GroundMaterial`'s: its range is said too.
+                let field = match e {
+                    ModelError::NegativeRestitution(_) => Some("restitution"),
+                    ModelError::NegativeFriction(_) => Some("friction"),
+                    ModelError::NotFinite { what } => {
+                        Some(*what).filter(|w| matches!(*w, "restitution" | "friction"))
+                    }
+                    _ => None,
+                };
+                match field {
+                    Some(field) => write!(f, "; GroundMaterial::{field} takes {}", range_of(field)),
+                    None => Ok(()),
+                }
+            }
             Self::MaterialOutOfRange { field, value } => write!(
                 f,
                 "GroundMaterial::{field} is {}, outside its range {}",
