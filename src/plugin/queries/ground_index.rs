@@ -439,10 +439,8 @@ impl GroundIndex {
         // time that varies): only the moving grounds', computed below with it.
         self.dt = dt;
         self.hooks_changed.clear();
-        // Written once the pass has gone through: a pass that fails leaves the bases as the
-        // last one did, for the rebuild to read the relative poses they had (`pose_in_step`;
-        // the motions and the tree it changed the rebuild replaces). The moving grounds'
-        // loop below reads them as the last pass left them too.
+        // Written once the pass has gone through (the moving grounds' loop reads them as the
+        // last pass left them): a pass that fails leaves them for the rebuild to read.
         let mut new_bases = Vec::new();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
