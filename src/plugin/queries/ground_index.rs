@@ -236,12 +236,14 @@ impl Basis {
 
     /// Is `co` still what this was taken from (`Basis::of` of it, its body and its step pose,
     /// equal to `self`)? Field by field from the collider, without building a second basis:
-    /// the index's pass asks it of every ground every step.
+    /// the index's pass asks it of every ground every step. While its relative pose is the
+    /// one taken, its step pose is its own (`pose_in_step`); a relative pose changes only by
+    /// a write, which rapier flags until its step applies it and so moves the collider.
     #[inline]
     fn matches(&self, co: &Collider, bodies: &RigidBodySet) -> bool {
         let (class, props) = (&self.class, &self.props);
-        pose_in_step(co, bodies, self.relative.as_ref()) == self.pose
-            && co.position_wrt_parent() == self.relative.as_ref()
+        *co.position() == self.pose
+            && (!co.has_modified_flag() || co.position_wrt_parent() == self.relative.as_ref())
             && co.contact_skin() == self.skin
             && std::ptr::eq(co.shape() as *const _ as *const (), class.shape)
             && co.is_enabled() == class.enabled
@@ -439,8 +441,9 @@ impl GroundIndex {
         // time that varies): only the moving grounds', computed below with it.
         self.dt = dt;
         self.hooks_changed.clear();
-        // Written once the pass has gone through (the moving grounds' loop reads them as the
-        // last pass left them): a pass that fails leaves them for the rebuild to read.
+        // Written once the pass has gone through: a pass that fails leaves them for the
+        // rebuild to read. A moving or absent ground's is kept as it was taken (a moving
+        // ground's pose changes every step; its motion is taken afresh below).
         let mut new_bases = Vec::new();
         for i in 0..self.bases.len() {
             let handle = self.handles[i];
@@ -480,7 +483,6 @@ impl GroundIndex {
             }
             // Moving grounds are computed below; absent ones have nothing to compute.
             if self.places[i] == Place::Absent || !self.motions[i].is_still() {
-                new_bases.push((i, now));
                 continue;
             }
             // A still ground moved, or changed its skin or coefficients: computed again in
