@@ -11,7 +11,10 @@
 //! it (30 000 cases found a box struck downwards at 2.1 m/s by a ball, 5.4 mm deep, Step mode
 //! at 30 Hz).
 //!
-//! Cases: 1 000 by default; set `RAPIER_IMPACT_PROPTEST_CASES` for more.
+//! Cases: 1 000 by default, drawn from a fixed seed (every run checks the same scenes); set
+//! `RAPIER_IMPACT_PROPTEST_CASES` for more, and `RAPIER_IMPACT_PROPTEST_SEED` for others (a
+//! whole number, or `random`). A fresh search found the case in the guide's "Not guaranteed"
+//! where rapier's solver presses a light box deeper than the bound for pushed bodies.
 
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
@@ -69,13 +72,6 @@ fn rule(k: u8) -> CoefficientCombineRule {
         2 => CoefficientCombineRule::Multiply,
         _ => CoefficientCombineRule::Max,
     }
-}
-
-fn cases() -> u32 {
-    std::env::var("RAPIER_IMPACT_PROPTEST_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1_000)
 }
 
 /// The half-space ground with the given material and the bodies above it, at `hz`.
@@ -228,7 +224,7 @@ fn prop_assert_le(depth: f64, bound: f64, label: &str, k: usize, pushed: bool) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+    #![proptest_config(random_scene_config("RAPIER_IMPACT_PROPTEST_CASES", 1_000))]
 
     #[test]
     fn random_scenes_stay_finite_above_ground_and_never_gain_energy_at_impacts(

@@ -10,7 +10,8 @@
 //!
 //! Every ground's top is at `y = 0` over a half-space floor, so "below a ground" is below
 //! `y = 0`. Cases: 24 by default (sequences of up to 24 operations); set
-//! `RAPIER_IMPACT_STRESS_CASES` for a long run.
+//! `RAPIER_IMPACT_STRESS_CASES` for a long run. The sequences are drawn from a fixed seed, the
+//! same at every run; `RAPIER_IMPACT_PROPTEST_SEED` draws others (a whole number, or `random`).
 
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
 
@@ -485,15 +486,8 @@ impl Sim {
     }
 }
 
-fn cases() -> u32 {
-    std::env::var("RAPIER_IMPACT_STRESS_CASES")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(24)
-}
-
 proptest! {
-    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
+    #![proptest_config(random_scene_config("RAPIER_IMPACT_STRESS_CASES", 24))]
 
     #[test]
     fn random_sequences_of_user_operations_keep_every_guarantee(

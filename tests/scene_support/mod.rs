@@ -595,3 +595,36 @@ pub fn saved_world(world: &PhysicsWorld) -> PhysicsWorld {
         ..PhysicsWorld::default()
     }
 }
+
+/// The configuration of a random-scene property test: `default_cases` cases unless the
+/// environment variable `cases_var` gives another count, drawn from a fixed seed, so that
+/// every run of the suite, CI's included, checks the same scenes and a failure it reports is
+/// one anyone can replay. `RAPIER_IMPACT_PROPTEST_SEED` draws other scenes for a longer
+/// search: a number picks that seed, `random` a fresh one each run. A value that is neither
+/// stops the test at once rather than falling back to the fixed seed unseen.
+pub fn random_scene_config(cases_var: &str, default_cases: u32) -> proptest::test_runner::Config {
+    use proptest::test_runner::{Config, RngAlgorithm, RngSeed};
+    fn number<T: std::str::FromStr>(var: &str, value: String) -> T {
+        value
+            .parse()
+            .unwrap_or_else(|_| panic!("{var}={value:?}: expected a whole number"))
+    }
+    let cases = std::env::var(cases_var)
+        .map(|v| number(cases_var, v))
+        .unwrap_or(default_cases);
+    let seed_var = "RAPIER_IMPACT_PROPTEST_SEED";
+    let rng_seed = match std::env::var(seed_var) {
+        Err(_) => RngSeed::Fixed(RANDOM_SCENE_SEED),
+        Ok(v) if v == "random" => RngSeed::Random,
+        Ok(v) => RngSeed::Fixed(number(seed_var, v)),
+    };
+    Config {
+        cases,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        rng_seed,
+        ..Config::default()
+    }
+}
+
+/// The seed of the random-scene tests' cases when `RAPIER_IMPACT_PROPTEST_SEED` is not set.
+pub const RANDOM_SCENE_SEED: u64 = 0x5eed_5ce0;
