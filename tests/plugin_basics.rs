@@ -1374,34 +1374,48 @@ fn configs_out_of_range_are_refused() {
 }
 
 /// A body's own rolling settings, tangential restitution and restitution curve out of range
-/// are refused at the call, and nothing of them is kept; the ends of the ranges are taken and
-/// kept, and `None` clears them.
+/// are refused at the call, as that setter's (its message names the setter, not
+/// `ImpactConfig`), and nothing of them is kept; the ends of the ranges are taken and kept,
+/// and `None` clears them.
 fn body_settings_out_of_range_are_refused(world: &mut PhysicsWorld, p: &mut ImpactPlugin) {
     let (ball, _) = world.insert(RigidBodyBuilder::dynamic(), ColliderBuilder::ball(0.1));
-    assert!(matches!(
+    let refused_by = |result: Result<(), ConfigError>, setter: &str, field: &str| {
+        let e = result.expect_err("refused");
+        assert!(
+            matches!(e, ConfigError::InvalidBodySetting { setter: s, field: f, .. }
+                if s == setter && f == field),
+            "{e:?}"
+        );
+        let message = e.to_string();
+        assert!(
+            message.starts_with(&format!("ImpactPlugin::{setter}: {field} is ")),
+            "{message}"
+        );
+    };
+    refused_by(
         p.set_body_rolling(ball, Some(RollingSettings::new(0.1, 1e300))),
-        Err(ConfigError::InvalidConfig {
-            field: "spinning_friction",
-            ..
-        })
-    ));
+        "set_body_rolling",
+        "spinning_friction",
+    );
+    refused_by(
+        p.set_body_rolling(ball, Some(RollingSettings::new(-0.1, 0.0))),
+        "set_body_rolling",
+        "rolling_resistance",
+    );
+    assert_eq!(p.body_rolling(ball), None);
     // A body's own tangential restitution and curve: refused at the call, nothing kept.
     for beta in [1.5, -2.0, f64::NAN, f64::INFINITY] {
-        assert!(matches!(
+        refused_by(
             p.set_body_tangential_restitution(ball, Some(beta)),
-            Err(ConfigError::InvalidConfig {
-                field: "tangential_restitution",
-                ..
-            })
-        ));
+            "set_body_tangential_restitution",
+            "tangential_restitution",
+        );
     }
-    assert!(matches!(
+    refused_by(
         p.set_body_restitution_curve(ball, Some(curve(&[(0.5, 0.2), (1.0, 11.0)]))),
-        Err(ConfigError::InvalidConfig {
-            field: "restitution_curve",
-            ..
-        })
-    ));
+        "set_body_restitution_curve",
+        "restitution_curve",
+    );
     assert_eq!(p.body_tangential_restitution(ball), None);
     assert_eq!(p.body_restitution_curve(ball), None);
     p.set_body_tangential_restitution(ball, Some(-1.0)).unwrap();

@@ -524,7 +524,8 @@ fn a_body_s_own_tangential_restitution_and_curve_reach_its_impacts() {
     assert!(
         matches!(
             rec.errors.last().map(|m| &m.error),
-            Some(ConfigError::InvalidConfig {
+            Some(ConfigError::InvalidBodySetting {
+                setter: "set_body_tangential_restitution",
                 field: "tangential_restitution",
                 ..
             })

@@ -262,7 +262,8 @@ fn a_body_s_own_settings_are_given_changed_refused_and_taken_back() {
     assert!(errors.iter().any(|(e, error)| *e == Some(ball)
         && matches!(
             error,
-            ConfigError::InvalidConfig {
+            ConfigError::InvalidBodySetting {
+                setter: "set_body_rolling",
                 field: "rolling_resistance",
                 ..
             }

@@ -71,13 +71,21 @@ fn check_bounce(
 
 /// Checks a body's own tangential restitution and restitution curve
 /// ([`crate::ImpactPlugin::set_body_tangential_restitution`],
-/// [`crate::ImpactPlugin::set_body_restitution_curve`]).
+/// [`crate::ImpactPlugin::set_body_restitution_curve`]), refused as that setter's.
 pub(crate) fn body_bounce(
     tangential_restitution: Option<f64>,
     restitution_curve: Option<&RestitutionCurve>,
 ) -> Result<(), ConfigError> {
     check_bounce(tangential_restitution, restitution_curve, |field, value| {
-        ConfigError::InvalidConfig { field, value }
+        let setter = match field {
+            "tangential_restitution" => "set_body_tangential_restitution",
+            _ => "set_body_restitution_curve",
+        };
+        ConfigError::InvalidBodySetting {
+            setter,
+            field,
+            value,
+        }
     })
 }
 
@@ -304,19 +312,30 @@ impl RollingSettings {
         }
     }
 
-    /// Checks both coefficients: in `[0, 100]`.
+    /// Checks both coefficients: in `[0, 100]`, else
+    /// [`ConfigError::InvalidBodySetting`] of [`crate::ImpactPlugin::set_body_rolling`].
     pub fn validate(&self) -> Result<(), ConfigError> {
-        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
-        rolling_coefficient("spinning_friction", self.spinning_friction)
+        let own = |field, value| ConfigError::InvalidBodySetting {
+            setter: "set_body_rolling",
+            field,
+            value,
+        };
+        rolling_coefficient("rolling_resistance", self.rolling_resistance, own)?;
+        rolling_coefficient("spinning_friction", self.spinning_friction, own)
     }
 }
 
-/// Checks a body's or the configuration's rolling coefficient: in `[0, 100]`.
-pub(crate) fn rolling_coefficient(field: &'static str, value: f64) -> Result<(), ConfigError> {
+/// Checks a body's or the configuration's rolling coefficient: in `[0, 100]`; `error` builds
+/// the error from the field's name and the value refused.
+fn rolling_coefficient(
+    field: &'static str,
+    value: f64,
+    error: impl Fn(&'static str, f64) -> ConfigError,
+) -> Result<(), ConfigError> {
     if in_range(value, MAX_FRICTION) {
         Ok(())
     } else {
-        Err(ConfigError::InvalidConfig { field, value })
+        Err(error(field, value))
     }
 }
 
@@ -391,11 +410,13 @@ impl ImpactConfig {
             check("resting_gap", v, MAX_THRESHOLD)?;
         }
         check("flat_tolerance", self.flat_tolerance, MAX_FLAT_TOLERANCE)?;
-        rolling_coefficient("rolling_resistance", self.rolling_resistance)?;
-        rolling_coefficient("spinning_friction", self.spinning_friction)?;
-        body_bounce(
+        let own = |field, value| ConfigError::InvalidConfig { field, value };
+        rolling_coefficient("rolling_resistance", self.rolling_resistance, own)?;
+        rolling_coefficient("spinning_friction", self.spinning_friction, own)?;
+        check_bounce(
             Some(self.tangential_restitution),
             self.restitution_curve.as_ref(),
+            own,
         )?;
         if self.max_impacts_per_step == 0 {
             return Err(ConfigError::InvalidConfig {
@@ -412,12 +433,27 @@ impl ImpactConfig {
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum ConfigError {
-    /// A config field (or a body's rolling coefficient) is outside its documented range
-    /// (NaN, infinite, negative, too large, or zero where `>= 1`).
+    /// A config field is outside its documented range (NaN, infinite, negative, too large,
+    /// or zero where `>= 1`).
     InvalidConfig {
-        /// The field of [`ImpactConfig`] (or of [`crate::ImpactPlugin::set_body_rolling`]).
+        /// The field of [`ImpactConfig`].
         field: &'static str,
         /// The value refused.
+        value: f64,
+    },
+    /// A body's own setting is outside its documented range (NaN, infinite, or beyond its
+    /// ends), refused by the setter named, a method of [`crate::ImpactPlugin`]: a field of
+    /// [`RollingSettings`] (`set_body_rolling`), a tangential restitution
+    /// (`set_body_tangential_restitution`), or a restitution curve with an `e` above 10
+    /// (`set_body_restitution_curve`). [`crate::ImpactPlugin::restore`] refuses a snapshot
+    /// holding such a setting with it too.
+    InvalidBodySetting {
+        /// The method of [`crate::ImpactPlugin`] whose argument it is.
+        setter: &'static str,
+        /// The setting: `rolling_resistance`, `spinning_friction`, `tangential_restitution` or
+        /// `restitution_curve`.
+        field: &'static str,
+        /// The value refused (a curve's largest `e`).
         value: f64,
     },
     /// The model refuses a material: a ground material's restitution or friction is negative
@@ -453,6 +489,16 @@ impl fmt::Display for ConfigError {
             Self::InvalidConfig { field, value } => write!(
                 f,
                 "ImpactConfig::{field} is {}, outside its range {}",
+                Shown(*value),
+                range_of(field)
+            ),
+            Self::InvalidBodySetting {
+                setter,
+                field,
+                value,
+            } => write!(
+                f,
+                "ImpactPlugin::{setter}: {field} is {}, outside its range {}",
                 Shown(*value),
                 range_of(field)
             ),

@@ -344,7 +344,7 @@ impl<H> ImpactPlugin<H> {
 
     /// A ball's own rolling resistance and spinning friction (`None` for the configuration's):
     /// used on every ground without its own (see [`ImpactConfig::rolling_resistance`]). Each
-    /// coefficient in `[0, 100]`, else [`ConfigError::InvalidConfig`] and nothing changes.
+    /// coefficient in `[0, 100]`, else [`ConfigError::InvalidBodySetting`] and nothing changes.
     pub fn set_body_rolling(
         &mut self,
         body: RigidBodyHandle,
@@ -379,7 +379,8 @@ impl<H> ImpactPlugin<H> {
     /// A body's own tangential restitution `beta0` (Walton's, in `[-1, 1]`; `None` for the
     /// configuration's): used in its impacts on every ground without one of its own, and in
     /// its impacts with other bodies (the mean of the two bodies' where both have one). See
-    /// [`ImpactConfig::tangential_restitution`].
+    /// [`ImpactConfig::tangential_restitution`]. Outside `[-1, 1]`,
+    /// [`ConfigError::InvalidBodySetting`] and nothing changes.
     pub fn set_body_tangential_restitution(
         &mut self,
         body: RigidBodyHandle,
@@ -399,7 +400,8 @@ impl<H> ImpactPlugin<H> {
     /// A body's own restitution as a function of the impact speed (`None` for the
     /// configuration's): replaces the constant `e` in its impacts on every ground without a
     /// curve of its own, and in its impacts with other bodies (the mean of the two curves where
-    /// both bodies have one). Every `e` of the curve must be at most 10. See
+    /// both bodies have one). Every `e` of the curve must be at most 10, else
+    /// [`ConfigError::InvalidBodySetting`] and nothing changes. See
     /// [`ImpactConfig::restitution_curve`].
     pub fn set_body_restitution_curve(
         &mut self,

@@ -276,6 +276,21 @@ mod tests {
         edited.memory.shadows.push((body, shadow));
         assert_eq!(plugin.restore(&edited), Err(RestoreError::NotFinite));
         assert_eq!(*plugin.config(), ImpactConfig::default());
+        // A body's own setting is refused as its setter refuses it.
+        let mut edited = plugin.snapshot();
+        edited.config.max_impacts_per_step = 9;
+        edited.registry = edited.registry.with_body_rolling(body, 0.1, f64::NAN);
+        assert_eq!(
+            plugin.restore(&edited).map_err(|e| e.to_string()),
+            Err(RestoreError::Invalid(ConfigError::InvalidBodySetting {
+                setter: "set_body_rolling",
+                field: "spinning_friction",
+                value: f64::NAN,
+            })
+            .to_string())
+        );
+        assert_eq!(plugin.body_rolling(body), None);
+        assert_eq!(*plugin.config(), ImpactConfig::default());
     }
 
     /// A hand-edited snapshot naming bodies and colliders at slots near `u32::MAX` (no world

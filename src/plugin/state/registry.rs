@@ -10,7 +10,7 @@ use crate::model::{Material, RestitutionCurve};
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::{ContactMaterial, combined_friction, material};
 use crate::plugin::config::{
-    ConfigError, GroundMaterial, ImpactConfig, body_bounce, rolling_coefficient,
+    ConfigError, GroundMaterial, ImpactConfig, RollingSettings, body_bounce,
 };
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
 use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
@@ -495,6 +495,12 @@ impl SavedRegistry {
         self.grounds.push((c, entry));
         self
     }
+
+    /// With body `b`'s own rolling coefficients `(rr, sp)` (a hand-edited snapshot's).
+    pub fn with_body_rolling(mut self, b: RigidBodyHandle, rr: f64, sp: f64) -> Self {
+        self.body_rolling.push((b, (rr, sp)));
+        self
+    }
 }
 
 impl Registry {
@@ -535,8 +541,7 @@ impl Registry {
                 .validate()?;
         }
         for (_, (rr, sp)) in &saved.body_rolling {
-            rolling_coefficient("rolling_resistance", *rr)?;
-            rolling_coefficient("spinning_friction", *sp)?;
+            RollingSettings::new(*rr, *sp).validate()?;
         }
         for (_, own) in &saved.body_bounce {
             body_bounce(own.tangential_restitution, own.restitution_curve.as_ref())?;
