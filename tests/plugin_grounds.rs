@@ -5,6 +5,9 @@
 //!   the collider not re-marked by the all-fixed mode);
 //! - a position-based kinematic platform rising at `V`: contact time and `v' = V - e (v - V)`;
 //!   in `Step` mode, `v' = V - e (v0 - V)` from the velocity at the step boundary;
+//! - a bat (position-based, up to 30 m/s) and a blade (turning at 30 rad/s) swung onto a ball
+//!   at rest: met by their own motion, at the contact's time, the ball leaving at `(1 + e)`
+//!   times the approach speed;
 //! - a kinematic turntable spinning about the vertical: in the platform frame the contact's
 //!   tangential velocity `u_t = v_t - w x r` is left at `5/7 u_t` (stick, solid ball) or cut
 //!   by `mu (1 + e) |u_n|` (slip), and the normal speed is reversed times `e`;
@@ -355,6 +358,154 @@ fn a_position_based_rising_platform_enters_the_model() {
         }
     }
     panic!("the ball never met the platform");
+}
+
+/// A bat (a position-based kinematic box, 10 cm thick, friction 0) swung along x at `V` up
+/// to 30 m/s onto a ball at rest, without gravity, from 2.4 steps' travel away: the ball
+/// does not move, so only the bat's own motion brings them together. In the in-step modes
+/// one impact, at `2.4 dt`, leaves the ball at `(1 + e) V` (the bat's mass is infinite); in
+/// `Step` mode the impulse at the start of the step it closes in does. The ball is never
+/// inside the bat at a step's end.
+#[test]
+fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
+    let (e, r, half) = (0.5, 0.1, 0.05);
+    let (tt, tv) = tol();
+    for v in [3.0, 12.0, 30.0] {
+        for timing in [
+            TimingMode::Step,
+            TimingMode::TimeOfImpact,
+            TimingMode::Exact,
+        ] {
+            let mut world = PhysicsWorld {
+                gravity: Vector::ZERO,
+                ..Default::default()
+            };
+            let dt = wide(world.integration_parameters.dt);
+            let bat_x = |k: usize| -r - half - 2.4 * v * dt + v * k as f64 * dt;
+            let (bat, face) = world.insert(
+                RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
+                    real(bat_x(0)),
+                    0.0,
+                    0.0,
+                )),
+                ColliderBuilder::cuboid(real(half), 0.3, 0.3).friction(0.0),
+            );
+            let b = ball(&mut world, [0.0, 0.0, 0.0], r, 0.0, 0.0);
+            let mut p = plugin_with_material(&world, face, timing, e, 0.0);
+            let mut hits = Vec::new();
+            for k in 0..5 {
+                world.bodies[bat].set_next_kinematic_translation(Vector::new(
+                    real(bat_x(k + 1)),
+                    0.0,
+                    0.0,
+                ));
+                p.step(&mut world);
+                hits.extend(p.events().iter().map(|ev| (k, *ev)));
+                let gap = wide(world.bodies[b].translation().x) - r - (bat_x(k + 1) + half);
+                assert!(
+                    gap > -1e-5,
+                    "{timing:?}, bat at {v} m/s: step {k} ends with the ball {gap:e} m into the bat"
+                );
+            }
+            let vx = wide(world.bodies[b].linvel().x);
+            println!(
+                "{timing:?}, bat at {v} m/s: impacts {:?}, ball vx {vx:.6} (expected {:.6})",
+                hits.iter()
+                    .map(|(k, ev)| (*k, ev.timing, ev.time / dt))
+                    .collect::<Vec<_>>(),
+                (1.0 + e) * v
+            );
+            assert_eq!(hits.len(), 1, "{timing:?}, bat at {v} m/s");
+            let (k, ev) = hits[0];
+            assert_eq!(k, 2, "{timing:?}, bat at {v} m/s");
+            if timing == TimingMode::Step {
+                assert_eq!(ev.timing, ImpactTiming::StepStart);
+            } else {
+                assert_eq!(ev.timing, ImpactTiming::InStep);
+                assert_abs_diff_eq!(ev.time, 0.4 * dt, epsilon = tt);
+            }
+            assert_abs_diff_eq!(ev.approach_speed, v, epsilon = tv * v);
+            assert_abs_diff_eq!(vx, (1.0 + e) * v, epsilon = tv * v);
+        }
+    }
+}
+
+/// A blade (a position-based kinematic box 1 m long, 10 cm thick, friction 0) spun about its
+/// middle at 30 rad/s (half a radian a step) onto a ball at rest 0.35 m from its axis,
+/// without gravity: only the blade's turn brings them together. One impact leaves the ball
+/// at `(1 + e)` times the approach speed (the blade's mass is infinite); in the in-step modes
+/// at 1.4 steps, where the face is `r + h` from the ball's centre, the approach speed being
+/// the turn's at the contact, `omega R cos(asin((r + h) / R))`. The ball is never inside the
+/// blade at a step's end.
+#[test]
+fn a_fast_blade_meets_a_ball_at_rest_in_the_step() {
+    let (e, r, h, reach, omega) = (0.5, 0.05, 0.05, 0.35, 30.0);
+    let (tt, tv) = tol();
+    let touch = ((r + h) / reach).asin();
+    let approach = omega * reach * touch.cos();
+    for timing in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        let mut world = PhysicsWorld {
+            gravity: Vector::ZERO,
+            ..Default::default()
+        };
+        let dt = wide(world.integration_parameters.dt);
+        // The blade lies along x at angle `angle(k)` after `k` steps; the ball at angle 0.
+        let angle = |k: usize| -touch - 1.4 * omega * dt + omega * k as f64 * dt;
+        let turned = |k: usize| Rotation::from_rotation_z(real(angle(k)));
+        let (blade, face) = world.insert(
+            RigidBodyBuilder::kinematic_position_based().rotation(turned(0).to_scaled_axis()),
+            ColliderBuilder::cuboid(0.5, real(h), 0.3).friction(0.0),
+        );
+        let b = ball(&mut world, [reach, 0.0, 0.0], r, 0.0, 0.0);
+        let mut p = plugin_with_material(&world, face, timing, e, 0.0);
+        let mut hits = Vec::new();
+        for k in 0..4 {
+            world.bodies[blade].set_next_kinematic_rotation(turned(k + 1));
+            p.step(&mut world);
+            hits.extend(p.events().iter().map(|ev| (k, *ev)));
+            let (bc, fc) = (
+                &world.colliders[world.bodies[b].colliders()[0]],
+                &world.colliders[face],
+            );
+            // The deepest penetration, if they overlap (parry's signed distance).
+            let depth = rapier_impact::rapier::parry::query::contact(
+                fc.position(),
+                fc.shape(),
+                bc.position(),
+                bc.shape(),
+                0.0,
+            )
+            .unwrap()
+            .map_or(0.0, |c| -wide(c.dist));
+            assert!(
+                depth < 1e-5,
+                "{timing:?}: step {k} ends with the ball {depth:e} m inside the blade"
+            );
+        }
+        let speed = wide(world.bodies[b].linvel().length());
+        println!(
+            "{timing:?}, blade at {omega} rad/s: impacts {:?}, ball speed {speed:.6} (expected {:.6} in-step)",
+            hits.iter()
+                .map(|(k, ev)| (*k, ev.timing, ev.time / dt, ev.approach_speed))
+                .collect::<Vec<_>>(),
+            (1.0 + e) * approach
+        );
+        assert_eq!(hits.len(), 1, "{timing:?}");
+        let (k, ev) = hits[0];
+        assert_eq!(k, 1, "{timing:?}");
+        assert_abs_diff_eq!(speed, (1.0 + e) * ev.approach_speed, epsilon = tv * speed);
+        if timing == TimingMode::Step {
+            assert_eq!(ev.timing, ImpactTiming::StepStart);
+        } else {
+            assert_eq!(ev.timing, ImpactTiming::InStep);
+            assert_abs_diff_eq!(ev.time, 0.4 * dt, epsilon = tt);
+            assert_abs_diff_eq!(ev.approach_speed, approach, epsilon = tv * approach);
+        }
+    }
 }
 
 #[test]

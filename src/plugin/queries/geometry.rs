@@ -66,8 +66,8 @@ impl GroundGeom<'_> {
     /// `GAP_BOUND_SLACK * (1 + |centre|)` for the box's `f32` corners and parry's `f32`
     /// distance. The box is loosened by the resting gap and the ground's skin, and the
     /// bound subtracts neither: that is its margin. `-inf` (no bound) for a moving ground,
-    /// whose box holds only its poses at the step's ends (not the arc of a turn between) and
-    /// is taken from its collider, which rapier moves with a body the user moved only in its
+    /// whose box holds its whole sweep over the step, not its pose at the start, and is
+    /// taken from its collider, which rapier moves with a body the user moved only in its
     /// step; `-inf` also with the centre in the box.
     pub fn gap_bound(&self, centre: &Vector3<f64>, radius: f64) -> f64 {
         if !self.motion.is_still() {
@@ -116,6 +116,21 @@ impl GroundGeom<'_> {
     /// A bound on the speed of the ground's points within `reach` of its centre of mass.
     fn max_speed(&self, reach: f64) -> f64 {
         self.motion.v.norm() + self.motion.w.norm() * reach
+    }
+
+    /// How far, over a step of length `dt`, any point of the ground moves that can come
+    /// within `radius` of `centre` in it (m): 0 for a still ground. A body's reach of a
+    /// moving ground adds it, as the search along a flight adds the ground's speed: a
+    /// kinematic bat swung onto a ball at rest reaches it by its own motion. A turn keeps a
+    /// point's distance `|r|` to the centre of mass, which moves by `|v| dt`, so such a point
+    /// has `|r| <= |centre - com| + radius + |v| dt` and moves by at most `(|v| + |w| |r|) dt`.
+    pub fn travel_near(&self, centre: &Vector3<f64>, radius: f64, dt: f64) -> f64 {
+        if self.motion.is_still() {
+            return 0.0;
+        }
+        let v = self.motion.v.norm();
+        let r = (centre - self.com_at(0.0)).norm() + radius + v * dt;
+        self.max_speed(r) * dt
     }
 }
 

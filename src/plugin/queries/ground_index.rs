@@ -86,8 +86,9 @@ pub(crate) struct GroundMotion {
     pub pose0: Isometry3<f64>,
     pub v: Vector3<f64>,
     pub w: Vector3<f64>,
-    /// World AABB of the collider's poses at the step's start and predicted end (not the arc
-    /// of a turn between), loosened by the resting gap and the collider's contact skin.
+    /// World AABB of the collider's poses over the step (for a turning ground, its start's
+    /// box loosened by the farthest any of its points travels), loosened by the resting gap
+    /// and the collider's contact skin.
     pub aabb: Aabb,
     /// A half-space ground that does not turn in the step: its world outward normal `n` and
     /// the offset `d` with `n·x <= d` for every point of it over the step. (parry gives a
@@ -939,6 +940,31 @@ fn pose_in_step(co: &Collider, bodies: &RigidBodySet, last_relative: Option<&Pos
     *co.position()
 }
 
+/// The box of a moving ground's collider `co` over a step of length `dt`: the box of its
+/// start (`start`, loosened by `loosen`) merged with its end's (at the pose `end`, loosened
+/// alike); for a ground turning at `w`, also the start's box loosened by the farthest any of
+/// its points travels (`local_frame`: the collider in its body's centre-of-mass frame), as a
+/// turn carries the points along arcs that can leave the boxes of its two ends (a flipper's
+/// tip at mid-turn).
+fn swept_box(
+    co: &Collider,
+    (start, end): (Aabb, &Pose),
+    loosen: Real,
+    (v, w, dt): (Vector3<f64>, Vector3<f64>, f64),
+    local_frame: &Isometry3<f64>,
+) -> Aabb {
+    let mut aabb = start;
+    aabb.merge(&co.shape().compute_aabb(end).loosened(loosen));
+    if w != Vector3::zeros() {
+        let sphere = co.shape().compute_local_bounding_sphere();
+        let centre = local_frame * Point3::from(vec_to_na(sphere.center));
+        let farthest = centre.coords.norm() + to_f64(sphere.radius);
+        let travel = (v.norm() + w.norm() * farthest) * dt;
+        aabb.merge(&start.loosened(to_real(travel)));
+    }
+    aabb
+}
+
 /// A ground's start-of-step pose, predicted velocities and swept AABB, or `None` when rapier
 /// would not collide with it this step (disabled, a sensor, on a disabled body) or it is on a
 /// dynamic body.
@@ -954,7 +980,7 @@ fn motion_of(
     }
     let parent = co.parent().and_then(|p| bodies.get(p).map(|rb| (p, rb)));
     let loosen = to_real(gap + to_f64(co.contact_skin()));
-    let mut aabb = co.shape().compute_aabb(&pose).loosened(loosen);
+    let aabb = co.shape().compute_aabb(&pose).loosened(loosen);
     // The half-space's bound at a collider pose: `n·x <= d`, loosened like the AABB.
     let half_space = co.shape().as_halfspace();
     let plane_at = |pose: &Pose| {
@@ -988,7 +1014,7 @@ fn motion_of(
                 UnitQuaternion::from_scaled_axis(w * dt) * frame0.rotation,
             ) * local_frame;
             let end_pose = pose_from_na(&end);
-            aabb.merge(&co.shape().compute_aabb(&end_pose).loosened(loosen));
+            let aabb = swept_box(co, (aabb, &end_pose), loosen, (v, w, dt), &local_frame);
             // A turning half-space sweeps too much for one plane: AABB only.
             let plane = match (plane_at(&pose), plane_at(&end_pose)) {
                 (Some((n, d0)), Some((_, d1))) if w == Vector3::zeros() => Some((n, d0.max(d1))),
@@ -1249,6 +1275,52 @@ mod tests {
             index.set_entry(tiles[3], entry);
             index.refresh(&reg, bodies, colliders, (DT, GAP), &|_| false);
             assert_eq!(index.stand_in(tiles[3]), slab);
+        }
+    }
+
+    /// A turning ground's box holds its collider at every time of the step, as the plan and
+    /// the search move it (its centre of mass along `v`, turning at `w` about it): a bat
+    /// swung through half a radian in a step, about its middle and about its end, whose tip
+    /// at mid-turn lies beyond the boxes of the step's two ends.
+    #[test]
+    fn a_turning_grounds_box_holds_it_at_every_time_of_the_step() {
+        use crate::rapier::math::Rotation;
+        let mut world = PhysicsWorld::default();
+        let spin = 30.0;
+        let half_turn = Rotation::from_rotation_z(-0.25);
+        let (_, middle) = world.insert(
+            RigidBodyBuilder::kinematic_velocity_based()
+                .rotation(half_turn.to_scaled_axis())
+                .angvel(Vector::new(0.0, 0.0, spin)),
+            ColliderBuilder::cuboid(0.5, 0.05, 0.3),
+        );
+        let (_, end) = world.insert(
+            RigidBodyBuilder::kinematic_velocity_based()
+                .translation(Vector::new(5.0, 0.0, 0.0))
+                .rotation(half_turn.to_scaled_axis())
+                .linvel(Vector::new(0.0, 3.0, 0.0))
+                .angvel(Vector::new(0.0, 0.0, spin)),
+            ColliderBuilder::cuboid(0.5, 0.05, 0.3).translation(Vector::new(0.5, 0.0, 0.0)),
+        );
+        let grounds = [middle, end];
+        let reg = registry(&grounds);
+        let mut index = GroundIndex::default();
+        index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
+        for (k, m) in index.motions.iter().enumerate() {
+            let co = &world.colliders[grounds[k]];
+            for i in 0..=16 {
+                let t = DT * f64::from(i) / 16.0;
+                let frame = Isometry3::from_parts(
+                    Translation3::from(m.com0 + m.v * t),
+                    UnitQuaternion::from_scaled_axis(m.w * t) * m.rot0,
+                );
+                let held = co.shape().compute_aabb(&pose_from_na(&(frame * m.local)));
+                assert!(
+                    m.aabb.contains(&held),
+                    "ground {k} at {i}/16 of the step: {held:?} beyond {:?}",
+                    m.aabb
+                );
+            }
         }
     }
 

@@ -35,8 +35,11 @@ pub(super) struct BodyNear<'q, 'c> {
     pub geom: &'q BodyGeom<'c>,
     /// A bound on the speed of any point of the body over the step (m/s).
     pub speed: f64,
-    /// How far beyond its bounding sphere the body can reach a ground in the step (m).
+    /// How far beyond its bounding sphere the body can reach a still ground in the step (m):
+    /// a moving ground's reach adds its own travel ([`BodyNear::reach_to`]).
     pub reach: f64,
+    /// The step's length (s).
+    pub dt: f64,
     /// The grounds near it (indices in `StepData::grounds`).
     pub near: SmallList<usize>,
     /// A ball of an impact between bodies: it needs its candidate in every mode.
@@ -122,9 +125,16 @@ impl BodyNear<'_, '_> {
                 &self.grounds[k].1,
                 self.start,
                 0.0,
-                self.reach,
+                self.reach_to(&self.grounds[k].1),
             )),
         }
+    }
+
+    /// How far beyond its bounding sphere the body can reach the ground `gg` in the step
+    /// (m): its own reach, and the ground's travel near it ([`ground_reach`]).
+    #[inline]
+    pub fn reach_to(&self, gg: &GroundGeom) -> f64 {
+        ground_reach(self.reach, (self.start, self.geom), gg, self.dt)
     }
 
     /// How far a point of the body can move relative to a resting contact point in the step
@@ -193,6 +203,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             geom,
             speed,
             reach,
+            dt,
             near,
             member,
             turns_surface,
@@ -201,7 +212,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             start_contacts: SmallList::Empty,
         });
         if !turns_surface && body.grounds.len() > 1 {
-            body.start_contacts = nearest_first(body.geom, &mut body.grounds, start, reach);
+            body.start_contacts = nearest_first(body.geom, &mut body.grounds, start, (reach, dt));
         }
         Some(body)
     }
@@ -299,6 +310,14 @@ fn grounds_of<'c>(near: &[usize], scene: &Scene<'c>) -> SmallList<(usize, Ground
         .collect()
 }
 
+/// How far beyond its bounding sphere a body (`reach` its own, from `start` with `geom`) can
+/// reach the ground `gg` in a step of length `dt`: its own reach, and what the ground travels
+/// near it (`GroundGeom::travel_near`: 0 for a still ground).
+#[inline]
+fn ground_reach(reach: f64, (start, geom): (&State, &BodyGeom), gg: &GroundGeom, dt: f64) -> f64 {
+    reach + gg.travel_near(&start.com, geom.radius + reach, dt)
+}
+
 /// A ball (`geom`, one centred ball) near several grounds (a seam between floor tiles): the
 /// ground it rests on (least `|gap|` at `start`, the first in `grounds`' order on a tie) moved
 /// first in `grounds`, so that if it rolls there on one plane with the others, the rest are
@@ -312,7 +331,7 @@ fn nearest_first(
     geom: &BodyGeom,
     grounds: &mut SmallList<(usize, GroundGeom)>,
     start: &State,
-    reach: f64,
+    (reach, dt): (f64, f64),
 ) -> SmallList<Option<StartContact>> {
     let part = &geom.parts[0];
     let centre = part_pose(part, start).translation.vector;
@@ -338,7 +357,14 @@ fn nearest_first(
         if bounds[k] > least {
             continue;
         }
-        let found = contact_checked(part, &grounds[k].1, start, 0.0, reach);
+        let gg = &grounds[k].1;
+        let found = contact_checked(
+            part,
+            gg,
+            start,
+            0.0,
+            ground_reach(reach, (start, geom), gg, dt),
+        );
         least = least.min(gap(&found));
         start_contacts[k] = Some(found);
     }

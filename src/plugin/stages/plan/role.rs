@@ -353,7 +353,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 );
                 event.timing = ImpactTiming::StepStart;
                 self.reports.events.push(event);
-                found = contact_checked(part, gg, &plan.state, 0.0, body.reach);
+                found = contact_checked(part, gg, &plan.state, 0.0, body.reach_to(gg));
             }
         }
         if let Ok(Some((_, n, _))) = found {
@@ -380,7 +380,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let at_start = plan.state.com == body.start.com && plan.state.rot == body.start.rot;
         let found = match at_start.then(|| body.start_contact(k)).flatten() {
             Some(found) => found,
-            None => contact_checked(part, gg, &plan.state, 0.0, body.reach),
+            None => contact_checked(part, gg, &plan.state, 0.0, body.reach_to(gg)),
         };
         let found = self.mesh_side(reads, plan, pair, found, step);
         let contact0 = found.as_ref().ok().copied().flatten();
@@ -562,7 +562,7 @@ fn rolling_piece_role(
     }
     let found = body
         .start_contact(k)
-        .unwrap_or_else(|| contact_checked(part, gg, state, 0.0, body.reach));
+        .unwrap_or_else(|| contact_checked(part, gg, state, 0.0, body.reach_to(gg)));
     verdict.any_impact |= within_reach(&found);
     Role::Impact
 }
