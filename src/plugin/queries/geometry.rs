@@ -14,7 +14,8 @@ pub(crate) use impact_time::{
 };
 pub(crate) use instant::{closest, contact, contact_checked, contact_from_side};
 pub(crate) use plane::{
-    COPLANAR_TOLERANCE, PlaneNear, flat_relative, landing_point, one_plane_under, plane_piece_of,
+    COPLANAR_TOLERANCE, PlaneNear, body_landing_point, flat_relative, landing_point,
+    one_plane_under, plane_piece_of,
 };
 
 use crate::motion::State;

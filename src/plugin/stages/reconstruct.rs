@@ -20,7 +20,7 @@ use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::on_plane;
 use crate::plugin::policy::{CCD_SLACK, MOVED_AS_FLOWN_ROUNDING, STILL_TRAVEL_SQUARED};
 use crate::plugin::queries::geometry::{
-    BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact, landing_point,
+    BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact,
 };
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -85,10 +85,7 @@ pub(crate) fn through_impacts(
         };
         let part = &geom.parts[hit.part];
         let gg = &grounds[hit.ground];
-        let (point, points) = landing_point(part, gg, &s, t, &hit, view.config.flat_tolerance);
-        let material = view
-            .registry
-            .material_of(colliders, part.handle, gg.handle, view.config);
+        let (material, point, points) = view.landing(colliders, (geom, gg), (&s, t), &hit);
         let (law, resting_speed) = (view.config.law, step.policy.resting_speed);
         let last_allowed = count + 1 >= view.config.max_impacts_per_step;
         let input = ImpactInput::new(

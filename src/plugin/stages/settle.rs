@@ -24,7 +24,7 @@ use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, landing_point, part_pose,
+    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, part_pose,
 };
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
@@ -206,12 +206,9 @@ impl AfterStep<'_> {
                 }
                 EndAction::Impact { settle: settling } => settle |= settling,
             }
-            let part = &checked.geom.parts[hit.part];
             let gg = &grounds[hit.ground];
-            let (point, points) = landing_point(part, gg, &s, dt, &hit, self.config.flat_tolerance);
-            let material =
-                self.registry
-                    .material_of(colliders, part.handle, gg.handle, self.config);
+            let (material, point, points) =
+                self.landing(colliders, (checked.geom, gg), (&s, dt), &hit);
             let resting_speed = step.policy.bounce_floor(neighbours_of().touching);
             let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
             let input =

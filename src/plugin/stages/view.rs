@@ -2,10 +2,13 @@
 //! step ([`EndOfStep`]), and the plugin as they read it, with the one writer
 //! ([`AfterStep`]).
 
+use crate::motion::State;
+use crate::plugin::bridge::resolve::ContactMaterial;
 use crate::plugin::config::{ImpactConfig, TimingMode};
 use crate::plugin::events::Reports;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
+use crate::plugin::queries::geometry::{BodyGeom, BodyPart, GroundGeom, Hit, body_landing_point};
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
 use crate::plugin::state::handles::{HandleMap, HandleSet, PairKey};
@@ -13,7 +16,8 @@ use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
 use crate::plugin::state::writes::Writes;
-use crate::rapier::prelude::RigidBodyHandle;
+use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
+use nalgebra::Vector3;
 
 /// The step's data in `after_step`, with rapier's sets after its step.
 pub(crate) struct EndOfStep<'a> {
@@ -68,5 +72,26 @@ impl<'a> AfterStep<'a> {
             commit: Commit::new(writes, reports, &mut memory.shadows, exact),
             released: Vec::new(),
         }
+    }
+
+    /// The material of the contact `hit` of the body (`geom`, at `s`, time `t`) with the ground
+    /// `gg`, and its landing: the point and the count of contact points of the one impact
+    /// (`geometry::body_landing_point`: the hit part's vertices, and the body's other parts
+    /// of that material landing with it).
+    pub fn landing(
+        &self,
+        colliders: &ColliderSet,
+        (geom, gg): (&BodyGeom, &GroundGeom),
+        (s, t): (&State, f64),
+        hit: &Hit,
+    ) -> (ContactMaterial<'a>, Vector3<f64>, usize) {
+        let (registry, config) = (self.registry, self.config);
+        let material_of =
+            |part: &BodyPart| registry.material_of(colliders, part.handle, gg.handle, config);
+        let material = material_of(&geom.parts[hit.part]);
+        let same_material = |_, other: &BodyPart| material_of(other) == material;
+        let flat = config.flat_tolerance;
+        let (point, points) = body_landing_point(geom, gg, (s, t), hit, flat, same_material);
+        (material, point, points)
     }
 }

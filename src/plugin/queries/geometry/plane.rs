@@ -3,8 +3,8 @@
 //! cover its path ([`plane_piece_of`], [`one_plane_under`]), and the landing points of a flat
 //! face of the body ([`landing_point`]).
 
-use super::instant::cuboid_face;
-use super::{BodyPart, GroundGeom, Hit, body_velocity_at, part_pose};
+use super::instant::{contact, cuboid_face};
+use super::{BodyGeom, BodyPart, GroundGeom, Hit, body_velocity_at, part_pose};
 use crate::motion::State;
 use crate::parry::shape::{PolygonalFeature, Triangle};
 use crate::plugin::bridge::convert::{to_f64, vec_to_na};
@@ -335,6 +335,72 @@ fn stretch_over_triangle(
         }
     }
     (lo <= hi).then_some((lo, hi))
+}
+
+/// [`landing_point`] for a body of any number of colliders (`geom`, `h` the hit of its part
+/// `h.part`): the landing points of its other parts on the same ground that approach it, along
+/// the same normal (within `flat_tolerance`), and lie on the contact plane within
+/// `flat_tolerance` times the spread of all the points (with the rounding a face's test
+/// allows), join the hit part's as a flat face's vertices do: one simultaneous impact at the
+/// centroid of all their contact points, projected on the contact plane, with their count.
+/// So a dumbbell, a plank of two cubes or a table on four feet landing level gets its
+/// impulse under its centre of mass, as one cube landing flat does, and not one foot's after
+/// another's. `joins(j, part)` says whether part `j` may (the caller's rule: the hit part's
+/// material, and a pair rapier's filtering and the user's keep).
+pub(crate) fn body_landing_point(
+    geom: &BodyGeom,
+    ground: &GroundGeom,
+    (s, t): (&State, f64),
+    h: &Hit,
+    flat_tolerance: f64,
+    joins: impl Fn(usize, &BodyPart) -> bool,
+) -> (Vector3<f64>, usize) {
+    let own = landing_point(&geom.parts[h.part], ground, s, t, h, flat_tolerance);
+    if geom.parts.len() < 2 {
+        return own;
+    }
+    // The others are looked for within the largest tolerance any spread can give: the
+    // body's diameter's.
+    let diameter = 2.0 * geom.radius;
+    let widest = flat_tolerance * diameter + FACE_ROUNDING * (diameter + FACE_SIZE_FLOOR);
+    let min_cos = flat_tolerance.cos();
+    let mut points = vec![own];
+    for (j, part) in geom.parts.iter().enumerate() {
+        if j == h.part || ground.skip.contains(&part.handle) || !joins(j, part) {
+            continue;
+        }
+        let Some(found) = contact(part, ground, s, t, h.dist + widest) else {
+            continue;
+        };
+        if found.1.dot(&h.normal) < min_cos {
+            continue;
+        }
+        let hit = Hit::at((j, h.ground), ground, s, t, found);
+        let (p, count) = landing_point(part, ground, s, t, &hit, flat_tolerance);
+        let u = body_velocity_at(s, &p) - ground.velocity_at(&p, t);
+        if h.normal.dot(&u) < 0.0 {
+            points.push((p, count));
+        }
+    }
+    if points.len() < 2 {
+        return own;
+    }
+    let spread = points
+        .iter()
+        .flat_map(|(a, _)| points.iter().map(move |(b, _)| (a - b).norm()))
+        .fold(0.0, f64::max);
+    let tol = flat_tolerance * spread + FACE_ROUNDING * (spread + FACE_SIZE_FLOOR);
+    let level = |p: &Vector3<f64>| h.normal.dot(&(p - h.point));
+    let (mut sum, mut count) = (Vector3::zeros(), 0);
+    for (p, n) in points.iter().filter(|(p, _)| level(p).abs() <= tol) {
+        sum += p * *n as f64;
+        count += n;
+    }
+    if count == own.1 {
+        return own;
+    }
+    let c = sum / count as f64;
+    (c - h.normal * level(&c), count)
 }
 
 /// The contact points of a landing, resolved as one impact (see `docs/guide.md`):

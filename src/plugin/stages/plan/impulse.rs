@@ -9,7 +9,9 @@ use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, reso
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
 use crate::plugin::policy::rests_at;
-use crate::plugin::queries::geometry::{BodyGeom, Hit, body_velocity_at, landing_point};
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, Hit, body_landing_point, body_velocity_at, landing_point,
+};
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::PhysicsHooks;
@@ -36,8 +38,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let BodyReads { body, scene, .. } = reads;
         let Pair { part, gg, .. } = pair;
         let n = hit.normal;
-        let (point, count) =
-            landing_point(part, gg, &plan.state, 0.0, hit, self.config.flat_tolerance);
         let inertia = Inertia::of(body.rb);
         let single = BodyGeom {
             parts: SmallList::One(*part),
@@ -46,6 +46,24 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let material =
             self.registry
                 .material_of(scene.colliders, part.handle, gg.handle, self.config);
+        // The body's other parts landing with this one join its impact (a dumbbell landing
+        // level), where their pairs are the plugin's and of the same material.
+        let joins = |j: usize, other: &BodyPart| {
+            !pair.refused[j]
+                && self
+                    .registry
+                    .material_of(scene.colliders, other.handle, gg.handle, self.config)
+                    == material
+        };
+        let flat = self.config.flat_tolerance;
+        let (point, count) = match body.geom.parts.iter().position(|p| p.handle == part.handle) {
+            Some(own) => {
+                let landing = Hit { part: own, ..*hit };
+                body_landing_point(body.geom, gg, (&plan.state, 0.0), &landing, flat, joins)
+            }
+            // (Not met: the pair's part is one of the body's.)
+            None => landing_point(part, gg, &plan.state, 0.0, hit, flat),
+        };
         let (law, resting_speed) = (self.config.law, step.policy.resting_speed);
         let timing = ImpactTiming::StepStart;
         let input = ImpactInput::new(body.handle, &inertia, law, material, resting_speed, timing);

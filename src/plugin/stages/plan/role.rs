@@ -34,6 +34,9 @@ pub(super) struct Pair<'q, 'c> {
     pub key: PairKey,
     pub colliders: (&'c Collider, &'c Collider),
     pub user: ActiveHooks,
+    /// For each of the body's parts, whether its pair with this ground is rapier's whatever
+    /// happens (`Role::Filtered`).
+    pub refused: &'q [bool],
 }
 
 /// What every pair with one ground reads of its collider, whatever the body: the hook flags
@@ -78,13 +81,35 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             clear: true,
         };
         let side = self.ground_side(*gi, gg.handle, scene);
-        for part in &body.geom.parts {
+        // Each pair's flags, read once: the user's filter and the rolling decision both ask
+        // for them (either collider's, `HookFlags::recorded_pair_flags`). Every part's pair is
+        // filtered before any role is decided: a `Step` impulse of one part asks which others
+        // land with it.
+        let flags: SmallList<(ActiveHooks, ActiveHooks)> = body
+            .geom
+            .parts
+            .iter()
+            .map(|part| {
+                let body_user = self.flags.recorded_user_flags(scene.colliders, part.handle);
+                (body_user, body_user | side.user)
+            })
+            .collect();
+        let refused: SmallList<bool> = body
+            .geom
+            .parts
+            .iter()
+            .zip(flags.iter())
+            .map(|(part, (_, user))| {
+                let key = (part.handle, gg.handle);
+                // Both exist: the body's geometry and the ground's were read from them.
+                let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
+                self.filtered(body, scene, key, colliders, (*user, &side.filter))
+                    || self.coefficients_refused(key, colliders, side.in_range)
+            })
+            .collect();
+        for (i, part) in body.geom.parts.iter().enumerate() {
             let key = (part.handle, gg.handle);
-            // Read once: the user's filter and the rolling decision both ask for them (the
-            // pair's flags: either collider's, `HookFlags::recorded_pair_flags`).
-            let body_user = self.flags.recorded_user_flags(scene.colliders, key.0);
-            let user = body_user | side.user;
-            // Both exist: the body's geometry and the ground's were read from them.
+            let (body_user, user) = flags[i];
             let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
             let pair = Pair {
                 k,
@@ -93,10 +118,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 key,
                 colliders,
                 user,
+                refused: &refused,
             };
-            let role = if self.filtered(body, scene, key, colliders, (user, &side.filter))
-                || self.coefficients_refused(key, colliders, side.in_range)
-            {
+            let role = if refused[i] {
                 Role::Filtered
             } else if let Some(pieces) = &plan.rolling_pieces {
                 rolling_piece_role(body, (&plan.state, pieces), pair, &mut verdict)
