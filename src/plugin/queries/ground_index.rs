@@ -960,7 +960,11 @@ fn swept_box(
         let centre = local_frame * Point3::from(vec_to_na(sphere.center));
         let farthest = centre.coords.norm() + to_f64(sphere.radius);
         let travel = (v.norm() + w.norm() * farthest) * dt;
-        aabb.merge(&start.loosened(to_real(travel)));
+        // A velocity the user set to NaN or infinity travels nowhere that a box can hold: the
+        // box of the ends is kept, rather than parry's refusal of the amount (a panic).
+        if travel.is_finite() {
+            aabb.merge(&start.loosened(to_real(travel)));
+        }
     }
     aabb
 }
@@ -1279,34 +1283,55 @@ mod tests {
     }
 
     /// A turning ground's box holds its collider at every time of the step, as the plan and
-    /// the search move it (its centre of mass along `v`, turning at `w` about it): a bat
-    /// swung through half a radian in a step, about its middle and about its end, whose tip
-    /// at mid-turn lies beyond the boxes of the step's two ends.
+    /// the search move it (its centre of mass along `v`, turning at `w` about it): blades 2 m
+    /// long swung through half a radian in a step, about their middle and (their mass at a
+    /// hub) about their end, whose tips at mid-turn lie up to 6 cm beyond the boxes of the
+    /// step's two ends. A turn at a NaN rate leaves a box, not a panic.
     #[test]
     fn a_turning_grounds_box_holds_it_at_every_time_of_the_step() {
         use crate::rapier::math::Rotation;
+        use crate::rapier::prelude::MassProperties;
         let mut world = PhysicsWorld::default();
         let spin = 30.0;
-        let half_turn = Rotation::from_rotation_z(-0.25);
+        // At -0.25 rad after the step below, turning to +0.25 in the next.
+        let half_turn = Rotation::from_rotation_z(-0.75);
         let (_, middle) = world.insert(
             RigidBodyBuilder::kinematic_velocity_based()
                 .rotation(half_turn.to_scaled_axis())
                 .angvel(Vector::new(0.0, 0.0, spin)),
-            ColliderBuilder::cuboid(0.5, 0.05, 0.3),
+            ColliderBuilder::cuboid(1.0, 0.05, 0.3),
         );
+        let hub = MassProperties::new(Vector::ZERO, 10.0, Vector::splat(1.0));
         let (_, end) = world.insert(
             RigidBodyBuilder::kinematic_velocity_based()
                 .translation(Vector::new(5.0, 0.0, 0.0))
                 .rotation(half_turn.to_scaled_axis())
+                .additional_mass_properties(hub)
                 .linvel(Vector::new(0.0, 3.0, 0.0))
                 .angvel(Vector::new(0.0, 0.0, spin)),
-            ColliderBuilder::cuboid(0.5, 0.05, 0.3).translation(Vector::new(0.5, 0.0, 0.0)),
+            ColliderBuilder::cuboid(1.0, 0.05, 0.3)
+                .translation(Vector::new(1.0, 0.0, 0.0))
+                .density(0.0),
         );
-        let grounds = [middle, end];
+        let (turned_nan, nan) = world.insert(
+            RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(-5.0, 0.0, 0.0)),
+            ColliderBuilder::cuboid(1.0, 0.05, 0.3),
+        );
+        // rapier computes the bodies' mass properties from their colliders and the hub in
+        // its step.
+        world.step();
+        world.bodies[turned_nan].set_angvel(Vector::new(0.0, 0.0, Real::NAN), true);
+        let grounds = [middle, end, nan];
         let reg = registry(&grounds);
         let mut index = GroundIndex::default();
         index.refresh(&reg, &world.bodies, &world.colliders, (DT, GAP), &|_| false);
-        for (k, m) in index.motions.iter().enumerate() {
+        let end_com = index.motions[1].com0;
+        let hub_at = vec_to_na(world.bodies[world.colliders[end].parent().unwrap()].translation());
+        assert!(
+            (end_com - hub_at).norm() < 1e-6,
+            "the second blade turns about {end_com:?}, not its end"
+        );
+        for (k, m) in index.motions.iter().enumerate().take(2) {
             let co = &world.colliders[grounds[k]];
             for i in 0..=16 {
                 let t = DT * f64::from(i) / 16.0;
