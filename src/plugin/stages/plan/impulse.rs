@@ -36,7 +36,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Role {
         let BodyReads { body, scene, .. } = reads;
-        let Pair { part, gg, .. } = pair;
+        let Pair { k, part, gg, .. } = pair;
         let n = hit.normal;
         let inertia = Inertia::of(body.rb);
         let single = BodyGeom {
@@ -48,8 +48,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 .material_of(scene.colliders, part.handle, gg.handle, self.config);
         // The body's other parts landing with this one join its impact (a dumbbell landing
         // level), where their pairs are the plugin's and of the same material.
-        let joins = |j: usize, other: &BodyPart| {
-            !pair.refused[j]
+        let joins = |_, other: &BodyPart| {
+            !self.part_refused(body, scene, other, k)
                 && self
                     .registry
                     .material_of(scene.colliders, other.handle, gg.handle, self.config)

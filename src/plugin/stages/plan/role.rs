@@ -34,9 +34,6 @@ pub(super) struct Pair<'q, 'c> {
     pub key: PairKey,
     pub colliders: (&'c Collider, &'c Collider),
     pub user: ActiveHooks,
-    /// For each of the body's parts, whether its pair with this ground is rapier's whatever
-    /// happens (`Role::Filtered`).
-    pub refused: &'q [bool],
 }
 
 /// What every pair with one ground reads of its collider, whatever the body: the hook flags
@@ -81,35 +78,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             clear: true,
         };
         let side = self.ground_side(*gi, gg.handle, scene);
-        // Each pair's flags, read once: the user's filter and the rolling decision both ask
-        // for them (either collider's, `HookFlags::recorded_pair_flags`). Every part's pair is
-        // filtered before any role is decided: a `Step` impulse of one part asks which others
-        // land with it.
-        let flags: SmallList<(ActiveHooks, ActiveHooks)> = body
-            .geom
-            .parts
-            .iter()
-            .map(|part| {
-                let body_user = self.flags.recorded_user_flags(scene.colliders, part.handle);
-                (body_user, body_user | side.user)
-            })
-            .collect();
-        let refused: SmallList<bool> = body
-            .geom
-            .parts
-            .iter()
-            .zip(flags.iter())
-            .map(|(part, (_, user))| {
-                let key = (part.handle, gg.handle);
-                // Both exist: the body's geometry and the ground's were read from them.
-                let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
-                self.filtered(body, scene, key, colliders, (*user, &side.filter))
-                    || self.coefficients_refused(key, colliders, side.in_range)
-            })
-            .collect();
-        for (i, part) in body.geom.parts.iter().enumerate() {
+        for part in &body.geom.parts {
             let key = (part.handle, gg.handle);
-            let (body_user, user) = flags[i];
+            // Read once: the user's filter and the rolling decision both ask for them (the
+            // pair's flags: either collider's, `HookFlags::recorded_pair_flags`).
+            let body_user = self.flags.recorded_user_flags(scene.colliders, key.0);
+            let user = body_user | side.user;
+            // Both exist: the body's geometry and the ground's were read from them.
             let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
             let pair = Pair {
                 k,
@@ -118,9 +93,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 key,
                 colliders,
                 user,
-                refused: &refused,
             };
-            let role = if refused[i] {
+            let role = if self.filtered(body, scene, key, colliders, (user, &side.filter))
+                || self.coefficients_refused(key, colliders, side.in_range)
+            {
                 Role::Filtered
             } else if let Some(pieces) = &plan.rolling_pieces {
                 rolling_piece_role(body, (&plan.state, pieces), pair, &mut verdict)
@@ -208,6 +184,34 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 ground_side,
             )
             || filter::user_refuses(self.user_hooks, user, bodies, colliders, key)
+    }
+
+    /// Is the pair of the body's part `part` with its `k`-th ground rapier's whatever happens,
+    /// as [`Self::plan_ground`] finds it (`Role::Filtered`), for a part whose pair it has not
+    /// decided yet: rapier's filtering or the user's refuses it, or a collider's coefficients
+    /// are out of range (here even where the ground's material would replace them). Reads
+    /// only; diagnoses nothing. Asked by a `Step` impulse of another part, of the parts that
+    /// may land with it.
+    pub(super) fn part_refused(
+        &self,
+        body: &BodyNear,
+        scene: &Scene,
+        part: &BodyPart,
+        k: usize,
+    ) -> bool {
+        let (gi, gg) = &body.grounds[k];
+        let Some(side) = self.ground_side.filter(|side| side.index == *gi) else {
+            return true;
+        };
+        let key = (part.handle, gg.handle);
+        let colliders = (&scene.colliders[key.0], &scene.colliders[key.1]);
+        let user = self.flags.recorded_user_flags(scene.colliders, key.0) | side.user;
+        let body_in_range = coefficients_in_range(
+            to_f64(colliders.0.restitution()),
+            to_f64(colliders.0.friction()),
+        );
+        !(body_in_range && side.in_range)
+            || self.filtered(body, scene, key, colliders, (user, &side.filter))
     }
 
     /// Is a collider of the pair out of the plugin's coefficient ranges, with no ground
