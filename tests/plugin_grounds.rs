@@ -430,6 +430,73 @@ fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
     }
 }
 
+/// The bat at 12 and 30 m/s onto a ball resting on the floor (e = 0.5, mu = 0.5): the
+/// floor's contact is rapier's, so the bat's impact is the step-end one (`StepStart` in `Step`
+/// mode), once, and the ball leaves ahead of the bat, never inside it at a step's end.
+#[test]
+fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
+    let (e, r, half) = (0.5, 0.1, 0.05);
+    for v in [12.0, 30.0] {
+        for timing in [
+            TimingMode::Step,
+            TimingMode::TimeOfImpact,
+            TimingMode::Exact,
+        ] {
+            let mut world = PhysicsWorld::default();
+            let dt = wide(world.integration_parameters.dt);
+            let (_, floor) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::halfspace(up()).friction(0.5),
+            );
+            let bat_x = |k: usize| -r - half - 2.4 * v * dt + v * k as f64 * dt;
+            let (bat, face) = world.insert(
+                RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
+                    real(bat_x(0)),
+                    0.3,
+                    0.0,
+                )),
+                ColliderBuilder::cuboid(real(half), 0.3, 0.3)
+                    .friction(0.0)
+                    .restitution(real(e)),
+            );
+            let b = ball(&mut world, [0.0, r, 0.0], r, e, 0.5);
+            let mut p = plugin_with_material(&world, floor, timing, e, 0.5);
+            p.add_ground(&world.bodies, &world.colliders, face).unwrap();
+            let mut hits = Vec::new();
+            for k in 0..5 {
+                world.bodies[bat].set_next_kinematic_translation(Vector::new(
+                    real(bat_x(k + 1)),
+                    0.3,
+                    0.0,
+                ));
+                p.step(&mut world);
+                hits.extend(
+                    p.events()
+                        .iter()
+                        .filter(|ev| ev.ground == face)
+                        .map(|ev| (k, ev.timing)),
+                );
+                let gap = wide(world.bodies[b].translation().x) - r - (bat_x(k + 1) + half);
+                assert!(
+                    gap > -1e-5,
+                    "{timing:?}, bat at {v} m/s: step {k} ends with the ball {gap:e} m into the bat"
+                );
+            }
+            let vx = wide(world.bodies[b].linvel().x);
+            println!(
+                "{timing:?}, bat at {v} m/s onto a resting ball: impacts {hits:?}, ball vx {vx:.4}"
+            );
+            let expected = if timing == TimingMode::Step {
+                ImpactTiming::StepStart
+            } else {
+                ImpactTiming::StepEnd
+            };
+            assert_eq!(hits, vec![(2, expected)], "{timing:?}, bat at {v} m/s");
+            assert!(vx > v, "{timing:?}, bat at {v} m/s: the ball left at {vx}");
+        }
+    }
+}
+
 /// A blade (a position-based kinematic box 1 m long, 10 cm thick, friction 0) spun about its
 /// middle at 30 rad/s (half a radian a step) onto a ball at rest 0.35 m from its axis,
 /// without gravity: only the blade's turn brings them together. One impact leaves the ball
