@@ -430,13 +430,14 @@ fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
     }
 }
 
-/// The bat at 12 and 30 m/s onto a ball resting on the floor (e = 0.5, mu = 0.5): the
-/// floor's contact is rapier's, so the bat's impact is the step-end one (`StepStart` in `Step`
-/// mode), once, and the ball leaves ahead of the bat, never inside it at a step's end.
+/// The bat at 12 and 30 m/s onto a ball resting on the floor (e = 0.5, mu = 0.5), awake or
+/// asleep (on a tee: rapier would not wake it before the bat is through): the floor's contact
+/// is rapier's, so the bat's impact is the step-end one (`StepStart` in `Step` mode), once,
+/// and the ball leaves ahead of the bat, never inside it at a step's end.
 #[test]
 fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
     let (e, r, half) = (0.5, 0.1, 0.05);
-    for v in [12.0, 30.0] {
+    for (v, asleep) in [(12.0, false), (30.0, false), (12.0, true), (30.0, true)] {
         for timing in [
             TimingMode::Step,
             TimingMode::TimeOfImpact,
@@ -462,6 +463,18 @@ fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
             let b = ball(&mut world, [0.0, r, 0.0], r, e, 0.5);
             let mut p = plugin_with_material(&world, floor, timing, e, 0.5);
             p.add_ground(&world.bodies, &world.colliders, face).unwrap();
+            if asleep {
+                // Put to sleep once the insertions' wake-ups are past, the bat standing still.
+                let still = Vector::new(real(bat_x(0)), 0.3, 0.0);
+                for k in 0..3 {
+                    if k == 2 {
+                        world.bodies[b].sleep();
+                    }
+                    world.bodies[bat].set_next_kinematic_translation(still);
+                    p.step(&mut world);
+                }
+                assert!(world.bodies[b].is_sleeping(), "the ball is awake");
+            }
             let mut hits = Vec::new();
             for k in 0..5 {
                 world.bodies[bat].set_next_kinematic_translation(Vector::new(
@@ -479,20 +492,21 @@ fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
                 let gap = wide(world.bodies[b].translation().x) - r - (bat_x(k + 1) + half);
                 assert!(
                     gap > -1e-5,
-                    "{timing:?}, bat at {v} m/s: step {k} ends with the ball {gap:e} m into the bat"
+                    "{timing:?}, bat at {v} m/s, asleep {asleep}: step {k} ends with the ball {gap:e} m into the bat"
                 );
             }
             let vx = wide(world.bodies[b].linvel().x);
             println!(
-                "{timing:?}, bat at {v} m/s onto a resting ball: impacts {hits:?}, ball vx {vx:.4}"
+                "{timing:?}, bat at {v} m/s onto a resting ball, asleep {asleep}: impacts {hits:?}, ball vx {vx:.4}"
             );
             let expected = if timing == TimingMode::Step {
                 ImpactTiming::StepStart
             } else {
                 ImpactTiming::StepEnd
             };
-            assert_eq!(hits, vec![(2, expected)], "{timing:?}, bat at {v} m/s");
-            assert!(vx > v, "{timing:?}, bat at {v} m/s: the ball left at {vx}");
+            let at = format!("{timing:?}, bat at {v} m/s, asleep {asleep}");
+            assert_eq!(hits, vec![(2, expected)], "{at}");
+            assert!(vx > v, "{at}: the ball left at {vx}");
         }
     }
 }

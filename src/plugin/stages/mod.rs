@@ -117,6 +117,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.stopwatch.lap(Stage::PairPlan);
         let rapier_gravity = (gravity, params.dt);
         let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
+        self.wake(&survey.woken);
         self.stopwatch.lap(Stage::Survey);
         let to_plan = std::mem::take(&mut survey.to_plan);
         let planned_count = to_plan.len();
@@ -297,6 +298,24 @@ impl<H> ImpactPlugin<H> {
                 dt: step.dt,
             };
             pair_plan::step_start_impulses(&mut step.pairs, bodies, &mut commit, &inputs);
+        }
+    }
+
+    /// Records the wake-ups of the asleep bodies the survey found a moving ground reaches, so
+    /// that the plan reads them awake.
+    fn wake(&mut self, woken: &[RigidBodyHandle]) {
+        if woken.is_empty() {
+            return;
+        }
+        let exact = self.config.timing == TimingMode::Exact;
+        let mut commit = Commit::new(
+            &mut self.writes,
+            &mut self.reports,
+            &mut self.memory.shadows,
+            exact,
+        );
+        for body in woken {
+            commit.wake(*body);
         }
     }
 

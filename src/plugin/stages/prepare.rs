@@ -15,13 +15,14 @@
 //! [`ImpactPlugin::measure_ground_motion`] reads where the moving grounds went. Nothing here
 //! writes into rapier.
 
-use crate::plugin::bridge::convert::{pose_to_na, to_f64, to_real, vec_to_na};
+use crate::plugin::bridge::convert::{pose_to_na, to_f64, to_real, vec_from_na, vec_to_na};
 use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
+use crate::plugin::queries::geometry::contact_checked;
 use crate::plugin::queries::ground_index::{GroundIndex, GroundMotion};
-use crate::plugin::queries::observe::{snapshot, surely_far};
+use crate::plugin::queries::observe::{body_geom, ground_geom, snapshot, surely_far};
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::Slotted;
 use crate::plugin::state::memory::LastStep;
@@ -91,6 +92,9 @@ pub(super) struct Survey {
     pub untested: UntestedFlights,
     /// A dynamic body the plugin does not manage: it decides where the hook flags go.
     pub unmanaged: bool,
+    /// Asleep bodies a moving ground reaches in the step ([`ImpactPlugin::moving_ground_reaches`]):
+    /// to be woken (recorded by the caller) and planned.
+    pub woken: Vec<RigidBodyHandle>,
 }
 
 impl<H> ImpactPlugin<H> {
@@ -188,15 +192,22 @@ impl<H> ImpactPlugin<H> {
                 surveyed_far: Vec::new(),
             },
             unmanaged: false,
+            woken: Vec::new(),
         };
         for (handle, rb) in bodies.iter() {
             if !self.registry.manages(handle, rb) {
                 survey.unmanaged |= rb.is_dynamic() && rb.is_enabled();
                 continue;
             }
-            // Asleep unless the pair plan woke it (written at this half's commit).
+            // Asleep unless the pair plan woke it (written at this half's commit), or a moving
+            // ground reaches it.
             if self.writes.is_sleeping(handle, rb) {
-                step.asleep.push(handle);
+                if self.moving_ground_reaches(handle, rb, colliders, step) {
+                    survey.woken.push(handle);
+                    survey.to_plan.push(handle);
+                } else {
+                    step.asleep.push(handle);
+                }
                 continue;
             }
             if step.pairs.members.contains(handle) {
@@ -229,6 +240,44 @@ impl<H> ImpactPlugin<H> {
         }
         survey.untested.flights = step.candidates.len();
         survey
+    }
+
+    /// Does a moving ground reach the asleep body `handle` (`rb`) in the step: one that moves
+    /// (its travel near the body is positive), whose box over the step meets the body's
+    /// bounding sphere, and that lies within that travel (and the contact margin) of one of
+    /// the body's colliders at the step's start? rapier wakes a body a kinematic body touches
+    /// only once their boxes meet at a step's start, so a bat crossing more than that in a
+    /// step passes through a ball asleep on a tee; planned awake, the ball is met. Reads only.
+    fn moving_ground_reaches(
+        &self,
+        handle: RigidBodyHandle,
+        rb: &RigidBody,
+        colliders: &ColliderSet,
+        step: &StepData,
+    ) -> bool {
+        let moving = self.registry.index.moving();
+        if moving.is_empty() {
+            return false;
+        }
+        let state = self.writes.now(handle, rb).state();
+        let geom = body_geom(rb, colliders, &vec_to_na(rb.local_center_of_mass()));
+        let margin = step.policy.contact_margin();
+        moving.iter().any(|i| {
+            let motion = &step.grounds[*i];
+            let Some(gg) = ground_geom(motion, colliders) else {
+                return false;
+            };
+            let travel = gg.travel_near(&state.com, geom.radius + margin, step.dt);
+            let half = to_real(geom.radius + travel + margin);
+            travel > 0.0
+                && !motion.misses_cube(vec_from_na(&state.com), half)
+                && geom.parts.iter().any(|part| {
+                    matches!(
+                        contact_checked(part, &gg, &state, 0.0, travel + margin),
+                        Ok(Some(_))
+                    )
+                })
+        })
     }
 
     /// `Exact` mode, right after the plan of `handle` found no ground near it: if the survey
