@@ -84,7 +84,8 @@ pub struct ImpactEvent {
     /// The body the change was made to: the body that hit the ground, or one of the two
     /// bodies of an impact between bodies.
     pub body: RigidBodyHandle,
-    /// The body's collider that touched.
+    /// The body's collider that touched (of a level landing of several colliders, the one
+    /// that touched first).
     pub collider: ColliderHandle,
     /// The ground collider (on a floor of flush tiles the plugin takes as one box, the tile
     /// under `point`), or in an impact between bodies the other body's collider.
@@ -96,12 +97,15 @@ pub struct ImpactEvent {
     pub time: f64,
     /// How the time was found.
     pub timing: ImpactTiming,
-    /// Contact point on the body (m): the single deepest point, or the centroid of the
-    /// simultaneous contact points of a flat or edge landing.
+    /// Contact point on the body (m): the single deepest point, the centroid of the
+    /// simultaneous contact points of a flat or edge landing, or, for a level landing of
+    /// several colliders, the centre of mass projected on the contact plane (within their
+    /// points' hull, maybe between the colliders).
     pub point: Vector,
     /// Unit contact normal, from the ground (or the other body) into the body.
     pub normal: Vector,
-    /// Number of contact points resolved as one simultaneous impact (1 for a single point).
+    /// Number of contact points resolved as one simultaneous impact (1 for a single point;
+    /// of a level landing of several colliders, all of theirs).
     pub contact_points: usize,
     /// Approach speed `-u.n > 0` of the contact point relative to the ground (m/s).
     pub approach_speed: f64,

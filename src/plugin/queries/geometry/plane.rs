@@ -338,15 +338,18 @@ fn stretch_over_triangle(
 }
 
 /// [`landing_point`] for a body of any number of colliders (`geom`, `h` the hit of its part
-/// `h.part`): the landing points of its other parts on the same ground that approach it, along
-/// the same normal (within `flat_tolerance`), and lie on the contact plane within
-/// `flat_tolerance` times the spread of all the points (with the rounding a face's test
-/// allows), join the hit part's as a flat face's vertices do: one simultaneous impact at the
-/// centroid of all their contact points, projected on the contact plane, with their count.
-/// So a dumbbell, a plank of two cubes or a table on four feet landing level gets its
-/// impulse under its centre of mass, as one cube landing flat does, and not one foot's after
-/// another's. `joins(j, part)` says whether part `j` may (the caller's rule: the hit part's
-/// material, and a pair rapier's filtering and the user's keep).
+/// `h.part`, the body at `s`, time `t`): the landing points of its other parts on the same
+/// ground that lie on the contact plane within `flat_tolerance` times the spread of all the
+/// points (with the rounding a face's test allows), along the same normal (within
+/// `flat_tolerance`), and approach it at the hit part's normal speed (within `flat_tolerance`
+/// of it: a level landing without a tumble) land with it. When the body's centre of mass,
+/// projected on the contact plane, lies in the hull of their points, they are one impact
+/// there, with the count of all their contact points: every point then leaves at the same
+/// speed, the simultaneous impact's answer, and a dumbbell, a hammer or a table on its feet
+/// landing level leaves without spin, rather than spun by one foot's impact before the
+/// other's. Otherwise the hit part's landing stands alone. `joins(j, part)` says whether part
+/// `j` may join (the caller's rule: the hit part's material, a pair rapier's filtering and the
+/// user's keep).
 pub(crate) fn body_landing_point(
     geom: &BodyGeom,
     ground: &GroundGeom,
@@ -359,17 +362,25 @@ pub(crate) fn body_landing_point(
     if geom.parts.len() < 2 {
         return own;
     }
-    // The others are looked for within the largest tolerance any spread can give: the
-    // body's diameter's.
+    let approach = |p: &Vector3<f64>| {
+        h.normal
+            .dot(&(body_velocity_at(s, p) - ground.velocity_at(p, t)))
+    };
+    let own_speed = approach(&own.0);
+    // The others are looked for within the largest tolerance any spread can give, the
+    // body's diameter's, beyond the hit (never a negative distance: parry refuses one).
     let diameter = 2.0 * geom.radius;
     let widest = flat_tolerance * diameter + FACE_ROUNDING * (diameter + FACE_SIZE_FLOOR);
+    let look = (h.dist + widest).max(0.0);
     let min_cos = flat_tolerance.cos();
+    let same_speed =
+        |speed: f64| (speed - own_speed).abs() <= flat_tolerance * own_speed.abs() + FACE_ROUNDING;
     let mut points = vec![own];
     for (j, part) in geom.parts.iter().enumerate() {
         if j == h.part || ground.skip.contains(&part.handle) || !joins(j, part) {
             continue;
         }
-        let Some(found) = contact(part, ground, s, t, h.dist + widest) else {
+        let Some(found) = contact(part, ground, s, t, look) else {
             continue;
         };
         if found.1.dot(&h.normal) < min_cos {
@@ -377,8 +388,8 @@ pub(crate) fn body_landing_point(
         }
         let hit = Hit::at((j, h.ground), ground, s, t, found);
         let (p, count) = landing_point(part, ground, s, t, &hit, flat_tolerance);
-        let u = body_velocity_at(s, &p) - ground.velocity_at(&p, t);
-        if h.normal.dot(&u) < 0.0 {
+        let speed = approach(&p);
+        if speed < 0.0 && same_speed(speed) {
             points.push((p, count));
         }
     }
@@ -391,16 +402,73 @@ pub(crate) fn body_landing_point(
         .fold(0.0, f64::max);
     let tol = flat_tolerance * spread + FACE_ROUNDING * (spread + FACE_SIZE_FLOOR);
     let level = |p: &Vector3<f64>| h.normal.dot(&(p - h.point));
-    let (mut sum, mut count) = (Vector3::zeros(), 0);
-    for (p, n) in points.iter().filter(|(p, _)| level(p).abs() <= tol) {
-        sum += p * *n as f64;
-        count += n;
-    }
-    if count == own.1 {
+    points.retain(|(p, _)| level(p).abs() <= tol);
+    if points.len() < 2 {
         return own;
     }
-    let c = sum / count as f64;
-    (c - h.normal * level(&c), count)
+    // The centre of mass on the contact plane, if the points hold it.
+    let under = s.com - h.normal * level(&s.com);
+    let corners: Vec<Vector3<f64>> = points
+        .iter()
+        .map(|(p, _)| p - h.normal * level(p))
+        .collect();
+    if !in_hull(&corners, &under, &h.normal, tol) {
+        return own;
+    }
+    (under, points.iter().map(|(_, n)| n).sum())
+}
+
+/// Is `q` within `tol` of the convex hull of `points`, all of them and `q` in one plane of
+/// unit normal `n`? The points in the plane's coordinates, their hull by the monotone chain,
+/// and `q` within `tol` of each of its edges' inner side (of the segment, for points on a
+/// line; of the point, for one).
+fn in_hull(points: &[Vector3<f64>], q: &Vector3<f64>, n: &Vector3<f64>, tol: f64) -> bool {
+    let u = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u = (u - n * n.dot(&u)).normalize();
+    let v = n.cross(&u);
+    let flat = |p: &Vector3<f64>| (p.dot(&u), p.dot(&v));
+    let q = flat(q);
+    let mut pts: Vec<(f64, f64)> = points.iter().map(flat).collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let floor = hull.len();
+        for &p in pts.iter() {
+            while hull.len() >= floor + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+        if pass == 0 {
+            pts.reverse();
+        }
+    }
+    let dist = |a: (f64, f64), b: (f64, f64)| ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
+    match hull.len() {
+        0 => false,
+        1 => dist(hull[0], q) <= tol,
+        2 => {
+            let (a, b) = (hull[0], hull[1]);
+            let len = dist(a, b);
+            let along = ((q.0 - a.0) * (b.0 - a.0) + (q.1 - a.1) * (b.1 - a.1)) / len;
+            let off = cross(a, b, q).abs() / len;
+            off <= tol && along >= -tol && along <= len + tol
+        }
+        k => (0..k).all(|i| {
+            let (a, b) = (hull[i], hull[(i + 1) % k]);
+            cross(a, b, q) / dist(a, b) >= -tol
+        }),
+    }
 }
 
 /// The contact points of a landing, resolved as one impact (see `docs/guide.md`):
