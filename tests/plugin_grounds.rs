@@ -360,64 +360,113 @@ fn a_position_based_rising_platform_enters_the_model() {
     panic!("the ball never met the platform");
 }
 
-/// A bat (a position-based kinematic box, 10 cm thick, friction 0) swung along x at `V` up
-/// to 30 m/s onto a ball at rest, without gravity, from 2.4 steps' travel away: the ball
-/// does not move, so only the bat's own motion brings them together. In the in-step modes
-/// one impact, at `2.4 dt`, leaves the ball at `(1 + e) V` (the bat's mass is infinite); in
-/// `Step` mode the impulse at the start of the step it closes in does. The ball is never
-/// inside the bat at a step's end.
+/// A world without gravity.
+fn weightless() -> PhysicsWorld {
+    PhysicsWorld {
+        gravity: Vector::ZERO,
+        ..Default::default()
+    }
+}
+
+/// A bat: a position-based kinematic box 10 cm thick (friction 0, restitution `e`), at
+/// height `y`, swung along x at `v` onto a ball of radius `r` at the origin, its face 2.4
+/// steps' travel from the ball at the start.
+struct Bat {
+    body: RigidBodyHandle,
+    face: ColliderHandle,
+    v: f64,
+    r: f64,
+    y: f64,
+    dt: f64,
+}
+
+impl Bat {
+    const HALF: f64 = 0.05;
+
+    fn insert(world: &mut PhysicsWorld, (v, r, y, e): (f64, f64, f64, f64)) -> Self {
+        let dt = wide(world.integration_parameters.dt);
+        let mut bat = Bat {
+            body: RigidBodyHandle::invalid(),
+            face: ColliderHandle::invalid(),
+            v,
+            r,
+            y,
+            dt,
+        };
+        (bat.body, bat.face) = world.insert(
+            RigidBodyBuilder::kinematic_position_based().translation(bat.at(0)),
+            ColliderBuilder::cuboid(real(Self::HALF), 0.3, 0.3)
+                .friction(0.0)
+                .restitution(real(e)),
+        );
+        bat
+    }
+
+    /// Its centre after `k` steps.
+    fn at(&self, k: usize) -> Vector {
+        let x = -self.r - Self::HALF - 2.4 * self.v * self.dt + self.v * k as f64 * self.dt;
+        Vector::new(real(x), real(self.y), 0.0)
+    }
+
+    /// Five steps of the swing, each from its start: the impacts against it (step, event),
+    /// the ball `b` never inside it at a step's end.
+    fn swing(
+        &self,
+        world: &mut PhysicsWorld,
+        p: &mut ImpactPlugin,
+        b: RigidBodyHandle,
+        label: &str,
+    ) -> Vec<(usize, ImpactEvent)> {
+        let mut hits = Vec::new();
+        for k in 0..5 {
+            world.bodies[self.body].set_next_kinematic_translation(self.at(k + 1));
+            p.step(world);
+            hits.extend(
+                p.events()
+                    .iter()
+                    .filter(|ev| ev.ground == self.face)
+                    .map(|ev| (k, *ev)),
+            );
+            let face = wide(self.at(k + 1).x) + Self::HALF;
+            let gap = wide(world.bodies[b].translation().x) - self.r - face;
+            assert!(
+                gap > -1e-5,
+                "{label}: step {k} ends with the ball {gap:e} m into the bat"
+            );
+        }
+        hits
+    }
+}
+
+/// The bat swung at `V` up to 30 m/s onto a ball at rest, without gravity: the ball does not
+/// move, so only the bat's own motion brings them together. In the in-step modes one impact,
+/// at `2.4 dt`, leaves the ball at `(1 + e) V` (the bat's mass is infinite); in `Step` mode
+/// the impulse at the start of the step it closes in does. The ball is never inside the bat
+/// at a step's end.
 #[test]
 fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
-    let (e, r, half) = (0.5, 0.1, 0.05);
+    let (e, r) = (0.5, 0.1);
     let (tt, tv) = tol();
     for v in [3.0, 12.0, 30.0] {
-        for timing in [
-            TimingMode::Step,
-            TimingMode::TimeOfImpact,
-            TimingMode::Exact,
-        ] {
-            let mut world = PhysicsWorld {
-                gravity: Vector::ZERO,
-                ..Default::default()
-            };
+        for timing in MODES {
+            let mut world = weightless();
             let dt = wide(world.integration_parameters.dt);
-            let bat_x = |k: usize| -r - half - 2.4 * v * dt + v * k as f64 * dt;
-            let (bat, face) = world.insert(
-                RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
-                    real(bat_x(0)),
-                    0.0,
-                    0.0,
-                )),
-                ColliderBuilder::cuboid(real(half), 0.3, 0.3).friction(0.0),
-            );
+            let bat = Bat::insert(&mut world, (v, r, 0.0, 0.0));
             let b = ball(&mut world, [0.0, 0.0, 0.0], r, 0.0, 0.0);
-            let mut p = plugin_with_material(&world, face, timing, e, 0.0);
-            let mut hits = Vec::new();
-            for k in 0..5 {
-                world.bodies[bat].set_next_kinematic_translation(Vector::new(
-                    real(bat_x(k + 1)),
-                    0.0,
-                    0.0,
-                ));
-                p.step(&mut world);
-                hits.extend(p.events().iter().map(|ev| (k, *ev)));
-                let gap = wide(world.bodies[b].translation().x) - r - (bat_x(k + 1) + half);
-                assert!(
-                    gap > -1e-5,
-                    "{timing:?}, bat at {v} m/s: step {k} ends with the ball {gap:e} m into the bat"
-                );
-            }
+            let mut p = plugin_with_material(&world, bat.face, timing, e, 0.0);
+            let at = format!("{timing:?}, bat at {v} m/s");
+            let hits = bat.swing(&mut world, &mut p, b, &at);
             let vx = wide(world.bodies[b].linvel().x);
             println!(
-                "{timing:?}, bat at {v} m/s: impacts {:?}, ball vx {vx:.6} (expected {:.6})",
+                "{at}: impacts {:?}, ball vx {vx:.6} (expected {:.6})",
                 hits.iter()
                     .map(|(k, ev)| (*k, ev.timing, ev.time / dt))
                     .collect::<Vec<_>>(),
                 (1.0 + e) * v
             );
-            assert_eq!(hits.len(), 1, "{timing:?}, bat at {v} m/s");
+            assert_eq!(hits.len(), 1, "{at}");
             let (k, ev) = hits[0];
-            assert_eq!(k, 2, "{timing:?}, bat at {v} m/s");
+            assert_eq!(k, 2, "{at}");
             if timing == TimingMode::Step {
                 assert_eq!(ev.timing, ImpactTiming::StepStart);
             } else {
@@ -436,75 +485,43 @@ fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
 /// and the ball leaves ahead of the bat, never inside it at a step's end.
 #[test]
 fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
-    let (e, r, half) = (0.5, 0.1, 0.05);
+    let (e, r) = (0.5, 0.1);
     for (v, asleep) in [(12.0, false), (30.0, false), (12.0, true), (30.0, true)] {
-        for timing in [
-            TimingMode::Step,
-            TimingMode::TimeOfImpact,
-            TimingMode::Exact,
-        ] {
+        for timing in MODES {
             let mut world = PhysicsWorld::default();
-            let dt = wide(world.integration_parameters.dt);
             let (_, floor) = world.insert(
                 RigidBodyBuilder::fixed(),
                 ColliderBuilder::halfspace(up()).friction(0.5),
             );
-            let bat_x = |k: usize| -r - half - 2.4 * v * dt + v * k as f64 * dt;
-            let (bat, face) = world.insert(
-                RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
-                    real(bat_x(0)),
-                    0.3,
-                    0.0,
-                )),
-                ColliderBuilder::cuboid(real(half), 0.3, 0.3)
-                    .friction(0.0)
-                    .restitution(real(e)),
-            );
+            let bat = Bat::insert(&mut world, (v, r, 0.3, e));
             let b = ball(&mut world, [0.0, r, 0.0], r, e, 0.5);
             let mut p = plugin_with_material(&world, floor, timing, e, 0.5);
-            p.add_ground(&world.bodies, &world.colliders, face).unwrap();
+            p.add_ground(&world.bodies, &world.colliders, bat.face)
+                .unwrap();
             if asleep {
                 // Put to sleep once the insertions' wake-ups are past, the bat standing still.
-                let still = Vector::new(real(bat_x(0)), 0.3, 0.0);
                 for k in 0..3 {
                     if k == 2 {
                         world.bodies[b].sleep();
                     }
-                    world.bodies[bat].set_next_kinematic_translation(still);
+                    world.bodies[bat.body].set_next_kinematic_translation(bat.at(0));
                     p.step(&mut world);
                 }
                 assert!(world.bodies[b].is_sleeping(), "the ball is awake");
             }
-            let mut hits = Vec::new();
-            for k in 0..5 {
-                world.bodies[bat].set_next_kinematic_translation(Vector::new(
-                    real(bat_x(k + 1)),
-                    0.3,
-                    0.0,
-                ));
-                p.step(&mut world);
-                hits.extend(
-                    p.events()
-                        .iter()
-                        .filter(|ev| ev.ground == face)
-                        .map(|ev| (k, ev.timing)),
-                );
-                let gap = wide(world.bodies[b].translation().x) - r - (bat_x(k + 1) + half);
-                assert!(
-                    gap > -1e-5,
-                    "{timing:?}, bat at {v} m/s, asleep {asleep}: step {k} ends with the ball {gap:e} m into the bat"
-                );
-            }
+            let at = format!("{timing:?}, bat at {v} m/s onto a resting ball, asleep {asleep}");
+            let hits: Vec<_> = bat
+                .swing(&mut world, &mut p, b, &at)
+                .into_iter()
+                .map(|(k, ev)| (k, ev.timing))
+                .collect();
             let vx = wide(world.bodies[b].linvel().x);
-            println!(
-                "{timing:?}, bat at {v} m/s onto a resting ball, asleep {asleep}: impacts {hits:?}, ball vx {vx:.4}"
-            );
+            println!("{at}: impacts {hits:?}, ball vx {vx:.4}");
             let expected = if timing == TimingMode::Step {
                 ImpactTiming::StepStart
             } else {
                 ImpactTiming::StepEnd
             };
-            let at = format!("{timing:?}, bat at {v} m/s, asleep {asleep}");
             assert_eq!(hits, vec![(2, expected)], "{at}");
             assert!(vx > v, "{at}: the ball left at {vx}");
         }
@@ -524,15 +541,8 @@ fn a_fast_blade_meets_a_ball_at_rest_in_the_step() {
     let (tt, tv) = tol();
     let touch = ((r + h) / reach).asin();
     let approach = omega * reach * touch.cos();
-    for timing in [
-        TimingMode::Step,
-        TimingMode::TimeOfImpact,
-        TimingMode::Exact,
-    ] {
-        let mut world = PhysicsWorld {
-            gravity: Vector::ZERO,
-            ..Default::default()
-        };
+    for timing in MODES {
+        let mut world = weightless();
         let dt = wide(world.integration_parameters.dt);
         // The blade lies along x at angle `angle(k)` after `k` steps; the ball at angle 0.
         let angle = |k: usize| -touch - 1.4 * omega * dt + omega * k as f64 * dt;

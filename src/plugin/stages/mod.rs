@@ -307,16 +307,22 @@ impl<H> ImpactPlugin<H> {
         if woken.is_empty() {
             return;
         }
+        let mut commit = self.writer();
+        for body in woken {
+            commit.wake(*body);
+        }
+    }
+
+    /// The one writer (`commit.rs`) over the plugin's writes, reports and shadows, for a stage
+    /// that reads nothing else of the plugin while it records.
+    fn writer(&mut self) -> Commit<'_> {
         let exact = self.config.timing == TimingMode::Exact;
-        let mut commit = Commit::new(
+        Commit::new(
             &mut self.writes,
             &mut self.reports,
             &mut self.memory.shadows,
             exact,
-        );
-        for body in woken {
-            commit.wake(*body);
-        }
+        )
     }
 
     /// Plans each body of `to_plan` (`plan/`) and records what its plan wrote and reported;

@@ -69,12 +69,7 @@ impl<H> ImpactPlugin<H> {
         // Flights are steered in `Exact` mode only: the other modes leave them to rapier's
         // integrator.
         let exact = self.config.timing == TimingMode::Exact;
-        let mut commit = Commit::new(
-            &mut self.writes,
-            &mut self.reports,
-            &mut self.memory.shadows,
-            exact,
-        );
+        let mut commit = self.writer();
         let (dt, substeps) = (step.dt, step.substeps as f64);
         for cand in step.candidates.iter_mut() {
             let rolls = cand.rolls_on_one_face;
