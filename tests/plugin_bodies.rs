@@ -731,3 +731,62 @@ fn bodies_of_several_colliders_started_in_a_compound_or_mesh_ground_step_on() {
         }
     }
 }
+
+/// Bodies of several colliders landing level whose impacts are not joined: a rod on three
+/// balls in a line, turned 0.3 rad about the vertical, with a heavy cube beyond its last
+/// ball (its centre of mass 0.2 m beyond its feet: it tips, from the first ball to land);
+/// and a dumbbell landing level while yawing at 10 rad/s (each ball slides its own way, and
+/// keeps its own friction). The first impact is one ball's, and the body leaves turning.
+#[test]
+fn a_level_landing_off_its_feet_or_yawing_is_resolved_collider_by_collider() {
+    let ball = |x: f64| ColliderBuilder::ball(0.1).translation(Vector::new(real(x), 0.0, 0.0));
+    let rod = vec![
+        ball(-0.3),
+        ball(0.0),
+        ball(0.3),
+        ColliderBuilder::cuboid(0.1, 0.1, 0.1)
+            .translation(Vector::new(0.8, 0.3, 0.0))
+            .density(20.9),
+    ];
+    let dumbbell = vec![ball(-0.3), ball(0.3)];
+    for (label, parts, turned, yaw) in [
+        ("rod, centre of mass beyond its feet", rod, 0.3, 0.0),
+        ("dumbbell yawing", dumbbell, 0.0, 10.0),
+    ] {
+        for mode in MODES {
+            let mut world = PhysicsWorld::default();
+            let (_, ground) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::halfspace(up())
+                    .restitution(0.5)
+                    .friction(0.6),
+            );
+            let body = world.bodies.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.0, 0.6, 0.0))
+                    .rotation(Vector::new(0.0, real(turned), 0.0))
+                    .angvel(Vector::new(0.0, real(yaw), 0.0)),
+            );
+            for part in &parts {
+                let part = part.clone().restitution(0.5).friction(0.6);
+                world
+                    .colliders
+                    .insert_with_parent(part, body, &mut world.bodies);
+            }
+            let mut plugin = plugin_on(&world, ground, mode);
+            let first = (0..60).find_map(|_| {
+                plugin.step(&mut world);
+                plugin.events().first().copied()
+            });
+            let first = first.expect("it lands");
+            let w = world.bodies[body].angvel();
+            let tilt = wide(Vector::new(w.x, 0.0, w.z).length());
+            println!(
+                "{label}, {mode:?}: first impact on {} points, |w| about a level axis after {tilt:.3} rad/s",
+                first.contact_points
+            );
+            assert_eq!(first.contact_points, 1, "{label}, {mode:?}");
+            assert!(tilt > 0.1, "{label}, {mode:?}: leaves level, |w| {tilt}");
+        }
+    }
+}

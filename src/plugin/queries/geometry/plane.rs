@@ -341,8 +341,8 @@ fn stretch_over_triangle(
 /// `h.part`, the body at `s`, time `t`): the landing points of its other parts on the same
 /// ground that lie on the contact plane within `flat_tolerance` times the spread of all the
 /// points (with the rounding a face's test allows), along the same normal (within
-/// `flat_tolerance`), and approach it at the hit part's normal speed (within `flat_tolerance`
-/// of it: a level landing without a tumble) land with it. When the body's centre of mass,
+/// `flat_tolerance`), and approach it at the hit part's velocity (within `flat_tolerance` of
+/// it: a level landing without a tumble or a spin about the normal) land with it. When the body's centre of mass,
 /// projected on the contact plane, lies in the hull of their points, they are one impact
 /// there, with the count of all their contact points: every point then leaves at the same
 /// speed, the simultaneous impact's answer, and a dumbbell, a hammer or a table on its feet
@@ -362,19 +362,19 @@ pub(crate) fn body_landing_point(
     if geom.parts.len() < 2 {
         return own;
     }
-    let approach = |p: &Vector3<f64>| {
-        h.normal
-            .dot(&(body_velocity_at(s, p) - ground.velocity_at(p, t)))
-    };
-    let own_speed = approach(&own.0);
+    let relative = |p: &Vector3<f64>| body_velocity_at(s, p) - ground.velocity_at(p, t);
+    let own_velocity = relative(&own.0);
     // The others are looked for within the largest tolerance any spread can give, the
     // body's diameter's, beyond the hit (never a negative distance: parry refuses one).
     let diameter = 2.0 * geom.radius;
     let widest = flat_tolerance * diameter + FACE_ROUNDING * (diameter + FACE_SIZE_FLOOR);
     let look = (h.dist + widest).max(0.0);
     let min_cos = flat_tolerance.cos();
-    let same_speed =
-        |speed: f64| (speed - own_speed).abs() <= flat_tolerance * own_speed.abs() + FACE_ROUNDING;
+    // The same velocity relative to the ground at every point: no tumble, and no spin about
+    // the normal, whose friction at each point one impulse at one point would not have.
+    let same_velocity = |u: &Vector3<f64>| {
+        (u - own_velocity).norm() <= flat_tolerance * own_velocity.norm() + FACE_ROUNDING
+    };
     let mut points = vec![own];
     for (j, part) in geom.parts.iter().enumerate() {
         if j == h.part || ground.skip.contains(&part.handle) || !joins(j, part) {
@@ -388,8 +388,8 @@ pub(crate) fn body_landing_point(
         }
         let hit = Hit::at((j, h.ground), ground, s, t, found);
         let (p, count) = landing_point(part, ground, s, t, &hit, flat_tolerance);
-        let speed = approach(&p);
-        if speed < 0.0 && same_speed(speed) {
+        let u = relative(&p);
+        if h.normal.dot(&u) < 0.0 && same_velocity(&u) {
             points.push((p, count));
         }
     }
@@ -419,9 +419,10 @@ pub(crate) fn body_landing_point(
 }
 
 /// Is `q` within `tol` of the convex hull of `points`, all of them and `q` in one plane of
-/// unit normal `n`? The points in the plane's coordinates, their hull by the monotone chain,
-/// and `q` within `tol` of each of its edges' inner side (of the segment, for points on a
-/// line; of the point, for one).
+/// unit normal `n`? The points in the plane's coordinates, their hull by the monotone chain
+/// (counter-clockwise); `q` inside it by more than `tol`, or within `tol` of one of its edges
+/// as a segment (of the segment, for points on a line; of the point, for one). Not within
+/// `tol` of each edge's line: by a sharp corner of a thin hull that reaches far beyond it.
 fn in_hull(points: &[Vector3<f64>], q: &Vector3<f64>, n: &Vector3<f64>, tol: f64) -> bool {
     let u = if n.x.abs() < 0.9 {
         Vector3::x()
@@ -453,22 +454,25 @@ fn in_hull(points: &[Vector3<f64>], q: &Vector3<f64>, n: &Vector3<f64>, tol: f64
             pts.reverse();
         }
     }
-    let dist = |a: (f64, f64), b: (f64, f64)| ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
-    match hull.len() {
-        0 => false,
-        1 => dist(hull[0], q) <= tol,
-        2 => {
-            let (a, b) = (hull[0], hull[1]);
-            let len = dist(a, b);
-            let along = ((q.0 - a.0) * (b.0 - a.0) + (q.1 - a.1) * (b.1 - a.1)) / len;
-            let off = cross(a, b, q).abs() / len;
-            off <= tol && along >= -tol && along <= len + tol
-        }
-        k => (0..k).all(|i| {
-            let (a, b) = (hull[i], hull[(i + 1) % k]);
-            cross(a, b, q) / dist(a, b) >= -tol
-        }),
-    }
+    // The distance from `q` to the segment `ab` (to `a`, for a point).
+    let to_segment = |a: (f64, f64), b: (f64, f64)| {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let len2 = dx * dx + dy * dy;
+        let along = if len2 > 0.0 {
+            (((q.0 - a.0) * dx + (q.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        ((q.0 - a.0 - along * dx).powi(2) + (q.1 - a.1 - along * dy).powi(2)).sqrt()
+    };
+    let k = hull.len();
+    let edges = || (0..k).map(|i| (hull[i], hull[(i + 1) % k]));
+    // Inside by more than `tol` from every edge's line (a hull thinner than that, three
+    // points all but on a line, has no such inside), or within `tol` of an edge.
+    let deep = |(a, b): ((f64, f64), (f64, f64))| {
+        cross(a, b, q) >= tol * ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt()
+    };
+    k > 0 && ((k > 2 && edges().all(deep)) || edges().any(|(a, b)| to_segment(a, b) <= tol))
 }
 
 /// The contact points of a landing, resolved as one impact (see `docs/guide.md`):
