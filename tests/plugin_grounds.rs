@@ -528,6 +528,87 @@ fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
     }
 }
 
+/// A ball asleep beside fast kinematic grounds that cannot reach it: on the floor, a bat 1 cm
+/// away receding at 12 m/s and one passing along it at 12 m/s; and on a platform sliding
+/// under it at 1 m/s (a conveyor). The plugin wakes it no more than rapier alone does: after
+/// 10 steps it sleeps exactly when it sleeps in rapier alone.
+#[test]
+fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
+    let r = 0.1;
+    // (label, the ground's centre, its velocity, its half extents, the ball's lowest point)
+    let bat = [0.05, 0.3, 0.3];
+    let cases = [
+        (
+            "a bat receding",
+            [-r - 0.06, r, 0.0],
+            [-12.0, 0.0, 0.0],
+            bat,
+            0.0,
+        ),
+        (
+            "a bat passing",
+            [-r - 0.06, r, 0.0],
+            [0.0, 0.0, 12.0],
+            bat,
+            0.0,
+        ),
+        (
+            "a conveyor under it",
+            [0.0, -0.04, 0.0],
+            [1.0, 0.0, 0.0],
+            [2.0, 0.05, 2.0],
+            0.01,
+        ),
+    ];
+    for (label, at, v, half, bottom) in cases {
+        let run = |mode: Option<TimingMode>| {
+            let mut world = PhysicsWorld::default();
+            let (_, floor) =
+                world.insert(RigidBodyBuilder::fixed(), ColliderBuilder::halfspace(up()));
+            let (platform, ground) = world.insert(
+                RigidBodyBuilder::kinematic_velocity_based().translation(Vector::new(
+                    real(at[0]),
+                    real(at[1]),
+                    real(at[2]),
+                )),
+                ColliderBuilder::cuboid(real(half[0]), real(half[1]), real(half[2])),
+            );
+            let b = ball(&mut world, [0.0, bottom + r, 0.0], r, 0.0, 0.5);
+            let mut p = mode.map(|timing| {
+                let mut p = plugin_on(&world, floor, timing);
+                p.add_ground(&world.bodies, &world.colliders, ground)
+                    .unwrap();
+                p
+            });
+            let mut step = |world: &mut PhysicsWorld| match p.as_mut() {
+                Some(p) => p.step(world),
+                None => world.step(),
+            };
+            // Asleep once the insertions' wake-ups are past, the ground standing still; then
+            // the ground starts.
+            for k in 0..3 {
+                if k == 2 {
+                    world.bodies[b].sleep();
+                }
+                step(&mut world);
+            }
+            assert!(world.bodies[b].is_sleeping(), "{label}: the ball is awake");
+            let v = Vector::new(real(v[0]), real(v[1]), real(v[2]));
+            world.bodies[platform].set_linvel(v, true);
+            for _ in 0..10 {
+                step(&mut world);
+            }
+            world.bodies[b].is_sleeping()
+        };
+        let alone = run(None);
+        for mode in MODES {
+            let with = run(Some(mode));
+            println!("{label}, {mode:?}: asleep {with} (rapier alone {alone})");
+            assert_eq!(with, alone, "{label}, {mode:?}");
+        }
+    }
+}
+
 /// A blade (a position-based kinematic box 1 m long, 10 cm thick, friction 0) spun about its
 /// middle at 30 rad/s (half a radian a step) onto a ball at rest 0.35 m from its axis,
 /// without gravity: only the blade's turn brings them together. One impact leaves the ball

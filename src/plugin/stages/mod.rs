@@ -5,8 +5,9 @@
 //!    last step's memory handed to the plan (`state/memory.rs`, `Memory::begin_step`).
 //! 2. pair plan (`pair_plan/`): the pairs of opted-in bodies that may meet and their roles;
 //!    their sleeping bodies woken, and in `Step` mode their impulses at the step's start.
-//! 3. survey (`prepare.rs`): which managed bodies are asleep, far from every ground (in
-//!    `Exact` mode a flying candidate each), or to be planned (outside slabs, a body the last
+//! 3. survey (`prepare.rs`): which managed bodies are asleep (those a fast moving ground
+//!    reaches woken), far from every ground (in `Exact` mode a flying candidate each), or to
+//!    be planned (outside slabs, a body the last
 //!    step's plan found near a ground without the far test: `NearMarks`; in `Exact` mode,
 //!    after the plan, such a body found far gets its flight in the survey's place).
 //! 4. plan (`plan/`): each planned body's pairs with the grounds near it get a role, the body

@@ -6,8 +6,8 @@
 //! ([`Policy`], from the configuration, gravity and rapier's integration parameters) and every
 //! ground's pose over the step (the ground index, lent to the step until its end).
 //! [`ImpactPlugin::survey`] sorts the managed bodies: asleep (checked at the step's end if
-//! rapier wakes them), surely far from every ground (no plan; only their flight in `Exact`
-//! mode), or to be planned (outside slabs, a body the last step's plan found near a ground,
+//! rapier wakes them; woken and planned if a fast moving ground reaches them), surely far
+//! from every ground (no plan; only their flight in `Exact` mode), or to be planned (outside slabs, a body the last step's plan found near a ground,
 //! without the far test: most often it is near still, and the plan finds one that is not
 //! near, as the test would have found it far). In `Exact` mode, where the candidates' order is
 //! the order of the writes their flights make, such a body found far gets its flying
@@ -242,12 +242,15 @@ impl<H> ImpactPlugin<H> {
         survey
     }
 
-    /// Does a moving ground reach the asleep body `handle` (`rb`) in the step: one that moves
-    /// (its travel near the body is positive), whose box over the step meets the body's
-    /// bounding sphere, and that lies within that travel (and the contact margin) of one of
-    /// the body's colliders at the step's start? rapier wakes a body a kinematic body touches
-    /// only once their boxes meet at a step's start, so a bat crossing more than that in a
-    /// step passes through a ball asleep on a tee; planned awake, the ball is met. Reads only.
+    /// Does a moving ground reach the asleep body `handle` (`rb`) in the step where rapier
+    /// would not wake it first? rapier wakes a body a kinematic body touches only as their
+    /// contact starts, within its prediction distance: a bat crossing a ball on a tee in one
+    /// step passed through it. Such a ground moves farther near the body in the step than the
+    /// contact margin (slower, rapier meets it in time), its box over the step meets the
+    /// body, and at the step's start it lies within that travel of one of the body's
+    /// colliders and closes on it there (its point's velocity along the contact normal). A
+    /// pile resting on a platform that slides, or beside one that passes or recedes, is left
+    /// asleep. Reads only; a step with no ground that moves pays a look at the moving list.
     fn moving_ground_reaches(
         &self,
         handle: RigidBodyHandle,
@@ -255,28 +258,34 @@ impl<H> ImpactPlugin<H> {
         colliders: &ColliderSet,
         step: &StepData,
     ) -> bool {
-        let moving = self.registry.index.moving();
-        if moving.is_empty() {
+        let moves = |m: &&GroundMotion| m.v != Vector3::zeros() || m.w != Vector3::zeros();
+        let mut moving = self
+            .registry
+            .index
+            .moving()
+            .iter()
+            .map(|i| &step.grounds[*i])
+            .filter(moves)
+            .peekable();
+        if moving.peek().is_none() {
             return false;
         }
         let state = self.writes.now(handle, rb).state();
         let geom = body_geom(rb, colliders, &vec_to_na(rb.local_center_of_mass()));
         let margin = step.policy.contact_margin();
-        moving.iter().any(|i| {
-            let motion = &step.grounds[*i];
+        moving.any(|motion| {
             let Some(gg) = ground_geom(motion, colliders) else {
                 return false;
             };
             let travel = gg.travel_near(&state.com, geom.radius + margin, step.dt);
             let half = to_real(geom.radius + travel + margin);
-            travel > 0.0
+            let closing = |part| match contact_checked(part, &gg, &state, 0.0, travel + margin) {
+                Ok(Some((_, n, p))) => n.dot(&gg.velocity_at(&p, 0.0)) > 0.0,
+                _ => false,
+            };
+            travel > margin
                 && !motion.misses_cube(vec_from_na(&state.com), half)
-                && geom.parts.iter().any(|part| {
-                    matches!(
-                        contact_checked(part, &gg, &state, 0.0, travel + margin),
-                        Ok(Some(_))
-                    )
-                })
+                && geom.parts.iter().any(closing)
         })
     }
 
