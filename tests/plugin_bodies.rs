@@ -126,14 +126,21 @@ struct Built {
     g: Vector3<f64>,
 }
 
-fn build(t: &Throw) -> Built {
+/// A world whose ground is a half-space floor at `y = 0` with restitution `e` and friction
+/// `mu`.
+fn on_a_floor(e: f64, mu: f64) -> (PhysicsWorld, ColliderHandle) {
     let mut world = PhysicsWorld::default();
     let (_, ground) = world.insert(
         RigidBodyBuilder::fixed(),
         ColliderBuilder::halfspace(up())
-            .restitution(real(t.e))
-            .friction(real(t.mu)),
+            .restitution(real(e))
+            .friction(real(mu)),
     );
+    (world, ground)
+}
+
+fn build(t: &Throw) -> Built {
+    let (mut world, ground) = on_a_floor(t.e, t.mu);
     let q = UnitQuaternion::from_euler_angles(t.tilt[0], 0.0, 0.0)
         * UnitQuaternion::from_euler_angles(0.0, 0.0, t.tilt[1]);
     let (low, _) = t.shape.lowest(&q);
@@ -514,13 +521,7 @@ impl Lander {
 /// first event)`; `None` is rapier alone.
 fn flat_landing(lander: Lander, mode: Option<TimingMode>, vx: f64, mu: f64) -> (f64, f64, usize) {
     let (half, h, e) = (0.1, 0.5, 0.5);
-    let mut world = PhysicsWorld::default();
-    let (_, ground) = world.insert(
-        RigidBodyBuilder::fixed(),
-        ColliderBuilder::halfspace(up())
-            .restitution(real(e))
-            .friction(real(mu)),
-    );
+    let (mut world, ground) = on_a_floor(e, mu);
     let cube = world.bodies.insert(
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(0.0, real(h + half), 0.0))
@@ -754,13 +755,7 @@ fn a_level_landing_off_its_feet_or_yawing_is_resolved_collider_by_collider() {
         ("dumbbell yawing", dumbbell, 0.0, 10.0),
     ] {
         for mode in MODES {
-            let mut world = PhysicsWorld::default();
-            let (_, ground) = world.insert(
-                RigidBodyBuilder::fixed(),
-                ColliderBuilder::halfspace(up())
-                    .restitution(0.5)
-                    .friction(0.6),
-            );
+            let (mut world, ground) = on_a_floor(0.5, 0.6);
             let body = world.bodies.insert(
                 RigidBodyBuilder::dynamic()
                     .translation(Vector::new(0.0, 0.6, 0.0))

@@ -360,6 +360,17 @@ fn a_position_based_rising_platform_enters_the_model() {
     panic!("the ball never met the platform");
 }
 
+/// The impact `ev` was met at the start of its step in `Step` mode, else in the step at
+/// `time` (to `tt`).
+fn met_at(ev: &ImpactEvent, timing: TimingMode, time: f64, tt: f64) {
+    if timing == TimingMode::Step {
+        assert_eq!(ev.timing, ImpactTiming::StepStart);
+    } else {
+        assert_eq!(ev.timing, ImpactTiming::InStep);
+        assert_abs_diff_eq!(ev.time, time, epsilon = tt);
+    }
+}
+
 /// A world without gravity.
 fn weightless() -> PhysicsWorld {
     PhysicsWorld {
@@ -467,12 +478,7 @@ fn a_fast_bat_meets_a_ball_at_rest_in_the_step() {
             assert_eq!(hits.len(), 1, "{at}");
             let (k, ev) = hits[0];
             assert_eq!(k, 2, "{at}");
-            if timing == TimingMode::Step {
-                assert_eq!(ev.timing, ImpactTiming::StepStart);
-            } else {
-                assert_eq!(ev.timing, ImpactTiming::InStep);
-                assert_abs_diff_eq!(ev.time, 0.4 * dt, epsilon = tt);
-            }
+            met_at(&ev, timing, 0.4 * dt, tt);
             assert_abs_diff_eq!(ev.approach_speed, v, epsilon = tv * v);
             assert_abs_diff_eq!(vx, (1.0 + e) * v, epsilon = tv * v);
         }
@@ -670,11 +676,8 @@ fn a_fast_blade_meets_a_ball_at_rest_in_the_step() {
         let (k, ev) = hits[0];
         assert_eq!(k, 1, "{timing:?}");
         assert_abs_diff_eq!(speed, (1.0 + e) * ev.approach_speed, epsilon = tv * speed);
-        if timing == TimingMode::Step {
-            assert_eq!(ev.timing, ImpactTiming::StepStart);
-        } else {
-            assert_eq!(ev.timing, ImpactTiming::InStep);
-            assert_abs_diff_eq!(ev.time, 0.4 * dt, epsilon = tt);
+        met_at(&ev, timing, 0.4 * dt, tt);
+        if timing != TimingMode::Step {
             assert_abs_diff_eq!(ev.approach_speed, approach, epsilon = tv * approach);
         }
     }

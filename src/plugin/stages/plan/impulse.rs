@@ -9,17 +9,15 @@ use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, reso
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
 use crate::plugin::policy::rests_at;
-use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, Hit, body_landing_point, body_velocity_at, landing_point,
-};
-use crate::plugin::state::small_list::SmallList;
+use crate::plugin::queries::geometry::{BodyPart, Hit, body_landing_point, body_velocity_at};
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::PhysicsHooks;
 
 impl<H: PhysicsHooks> Planner<'_, H> {
-    /// Resolves the pair's contact `hit` (closing within the step, at the step's start) as
-    /// one impact of the body's part alone at its landing point (`landing_point`), with the
-    /// body's state `plan.state`. On an impulse: the new state in `plan.state`
+    /// Resolves the pair's contact `hit` (closing within the step, at the step's start; its
+    /// part the pair's) as one impact at its landing point (`body_landing_point`: the part's,
+    /// with the body's other parts landing level with it), with the body's state
+    /// `plan.state`. On an impulse: the new state in `plan.state`
     /// (`plan.touched`), its event pushed, and the pair `Resting` if the point now leaves
     /// slower than the resting speed, else `Impact` (out of rapier's solver: a touching pair
     /// kept in the solver after the impulse would let a heavy body landing on this one in
@@ -39,10 +37,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let Pair { k, part, gg, .. } = pair;
         let n = hit.normal;
         let inertia = Inertia::of(body.rb);
-        let single = BodyGeom {
-            parts: SmallList::One(*part),
-            radius: body.geom.radius,
-        };
         let material =
             self.registry
                 .material_of(scene.colliders, part.handle, gg.handle, self.config);
@@ -56,20 +50,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     == material
         };
         let flat = self.config.flat_tolerance;
-        let (point, count) = match body.geom.parts.iter().position(|p| p.handle == part.handle) {
-            Some(own) => {
-                let landing = Hit { part: own, ..*hit };
-                body_landing_point(body.geom, gg, (&plan.state, 0.0), &landing, flat, joins)
-            }
-            // (Not met: the pair's part is one of the body's.)
-            None => landing_point(part, gg, &plan.state, 0.0, hit, flat),
-        };
+        let (point, count) =
+            body_landing_point(body.geom, gg, (&plan.state, 0.0), hit, flat, joins);
         let (law, resting_speed) = (self.config.law, step.policy.resting_speed);
         let timing = ImpactTiming::StepStart;
         let input = ImpactInput::new(body.handle, &inertia, law, material, resting_speed, timing);
         match resolve(
             &input,
-            &single,
+            body.geom,
             gg,
             &plan.state,
             0.0,

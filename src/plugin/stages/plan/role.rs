@@ -29,7 +29,9 @@ use nalgebra::Vector3;
 #[derive(Clone, Copy)]
 pub(super) struct Pair<'q, 'c> {
     pub k: usize,
+    /// The body's part, and its index in the body's parts.
     pub part: &'q BodyPart<'c>,
+    pub part_index: usize,
     pub gg: &'q GroundGeom<'c>,
     pub key: PairKey,
     pub colliders: (&'c Collider, &'c Collider),
@@ -78,7 +80,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             clear: true,
         };
         let side = self.ground_side(*gi, gg.handle, scene);
-        for part in &body.geom.parts {
+        for (part_index, part) in body.geom.parts.iter().enumerate() {
             let key = (part.handle, gg.handle);
             // Read once: the user's filter and the rolling decision both ask for them (the
             // pair's flags: either collider's, `HookFlags::recorded_pair_flags`).
@@ -89,6 +91,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             let pair = Pair {
                 k,
                 part,
+                part_index,
                 gg,
                 key,
                 colliders,
@@ -545,7 +548,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     ) -> Role {
         if closes_within(dist, un, n.dot(&(reads.body.flight.accel)), step.dt) && un < 0.0 {
             let hit = Hit {
-                part: 0,
+                part: pair.part_index,
                 ground: 0,
                 dist,
                 normal: n,

@@ -145,6 +145,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             key,
             colliders,
             user,
+            ..
         } = pair;
         let (gi, _) = &body.grounds[k];
         let state = &plan.state;
