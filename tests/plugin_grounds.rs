@@ -37,7 +37,9 @@ use rapier_impact::model::{self, Body, BodyVelocity, Contact, Law, Material};
 use rapier_impact::na::{Matrix3, Vector3};
 use rapier_impact::rapier::parry::utils::Array2;
 use rapier_impact::rapier::prelude::*;
-use rapier_impact::{EventKind, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode};
+use rapier_impact::{
+    EventKind, GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactTiming, TimingMode,
+};
 
 /// Tolerances `(time (s), velocity (m/s))` of an exact in-step impact.
 fn tol() -> (f64, f64) {
@@ -534,14 +536,169 @@ fn a_fast_bat_meets_a_ball_resting_on_the_floor() {
     }
 }
 
+/// What refuses the wall's pairs in [`bat_into_wall`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum WallRefused {
+    No,
+    /// Collision groups: rapier's own filtering.
+    ByGroups,
+    /// The user's filter, which the wall's collider asks for.
+    ByUserFilter,
+}
+
+/// What [`bat_into_wall`] measured: the events (step, on the wall, event), the ball's end
+/// velocity `(vx, vz)`, and at each step's end how deep the ball is in the bat and the wall
+/// (m, negative outside).
+type WallRun = (Vec<(usize, bool, ImpactEvent)>, (f64, f64), Vec<(f64, f64)>);
+
+/// The wall run of [`a_ball_a_fast_bat_sends_into_a_wall_meets_it_in_the_step`]: three steps
+/// of the bat at `v` in `timing`, the wall's pairs refused or not. Its face is met once the
+/// ball's centre has gone `0.75 v dt`; `slanted`, it is a slab 10 cm thick turned 45 degrees
+/// about the vertical, its normal `(-1, 0, -1) / sqrt(2)`, whose box holds the ball at rest
+/// (the plan finds it near, and out of reach), else a block 1 m thick facing the ball.
+fn bat_into_wall(v: f64, timing: TimingMode, refused: WallRefused, slanted: bool) -> WallRun {
+    let (e, e_wall, r) = (0.5, 0.5, 0.1);
+    let mut world = weightless();
+    let dt = wide(world.integration_parameters.dt);
+    let gap = 0.75 * v * dt;
+    let bat = Bat::insert(&mut world, (v, r, 0.0, 0.0));
+    // The face's unit normal (towards the ball) and a point of it.
+    let (n, q) = if slanted {
+        let n = Vector3::new(-1.0, 0.0, -1.0) / 2f64.sqrt();
+        (n, Vector3::new(gap + r * 2f64.sqrt(), 0.0, 0.0))
+    } else {
+        (-Vector3::x(), Vector3::new(gap + r, 0.0, 0.0))
+    };
+    let (half, turn) = if slanted {
+        (0.05, -std::f64::consts::FRAC_PI_4)
+    } else {
+        (0.5, 0.0)
+    };
+    let centre = q - n * half;
+    let mut wall_co = ColliderBuilder::cuboid(real(half), 1.0, 1.0).friction(0.0);
+    wall_co = match refused {
+        WallRefused::No => wall_co,
+        WallRefused::ByGroups => wall_co.collision_groups(InteractionGroups::new(
+            Group::GROUP_2,
+            Group::NONE,
+            InteractionTestMode::And,
+        )),
+        WallRefused::ByUserFilter => wall_co.active_hooks(ActiveHooks::FILTER_CONTACT_PAIRS),
+    };
+    let (_, wall) = world.insert(
+        RigidBodyBuilder::fixed()
+            .translation(Vector::new(real(centre.x), 0.0, real(centre.z)))
+            .rotation(Vector::new(0.0, real(turn), 0.0)),
+        wall_co,
+    );
+    let b = ball(&mut world, [0.0, 0.0, 0.0], r, 0.0, 0.0);
+    let config = ImpactConfig::default().with_timing(timing);
+    let mut p = ImpactPlugin::with_hooks(config, GhostFilter::new(wall)).unwrap();
+    let (bodies, colliders) = (&world.bodies, &world.colliders);
+    p.add_ground_with_material(bodies, colliders, bat.face, GroundMaterial::new(e, 0.0))
+        .unwrap();
+    p.add_ground_with_material(bodies, colliders, wall, GroundMaterial::new(e_wall, 0.0))
+        .unwrap();
+    let (mut hits, mut inside) = (Vec::new(), Vec::new());
+    for k in 0..3 {
+        world.bodies[bat.body].set_next_kinematic_translation(bat.at(k + 1));
+        p.step(&mut world);
+        hits.extend(p.events().iter().map(|ev| (k, ev.ground == wall, *ev)));
+        let at = na(world.bodies[b].translation());
+        let into_bat = wide(bat.at(k + 1).x) + Bat::HALF - (at.x - r);
+        inside.push((into_bat, r - n.dot(&(at - q))));
+    }
+    let end = na(world.bodies[b].linvel());
+    (hits, (end.x, end.z), inside)
+}
+
+/// The bat at 12 and 30 m/s onto a ball at rest, without gravity, with a still wall
+/// (friction 0, restitution 0.5) `0.75 V dt` behind the ball (15 and 37.5 cm): far beyond
+/// anything the ball at rest could reach in a step, so only the bat's impact brings the wall
+/// within reach. In the in-step modes the ball meets the wall in the same step, at `0.9 dt`,
+/// at `(1 + e) V`, and leaves it at `e_w (1 + e) V`, and nothing else happens in the step
+/// (the bat is then `0.25 V dt` from it, closing at `1.75 V`). In `Step` mode, after the
+/// bat's impulse at the step's start, the wall's impact is the step's end one, at
+/// `(1 + e) V`, with the same velocity after. Never inside the wall or the bat at a step's
+/// end. The same wall slanted at 45 degrees, its box around the ball at rest (found near,
+/// out of reach): met at `(1 + e) V / sqrt(2)`, leaving at `(1 + e) V (1/4, 0, -3/4)`. A
+/// wall whose pairs rapier's collision groups or the user's filter refuse is passed through,
+/// as in rapier alone: the bat's is the one impact. Stepped to the end of the impacts' step
+/// only: the bat then pins the ball against the wall, which no closed form describes.
+#[test]
+fn a_ball_a_fast_bat_sends_into_a_wall_meets_it_in_the_step() {
+    let e = 0.5;
+    let (tt, tv) = tol();
+    let walls = [
+        (WallRefused::No, false),
+        (WallRefused::No, true),
+        (WallRefused::ByGroups, false),
+        (WallRefused::ByUserFilter, false),
+    ];
+    for (v, (refused, slanted)) in [12.0, 30.0].into_iter().flat_map(|v| walls.map(|w| (v, w))) {
+        for timing in MODES {
+            let dt = wide(PhysicsWorld::default().integration_parameters.dt);
+            let (hits, (vx, vz), inside) = bat_into_wall(v, timing, refused, slanted);
+            let at = format!(
+                "{timing:?}, bat at {v} m/s, a wall behind, refused {refused:?}, slanted {slanted}"
+            );
+            println!(
+                "{at}: impacts (step, on the wall, timing, time / dt, approach) {:?}, ball \
+                 (vx, vz) ({vx:.6}, {vz:.6})",
+                hits.iter()
+                    .map(|(k, w, ev)| (*k, *w, ev.timing, ev.time / dt, ev.approach_speed))
+                    .collect::<Vec<_>>(),
+            );
+            let struck = (1.0 + e) * v;
+            let (k_bat, on_wall, by_bat) = hits[0];
+            assert_eq!((k_bat, on_wall), (2, false), "{at}");
+            met_at(&by_bat, timing, 0.4 * dt, tt);
+            assert_abs_diff_eq!(by_bat.approach_speed, v, epsilon = tv * v);
+            if refused != WallRefused::No {
+                assert_eq!(hits.len(), 1, "{at}");
+                assert_abs_diff_eq!(vx, struck, epsilon = tv * v);
+                continue;
+            }
+            for (k, (into_bat, into_wall)) in inside.into_iter().enumerate() {
+                assert!(
+                    into_bat < 1e-5,
+                    "{at}: step {k} ends {into_bat:e} m into the bat"
+                );
+                assert!(
+                    into_wall < 1e-5,
+                    "{at}: step {k} ends {into_wall:e} m into the wall"
+                );
+            }
+            assert_eq!(hits.len(), 2, "{at}");
+            let (k_wall, on_wall, by_wall) = hits[1];
+            assert_eq!((k_wall, on_wall), (2, true), "{at}");
+            if timing == TimingMode::Step {
+                assert_eq!(by_wall.timing, ImpactTiming::StepEnd, "{at}");
+            } else {
+                met_at(&by_wall, timing, 0.9 * dt, tt);
+            }
+            let (approach, after) = if slanted {
+                (struck / 2f64.sqrt(), (0.25 * struck, -0.75 * struck))
+            } else {
+                (struck, (-0.5 * struck, 0.0))
+            };
+            assert_abs_diff_eq!(by_wall.approach_speed, approach, epsilon = tv * v);
+            assert_abs_diff_eq!(vx, after.0, epsilon = tv * v);
+            assert_abs_diff_eq!(vz, after.1, epsilon = tv * v);
+        }
+    }
+}
+
 /// A ball asleep beside fast kinematic grounds that cannot reach it: on the floor, a bat 1 cm
-/// away receding at 12 m/s and one passing along it at 12 m/s; and on a platform sliding
-/// under it at 1 m/s (a conveyor). The plugin wakes it no more than rapier alone does: after
+/// away receding at 12 m/s, one passing along it at 12 m/s, and one swung through it at
+/// 12 m/s whose collision groups refuse it; and on a platform sliding under it at 1 m/s (a
+/// conveyor). The plugin wakes it no more than rapier alone does: after
 /// 10 steps it sleeps exactly when it sleeps in rapier alone.
 #[test]
 fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
     let r = 0.1;
-    // (label, the ground's centre, its velocity, its half extents, the ball's lowest point)
+    // (label, the ground's centre, its velocity, its half extents, the ball's lowest point,
+    // whether the ground's collision groups refuse the ball)
     let bat = [0.05, 0.3, 0.3];
     let cases = [
         (
@@ -550,6 +707,15 @@ fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
             [-12.0, 0.0, 0.0],
             bat,
             0.0,
+            false,
+        ),
+        (
+            "a bat the collision groups pass through the ball",
+            [-r - 0.06, r, 0.0],
+            [12.0, 0.0, 0.0],
+            bat,
+            0.0,
+            true,
         ),
         (
             "a bat passing",
@@ -557,6 +723,7 @@ fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
             [0.0, 0.0, 12.0],
             bat,
             0.0,
+            false,
         ),
         (
             "a conveyor under it",
@@ -564,9 +731,10 @@ fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
             [1.0, 0.0, 0.0],
             [2.0, 0.05, 2.0],
             0.01,
+            false,
         ),
     ];
-    for (label, at, v, half, bottom) in cases {
+    for (label, at, v, half, bottom, refused) in cases {
         let run = |mode: Option<TimingMode>| {
             let mut world = PhysicsWorld::default();
             let (_, floor) =
@@ -577,7 +745,16 @@ fn a_ball_asleep_beside_a_fast_ground_that_cannot_reach_it_stays_asleep() {
                     real(at[1]),
                     real(at[2]),
                 )),
-                ColliderBuilder::cuboid(real(half[0]), real(half[1]), real(half[2])),
+                ColliderBuilder::cuboid(real(half[0]), real(half[1]), real(half[2]))
+                    .collision_groups(if refused {
+                        InteractionGroups::new(
+                            Group::GROUP_2,
+                            Group::NONE,
+                            InteractionTestMode::And,
+                        )
+                    } else {
+                        InteractionGroups::all()
+                    }),
             );
             let b = ball(&mut world, [0.0, bottom + r, 0.0], r, 0.0, 0.5);
             let mut p = mode.map(|timing| {

@@ -121,7 +121,7 @@ pub(crate) fn joint_disables_contacts(
 /// a joint between the bodies disable its contacts, or the user's filter refuse it (asked
 /// where the user's flags recorded in `flags` ask for it)? Every test is symmetric in the
 /// two.
-pub(crate) fn pair_refused<H: PhysicsHooks>(
+pub(crate) fn pair_refused<H: PhysicsHooks + ?Sized>(
     (user_hooks, flags): (&H, &HookFlags),
     (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
     key: PairKey,
@@ -133,10 +133,37 @@ pub(crate) fn pair_refused<H: PhysicsHooks>(
         || user_refuses(user_hooks, user, bodies, colliders, key)
 }
 
+/// Would rapier not solve the pair `key` (the collider of the body `body`, a ground's
+/// collider), a joint between the body and the ground's body disable its contacts, or the
+/// user's filter refuse it (asked where the user's flags recorded in `flags` ask for it)? For
+/// a pair the plan gave no role (the body was asleep, or the step sent it beyond its plan's
+/// reach): the plugin resolves it only where rapier would solve it.
+pub(crate) fn ground_pair_refused<H: PhysicsHooks + ?Sized>(
+    (user_hooks, flags): (&H, &HookFlags),
+    (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
+    body: RigidBodyHandle,
+    key: PairKey,
+) -> bool {
+    let (Some(body_co), Some(ground_co)) = (colliders.get(key.0), colliders.get(key.1)) else {
+        return true;
+    };
+    let user = flags.recorded_pair_flags(colliders, key);
+    !rapier_solves(bodies, body_co, ground_co)
+        || ground_co.parent().is_some_and(|ground_body| {
+            joint_disables_contacts(
+                sets.impulse_joints,
+                sets.multibody_joints,
+                body,
+                ground_body,
+            )
+        })
+        || user_refuses(user_hooks, user, bodies, colliders, key)
+}
+
 /// Does the user's filter refuse the pair `key` (body collider, ground collider)? Asked only
 /// when the colliders' own hook flags (`user_flags`, those the user set) ask for it; a refusal
 /// is `None`, or flags without rigid impulses.
-pub(crate) fn user_refuses<H: PhysicsHooks>(
+pub(crate) fn user_refuses<H: PhysicsHooks + ?Sized>(
     user_hooks: &H,
     user_flags: ActiveHooks,
     bodies: &RigidBodySet,

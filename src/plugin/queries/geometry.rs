@@ -47,6 +47,7 @@ pub(crate) struct BodyGeom<'a> {
 }
 
 /// A ground collider moving at constant velocity over the step (zero for fixed ground).
+#[derive(Clone)]
 pub(crate) struct GroundGeom<'a> {
     pub handle: ColliderHandle,
     pub shape: &'a dyn Shape,
@@ -186,6 +187,45 @@ pub(crate) fn part_pose(part: &BodyPart, s: &State) -> Isometry3<f64> {
 #[inline]
 pub(crate) fn body_velocity_at(s: &State, p: &Vector3<f64>) -> Vector3<f64> {
     s.v + s.w.cross(&(p - s.com))
+}
+
+/// Where a body of bounding radius `radius` (about its centre of mass) can be over the next
+/// `left` seconds from `s`, under an acceleration of magnitude at most `accel`, loosened by
+/// `margin`: its centre's way is the segment along `s.v`, bowed by at most
+/// `accel left^2 / 2` (twice that is allowed), and the body is held about the segment's
+/// middle, so that a ball sent up from a floor does not reach back down to it.
+pub(crate) struct WayBound {
+    /// The segment's middle (m).
+    pub centre: Vector3<f64>,
+    /// The segment (m).
+    way: Vector3<f64>,
+    /// The body's radius, the bow's allowance and the margin (m), summed in that order.
+    radius: f64,
+    bow: f64,
+    margin: f64,
+}
+
+impl WayBound {
+    pub fn new(s: &State, accel: f64, radius: f64, left: f64, margin: f64) -> Self {
+        let way = s.v * left;
+        Self {
+            centre: s.com + 0.5 * way,
+            way,
+            radius,
+            bow: accel * left * left,
+            margin,
+        }
+    }
+
+    /// The half side of a cube about `centre` that holds the body (m).
+    pub fn cube_half(&self) -> f64 {
+        0.5 * self.way.amax() + self.radius + self.bow + self.margin
+    }
+
+    /// The radius of a ball about `centre` that holds the body (m).
+    pub fn ball_radius(&self) -> f64 {
+        0.5 * self.way.norm() + self.radius + self.bow + self.margin
+    }
 }
 
 /// Signed distance (m, skins deducted), unit normal from the ground into the body, and the

@@ -13,13 +13,17 @@
 //!   steered ball's velocities given back the steering's offsets), checked
 //!   (`EndCheck::DisturbedRolling`), with a `Released` event;
 //! - a body that flew alone with a closing ground: the in-step impacts from its start state
-//!   (`reconstruct::through_impacts`), the end state checked (`EndCheck::Flown`);
+//!   (`reconstruct::through_impacts`, with the grounds along its way after an impact that
+//!   sends it beyond its plan's reach), the end state checked (`EndCheck::Flown`) against
+//!   the grounds searched;
 //! - a body that flew alone with the step clear: `Exact` mode's exact flight
 //!   (`fly_exactly`; of a flight the steer stage steered, the velocity alone where rapier's
 //!   integrator carried the translation), and a check of rapier's rotation for a body whose
 //!   turning moves its surface (`turned_end`); a steered body something else touched keeps
 //!   rapier's end state, its velocity given back the steering's offset;
-//! - any other: rapier's end state, checked (`EndCheck::RapierEnd`).
+//! - any other: rapier's end state, checked (`EndCheck::RapierEnd`); after impulses at the
+//!   step's start (`Step` mode's, a push-out), also against the grounds along the way they
+//!   sent it, beyond its plan's reach (`reconstruct::grounds_beyond_plan`).
 //!
 //! The checks are the settle stage's (`settle.rs`); every write and event goes through the
 //! commit (`commit.rs`). Also here: the balls held at rest on a slope for their first step,
@@ -50,11 +54,11 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, FirstHold};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::Vector;
-use crate::rapier::prelude::{ColliderSet, LockedAxes, RigidBody, RigidBodySet};
+use crate::rapier::prelude::{ColliderSet, LockedAxes, PhysicsHooks, RigidBody, RigidBodySet};
 use nalgebra::Vector3;
 use std::cell::OnceCell;
 
-impl<H> ImpactPlugin<H> {
+impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// Routes every candidate not in `step.moved_together` (see the module's contract). A body
     /// rapier put to sleep in the step rests: rapier zeroed its velocities, and its contacts
     /// have left the solver's graph, so that it would look free and fall for a step.
@@ -268,6 +272,19 @@ impl AfterStep<'_> {
         let subject = Subject::new(cand, &geom, &grounds, step);
         let inertia = Inertia::of(now.rb());
         match first_search(now, &subject, flown, mode != TimingMode::Step && free()) {
+            None if cand.touched => {
+                // Impulses at the step's start (`Step` mode's, or a push-out back over a mesh)
+                // may have sent it beyond its plan's reach (a bat's hit): its end is checked
+                // against the grounds along its new way too.
+                let sets = (bodies, colliders, &step.sets);
+                let moved = (&cand.start, &cand.flight, 0.0);
+                let widened =
+                    reconstruct::grounds_beyond_plan(self, sets, &subject, &grounds, moved);
+                let grounds = widened.as_deref().unwrap_or(&grounds);
+                let subject = Subject::new(cand, &geom, grounds, step);
+                self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
+                self.turning_resting_checked(step, cand, bodies, colliders);
+            }
             None => {
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
@@ -528,7 +545,9 @@ impl AfterStep<'_> {
         let (cand, geom, grounds, step) =
             (subject.cand, subject.geom, subject.grounds, subject.step);
         let events_from = self.commit.reported().len();
-        let flown = reconstruct::through_impacts(self, colliders, subject, inertia, first);
+        let (flown, widened) =
+            reconstruct::through_impacts(self, (bodies, colliders), subject, inertia, first);
+        let grounds = widened.as_deref().unwrap_or(grounds);
         let checked = Checked {
             body: cand.body,
             geom,

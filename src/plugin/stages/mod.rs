@@ -117,7 +117,8 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         self.plan_pairs(&mut step, bodies, colliders, &sets, &last);
         self.stopwatch.lap(Stage::PairPlan);
         let rapier_gravity = (gravity, params.dt);
-        let mut survey = self.survey(&mut step, rapier_gravity, bodies, colliders, &last);
+        let scene = (&*bodies, &*colliders, &sets);
+        let mut survey = self.survey(&mut step, rapier_gravity, scene, &last);
         self.wake(&survey.woken);
         self.stopwatch.lap(Stage::Survey);
         let to_plan = std::mem::take(&mut survey.to_plan);
@@ -222,10 +223,18 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         };
         let mut view = AfterStep::new(
             (&self.config, &self.registry, &self.flags),
+            &self.user_hooks,
             &mut self.memory,
             (&mut self.writes, &mut self.reports),
         );
         pair_reconstruct::move_clusters(&mut view, bodies, colliders, &near, step)
+    }
+
+    /// What the stages after rapier's step read of the plugin, and the writer.
+    fn after_view(&mut self) -> AfterStep<'_> {
+        let reads = (&self.config, &self.registry, &self.flags);
+        let writes = (&mut self.writes, &mut self.reports);
+        AfterStep::new(reads, &self.user_hooks, &mut self.memory, writes)
     }
 }
 
@@ -394,13 +403,6 @@ impl<H> ImpactPlugin<H> {
         }
         step.grounds = grounds;
         (near, not_near)
-    }
-
-    /// What the stages after rapier's step read of the plugin, and the writer.
-    fn after_view(&mut self) -> AfterStep<'_> {
-        let reads = (&self.config, &self.registry, &self.flags);
-        let writes = (&mut self.writes, &mut self.reports);
-        AfterStep::new(reads, &mut self.memory, writes)
     }
 
     /// The commit stage, closing each half of the step's work on bodies: the writes recorded

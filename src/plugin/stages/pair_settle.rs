@@ -27,11 +27,11 @@ use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::PlannedPair;
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
+    ColliderHandle, ColliderSet, PhysicsHooks, RigidBody, RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
-impl<H> ImpactPlugin<H> {
+impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// The `Impact` pairs between bodies not moved together: rapier's end state (the pair
     /// out of its solver), checked at the step's end (`AfterStep::pair_end`).
     pub(super) fn settle_pairs(
@@ -294,14 +294,7 @@ impl<'v> AfterStep<'v> {
             let geom = body_geom(rb, colliders, &local_com);
             let inertia = Inertia::of(rb);
             let com = vec_from_na(&state.com);
-            let grounds = self.woken_geoms(
-                bodies,
-                colliders,
-                com,
-                &geom,
-                step,
-                (false, &|_, _, _| false),
-            );
+            let grounds = self.woken_geoms((bodies, colliders), body, (com, &geom), step, false);
             let checked = Checked {
                 body,
                 geom: &geom,

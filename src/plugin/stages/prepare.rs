@@ -20,16 +20,18 @@ use crate::plugin::config::{TimingMode, coefficients_in_range};
 use crate::plugin::hooks::lookup::Lookup;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::Policy;
-use crate::plugin::queries::geometry::contact_checked;
+use crate::plugin::queries::filter;
+use crate::plugin::queries::geometry::{BodyPart, contact_checked};
 use crate::plugin::queries::ground_index::{GroundIndex, GroundMotion};
-use crate::plugin::queries::observe::{body_geom, ground_geom, snapshot, surely_far};
+use crate::plugin::queries::observe::{Sets, body_geom, ground_geom, snapshot, surely_far};
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::handles::Slotted;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, IntegrationParameters, RigidBody, RigidBodyHandle, RigidBodySet,
+    ColliderHandle, ColliderSet, IntegrationParameters, PhysicsHooks, RigidBody, RigidBodyHandle,
+    RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -97,7 +99,7 @@ pub(super) struct Survey {
     pub woken: Vec<RigidBodyHandle>,
 }
 
-impl<H> ImpactPlugin<H> {
+impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// The step's data, `active` when the step has a positive `dt`.
     pub(super) fn prepare(
         &mut self,
@@ -172,8 +174,7 @@ impl<H> ImpactPlugin<H> {
         &self,
         step: &mut StepData,
         (gravity, dt): (Vector, Real),
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
+        (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
         last: &LastStep,
     ) -> Survey {
         let far_test = FarTest {
@@ -202,7 +203,7 @@ impl<H> ImpactPlugin<H> {
             // Asleep unless the pair plan woke it (written at this half's commit), or a moving
             // ground reaches it.
             if self.writes.is_sleeping(handle, rb) {
-                if self.moving_ground_reaches(handle, rb, colliders, step) {
+                if self.moving_ground_reaches((handle, rb), (bodies, colliders, sets), step) {
                     survey.woken.push(handle);
                     survey.to_plan.push(handle);
                 } else {
@@ -248,14 +249,17 @@ impl<H> ImpactPlugin<H> {
     /// step passed through it. Such a ground moves farther near the body in the step than the
     /// contact margin (slower, rapier meets it in time), its box over the step meets the
     /// body, and at the step's start it lies within that travel of one of the body's
-    /// colliders and closes on it there (its point's velocity along the contact normal). A
-    /// pile resting on a platform that slides, or beside one that passes or recedes, is left
-    /// asleep. Reads only; a step with no ground that moves pays a look at the moving list.
+    /// colliders and closes on it there (its point's velocity along the contact normal), in
+    /// a pair the plugin would resolve: not refused by rapier's filtering, a joint or the
+    /// user's filter (`filter::ground_pair_refused`), nor out of the coefficients' ranges
+    /// (`Registry::coefficients_refused`). A pile resting on a platform that slides, or
+    /// beside one that passes or recedes, is left asleep, and so is a ball the bat's
+    /// collision groups pass through. Reads only; a step with no ground that moves pays a look
+    /// at the moving list.
     fn moving_ground_reaches(
         &self,
-        handle: RigidBodyHandle,
-        rb: &RigidBody,
-        colliders: &ColliderSet,
+        (handle, rb): (RigidBodyHandle, &RigidBody),
+        (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
         step: &StepData,
     ) -> bool {
         let moves = |m: &&GroundMotion| m.v != Vector3::zeros() || m.w != Vector3::zeros();
@@ -279,9 +283,17 @@ impl<H> ImpactPlugin<H> {
             };
             let travel = gg.travel_near(&state.com, geom.radius + margin, step.dt);
             let half = to_real(geom.radius + travel + margin);
-            let closing = |part| match contact_checked(part, &gg, &state, 0.0, travel + margin) {
-                Ok(Some((_, n, p))) => n.dot(&gg.velocity_at(&p, 0.0)) > 0.0,
-                _ => false,
+            let closing = |part: &BodyPart| {
+                let refused = || {
+                    let hooks = (&self.user_hooks, &self.flags);
+                    let key = (part.handle, gg.handle);
+                    filter::ground_pair_refused(hooks, (bodies, colliders, sets), handle, key)
+                        || self.registry.coefficients_refused(colliders, key)
+                };
+                match contact_checked(part, &gg, &state, 0.0, travel + margin) {
+                    Ok(Some((_, n, p))) => n.dot(&gg.velocity_at(&p, 0.0)) > 0.0 && !refused(),
+                    _ => false,
+                }
             };
             travel > margin
                 && !motion.misses_cube(vec_from_na(&state.com), half)

@@ -6,28 +6,33 @@
 //! joint or torque, rapier's CCD consistent with its flight) and the first impact the search
 //! found; it flies the body to each impact (`crate::motion`), resolves it with the model
 //! (`resolve.rs`), and flies on, up to `ImpactConfig::max_impacts_per_step` impacts (the last
-//! with `e = 0`); an impact slower than the resting speed settles the body. It returns the
-//! state at the step's end and reports every impulse and correction as an event. It writes
+//! with `e = 0`); an impact slower than the resting speed settles the body. An impact that
+//! sends the body beyond its plan's reach (a bat's hit) adds the grounds along its new way to
+//! the search ([`grounds_beyond_plan`]). It returns the state at the step's end, with the
+//! grounds searched, and reports every impulse and correction as an event. It writes
 //! nothing into rapier: the caller has the settle stage check that state (`EndCheck::Flown`:
 //! a body never left inside a ground) and commits it.
 
 use crate::motion::{Flight, Rolling, State};
-use crate::plugin::bridge::convert::vec_to_na;
+use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
 };
-use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::on_plane;
-use crate::plugin::policy::{CCD_SLACK, MOVED_AS_FLOWN_ROUNDING, STILL_TRAVEL_SQUARED};
-use crate::plugin::queries::geometry::{
-    BodyGeom, GroundGeom, Hit, Search, closest, earliest_touch, first_impact,
+use crate::plugin::policy::{
+    CCD_SLACK, GAP_BOUND_SLACK, MOVED_AS_FLOWN_ROUNDING, Role, STILL_TRAVEL_SQUARED,
 };
+use crate::plugin::queries::geometry::{
+    BodyGeom, BodyPart, GroundGeom, Hit, Search, WayBound, closest, earliest_touch, first_impact,
+};
+use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::step::StepData;
 use crate::plugin::state::step::{Candidate, SteeredRoll};
 use crate::plugin::state::writes::Now;
-use crate::rapier::prelude::ColliderSet;
+use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodySet};
 use nalgebra::Vector3;
 
 /// One candidate as this stage reconstructs it: the plan's candidate, its colliders, the
@@ -56,15 +61,17 @@ impl<'s> Subject<'s> {
 }
 
 /// The body's state at the step's end after the impacts from `first` on (see the module's
-/// contract); `view` receives the events.
-pub(crate) fn through_impacts(
+/// contract), and the grounds searched, where an impact sent the body beyond its plan's
+/// reach (`None`: `subject.grounds`); `view` receives the events.
+pub(crate) fn through_impacts<'s>(
     view: &mut AfterStep,
-    colliders: &ColliderSet,
-    subject: &Subject,
+    (bodies, colliders): (&RigidBodySet, &'s ColliderSet),
+    subject: &Subject<'s>,
     inertia: &Inertia,
     first: Search,
-) -> State {
-    let (cand, geom, grounds, step) = (subject.cand, subject.geom, subject.grounds, subject.step);
+) -> (State, Option<Vec<GroundGeom<'s>>>) {
+    let (cand, geom, step) = (subject.cand, subject.geom, subject.step);
+    let mut widened: Option<Vec<GroundGeom<'s>>> = None;
     let mut next = first;
     let mut flight = cand.flight.clone();
     let mut seg = cand.start;
@@ -83,6 +90,7 @@ pub(crate) fn through_impacts(
             }
             Search::Hit(t, s, hit) => (t, s, hit),
         };
+        let grounds = widened.as_deref().unwrap_or(subject.grounds);
         let part = &geom.parts[hit.part];
         let gg = &grounds[hit.ground];
         let (material, point, points) = view.landing(colliders, (geom, gg), (&s, t), &hit);
@@ -100,27 +108,10 @@ pub(crate) fn through_impacts(
         count += 1;
         seg = s;
         seg_t0 = t;
-        // A landing point (centroid) that does not approach falls back to the deepest
-        // point; if that does not approach either, the flight stops here.
-        let resolved = resolve(
-            &input,
-            geom,
-            gg,
-            &s,
-            t,
-            &GroundContactAt::new(&hit, point, points),
-        )
-        .or_else(|| {
-            resolve(
-                &input,
-                geom,
-                gg,
-                &s,
-                t,
-                &GroundContactAt::new(&hit, hit.point, 1),
-            )
-        });
-        let Some((after, event)) = resolved else {
+        // If neither its landing point nor its deepest point approaches, the flight stops.
+        let Some((after, event)) =
+            resolve_landing(&input, (geom, gg), (&s, t), &hit, point, points)
+        else {
             stop = Some(s);
             break;
         };
@@ -139,17 +130,127 @@ pub(crate) fn through_impacts(
             normal: hit.normal,
             point,
         };
-        if settled && rest_on_ground(view, &site, inertia, &mut flight, &mut seg, t, step) {
+        let rests = settled && rest_on_ground(view, &site, inertia, &mut flight, &mut seg, t, step);
+        // The grounds its way on may reach, for the search and for the settle stage's check.
+        let sets = (bodies, colliders, &step.sets);
+        if let Some(all) = grounds_beyond_plan(view, sets, subject, grounds, (&seg, &flight, t)) {
+            widened = Some(all);
+        }
+        // The last impact allowed in the step (forced settled) on a leaving body: it flies
+        // on; the settle stage's check keeps it out of the ground.
+        if rests || count >= view.config.max_impacts_per_step {
             break;
         }
-        if count >= view.config.max_impacts_per_step {
-            // The last impact allowed in the step (forced settled) on a leaving
-            // body: it flies on; the settle stage's check keeps it out of the ground.
-            break;
-        }
+        let grounds = widened.as_deref().unwrap_or(subject.grounds);
         next = first_impact(geom, grounds, &flight, &seg, seg_t0, seg_t0, step.dt);
     }
-    stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0))
+    let end = stop.unwrap_or_else(|| flight.advance(&seg, step.dt - seg_t0));
+    (end, widened)
+}
+
+/// The impact of the body (`geom`, at `s`, time `t`) on `gg` at `hit`, at its landing point
+/// `point` (the centroid of `points` contact points), or, if that does not approach, at the
+/// deepest point; `None` if neither approaches.
+fn resolve_landing(
+    input: &ImpactInput,
+    (geom, gg): (&BodyGeom, &GroundGeom),
+    (s, t): (&State, f64),
+    hit: &Hit,
+    point: Vector3<f64>,
+    points: usize,
+) -> Option<(State, ImpactEvent)> {
+    resolve(
+        input,
+        geom,
+        gg,
+        s,
+        t,
+        &GroundContactAt::new(hit, point, points),
+    )
+    .or_else(|| {
+        resolve(
+            input,
+            geom,
+            gg,
+            s,
+            t,
+            &GroundContactAt::new(hit, hit.point, 1),
+        )
+    })
+}
+
+/// `searched` and the grounds that a body leaving an impact at `s` (time `t`, flying on by
+/// `flight`; in `Step` mode, the step's start after its impulses) may reach in the rest of
+/// the step that `searched` does not hold; `None` if there are none. Its plan looked for
+/// grounds as far as its start-of-step motion could take it (`Candidate::looked_in`), and
+/// an impact with a moving ground (a bat) can send it much faster, into a wall beyond that:
+/// - while its way on leaves that ball, the grounds along the way that the plan did not find
+///   (no role: the pairs rapier would not solve, or a joint or the user's filter refuses, or
+///   whose coefficients are the plugin's to refuse, are skipped; `AfterStep::unplanned_geom`);
+/// - the grounds the plan found out of reach (all their pairs `Impact`, out of rapier's
+///   solver, but not searched), where its way on leaves that ball or its turn moves its
+///   surface (a spin from the impact can swing a rod's end farther than the plan's bound).
+///
+/// Reads only.
+pub(crate) fn grounds_beyond_plan<'s>(
+    view: &AfterStep,
+    sets: (&RigidBodySet, &'s ColliderSet, &Sets),
+    subject: &Subject<'s>,
+    searched: &[GroundGeom<'s>],
+    (s, flight, t): (&State, &Flight, f64),
+) -> Option<Vec<GroundGeom<'s>>> {
+    let (cand, geom, step) = (subject.cand, subject.geom, subject.step);
+    let margin = step.policy.contact_margin();
+    let way = WayBound::new(s, flight.accel.norm(), geom.radius, step.dt - t, margin);
+    // Within the ball the plan looked in (queried in rapier's precision: its rounding
+    // allowed for), no ground it did not find.
+    let (looked_centre, looked_radius) = cand.looked_in;
+    let rounding = GAP_BOUND_SLACK * (1.0 + looked_centre.norm());
+    let beyond = (way.centre - looked_centre).norm() + way.ball_radius() > looked_radius - rounding;
+    if !beyond && !cand.turns_surface {
+        return None;
+    }
+    let unsearched = |handle: ColliderHandle| !searched.iter().any(|g| g.handle == handle);
+    let mut more: Vec<_> = cand
+        .near
+        .iter()
+        .filter(|i| !cand.impact_grounds.contains(i) && unsearched(step.grounds[**i].handle))
+        .filter(|i| out_of_reach_impacts(view, geom, step.grounds[**i].handle))
+        .filter_map(|i| view.pair_geom(&step.grounds[*i], geom, sets.1))
+        .collect();
+    // A non-finite way (parry's tree cannot take it) has no ground to add.
+    let (centre, half) = (vec_from_na(&way.centre), to_real(way.cube_half()));
+    if beyond && centre.is_finite() && half.is_finite() {
+        let tiles = geom
+            .parts
+            .iter()
+            .any(|part| step.by_tile.contains(&part.handle));
+        let found = view
+            .registry
+            .index
+            .near_cube(&step.grounds, centre, half, tiles);
+        more.extend(
+            found
+                .iter()
+                .filter(|i| !cand.near.contains(i) && unsearched(step.grounds[**i].handle))
+                .filter_map(|i| view.unplanned_geom(&step.grounds[*i], sets, cand.body, geom)),
+        );
+    }
+    (!more.is_empty()).then(|| searched.iter().cloned().chain(more).collect())
+}
+
+/// Did the plan find the ground `ground` out of the body's (`geom`) reach: every pair of it
+/// with the body `Impact` or `Filtered`, one at least `Impact`? (Such a ground is out of
+/// rapier's solver and not among the candidate's `Impact` grounds.)
+fn out_of_reach_impacts(view: &AfterStep, geom: &BodyGeom, ground: ColliderHandle) -> bool {
+    let role = |part: &BodyPart| view.roles.get(&(part.handle, ground)).copied();
+    geom.parts
+        .iter()
+        .all(|part| matches!(role(part), Some(Role::Impact | Role::Filtered)))
+        && geom
+            .parts
+            .iter()
+            .any(|part| role(part) == Some(Role::Impact))
 }
 
 /// A `Role::Rolling` ball's closed-form motion over the step from its start (which touches

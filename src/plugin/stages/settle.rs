@@ -22,13 +22,12 @@ use crate::plugin::bridge::resolve::{
 };
 use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
-use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{
     BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, part_pose,
 };
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
-    NonGround, ground_geom, neighbours, touched_besides_grounds,
+    NonGround, Sets, ground_geom, neighbours, touched_besides_grounds,
 };
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
@@ -36,9 +35,7 @@ use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::StepData;
 use crate::rapier::math::{Real, Vector};
-use crate::rapier::prelude::{
-    ActiveHooks, ColliderHandle, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet,
-};
+use crate::rapier::prelude::{ActiveHooks, ColliderSet, RigidBody, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 
 /// `s` moved out of the ground along `hit`'s normal and, if `stop`, without its speed into
@@ -132,10 +129,6 @@ pub(crate) struct Checked<'c> {
     /// for bodies with no restitution above 1 among them).
     pub events_from: usize,
 }
-
-/// Whether the user's filter or a joint refuses a body collider's pair with a ground (body
-/// collider, ground collider).
-pub(crate) type Refused<'f> = dyn Fn(&RigidBodySet, ColliderHandle, ColliderHandle) -> bool + 'f;
 
 impl AfterStep<'_> {
     /// The one end-of-step check: the body's deepest point at `end` against `grounds`, the
@@ -264,7 +257,7 @@ impl AfterStep<'_> {
         let elastic = self.commit.reported()[checked.events_from..]
             .iter()
             .all(|e| e.body != checked.body || e.restitution <= 1.0);
-        if !elastic || !self.may_cap_energy(rb, colliders, cand, step) {
+        if !elastic || !self.may_cap_energy(rb, colliders, (cand, checked.grounds), step) {
             return None;
         }
         let site = self
@@ -295,17 +288,21 @@ impl AfterStep<'_> {
     /// Nothing but still grounds touched the candidate in the step (no body, wall or joint:
     /// read from rapier's contact graph after the step), through the plugin's pairs with no contact
     /// modification of the user's, and no user torque acted: its energy can only have been
-    /// lost.
+    /// lost. `searched`: the grounds it was checked against, among them any an impact sent it
+    /// to beyond its plan (`reconstruct::grounds_beyond_plan`), which have no role.
     fn may_cap_energy(
         &self,
         rb: &RigidBody,
         colliders: &ColliderSet,
-        cand: &Candidate,
+        (cand, searched): (&Candidate, &[GroundGeom]),
         step: &EndOfStep,
     ) -> bool {
         let grounds = &step.grounds;
         if rb.user_torque() != Vector::ZERO
             || touched_besides_grounds(cand.body, rb, &step.sets, self.registry)
+            || searched.iter().any(|gg| {
+                !gg.motion.is_still() && !cand.near.iter().any(|i| grounds[*i].handle == gg.handle)
+            })
         {
             return false;
         }
@@ -376,17 +373,16 @@ impl AfterStep<'_> {
             .collect()
     }
 
-    /// The geometry of the grounds near a body asleep at the step's start (it has no roles),
-    /// without the pairs rapier would not solve or the user `refused`; a slab's tiles for a
-    /// body that meets them one by one (`tiles`, `observe::meets_tiles`).
+    /// The geometry of the grounds near a body asleep at the step's start (it has no roles):
+    /// [`AfterStep::unplanned_geom`] of each; a slab's tiles for a body that meets them one by
+    /// one (`tiles`, `observe::meets_tiles`).
     pub fn woken_geoms<'a>(
         &self,
-        bodies: &RigidBodySet,
-        colliders: &'a ColliderSet,
-        com: Vector,
-        geom: &BodyGeom,
-        step: &'a StepData,
-        (tiles, refused): (bool, &Refused<'_>),
+        (bodies, colliders): (&RigidBodySet, &'a ColliderSet),
+        body: RigidBodyHandle,
+        (com, geom): (Vector, &BodyGeom),
+        step: &'a EndOfStep,
+        tiles: bool,
     ) -> SmallList<GroundGeom<'a>> {
         let half = crate::plugin::bridge::convert::to_real(geom.radius + step.policy.resting_gap);
         self.registry
@@ -394,20 +390,30 @@ impl AfterStep<'_> {
             .near_cube(&step.grounds, com, half, tiles)
             .iter()
             .filter_map(|i| {
-                let mut gg = ground_geom(&step.grounds[*i], colliders)?;
-                let ground = &colliders[gg.handle];
-                gg.skip = geom
-                    .parts
-                    .iter()
-                    .map(|part| part.handle)
-                    .filter(|h| {
-                        !filter::rapier_solves(bodies, &colliders[*h], ground)
-                            || refused(bodies, *h, gg.handle)
-                    })
-                    .collect();
-                Some(gg)
+                let sets = (bodies, colliders, &step.sets);
+                self.unplanned_geom(&step.grounds[*i], sets, body, geom)
             })
             .collect()
+    }
+
+    /// A ground's geometry for the queries of the body `body` (`geom`) where its pairs with
+    /// the ground have no role this step, the pairs rapier would not solve, that a joint
+    /// disables or that the user's filter refuses skipped ([`AfterStep::refuses`]).
+    pub fn unplanned_geom<'a>(
+        &self,
+        gm: &'a GroundMotion,
+        (bodies, colliders, sets): (&RigidBodySet, &'a ColliderSet, &Sets),
+        body: RigidBodyHandle,
+        geom: &BodyGeom,
+    ) -> Option<GroundGeom<'a>> {
+        let mut gg = ground_geom(gm, colliders)?;
+        gg.skip = geom
+            .parts
+            .iter()
+            .map(|part| part.handle)
+            .filter(|h| self.refuses((bodies, colliders, sets), body, (*h, gg.handle)))
+            .collect();
+        Some(gg)
     }
 
     /// A ground's geometry for the queries of a body whose pairs have roles this step, its

@@ -8,6 +8,7 @@ use crate::plugin::config::{ImpactConfig, TimingMode};
 use crate::plugin::events::Reports;
 use crate::plugin::hooks::flags::HookFlags;
 use crate::plugin::policy::Role;
+use crate::plugin::queries::filter;
 use crate::plugin::queries::geometry::{BodyGeom, BodyPart, GroundGeom, Hit, body_landing_point};
 use crate::plugin::queries::observe::Sets;
 use crate::plugin::stages::commit::Commit;
@@ -16,7 +17,7 @@ use crate::plugin::state::memory::Memory;
 use crate::plugin::state::registry::Registry;
 use crate::plugin::state::step::StepData;
 use crate::plugin::state::writes::Writes;
-use crate::rapier::prelude::{ColliderSet, RigidBodyHandle};
+use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodyHandle, RigidBodySet};
 use nalgebra::Vector3;
 
 /// The step's data in `after_step`, with rapier's sets after its step.
@@ -42,12 +43,15 @@ impl std::ops::DerefMut for EndOfStep<'_> {
 }
 
 /// What the stages after rapier's step read of the plugin (the configuration, the registry,
-/// the hook flags, this step's roles of the pairs with grounds) and the one writer they
-/// write through.
+/// the hook flags, the user's hooks, this step's roles of the pairs with grounds) and the one
+/// writer they write through.
 pub(crate) struct AfterStep<'a> {
     pub config: &'a ImpactConfig,
     pub registry: &'a Registry,
     pub flags: &'a HookFlags,
+    /// The user's hooks: their filter decides the pairs with grounds that have no role
+    /// ([`AfterStep::refuses`]).
+    pub user_hooks: &'a dyn PhysicsHooks,
     pub roles: &'a HandleMap<PairKey, Role>,
     pub commit: Commit<'a>,
     /// The pairs of rolling balls released at the step's end (`EventKind::Released`): their
@@ -60,6 +64,7 @@ impl<'a> AfterStep<'a> {
     /// The view of a plugin's parts; `exact`: `TimingMode::Exact` (see `Commit`).
     pub fn new(
         (config, registry, flags): (&'a ImpactConfig, &'a Registry, &'a HookFlags),
+        user_hooks: &'a dyn PhysicsHooks,
         memory: &'a mut Memory,
         (writes, reports): (&'a mut Writes, &'a mut Reports),
     ) -> Self {
@@ -68,10 +73,26 @@ impl<'a> AfterStep<'a> {
             config,
             registry,
             flags,
+            user_hooks,
             roles: &memory.roles,
             commit: Commit::new(writes, reports, &mut memory.shadows, exact),
             released: Vec::new(),
         }
+    }
+
+    /// Is the pair `key` (a collider of the body `body`, a ground's collider), which has no
+    /// role this step, rapier's whatever happens: rapier, a joint or the user's filter refuse
+    /// it (`filter::ground_pair_refused`), or its coefficients are out of the plugin's ranges
+    /// (`Registry::coefficients_refused`)?
+    pub fn refuses(
+        &self,
+        (bodies, colliders, sets): (&RigidBodySet, &ColliderSet, &Sets),
+        body: RigidBodyHandle,
+        key: PairKey,
+    ) -> bool {
+        let hooks = (self.user_hooks, self.flags);
+        filter::ground_pair_refused(hooks, (bodies, colliders, sets), body, key)
+            || self.registry.coefficients_refused(colliders, key)
     }
 
     /// The material of the contact `hit` of the body (`geom`, at `s`, time `t`) with the ground

@@ -10,13 +10,12 @@ use crate::plugin::bridge::convert::vec_to_na;
 use crate::plugin::bridge::resolve::Inertia;
 use crate::plugin::impact_plugin::ImpactPlugin;
 use crate::plugin::policy::EndCheck;
-use crate::plugin::queries::filter;
 use crate::plugin::queries::observe::{body_geom, meets_tiles};
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
-use crate::rapier::prelude::{ColliderHandle, ColliderSet, PhysicsHooks, RigidBodySet};
+use crate::rapier::prelude::{ColliderSet, PhysicsHooks, RigidBodySet};
 
 impl<H: PhysicsHooks> ImpactPlugin<H> {
     /// Checks every body asleep at the start and awake at the end (see the module's
@@ -27,12 +26,9 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         bodies: &RigidBodySet,
         colliders: &ColliderSet,
     ) {
-        let user_hooks = &self.user_hooks;
         let reads = (&self.config, &self.registry, &self.flags);
         let writes = (&mut self.writes, &mut self.reports);
-        let mut view = AfterStep::new(reads, &mut self.memory, writes);
-        let (impulse_joints, multibody_joints) =
-            (step.sets.impulse_joints, step.sets.multibody_joints);
+        let mut view = AfterStep::new(reads, &self.user_hooks, &mut self.memory, writes);
         for handle in &step.asleep {
             let Some(rb) = bodies.get(*handle) else {
                 continue;
@@ -42,23 +38,12 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
             }
             let now = view.commit.now(*handle, rb);
             let (end, com) = (now.state(), now.center_of_mass());
-            let refused = |bodies: &RigidBodySet, part: ColliderHandle, ground: ColliderHandle| {
-                let user = view.flags.recorded_pair_flags(colliders, (part, ground));
-                colliders[ground].parent().is_some_and(|ground_body| {
-                    filter::joint_disables_contacts(
-                        impulse_joints,
-                        multibody_joints,
-                        *handle,
-                        ground_body,
-                    )
-                }) || filter::user_refuses(user_hooks, user, bodies, colliders, (part, ground))
-            };
             let local_com = vec_to_na(rb.local_center_of_mass());
             let geom = body_geom(rb, colliders, &local_com);
             let tiles = meets_tiles(step.sets.jointed(*handle), &geom.parts, |c| {
                 view.flags.recorded_user_flags(colliders, c)
             });
-            let grounds = view.woken_geoms(bodies, colliders, com, &geom, step, (tiles, &refused));
+            let grounds = view.woken_geoms((bodies, colliders), *handle, (com, &geom), step, tiles);
             let inertia = Inertia::of(rb);
             let checked = Checked {
                 body: *handle,

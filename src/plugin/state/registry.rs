@@ -10,10 +10,12 @@ use crate::model::{Material, RestitutionCurve};
 use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::{ContactMaterial, combined_friction, material};
 use crate::plugin::config::{
-    ConfigError, GroundMaterial, ImpactConfig, RollingSettings, body_bounce,
+    ConfigError, GroundMaterial, ImpactConfig, RollingSettings, body_bounce, coefficients_in_range,
 };
 use crate::plugin::queries::ground_index::{GroundEntry, GroundIndex};
-use crate::plugin::state::handles::{HandleMap, HandleSet, sorted_entries, sorted_members};
+use crate::plugin::state::handles::{
+    HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
+};
 use crate::rapier::prelude::{
     Collider, ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
 };
@@ -302,6 +304,26 @@ impl Registry {
         };
         let over = self.entry(ground).map_or((None, None), |g| g.rolling);
         (over.0.unwrap_or(own.0), over.1.unwrap_or(own.1))
+    }
+
+    /// Does the ground `ground`'s own material (`add_ground_with_material`) replace the
+    /// coefficients of its colliders' pairs?
+    pub fn replaces_coefficients(&self, ground: ColliderHandle) -> bool {
+        self.entry(ground).is_some_and(|g| g.material.is_some())
+    }
+
+    /// Is a collider of the pair `key` (body collider, ground collider) out of the plugin's
+    /// coefficient ranges (`config::coefficients_in_range`), with no ground material to
+    /// replace them? Such a pair is rapier's, as a filtered one is. The plan decides it with
+    /// what it read of the ground once, and diagnoses it (`plan/role.rs`); this is the same
+    /// rule for a pair with no role, read afresh, diagnosing nothing.
+    pub fn coefficients_refused(&self, colliders: &ColliderSet, key: PairKey) -> bool {
+        let out = |c| {
+            colliders.get(c).is_some_and(|co| {
+                !coefficients_in_range(to_f64(co.restitution()), to_f64(co.friction()))
+            })
+        };
+        (out(key.0) || out(key.1)) && !self.replaces_coefficients(key.1)
     }
 
     /// The material a ground was given, rebuilt from its entry and its curve.

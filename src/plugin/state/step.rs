@@ -51,6 +51,12 @@ pub(crate) struct Candidate {
     pub local_com: Vector3<f64>,
     /// Indices (in `StepData::grounds`) of the grounds its swept bounding sphere meets.
     pub near: SmallList<usize>,
+    /// The ball (centre and radius, m) the plan looked for grounds in: about the body's
+    /// start-of-step centre of mass, its bounding radius and its reach in the step (`near`
+    /// holds what it found; radius 0 for a body not planned near a ground). An impact that
+    /// sends the body beyond it looks again along its way on
+    /// (`reconstruct::grounds_beyond_plan`).
+    pub looked_in: (Vector3<f64>, f64),
     /// Indices (in `StepData::grounds`) of the grounds it has `Impact` pairs with.
     pub impact_grounds: SmallList<usize>,
     /// Step mode: impulses were applied at the start.
@@ -154,6 +160,7 @@ impl Candidate {
             flight,
             local_com,
             near: SmallList::Empty,
+            looked_in: (start.com, 0.0),
             impact_grounds: SmallList::Empty,
             touched: false,
             closing: false,

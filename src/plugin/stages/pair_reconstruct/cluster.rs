@@ -18,7 +18,7 @@ use crate::plugin::policy::on_plane;
 use crate::plugin::policy::rests_at;
 use crate::plugin::queries::body_contact::{BodyTouch, Mover, first_body_touch, touch_point};
 use crate::plugin::queries::geometry::{
-    Hit, Search, closest, earliest_touch, first_impact, landing_point,
+    Hit, Search, WayBound, closest, earliest_touch, first_impact, landing_point,
 };
 use crate::plugin::stages::reconstruct::rest_on_ground;
 use crate::plugin::stages::view::AfterStep;
@@ -1056,16 +1056,9 @@ impl Cluster<'_, '_> {
     fn reaches_other_grounds(&self, view: &AfterStep, k: usize, s: &State, left: f64) -> bool {
         let (ball, step) = (&self.balls[k], self.step);
         let accel = ball.cand.flight.accel.norm();
-        // Its way on: the segment along its velocity, bowed by its acceleration by at most
-        // `|a| left^2 / 2`, in a cube about the segment's middle (a ball sent up from the
-        // floor does not reach back down to it).
-        let way = s.v * left;
-        let reach = 0.5 * way.amax()
-            + ball.geom.radius
-            + accel * left * left
-            + step.policy.contact_margin();
-        let half = to_real(reach);
-        let centre = vec_from_na(&(s.com + 0.5 * way));
+        let margin = step.policy.contact_margin();
+        let way = WayBound::new(s, accel, ball.geom.radius, left, margin);
+        let (centre, half) = (vec_from_na(&way.centre), to_real(way.cube_half()));
         // A ball that met a slab's tiles one by one has tiles among its grounds.
         let tiles = ball
             .geom

@@ -287,6 +287,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             flight: body.flight.clone(),
             local_com: body.local_com,
             near: std::mem::take(&mut body.near),
+            looked_in: (body.start.com, body.geom.radius + body.reach),
             impact_grounds: std::mem::take(&mut plan.impact_grounds),
             touched: plan.touched,
             closing: plan.closing,

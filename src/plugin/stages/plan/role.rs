@@ -251,11 +251,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         key: PairKey,
         (body, ground): (Option<&Collider>, Option<&Collider>),
     ) -> bool {
-        if self
-            .registry
-            .entry(key.1)
-            .is_some_and(|g| g.material.is_some())
-        {
+        if self.registry.replaces_coefficients(key.1) {
             return false;
         }
         for (c, co) in [(key.0, body), (key.1, ground)] {
