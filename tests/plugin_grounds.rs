@@ -689,6 +689,81 @@ fn a_ball_a_fast_bat_sends_into_a_wall_meets_it_in_the_step() {
     }
 }
 
+/// A bat whose face is tilted 30 degrees down, moving along its normal
+/// `(cos 30, -sin 30, 0)` at 30 m/s (and stopped after the step of the hit), onto a ball
+/// resting on a floor, a half-space or a slab 2 cm thick (e = 0.5 everywhere): the floor's pair
+/// is rapier's resting contact, so the bat's is the step-end impact, whose move out of the
+/// bat along its normal is 30 cm, down into the floor. The ball never ends a step under the
+/// floor or through the slab, and leaves along x.
+#[test]
+fn a_bat_swung_down_onto_a_ball_resting_on_the_floor_never_drives_it_under() {
+    let (r, v) = (0.1, 30.0);
+    let cases = [30.0, 60.0]
+        .into_iter()
+        .flat_map(|tilt| [(tilt, false), (tilt, true)]);
+    for (tilt, slab) in cases {
+        let a = f64::to_radians(tilt);
+        let n = Vector3::new(a.cos(), -a.sin(), 0.0);
+        for timing in MODES {
+            let mut world = PhysicsWorld::default();
+            let dt = wide(world.integration_parameters.dt);
+            let floor = if slab {
+                ColliderBuilder::cuboid(5.0, 0.01, 5.0).translation(Vector::new(0.0, -0.01, 0.0))
+            } else {
+                ColliderBuilder::halfspace(up())
+            };
+            let (_, floor) = world.insert(RigidBodyBuilder::fixed(), floor.restitution(0.5));
+            let b = ball(&mut world, [0.0, r, 0.0], r, 0.5, 0.5);
+            // The face meets the ball 8 cm above its own centre, 2.4 steps in.
+            let along_face = Vector3::new(a.sin(), a.cos(), 0.0);
+            let centre = |k: f64| {
+                let c = Vector3::new(0.0, r, 0.0) - n * (r + 0.05) + along_face * 0.08
+                    - n * v * dt * (2.4 - k.min(3.0));
+                Vector::new(real(c.x), real(c.y), real(c.z))
+            };
+            let (bat, face) = world.insert(
+                RigidBodyBuilder::kinematic_position_based()
+                    .translation(centre(0.0))
+                    .rotation(Vector::new(0.0, 0.0, real(-a))),
+                ColliderBuilder::cuboid(0.05, 0.12, 0.3)
+                    .restitution(0.5)
+                    .friction(0.0),
+            );
+            let mut p = plugin_on(&world, floor, timing);
+            p.add_ground(&world.bodies, &world.colliders, face).unwrap();
+            let at = format!("{timing:?}, tilted {tilt} degrees, slab {slab}");
+            let mut ends = Vec::new();
+            for k in 0..6 {
+                world.bodies[bat].set_next_kinematic_translation(centre(k as f64 + 1.0));
+                p.step(&mut world);
+                let rb = &world.bodies[b];
+                ends.push((wide(rb.translation().y), na(rb.linvel())));
+            }
+            println!("{at}: (y, v) at each step's end {ends:.4?}");
+            // In `Step` mode the bat's impulse is the step's start one, and the floor's pair
+            // rapier's resting contact for the step: rapier's own tolerance, its allowed
+            // linear error (the resting gap), holds there.
+            let allowed = if timing == TimingMode::Step {
+                wide(world.integration_parameters.allowed_linear_error())
+            } else {
+                1e-4
+            };
+            for (k, (y, _)) in ends.iter().enumerate() {
+                assert!(
+                    *y - r > -allowed,
+                    "{at}: step {k} ends {:e} m under the floor",
+                    r - y
+                );
+            }
+            let (_, v_end) = ends[5];
+            // The bat's `(1 + e) V cos(tilt)` along x, 5/7 of it left by the floor's sticking
+            // impact.
+            let along = 1.5 * v * a.cos() * 5.0 / 7.0;
+            assert!(v_end.x > 0.8 * along, "{at}: the ball left at {v_end:?}");
+        }
+    }
+}
+
 /// A ball asleep beside fast kinematic grounds that cannot reach it: on the floor, a bat 1 cm
 /// away receding at 12 m/s, one passing along it at 12 m/s, and one swung through it at
 /// 12 m/s whose collision groups refuse it; and on a platform sliding under it at 1 m/s (a

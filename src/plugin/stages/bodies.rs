@@ -274,14 +274,17 @@ impl AfterStep<'_> {
         match first_search(now, &subject, flown, mode != TimingMode::Step && free()) {
             None if cand.touched => {
                 // Impulses at the step's start (`Step` mode's, or a push-out back over a mesh)
-                // may have sent it beyond its plan's reach (a bat's hit): its end is checked
-                // against the grounds along its new way too.
+                // may have sent it beyond its plan's reach (a bat's hit), or into a ground it
+                // rested on, whose pair is rapier's resting contact: its end is checked against
+                // the grounds along its new way and all those near it.
                 let sets = (bodies, colliders, &step.sets);
                 let moved = (&cand.start, &cand.flight, 0.0);
-                let widened =
-                    reconstruct::grounds_beyond_plan(self, sets, &subject, &grounds, moved);
-                let grounds = widened.as_deref().unwrap_or(&grounds);
-                let subject = Subject::new(cand, &geom, grounds, step);
+                let mut checked =
+                    reconstruct::grounds_beyond_plan(self, sets, &subject, &grounds, moved)
+                        .unwrap_or_else(|| grounds.to_vec());
+                let near = self.other_near_geoms(cand, &geom, (colliders, step), &checked);
+                checked.extend(near);
+                let subject = Subject::new(cand, &geom, &checked, step);
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
             }

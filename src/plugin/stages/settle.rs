@@ -20,7 +20,7 @@ use crate::plugin::bridge::convert::to_f64;
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
 };
-use crate::plugin::events::{EventKind, ImpactTiming};
+use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::geometry::{
     BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, part_pose,
@@ -116,6 +116,7 @@ pub(crate) fn capped_energy(
 }
 
 /// A body the settle stage checks, with what its checks need.
+#[derive(Clone, Copy)]
 pub(crate) struct Checked<'c> {
     pub body: RigidBodyHandle,
     pub geom: &'c BodyGeom<'c>,
@@ -153,13 +154,15 @@ impl AfterStep<'_> {
         why: EndCheck,
         step: &EndOfStep,
     ) -> (EndAction, Option<State>) {
-        let (body, grounds) = (checked.body, checked.grounds);
+        let body = checked.body;
         let Some(rb) = bodies.get(body) else {
             return (EndAction::Keep, None);
         };
-        let dt = step.dt;
-        let mut s = *end;
-        let mut first = EndAction::Keep;
+        // A correction that moves the body farther than the resting gap adds its other
+        // grounds (`Self::moved_into`): a bat does not drive a ball into its floor.
+        let mut grounds = std::borrow::Cow::Borrowed(checked.grounds);
+        let mut widened = false;
+        let (dt, mut s, mut first) = (step.dt, *end, EndAction::Keep);
         let mut settle = false;
         let mut changed = false;
         let mut around: Option<NonGround> = None;
@@ -168,21 +171,23 @@ impl AfterStep<'_> {
                 .get_or_insert_with(|| neighbours(body, rb, &step.sets, self.registry, &step.down))
         };
         for k in 0..self.config.max_impacts_per_step {
-            let found = closest(checked.geom, grounds, &s, dt, 0.0);
-            let gap = step.policy.resting_gap;
-            let Some(hit) = found.or_else(|| passed_through(checked, &s, dt, gap)) else {
+            // The body as this round checks it: against the grounds so far.
+            let now = &Checked {
+                grounds: &grounds,
+                ..*checked
+            };
+            let Some(hit) = deepest(now, checked.grounds.len(), &s, step) else {
                 break;
             };
-            let hit = on_entry_side(hit, checked, &s, dt);
             let rule = why.row_for(k, &hit.normal);
             let action = step.policy.end_action(rule, hit.dist, hit.un, || {
                 let around = neighbours_of();
                 Surroundings {
                     touching: around.touching,
                     loaded: around.loaded,
-                    pivot_pushed: checked
+                    pivot_pushed: now
                         .cand
-                        .is_some_and(|c| pivot_pushed(c, &grounds[hit.ground], &hit, &s, step)),
+                        .is_some_and(|c| pivot_pushed(c, &now.grounds[hit.ground], &hit, &s, step)),
                 }
             });
             if k == 0 {
@@ -193,28 +198,27 @@ impl AfterStep<'_> {
                 EndAction::PushOut { stop } => {
                     let before = s;
                     put_on_ground(&mut s, &hit, stop);
-                    self.report_push_out(checked, &hit, &before, &s, step);
+                    self.report_push_out(now, &hit, &before, &s, step);
                     changed |= s != before;
-                    break;
+                    if !self.moved_into(
+                        (colliders, step),
+                        checked,
+                        &hit,
+                        &mut grounds,
+                        &mut widened,
+                    ) {
+                        break;
+                    }
+                    continue;
                 }
                 EndAction::Impact { settle: settling } => settle |= settling,
             }
-            let gg = &grounds[hit.ground];
-            let (material, point, points) =
-                self.landing(colliders, (checked.geom, gg), (&s, dt), &hit);
             let resting_speed = step.policy.bounce_floor(neighbours_of().touching);
-            let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
-            let input =
-                ImpactInput::new(body, checked.inertia, law, material, resting_speed, timing)
-                    .forced_to_settle(settle || k + 1 >= self.config.max_impacts_per_step);
-            let Some((after, event)) = resolve(
-                &input,
-                checked.geom,
-                gg,
-                &s,
-                dt,
-                &GroundContactAt::new(&hit, point, points),
-            ) else {
+            let settling = settle || k + 1 >= self.config.max_impacts_per_step;
+            let at = (&s, dt);
+            let Some((after, event)) =
+                self.step_end_impact(colliders, now, (&hit, at), resting_speed, settling)
+            else {
                 break;
             };
             // A contact touching with no approach left: the impact changes nothing, and
@@ -226,6 +230,10 @@ impl AfterStep<'_> {
             s.com -= hit.normal * hit.dist;
             self.commit.event(event);
             changed = true;
+            self.moved_into((colliders, step), checked, &hit, &mut grounds, &mut widened);
+        }
+        if widened {
+            changed |= self.out_of_still_grounds(checked, &grounds, &mut s, step);
         }
         if !changed {
             return (first, None);
@@ -234,6 +242,111 @@ impl AfterStep<'_> {
             s = capped;
         }
         (first, Some(s))
+    }
+
+    /// The model's impulse at the checked body's contact `hit` at the step's end (`s`, time
+    /// `dt`), at its landing point, under the resting speed `resting_speed`; `settling`: with
+    /// `e = 0`. `None` where the contact does not approach.
+    fn step_end_impact(
+        &self,
+        colliders: &ColliderSet,
+        checked: &Checked,
+        (hit, (s, dt)): (&Hit, (&State, f64)),
+        resting_speed: f64,
+        settling: bool,
+    ) -> Option<(State, ImpactEvent)> {
+        let gg = &checked.grounds[hit.ground];
+        let (material, point, points) = self.landing(colliders, (checked.geom, gg), (s, dt), hit);
+        let (law, timing) = (self.config.law, ImpactTiming::StepEnd);
+        let input = ImpactInput::new(
+            checked.body,
+            checked.inertia,
+            law,
+            material,
+            resting_speed,
+            timing,
+        )
+        .forced_to_settle(settling);
+        let at = GroundContactAt::new(hit, point, points);
+        resolve(&input, checked.geom, gg, s, dt, &at)
+    }
+
+    /// After a correction moved the checked body out of a ground along its normal by the
+    /// depth of `hit`: if that is farther than the resting gap, the body's other grounds near
+    /// it (`Candidate::near`, each without its `Filtered` pairs) join `grounds`, once
+    /// (`widened`), so that the next rounds of the check find it if the move put it into one (a
+    /// ball resting on a floor that a bat swung down drove out of the bat and into the floor;
+    /// the floor's pair is rapier's resting contact, not among the `Impact` grounds checked).
+    /// Returns whether grounds joined.
+    fn moved_into<'g>(
+        &self,
+        (colliders, step): (&'g ColliderSet, &'g EndOfStep),
+        checked: &Checked<'g>,
+        hit: &Hit,
+        grounds: &mut std::borrow::Cow<'g, [GroundGeom<'g>]>,
+        widened: &mut bool,
+    ) -> bool {
+        let Some(cand) = checked.cand else {
+            return false;
+        };
+        if *widened || -hit.dist <= step.policy.resting_gap {
+            return false;
+        }
+        *widened = true;
+        let more = self.other_near_geoms(cand, checked.geom, (colliders, step), grounds);
+        if more.is_empty() {
+            return false;
+        }
+        grounds.to_mut().extend(more);
+        true
+    }
+
+    /// The geometry of the candidate's grounds near it (`Candidate::near`, each without its
+    /// `Filtered` pairs) that `present` does not hold.
+    pub fn other_near_geoms<'g>(
+        &self,
+        cand: &Candidate,
+        geom: &BodyGeom,
+        (colliders, step): (&'g ColliderSet, &'g StepData),
+        present: &[GroundGeom],
+    ) -> Vec<GroundGeom<'g>> {
+        cand.near
+            .iter()
+            .filter_map(|i| self.pair_geom(&step.grounds[*i], geom, colliders))
+            .filter(|gg| !present.iter().any(|g| g.handle == gg.handle))
+            .collect()
+    }
+
+    /// After rounds of the check that moved the body between grounds (`Self::moved_into`): a
+    /// body pinched between a moving ground and a still one (a bat driving a ball into the
+    /// floor), which the rounds left in the still one, is moved out of it along its normal,
+    /// its speed into it removed (a `PushOut`); the moving ground's contact is met again at
+    /// the next step. Returns whether it moved.
+    fn out_of_still_grounds(
+        &mut self,
+        checked: &Checked,
+        grounds: &[GroundGeom],
+        s: &mut State,
+        step: &EndOfStep,
+    ) -> bool {
+        let still: Vec<_> = grounds
+            .iter()
+            .filter(|gg| gg.motion.is_still())
+            .cloned()
+            .collect();
+        let gap = step.policy.resting_gap;
+        let Some(hit) = closest(checked.geom, &still, s, step.dt, 0.0).filter(|h| h.dist < -gap)
+        else {
+            return false;
+        };
+        let before = *s;
+        put_on_ground(s, &hit, true);
+        let checked = Checked {
+            grounds: &still,
+            ..*checked
+        };
+        self.report_push_out(&checked, &hit, &before, s, step);
+        true
     }
 
     /// A state moved out of the ground by position at the step's end gains the potential
@@ -457,6 +570,19 @@ impl AfterStep<'_> {
             step.dt,
         ));
     }
+}
+
+/// The checked body's deepest point at `s` (the step's end) in its grounds, measured from the
+/// side it came from (`on_entry_side`), or through a thin one (`passed_through`); `None` if
+/// none. The grounds from index `joined` on joined the check after a move
+/// (`AfterStep::moved_into`): one is met only where the body is deeper in it than the
+/// resting gap, as its resting contact within the gap stays rapier's.
+fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Option<Hit> {
+    let (gap, dt) = (step.policy.resting_gap, step.dt);
+    let found = closest(checked.geom, checked.grounds, s, dt, 0.0);
+    let hit = found.or_else(|| passed_through(checked, s, dt, gap))?;
+    let hit = on_entry_side(hit, checked, s, dt);
+    (hit.ground < joined || hit.dist < -gap).then_some(hit)
 }
 
 /// `hit` measured from the side of its ground the body came from. The closest contact of a
