@@ -785,3 +785,144 @@ fn a_level_landing_off_its_feet_or_yawing_is_resolved_collider_by_collider() {
         }
     }
 }
+
+/// A cube (20 cm) dropped flat from 30 cm onto a post whose top covers only
+/// `x in [0.04, 0.10]` of its face (and all of it along z): the landing is the part of the face
+/// over the post, one impact at that part's centroid `(0.07, 0, 0)` on its four corners, and
+/// the cube tips about z as the model's impulse there says (in the in-step modes, the model's
+/// velocities to the impact's tolerance). The face's centre, 4 cm off the post, was taken: the
+/// cube bounced straight up without spin.
+#[test]
+fn a_cube_landing_flat_half_off_a_post_lands_on_the_part_over_it() {
+    let (e, mu, half, gap) = (0.5, 0.5, 0.1, 0.3);
+    for mode in MODES {
+        let mut world = PhysicsWorld::default();
+        let (_, post) = world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(0.07, -0.5, 0.0)),
+            ColliderBuilder::cuboid(0.03, 0.5, 0.3)
+                .restitution(real(e))
+                .friction(real(mu)),
+        );
+        let shape = Shape::Cuboid([half; 3]);
+        let (cube, _) = world.insert(
+            RigidBodyBuilder::dynamic().translation(Vector::new(0.0, real(half + gap), 0.0)),
+            shape.collider().restitution(real(e)).friction(real(mu)),
+        );
+        let mut p = plugin_with_material(&world, post, mode, e, mu);
+        let (dt, g) = (wide(world.integration_parameters.dt), G);
+        let (k, ev) = (0..120)
+            .find_map(|k| {
+                p.step(&mut world);
+                p.events().first().map(|ev| (k, *ev))
+            })
+            .expect("no impact");
+        let rb = &world.bodies[cube];
+        let (v, w) = (na(rb.linvel()), na(rb.angvel()));
+        println!(
+            "{mode:?}: impact at {:.4} s, point {:.6?}, {} points, then v {v:.5?} w {w:.5?}",
+            k as f64 * dt + ev.time,
+            na(ev.point),
+            ev.contact_points
+        );
+        assert_eq!(ev.contact_points, 4, "{mode:?}");
+        // In `Step` mode the face is still above the post at the step's start.
+        let point = na(ev.point);
+        let height = if mode == TimingMode::Step {
+            0.0
+        } else {
+            point.y
+        };
+        let on_post = Vector3::new(point.x, height, point.z) - Vector3::new(0.07, 0.0, 0.0);
+        assert!(on_post.norm() < 1e-5, "{mode:?}: point {point:?}");
+        // The impulse up at +x tips the cube about +z.
+        assert!(
+            w.z > 1.0 && w.x.abs() + w.y.abs() < 1e-6,
+            "{mode:?}: w {w:?}"
+        );
+        if mode == TimingMode::Step {
+            continue;
+        }
+        let time = k as f64 * dt + ev.time;
+        let m = model::resolve(
+            Law::Guarded,
+            &model_body(&shape, &UnitQuaternion::identity()),
+            &BodyVelocity {
+                linear: Vector3::new(0.0, -g * time, 0.0),
+                angular: Vector3::zeros(),
+            },
+            &Contact::fixed(Vector3::y(), Vector3::new(0.07, -half, 0.0)),
+            &Material::new(e, mu),
+        )
+        .unwrap();
+        let (tl, ta, _) = tolerance(mode);
+        let v_end = m.velocity.linear - Vector3::y() * g * (dt - ev.time);
+        assert!(
+            (v - v_end).norm() <= tl * v_end.norm(),
+            "{mode:?}: v {v:?}, model {v_end:?}"
+        );
+        let w_model = m.velocity.angular;
+        assert!(
+            (w - w_model).norm() <= ta * w_model.norm(),
+            "{mode:?}: w {w:?}, model {w_model:?}"
+        );
+    }
+}
+
+/// A rod (a capsule 1 m long along z, radius 2 cm) at rest, without gravity, struck side-on
+/// near one end by a bat face 16 cm wide (`z in [0.34, 0.50]`) moving along x at 30 m/s: the
+/// landing is the part of the rod's side over the bat, `z in [0.34, 0.48]` of its segment, one
+/// impact at its middle, `z = 0.41`, on its two ends; the rod leaves spinning about y. The
+/// segment's middle, 34 cm off the bat, was taken: the rod left at `(1 + e) V` without spin.
+#[test]
+fn a_rod_struck_near_its_end_by_a_narrow_bat_lands_on_the_part_over_it() {
+    let (v, r, half) = (30.0, 0.02, 0.48);
+    for mode in MODES {
+        let mut world = PhysicsWorld {
+            gravity: Vector::ZERO,
+            ..Default::default()
+        };
+        let dt = wide(world.integration_parameters.dt);
+        // The bat's face meets the rod's side 2.4 steps in.
+        let bat_x = |k: f64| -r - 0.05 - v * dt * (2.4 - k);
+        let (bat, face) = world.insert(
+            RigidBodyBuilder::kinematic_position_based().translation(Vector::new(
+                real(bat_x(0.0)),
+                0.0,
+                0.42,
+            )),
+            ColliderBuilder::cuboid(0.05, 0.3, 0.08)
+                .restitution(0.5)
+                .friction(0.0),
+        );
+        let (rod, _) = world.insert(
+            RigidBodyBuilder::dynamic(),
+            ColliderBuilder::capsule_z(real(half), real(r))
+                .restitution(0.5)
+                .friction(0.0),
+        );
+        let mut p = plugin_with_material(&world, face, mode, 0.5, 0.0);
+        let mut hit = None;
+        for k in 0..3 {
+            let to = Vector::new(real(bat_x(k as f64 + 1.0)), 0.0, 0.42);
+            world.bodies[bat].set_next_kinematic_translation(to);
+            p.step(&mut world);
+            hit = hit.or(p.events().first().copied());
+        }
+        let ev = hit.expect("no impact");
+        let w = na(world.bodies[rod].angvel());
+        println!(
+            "{mode:?}: point {:.5?}, {} points, then w {w:.4?}",
+            na(ev.point),
+            ev.contact_points
+        );
+        assert_eq!(ev.contact_points, 2, "{mode:?}");
+        assert!(
+            (wide(ev.point.z) - 0.41).abs() < 1e-5,
+            "{mode:?}: {:?}",
+            ev.point
+        );
+        // Pushed along +x at z > 0: it turns about +y, as `r x P` says.
+        let turn = Vector3::new(0.0, 0.0, 0.41).cross(&Vector3::x());
+        assert!(w.dot(&turn) > 1.0, "{mode:?}: w {w:?}");
+    }
+}

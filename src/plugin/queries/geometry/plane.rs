@@ -475,9 +475,96 @@ fn in_hull(points: &[Vector3<f64>], q: &Vector3<f64>, n: &Vector3<f64>, tol: f64
     k > 0 && ((k > 2 && edges().all(deep)) || edges().any(|(a, b)| to_segment(a, b) <= tol))
 }
 
+/// The world corners, in order around it, of the face of a cuboid ground whose outward
+/// normal is nearest the world direction `n` at time `t`; `None` for another shape.
+fn cuboid_face_polygon(ground: &GroundGeom, t: f64, n: &Vector3<f64>) -> Option<[Vector3<f64>; 4]> {
+    let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
+    let pose = ground.pose_at(t);
+    let local = pose.rotation.inverse() * n;
+    let a = local.iamax();
+    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+    let corner = |sb: f64, sc: f64| {
+        let mut p = Vector3::zeros();
+        p[a] = half[a].copysign(local[a]);
+        p[b] = sb * half[b];
+        p[c] = sc * half[c];
+        (pose * nalgebra::Point3::from(p)).coords
+    };
+    Some([
+        corner(1.0, 1.0),
+        corner(-1.0, 1.0),
+        corner(-1.0, -1.0),
+        corner(1.0, -1.0),
+    ])
+}
+
+/// The convex polygon (or segment) `poly`, its vertices in order, clipped to the convex
+/// polygon `face`, both seen along the unit normal `n` (Sutherland-Hodgman): the vertices of
+/// their overlap, in order, at `poly`'s height along `n` (each of `poly`'s own where kept).
+/// Vertices that coincide are kept once.
+fn clip_to_face(
+    poly: &[Vector3<f64>],
+    face: &[Vector3<f64>],
+    n: &Vector3<f64>,
+) -> Vec<Vector3<f64>> {
+    let e1 = n.cross(&Vector3::new(n.z, n.x, n.y)).normalize();
+    let e1 = if e1.iter().all(|x| x.is_finite()) {
+        e1
+    } else {
+        n.cross(&Vector3::x()).normalize()
+    };
+    let e2 = n.cross(&e1);
+    let flat = |p: &Vector3<f64>| (e1.dot(p), e2.dot(p));
+    let cross = |a: (f64, f64), b: (f64, f64), p: (f64, f64)| {
+        (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
+    };
+    let face2: Vec<_> = face.iter().map(flat).collect();
+    let k = face2.len();
+    let area: f64 = (0..k)
+        .map(|i| cross((0.0, 0.0), face2[i], face2[(i + 1) % k]))
+        .sum();
+    let orient = area.signum();
+    let mut out: Vec<Vector3<f64>> = poly.to_vec();
+    for i in 0..k {
+        let (a, b) = (face2[i], face2[(i + 1) % k]);
+        let side = |p: &Vector3<f64>| orient * cross(a, b, flat(p));
+        let input = std::mem::take(&mut out);
+        for (j, cur) in input.iter().enumerate() {
+            let prev = &input[(j + input.len() - 1) % input.len()];
+            let (dc, dp) = (side(cur), side(prev));
+            if (dc >= 0.0) != (dp >= 0.0) {
+                out.push(prev + (cur - prev) * (dp / (dp - dc)));
+            }
+            if dc >= 0.0 {
+                out.push(*cur);
+            }
+        }
+    }
+    let size = poly.iter().map(|p| p.norm()).fold(1.0, f64::max);
+    let mut kept: Vec<Vector3<f64>> = Vec::with_capacity(out.len());
+    for p in out {
+        if !kept.iter().any(|q| (q - p).norm() <= FACE_ROUNDING * size) {
+            kept.push(p);
+        }
+    }
+    kept
+}
+
+/// The distance (m) from the world point `p` to the ground's surface at time `t`, its skin
+/// deducted (0 inside).
+fn ground_distance(ground: &GroundGeom, p: &Vector3<f64>, t: f64) -> f64 {
+    let local = ground
+        .pose_at(t)
+        .inverse_transform_point(&nalgebra::Point3::from(*p))
+        .coords;
+    let local = crate::plugin::bridge::convert::vec_from_na(&local);
+    to_f64(ground.shape.distance_to_local_point(local, true)) - ground.skin
+}
+
 /// The contact points of a landing, resolved as one impact (see `docs/guide.md`):
 /// the vertices of the body's support face towards the ground (parry's polygonal feature)
-/// that lie within `flat_tolerance x face size` of the contact plane and approach the
+/// that lie within `flat_tolerance x face size` of the contact plane, on the ground's surface
+/// (a face hanging over the ground's edge lands on the part over it), and approach the
 /// ground. Two or more give one impact at their centroid, projected on the contact plane;
 /// otherwise the impact is at the deepest point. Returns the point and the count.
 pub(crate) fn landing_point(
@@ -521,15 +608,33 @@ pub(crate) fn landing_point(
     if (h_min - to_f64(border)).abs() > tol + FACE_ROUNDING * (1.0 + size) {
         return (h.point, 1);
     }
+    let flat: Vec<Vector3<f64>> = verts
+        .iter()
+        .zip(&heights)
+        .filter(|(_, hx)| *hx - h_min <= tol)
+        .map(|(x, _)| *x)
+        .collect();
+    // Where the ground's surface ends under the face (a cube landing half on a post, a rod
+    // lying across a narrow bat), the landing is the part over it: the face clipped to a
+    // cuboid's face; on another bounded shape, the vertices over its surface.
+    // (Measured at the vertex's foot on the ground's face plane: in `Step` mode the face may
+    // still be above it.)
+    let surface = h.point - h.normal * h.dist;
+    let on_ground = |x: &Vector3<f64>| {
+        let foot = x - h.normal * h.normal.dot(&(x - surface));
+        ground_distance(ground, &foot, t) <= tol + FACE_ROUNDING * (1.0 + x.norm())
+    };
+    let points = match cuboid_face_polygon(ground, t, &h.normal) {
+        Some(face) => clip_to_face(&flat, &face, &h.normal),
+        None => flat.into_iter().filter(on_ground).collect(),
+    };
     let mut sum = Vector3::zeros();
     let mut n = 0usize;
-    for (x, hx) in verts.iter().zip(&heights) {
-        if hx - h_min <= tol {
-            let u = body_velocity_at(s, x) - ground.velocity_at(x, t);
-            if h.normal.dot(&u) < 0.0 {
-                sum += x;
-                n += 1;
-            }
+    for x in &points {
+        let u = body_velocity_at(s, x) - ground.velocity_at(x, t);
+        if h.normal.dot(&u) < 0.0 {
+            sum += x;
+            n += 1;
         }
     }
     if n < 2 {
