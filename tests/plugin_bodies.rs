@@ -926,3 +926,47 @@ fn a_rod_struck_near_its_end_by_a_narrow_bat_lands_on_the_part_over_it() {
         assert!(w.dot(&turn) > 1.0, "{mode:?}: w {w:?}");
     }
 }
+
+/// A cube (20 cm) yawed 1e-4 rad, dropped flat onto a post whose top is its face's size,
+/// flush with it: its corners stick out past the post's edges by about 1e-5 m, within the flat
+/// tolerance, so the whole face lands, on its four corners at its centre, and leaves without
+/// spin (clipped exactly, each edge would be cut at its middle and the mean of the cut points
+/// taken off the centre).
+#[test]
+fn a_cube_landing_flush_on_a_post_of_its_size_lands_on_its_whole_face() {
+    let (e, mu, half, gap, yaw) = (0.5, 0.5, 0.1, 0.3, 1e-4);
+    for mode in MODES {
+        let mut world = PhysicsWorld::default();
+        let (_, post) = world.insert(
+            RigidBodyBuilder::fixed().translation(Vector::new(0.0, -0.5, 0.0)),
+            ColliderBuilder::cuboid(real(half), 0.5, real(half))
+                .restitution(real(e))
+                .friction(real(mu)),
+        );
+        let (cube, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.0, real(half + gap), 0.0))
+                .rotation(Vector::new(0.0, real(yaw), 0.0)),
+            ColliderBuilder::cuboid(real(half), real(half), real(half))
+                .restitution(real(e))
+                .friction(real(mu)),
+        );
+        let mut p = plugin_with_material(&world, post, mode, e, mu);
+        let ev = (0..120)
+            .find_map(|_| {
+                p.step(&mut world);
+                p.events().first().copied()
+            })
+            .expect("no impact");
+        let w = na(world.bodies[cube].angvel());
+        println!(
+            "{mode:?}: point {:?}, {} points, then w {w:?}",
+            na(ev.point),
+            ev.contact_points
+        );
+        assert_eq!(ev.contact_points, 4, "{mode:?}");
+        let off_centre = Vector3::new(wide(ev.point.x), 0.0, wide(ev.point.z)).norm();
+        assert!(off_centre < 1e-6, "{mode:?}: point {:?}", ev.point);
+        assert!(w.norm() < 1e-5, "{mode:?}: w {w:?}");
+    }
+}

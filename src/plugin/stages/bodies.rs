@@ -282,9 +282,13 @@ impl AfterStep<'_> {
                 let mut checked =
                     reconstruct::grounds_beyond_plan(self, sets, &subject, &grounds, moved)
                         .unwrap_or_else(|| grounds.to_vec());
+                let joined = checked.len();
                 let near = self.other_near_geoms(cand, &geom, (colliders, step), &checked);
                 checked.extend(near);
-                let subject = Subject::new(cand, &geom, &checked, step);
+                let subject = Subject {
+                    joined,
+                    ..Subject::new(cand, &geom, &checked, step)
+                };
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
                 self.turning_resting_checked(step, cand, bodies, colliders);
             }
@@ -557,6 +561,7 @@ impl AfterStep<'_> {
             inertia,
             cand: Some(cand),
             grounds,
+            joined: grounds.len(),
             events_from,
         };
         let why = EndCheck::Flown;
@@ -587,6 +592,7 @@ impl AfterStep<'_> {
             inertia: &inertia,
             cand: Some(cand),
             grounds,
+            joined: subject.joined,
             events_from: self.commit.reported().len(),
         };
         let (action, settled) = self.check(bodies, colliders, &checked, &end, why, step);

@@ -320,6 +320,7 @@ fn commit_moved(
             inertia: &ball.inertia,
             cand: None,
             grounds: &ball.grounds,
+            joined: ball.grounds.len(),
             events_from: from,
         };
         let why = EndCheck::Flown;

@@ -301,6 +301,7 @@ impl<'v> AfterStep<'v> {
                 inertia: &inertia,
                 cand: None,
                 grounds: &grounds,
+                joined: grounds.len(),
                 events_from: self.commit.reported().len(),
             };
             let why = EndCheck::RapierEnd;

@@ -41,6 +41,9 @@ pub(crate) struct Subject<'s> {
     pub cand: &'s Candidate,
     pub geom: &'s BodyGeom<'s>,
     pub grounds: &'s [GroundGeom<'s>],
+    /// The grounds from this index on are checked only deeper than the resting gap
+    /// (`Checked::joined`).
+    pub joined: usize,
     pub step: &'s EndOfStep<'s>,
 }
 
@@ -55,6 +58,7 @@ impl<'s> Subject<'s> {
             cand,
             geom,
             grounds,
+            joined: grounds.len(),
             step,
         }
     }

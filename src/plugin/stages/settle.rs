@@ -126,6 +126,10 @@ pub(crate) struct Checked<'c> {
     pub cand: Option<&'c Candidate>,
     /// The grounds it is checked against.
     pub grounds: &'c [GroundGeom<'c>],
+    /// The grounds from this index on are checked only where the body is deeper in them
+    /// than the resting gap (their pairs are rapier's resting contacts): `grounds.len()` for
+    /// none.
+    pub joined: usize,
     /// Where the body's events of the step start among the step's events (the energy cap is
     /// for bodies with no restitution above 1 among them).
     pub events_from: usize,
@@ -176,7 +180,7 @@ impl AfterStep<'_> {
                 grounds: &grounds,
                 ..*checked
             };
-            let Some(hit) = deepest(now, checked.grounds.len(), &s, step) else {
+            let Some(hit) = deepest(now, checked.joined, &s, step) else {
                 break;
             };
             let rule = why.row_for(k, &hit.normal);
@@ -232,7 +236,7 @@ impl AfterStep<'_> {
             changed = true;
             self.moved_into((colliders, step), checked, &hit, &mut grounds, &mut widened);
         }
-        if widened {
+        if grounds.len() > checked.grounds.len() {
             changed |= self.out_of_still_grounds(checked, &grounds, &mut s, step);
         }
         if !changed {
@@ -334,17 +338,18 @@ impl AfterStep<'_> {
             .filter(|gg| gg.motion.is_still())
             .cloned()
             .collect();
-        let gap = step.policy.resting_gap;
-        let Some(hit) = closest(checked.geom, &still, s, step.dt, 0.0).filter(|h| h.dist < -gap)
-        else {
+        let checked = Checked {
+            grounds: &still,
+            joined: 0,
+            ..*checked
+        };
+        // Measured from the side it came from, or through a thin one (`deepest`); deeper
+        // than the gap only.
+        let Some(hit) = deepest(&checked, 0, s, step) else {
             return false;
         };
         let before = *s;
         put_on_ground(s, &hit, true);
-        let checked = Checked {
-            grounds: &still,
-            ..*checked
-        };
         self.report_push_out(&checked, &hit, &before, s, step);
         true
     }

@@ -51,6 +51,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 inertia: &inertia,
                 cand: None,
                 grounds: &grounds,
+                joined: grounds.len(),
                 events_from: view.commit.reported().len(),
             };
             let why = EndCheck::Woken;

@@ -501,19 +501,16 @@ fn cuboid_face_polygon(ground: &GroundGeom, t: f64, n: &Vector3<f64>) -> Option<
 /// The convex polygon (or segment) `poly`, its vertices in order, clipped to the convex
 /// polygon `face`, both seen along the unit normal `n` (Sutherland-Hodgman): the vertices of
 /// their overlap, in order, at `poly`'s height along `n` (each of `poly`'s own where kept).
-/// Vertices that coincide are kept once.
+/// A vertex within `tol` (m) outside an edge's line counts as inside (a face flush with the
+/// ground's edge, turned by rounding, is not cut at its middle). Vertices that coincide are
+/// kept once.
 fn clip_to_face(
     poly: &[Vector3<f64>],
     face: &[Vector3<f64>],
     n: &Vector3<f64>,
+    tol: f64,
 ) -> Vec<Vector3<f64>> {
-    let e1 = n.cross(&Vector3::new(n.z, n.x, n.y)).normalize();
-    let e1 = if e1.iter().all(|x| x.is_finite()) {
-        e1
-    } else {
-        n.cross(&Vector3::x()).normalize()
-    };
-    let e2 = n.cross(&e1);
+    let (e1, e2) = plane_basis(n);
     let flat = |p: &Vector3<f64>| (e1.dot(p), e2.dot(p));
     let cross = |a: (f64, f64), b: (f64, f64), p: (f64, f64)| {
         (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
@@ -527,15 +524,26 @@ fn clip_to_face(
     let mut out: Vec<Vector3<f64>> = poly.to_vec();
     for i in 0..k {
         let (a, b) = (face2[i], face2[(i + 1) % k]);
+        let slack = tol * ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+        // Signed, positive inside; a vertex is kept within `slack` outside.
         let side = |p: &Vector3<f64>| orient * cross(a, b, flat(p));
         let input = std::mem::take(&mut out);
         for (j, cur) in input.iter().enumerate() {
             let prev = &input[(j + input.len() - 1) % input.len()];
             let (dc, dp) = (side(cur), side(prev));
-            if (dc >= 0.0) != (dp >= 0.0) {
-                out.push(prev + (cur - prev) * (dp / (dp - dc)));
+            let (keep_cur, keep_prev) = (dc + slack >= 0.0, dp + slack >= 0.0);
+            if keep_cur != keep_prev {
+                // Where the edge crosses the line; with both ends outside (one within the
+                // slack), that end.
+                out.push(if (dc >= 0.0) != (dp >= 0.0) {
+                    prev + (cur - prev) * (dp / (dp - dc))
+                } else if keep_prev {
+                    *prev
+                } else {
+                    *cur
+                });
             }
-            if dc >= 0.0 {
+            if keep_cur {
                 out.push(*cur);
             }
         }
@@ -624,22 +632,58 @@ pub(crate) fn landing_point(
         let foot = x - h.normal * h.normal.dot(&(x - surface));
         ground_distance(ground, &foot, t) <= tol + FACE_ROUNDING * (1.0 + x.norm())
     };
-    let points = match cuboid_face_polygon(ground, t, &h.normal) {
-        Some(face) => clip_to_face(&flat, &face, &h.normal),
-        None => flat.into_iter().filter(on_ground).collect(),
-    };
-    let mut sum = Vector3::zeros();
-    let mut n = 0usize;
-    for x in &points {
-        let u = body_velocity_at(s, x) - ground.velocity_at(x, t);
-        if h.normal.dot(&u) < 0.0 {
-            sum += x;
-            n += 1;
+    let (points, clipped) = match cuboid_face_polygon(ground, t, &h.normal) {
+        Some(face) => {
+            let points = clip_to_face(&flat, &face, &h.normal, tol);
+            let clipped = points != flat;
+            (points, clipped)
         }
-    }
+        None => (flat.into_iter().filter(on_ground).collect(), false),
+    };
+    let approaching = |x: &Vector3<f64>| {
+        let u = body_velocity_at(s, x) - ground.velocity_at(x, t);
+        h.normal.dot(&u) < 0.0
+    };
+    let landing: Vec<_> = points.iter().copied().filter(approaching).collect();
+    let n = landing.len();
     if n < 2 {
         return (h.point, 1);
     }
-    let c = sum / n as f64;
+    // The part over a cuboid, all of it approaching: its area's centroid (a clipped face is
+    // no parallelogram in general); otherwise the points' mean, as for a whole face.
+    let whole_part = clipped && n == points.len() && n > 2;
+    let c = match whole_part.then(|| area_centroid(&landing, &h.normal)) {
+        Some(Some(c)) => c,
+        _ => landing.iter().sum::<Vector3<f64>>() / n as f64,
+    };
     (c - h.normal * h.normal.dot(&(c - h.point)), n)
+}
+
+/// An orthonormal pair spanning the plane normal to the unit vector `n`.
+fn plane_basis(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    // Crossed with the axis of `n`'s smallest component: never near parallel to it.
+    let axis = Vector3::ith(n.iamin(), 1.0);
+    let e1 = n.cross(&axis).normalize();
+    (e1, n.cross(&e1))
+}
+
+/// The centroid of the area of the convex polygon `poly` (vertices in order) seen along the
+/// unit normal `n`, at its vertices' mean height; `None` for a polygon of no area.
+fn area_centroid(poly: &[Vector3<f64>], n: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let (e1, e2) = plane_basis(n);
+    let flat: Vec<(f64, f64)> = poly.iter().map(|p| (e1.dot(p), e2.dot(p))).collect();
+    let (mut area, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for i in 0..flat.len() {
+        let (a, b) = (flat[i], flat[(i + 1) % flat.len()]);
+        let w = a.0 * b.1 - b.0 * a.1;
+        area += w;
+        cx += (a.0 + b.0) * w;
+        cy += (a.1 + b.1) * w;
+    }
+    let scale: f64 = poly.iter().map(|p| p.norm_squared()).sum();
+    if area.abs() <= f64::EPSILON * scale {
+        return None;
+    }
+    let height = poly.iter().map(|p| n.dot(p)).sum::<f64>() / poly.len() as f64;
+    Some(e1 * (cx / (3.0 * area)) + e2 * (cy / (3.0 * area)) + n * height)
 }
