@@ -31,6 +31,7 @@ use crate::plugin::queries::observe::{
 };
 use crate::plugin::stages::view::AfterStep;
 use crate::plugin::stages::view::EndOfStep;
+use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::Candidate;
 use crate::plugin::state::step::StepData;
@@ -524,14 +525,9 @@ impl AfterStep<'_> {
         body: RigidBodyHandle,
         geom: &BodyGeom,
     ) -> Option<GroundGeom<'a>> {
-        let mut gg = ground_geom(gm, colliders)?;
-        gg.skip = geom
-            .parts
-            .iter()
-            .map(|part| part.handle)
-            .filter(|h| self.refuses((bodies, colliders, sets), body, (*h, gg.handle)))
-            .collect();
-        Some(gg)
+        geom_skipping(gm, geom, colliders, |key| {
+            self.refuses((bodies, colliders, sets), body, key)
+        })
     }
 
     /// A ground's geometry for the queries of a body whose pairs have roles this step, its
@@ -542,14 +538,9 @@ impl AfterStep<'_> {
         geom: &BodyGeom,
         colliders: &'a ColliderSet,
     ) -> Option<GroundGeom<'a>> {
-        let mut gg = ground_geom(gm, colliders)?;
-        gg.skip = geom
-            .parts
-            .iter()
-            .map(|part| part.handle)
-            .filter(|h| self.roles.get(&(*h, gg.handle)) == Some(&Role::Filtered))
-            .collect();
-        Some(gg)
+        geom_skipping(gm, geom, colliders, |key| {
+            self.roles.get(&key) == Some(&Role::Filtered)
+        })
     }
 
     /// Reports a push-out (`put_on_ground`) from `before` to `after` at `hit`, unless it
@@ -575,6 +566,25 @@ impl AfterStep<'_> {
             step.dt,
         ));
     }
+}
+
+/// A ground's geometry for the queries of a body (`geom`), its colliders whose pair with the
+/// ground (body collider, ground collider) `skipped` holds left out.
+#[inline]
+fn geom_skipping<'a>(
+    gm: &'a GroundMotion,
+    geom: &BodyGeom,
+    colliders: &'a ColliderSet,
+    skipped: impl Fn(PairKey) -> bool,
+) -> Option<GroundGeom<'a>> {
+    let mut gg = ground_geom(gm, colliders)?;
+    gg.skip = geom
+        .parts
+        .iter()
+        .map(|part| part.handle)
+        .filter(|h| skipped((*h, gg.handle)))
+        .collect();
+    Some(gg)
 }
 
 /// The checked body's deepest point at `s` (the step's end) in its grounds, measured from the
