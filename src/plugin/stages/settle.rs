@@ -652,15 +652,51 @@ fn passed_through(checked: &Checked, s: &State, dt: f64, gap: f64) -> Option<Hit
             let Some(found) = contact_from_side(part, ground, s, dt, from, true) else {
                 continue;
             };
-            // In front of that face at the start, and below it now.
+            // In front of that face at the start, below it now, and through it on the way.
             let (dist, normal, point) = found;
-            let was_in_front = normal.dot(&(from - (point - normal * dist))) >= 0.0;
-            if dist < -gap && was_in_front && deepest.is_none_or(|d| dist < d.dist) {
+            let face = point - normal * dist;
+            let was_in_front = normal.dot(&(from - face)) >= 0.0;
+            let end = part_pose(part, s).translation.vector;
+            let margin = checked.geom.radius;
+            let through = || crosses_face(ground, dt, (from, end), (face, normal), margin);
+            if dist < -gap && was_in_front && deepest.is_none_or(|d| dist < d.dist) && through() {
                 deepest = Some(Hit::at((i, j), ground, s, dt, found));
             }
         }
     }
     deepest
+}
+
+/// Does the way of a body part from `from` (its start, carried with the ground) to `end`
+/// (its centre at the step's end, time `t`) cross the plane of a cuboid ground's face (a
+/// point `face` of it, its unit normal `normal`) within `margin` (m) of the face? A part that
+/// ends behind the face's plane with its foot on the face went through the ground only if
+/// so: behind a blade that turned past it, it went round the blade's end. The way is taken
+/// straight (exact for a ground that does not turn, a chord for one that does). Other
+/// grounds (a half-space, a mesh's triangle): yes.
+fn crosses_face(
+    ground: &GroundGeom,
+    t: f64,
+    (from, end): (Vector3<f64>, Vector3<f64>),
+    (face, normal): (Vector3<f64>, Vector3<f64>),
+    margin: f64,
+) -> bool {
+    let Some(cuboid) = ground.shape.as_cuboid() else {
+        return true;
+    };
+    let across = normal.dot(&(from - end));
+    if across <= 0.0 {
+        return true;
+    }
+    let along = (normal.dot(&(from - face)) / across).clamp(0.0, 1.0);
+    let crossing = from + (end - from) * along;
+    let pose = ground.pose_at(t);
+    let local = pose
+        .inverse_transform_point(&nalgebra::Point3::from(crossing))
+        .coords;
+    let axis = (pose.rotation.inverse() * normal).iamax();
+    let half = crate::plugin::bridge::convert::vec_to_na(cuboid.half_extents);
+    (0..3).all(|i| i == axis || local[i].abs() <= half[i] + margin)
 }
 
 /// Is a turning resting body's resting contact point on the ground of `hit` pushed into it
