@@ -144,6 +144,10 @@ impl AfterStep<'_> {
     /// - `Impact`: the model's impulse at the contact (`ImpactTiming::StepEnd`, `e = 0` if
     ///   settling, or at the body's last allowed impact), moved out, and again for the next
     ///   deepest point under the `RapierEnd` row, up to `max_impacts_per_step`;
+    /// - once either has moved the body farther than the resting gap, its other near grounds
+    ///   join, met only deeper than the gap (`moved_into`, `Checked::joined`), the rounds go
+    ///   on, and at the end a body left deeper than the gap in a still ground is moved out of
+    ///   it (`out_of_still_grounds`);
     /// - then, if it changed the state, the energy cap (`cap_if_gained`).
     ///
     /// Returns the action taken on the first point and the corrected state (`None`: `end`

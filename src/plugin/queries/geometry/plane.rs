@@ -638,6 +638,8 @@ pub(crate) fn landing_point(
             let clipped = points != flat;
             (points, clipped)
         }
+        // A half-space is under every vertex: no query.
+        None if ground.shape.as_halfspace().is_some() => (flat, false),
         None => (flat.into_iter().filter(on_ground).collect(), false),
     };
     let approaching = |x: &Vector3<f64>| {
