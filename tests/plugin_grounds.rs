@@ -691,10 +691,12 @@ fn a_ball_a_fast_bat_sends_into_a_wall_meets_it_in_the_step() {
 
 /// A bat whose face is tilted 30 degrees down, moving along its normal
 /// `(cos 30, -sin 30, 0)` at 30 m/s (and stopped after the step of the hit), onto a ball
-/// resting on a floor, a half-space or a slab 2 cm thick (e = 0.5 everywhere): the floor's pair
-/// is rapier's resting contact, so the bat's is the step-end impact, whose move out of the
-/// bat along its normal is 30 cm, down into the floor. The ball never ends a step under the
-/// floor or through the slab, and leaves along x.
+/// resting on a floor, a half-space or a slab 2 cm thick (e = 0.5 everywhere): in the in-step
+/// modes the floor's pair is rapier's resting contact, so the bat's is the step-end impact,
+/// whose move out of the bat along its normal is 30 cm, down into the floor. The ball never
+/// ends a step under the floor or through the slab (1e-4 m), and leaves along x. In `Step`
+/// mode the floor's contact takes its bounce at the start of the bat's step
+/// ([`bat_and_floor_at_one_start`]).
 #[test]
 fn a_bat_swung_down_onto_a_ball_resting_on_the_floor_never_drives_it_under() {
     let (r, v) = (0.1, 30.0);
@@ -733,24 +735,27 @@ fn a_bat_swung_down_onto_a_ball_resting_on_the_floor_never_drives_it_under() {
             p.add_ground(&world.bodies, &world.colliders, face).unwrap();
             let at = format!("{timing:?}, tilted {tilt} degrees, slab {slab}");
             let mut ends = Vec::new();
+            let mut starts = Vec::new();
             for k in 0..6 {
                 world.bodies[bat].set_next_kinematic_translation(centre(k as f64 + 1.0));
                 p.step(&mut world);
                 let rb = &world.bodies[b];
                 ends.push((wide(rb.translation().y), na(rb.linvel())));
+                starts.extend(
+                    p.events()
+                        .iter()
+                        .filter(|e| e.timing == ImpactTiming::StepStart)
+                        .map(|e| (k, e.ground == face, *e)),
+                );
             }
             println!("{at}: (y, v) at each step's end {ends:.4?}");
-            // In `Step` mode the bat's impulse is the step's start one, and the floor's pair
-            // rapier's resting contact for the step: rapier's own tolerance, its allowed
-            // linear error (the resting gap), holds there.
-            let allowed = if timing == TimingMode::Step {
-                wide(world.integration_parameters.allowed_linear_error())
-            } else {
-                1e-4
-            };
+            if timing == TimingMode::Step {
+                let m = wide(world.bodies[b].mass());
+                bat_and_floor_at_one_start(&at, &starts, (v, a, m));
+            }
             for (k, (y, _)) in ends.iter().enumerate() {
                 assert!(
-                    *y - r > -allowed,
+                    *y - r > -1e-4,
                     "{at}: step {k} ends {:e} m under the floor",
                     r - y
                 );
@@ -762,6 +767,43 @@ fn a_bat_swung_down_onto_a_ball_resting_on_the_floor_never_drives_it_under() {
             assert!(v_end.x > 0.8 * along, "{at}: the ball left at {v_end:?}");
         }
     }
+}
+
+/// `Step` mode's impulses in
+/// [`a_bat_swung_down_onto_a_ball_resting_on_the_floor_never_drives_it_under`] (`starts`: the
+/// step, whether on the bat, and the event of each `StepStart` impulse; bat speed `v`, tilt
+/// `a`, ball mass `m`): the bat's at the start of the step it closes in (2.4 steps: the
+/// third), the ball leaving it at `(1 + e) V n`; the floor's contact, which that drives into
+/// the floor, closes at the same start: its impulse reverses `(1 + e) V sin(tilt)` times e,
+/// and the ball sticks (solid ball: 2/7 of the slip taken,
+/// `(2/7) (1 + e) V cos(tilt) <= mu (1 + e) (1 + e) V sin(tilt)`).
+fn bat_and_floor_at_one_start(
+    at: &str,
+    starts: &[(usize, bool, ImpactEvent)],
+    (v, a, m): (f64, f64, f64),
+) {
+    let e = 0.5;
+    let down = (1.0 + e) * v * a.sin();
+    let along = (1.0 + e) * v * a.cos();
+    let floor_dv = Vector3::new(-2.0 / 7.0 * along, (1.0 + e) * down, 0.0);
+    for (k, on_bat, ev) in starts {
+        println!(
+            "{at}: step {k}, {}: approach {:.6}, impulse / m {:.6?}",
+            if *on_bat { "bat" } else { "floor" },
+            ev.approach_speed,
+            na(ev.impulse) / m
+        );
+    }
+    assert_eq!(starts.len(), 2, "{at}: {starts:?}");
+    let ((k0, on_bat, by_bat), (k1, on_floor, by_floor)) = (starts[0], starts[1]);
+    assert_eq!((k0, on_bat, k1, on_floor), (2, true, 2, false), "{at}");
+    assert_abs_diff_eq!(by_bat.approach_speed, v, epsilon = 1e-4 * v);
+    assert_abs_diff_eq!(by_floor.approach_speed, down, epsilon = 1e-4 * v);
+    let dv = na(by_floor.impulse) / m;
+    assert!(
+        (dv - floor_dv).norm() < 1e-4 * v,
+        "{at}: {dv:?} against {floor_dv:?}"
+    );
 }
 
 /// A ball asleep beside fast kinematic grounds that cannot reach it: on the floor, a bat 1 cm
@@ -1783,14 +1825,18 @@ fn a_ground_whose_fixed_body_moved_between_steps_is_met_where_it_now_is() {
 
 /// A blade 1 m long (10 cm thick) turning half a radian in one step about a pivot 0.8 m off
 /// the path of a ball flying by at 45 m/s, without gravity: the ball never comes within
-/// 0.28 m of it, and neither in-step mode reports an impact or changes its flight. (The end
-/// check took the ball, which ends behind the blade's face plane with its foot on the face,
-/// for one that went through the blade: in the blade's frame its path goes round the blade's
-/// end.) `Step` mode's start-of-step decision still bounces it off the blade (see the guide's
-/// "Not guaranteed").
+/// 0.28 m of it, and no mode reports an impact or changes its flight. (The in-step modes'
+/// end check took the ball, which ends behind the blade's face plane with its foot on the
+/// face, for one that went through the blade: in the blade's frame its path goes round the
+/// blade's end. `Step` mode's start-of-step decision bounced it: the start contact's gap,
+/// carried along its normal, closes within the step.)
 #[test]
 fn a_ball_flying_past_a_turning_blade_it_never_touches_flies_on() {
-    for mode in [TimingMode::TimeOfImpact, TimingMode::Exact] {
+    for mode in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
         let mut world = weightless();
         let pivot = Vector::new(0.5, 0.0, 0.8);
         let (blade, face) = world.insert(
@@ -1817,5 +1863,63 @@ fn a_ball_flying_past_a_turning_blade_it_never_touches_flies_on() {
             "{mode:?}: v {v:?}"
         );
         assert!(at.z.abs() < 1e-6, "{mode:?}: at {at:?}");
+    }
+}
+
+/// A ball flying past a fixed box's edge it never touches, in every mode: it approaches the
+/// edge at the step's start (the start contact's normal speed is negative and its gap closes
+/// along that normal well within the step), but its path passes 5 cm over the box's top face.
+/// No mode bounces it: rapier alone lets it fly on, and so does each of the plugin's modes.
+/// The same ball 10 cm lower clips the edge: one impact in every mode, in the in-step modes
+/// at the edge's normal at the touch, `n = (sqrt(3)/2, 0, 1/2)` (`v' = v - (1 + e) (v.n) n`,
+/// no friction); `Step` mode resolves it at the step's start, at the start contact's normal
+/// `(4, 0, 1) / sqrt(17)`.
+#[test]
+fn a_ball_flying_past_a_box_edge_it_never_touches_flies_on() {
+    let e = 0.5;
+    for mode in [
+        TimingMode::Step,
+        TimingMode::TimeOfImpact,
+        TimingMode::Exact,
+    ] {
+        for height in [0.65, 0.55] {
+            let mut world = weightless();
+            let (_, block) = world.insert(
+                RigidBodyBuilder::fixed(),
+                ColliderBuilder::cuboid(0.5, 0.5, 0.5)
+                    .restitution(real(e))
+                    .friction(0.0),
+            );
+            let b = ball(&mut world, [0.7, 0.0, height], 0.1, e, 0.0);
+            let v0 = Vector3::new(-30.0, 0.0, 0.0);
+            world.bodies[b].set_linvel(Vector::new(-30.0, 0.0, 0.0), true);
+            let mut p = plugin_on(&world, block, mode);
+            let mut events = 0;
+            for _ in 0..4 {
+                p.step(&mut world);
+                events += p.events().len();
+            }
+            let rb = &world.bodies[b];
+            let (at, v) = (na(rb.translation()), na(rb.linvel()));
+            println!("{mode:?}, {height}: ends at {at:?} at {v:?}, events {events}");
+            if height > 0.6 {
+                assert_eq!(events, 0, "{mode:?}");
+                assert!((v - v0).norm() < 1e-4, "{mode:?}: v {v:?}");
+                assert!((at.z - height).abs() < 1e-5, "{mode:?}: at {at:?}");
+                continue;
+            }
+            assert_eq!(events, 1, "{mode:?}: clipping the edge");
+            // The start contact's normal, from the edge to the centre (0.2, 0, 0.05) away.
+            let n = if mode == TimingMode::Step {
+                Vector3::new(4.0, 0.0, 1.0) / 17f64.sqrt()
+            } else {
+                Vector3::new(0.75f64.sqrt(), 0.0, 0.5)
+            };
+            let expected = v0 - (1.0 + e) * v0.dot(&n) * n;
+            assert!(
+                (v - expected).norm() < tol().1 * v0.norm(),
+                "{mode:?}: v {v:?} against {expected:?}"
+            );
+        }
     }
 }

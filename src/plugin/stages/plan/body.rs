@@ -11,6 +11,7 @@ use crate::plugin::queries::geometry::{
     BodyGeom, GroundGeom, PairContact, contact_checked, part_pose,
 };
 use crate::plugin::queries::observe::{Scene, centred_ball, ground_geom, meets_tiles};
+use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::small_list::SmallList;
 use crate::plugin::state::step::{Candidate, StepData};
@@ -94,6 +95,8 @@ pub(super) struct BodyPlan {
     pub rolling_pieces: Option<SmallList<ColliderHandle>>,
     /// Released from last step's rolling at the start (`Candidate::released`).
     pub released: Option<usize>,
+    /// The pairs `Step` mode's impulses resolved at the step's start.
+    pub resolved_at_start: SmallList<PairKey>,
 }
 
 impl BodyNear<'_, '_> {
@@ -110,6 +113,7 @@ impl BodyNear<'_, '_> {
             held: false,
             rolling_pieces: None,
             released: None,
+            resolved_at_start: SmallList::Empty,
         }
     }
 

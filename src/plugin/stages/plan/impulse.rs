@@ -1,15 +1,19 @@
 //! `Step` mode's start-of-step impulse: a contact that closes within the step is resolved at
 //! the step's start, its event pushed, and the pair's role follows from how the contact point
-//! leaves.
+//! leaves. A pair decided `Resting` before a later ground's impulse changed the body's state is
+//! decided again from the new state (`Planner::redecide_resting`): a bat's impulse that drives
+//! a ball into the floor it rests on closes the floor's contact too.
 
 use super::Planner;
 use super::body::{BodyPlan, BodyReads};
-use super::role::Pair;
+use super::role::{Pair, set_role};
 use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, resolve};
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
 use crate::plugin::policy::rests_at;
-use crate::plugin::queries::geometry::{BodyPart, Hit, body_landing_point, body_velocity_at};
+use crate::plugin::queries::geometry::{
+    BodyPart, Hit, body_landing_point, body_velocity_at, contact_checked,
+};
 use crate::plugin::state::step::StepData;
 use crate::rapier::prelude::PhysicsHooks;
 
@@ -34,7 +38,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         step: &StepData,
     ) -> Role {
         let BodyReads { body, scene, .. } = reads;
-        let Pair { k, part, gg, .. } = pair;
+        let Pair {
+            k, part, gg, key, ..
+        } = pair;
         let n = hit.normal;
         let inertia = Inertia::of(body.rb);
         let material =
@@ -66,6 +72,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             Some((after, event)) => {
                 plan.state = after;
                 plan.touched = true;
+                plan.resolved_at_start.push(key);
                 self.reports.events.push(event);
                 let un2 =
                     n.dot(&(body_velocity_at(&plan.state, &point) - gg.velocity_at(&point, 0.0)));
@@ -76,6 +83,75 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 }
             }
             None => Role::Resting,
+        }
+    }
+
+    /// After `Step` mode's impulses changed the body's state (`plan.touched`): its pairs still
+    /// `Resting` were decided from the state before (a floor planned before the bat that
+    /// drives the ball into it) and are decided again from `plan.state`, as
+    /// [`Self::touching_role`] decides them. A pair the new state closes takes its own
+    /// impulse and role (`Impact` joins the search after the step); one the new state lifts
+    /// off is `Impact` (out of rapier's solver, as the first decision would have made it);
+    /// one that still rests keeps its role and everything its first decision recorded. A pair
+    /// already resolved by its own impulse in the step keeps the role that impulse gave: one
+    /// impulse a pair and step. Rounds until one makes no impulse, so at most one round a
+    /// resting pair. A body rolling in closed form or held on a slope keeps its plan (its
+    /// pairs are the rolling's or rapier's). Out of line: only a `Step` impulse calls it.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn redecide_resting(
+        &mut self,
+        reads: BodyReads,
+        plan: &mut BodyPlan,
+        step: &mut StepData,
+    ) {
+        if plan.rolling.is_some() || plan.held || plan.rolling_pieces.is_some() {
+            return;
+        }
+        let body = reads.body;
+        let pairs = body.grounds.len() * body.geom.parts.len();
+        for _ in 0..pairs {
+            let impulses = self.reports.events.len();
+            for k in 0..body.grounds.len() {
+                let (gi, gg) = &body.grounds[k];
+                for (part_index, part) in body.geom.parts.iter().enumerate() {
+                    let key = (part.handle, gg.handle);
+                    if step.roles.get(&key) != Some(&Role::Resting)
+                        || plan.resolved_at_start.contains(&key)
+                    {
+                        continue;
+                    }
+                    let Some(planned) = step.ground_pairs.iter().rfind(|p| p.key == key) else {
+                        continue;
+                    };
+                    let Ok(Some(contact)) =
+                        contact_checked(part, gg, &plan.state, 0.0, body.reach_to(gg))
+                    else {
+                        continue;
+                    };
+                    let pair = Pair {
+                        k,
+                        part,
+                        part_index,
+                        gg,
+                        key,
+                        colliders: (&reads.scene.colliders[key.0], &reads.scene.colliders[key.1]),
+                        user: planned.user,
+                    };
+                    let role = self.touching_role(reads, plan, pair, contact, step);
+                    if role == Role::Resting {
+                        continue;
+                    }
+                    set_role(step, key, role);
+                    if role == Role::Impact && !plan.impact_grounds.contains(gi) {
+                        plan.impact_grounds.push(*gi);
+                        plan.closing = true;
+                    }
+                }
+            }
+            if self.reports.events.len() == impulses {
+                break;
+            }
         }
     }
 }

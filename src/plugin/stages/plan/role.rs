@@ -13,8 +13,8 @@ use crate::plugin::events::{EventKind, ImpactTiming};
 use crate::plugin::policy::Role;
 use crate::plugin::queries::filter::{self, FilterSide};
 use crate::plugin::queries::geometry::{
-    BodyPart, COPLANAR_TOLERANCE, GroundGeom, Hit, PairContact, Sweep, body_velocity_at,
-    cannot_close, contact_checked, contact_from_side, part_pose,
+    BodyGeom, BodyPart, COPLANAR_TOLERANCE, GroundGeom, Hit, PairContact, Search, Sweep,
+    body_velocity_at, cannot_close, contact_checked, contact_from_side, first_impact, part_pose,
 };
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
@@ -474,7 +474,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// mode the start impulse of a contact that closes in the step (`step_start_impulse`),
     /// else impact. May apply that impulse to `plan.state`; reads rapier's contact graph only
     /// where the policy asks whether the body is pressed.
-    fn touching_role(
+    pub(super) fn touching_role(
         &mut self,
         reads: BodyReads,
         plan: &mut BodyPlan,
@@ -532,6 +532,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// [`Self::touching_role`] in `Step` mode for a pair that does not rest, at `contact`
     /// with normal speed `un`: the start impulse of a contact that closes in the step
     /// (`step_start_impulse`), else impact. Out of line: the other modes' plans skip it.
+    ///
+    /// The contact closes when its gap, carried along the start normal, closes within the
+    /// step (`closes_within`) and, for a gap still open, the search along the body's flight
+    /// finds the part touching the ground in the step (`first_impact`): a path that passes an
+    /// edge or a corner closes the first line without ever touching.
     #[cold]
     #[inline(never)]
     fn step_mode_role(
@@ -542,7 +547,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         (dist, n, p): PairContact,
         (un, step): (f64, &StepData),
     ) -> Role {
-        if closes_within(dist, un, n.dot(&(reads.body.flight.accel)), step.dt) && un < 0.0 {
+        let closes = closes_within(dist, un, n.dot(&(reads.body.flight.accel)), step.dt)
+            && un < 0.0
+            && (dist <= 0.0 || touches_in_step(reads, plan, &pair, step.dt));
+        if closes {
             let hit = Hit {
                 part: pair.part_index,
                 ground: 0,
@@ -555,6 +563,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } else {
             Role::Impact
         }
+    }
+}
+
+/// Gives the pair `key`, already decided in the step, the role `role` (in `step.roles`, and in
+/// its entry of `step.ground_pairs`, whose flags stay).
+pub(super) fn set_role(step: &mut StepData, key: PairKey, role: Role) {
+    step.roles.insert(key, role);
+    if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == key) {
+        held.role = role;
     }
 }
 
@@ -592,6 +609,24 @@ fn rolling_piece_role(
         .unwrap_or_else(|| contact_checked(part, gg, state, 0.0, body.reach_to(gg)));
     verdict.any_impact |= within_reach(&found);
     Role::Impact
+}
+
+/// Does the pair's part touch its ground, approaching, within `[0, dt]` of the body's flight
+/// from `plan.state` (`first_impact` over that part and ground alone)? A search that gives up
+/// counts as touching: the contact then closes as its start normal says.
+fn touches_in_step(reads: BodyReads, plan: &BodyPlan, pair: &Pair, dt: f64) -> bool {
+    let body = reads.body;
+    let mut parts = SmallList::default();
+    parts.push(*pair.part);
+    let part_alone = BodyGeom {
+        parts,
+        radius: body.geom.radius,
+    };
+    let grounds = std::slice::from_ref(pair.gg);
+    !matches!(
+        first_impact(&part_alone, grounds, body.flight, &plan.state, 0.0, 0.0, dt),
+        Search::Clear
+    )
 }
 
 /// Is the contact within reach (found, and parry could query it)?
