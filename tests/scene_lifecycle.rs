@@ -7,6 +7,8 @@
 //! - a ground collider moved (teleported) by the user: bodies bounce on it where it is now,
 //!   also when a step of no length follows the move, or when it is moved relative to its
 //!   body; and a ground whose body is disabled and enabled again;
+//! - a body turned, or its centre of mass moved, by the user in flight: it flies on from
+//!   where rapier then holds it;
 //! - an empty world, a world with only ground, a plugin with no ground.
 
 #![allow(clippy::useless_conversion, clippy::unnecessary_cast)]
@@ -14,6 +16,7 @@
 mod scene_support;
 
 use approx::{abs_diff_eq, assert_abs_diff_eq};
+use rapier_impact::na::Vector3;
 use rapier_impact::rapier::prelude::*;
 use rapier_impact::{EventKind, TimingMode};
 use scene_support::*;
@@ -401,6 +404,86 @@ fn a_ground_lifted_under_a_rolling_ball_pushes_it_out() {
                         "{label}: no push-out in the step of the lift: {:?}",
                         p.events()
                     );
+                }
+            }
+        }
+    }
+}
+
+/// A body whose collider sits 0.3 m off its origin, flying 5 m above a ground-marked floor,
+/// which the user turns half a turn about its origin, gives more mass off its centre
+/// (`set_additional_mass_properties`), or adds a heavy collider to, between two steps: its
+/// centre of mass moves without its translation. In `Exact` mode it flies on from where
+/// rapier then holds its centre of mass, by the exact flight
+/// `c(t) = c0 + v0 t + g t^2 / 2` (1e-5 m; its `f64` state is not the body's any more); the
+/// other modes leave a flight far from the grounds to rapier: the same as rapier alone, to the
+/// bit.
+#[test]
+fn a_body_the_user_turns_or_weighs_again_in_flight_flies_on_from_where_it_is() {
+    let g = -9.81;
+    for edit in ["turned", "weighed again", "a collider added"] {
+        for timing in MODES {
+            let mut world = PhysicsWorld::default();
+            let dt = wide(world.integration_parameters.dt);
+            let (_, ground) = world.insert(RigidBodyBuilder::fixed(), floor(50.0));
+            let (b, _) = world.insert(
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.0, 5.0, 0.0))
+                    .linvel(Vector::new(1.0, 2.0, 0.0)),
+                ColliderBuilder::ball(0.1).translation(Vector::new(0.3, 0.0, 0.0)),
+            );
+            let mut p = plugin_on(&world, ground, timing);
+            for _ in 0..3 {
+                p.step(&mut world);
+            }
+            let mut alone = saved_world(&world);
+            for w in [&mut world, &mut alone] {
+                match edit {
+                    "turned" => w.bodies[b].set_rotation(
+                        Rotation::from_axis_angle(Vector::Y, std::f32::consts::PI as Real),
+                        true,
+                    ),
+                    "weighed again" => w.bodies[b].set_additional_mass_properties(
+                        MassProperties::new(Vector::new(0.5, 0.0, 0.0), 10.0, Vector::splat(0.1)),
+                        true,
+                    ),
+                    _ => {
+                        let heavy = ColliderBuilder::ball(0.1)
+                            .translation(Vector::new(0.5, 0.0, 0.0))
+                            .density(100.0);
+                        w.insert_collider(heavy, Some(b));
+                    }
+                }
+            }
+            let (t0, v0) = (world.bodies[b].translation(), world.bodies[b].linvel());
+            let rot = *world.bodies[b].rotation();
+            let label = format!("{edit}, {timing:?}");
+            for k in 1..=4 {
+                p.step(&mut world);
+                alone.step();
+                let (rb, ra) = (&world.bodies[b], &alone.bodies[b]);
+                // rapier places the new centre of mass in its step (the mass properties):
+                // the centre right after the edit is the origin then plus its new offset.
+                let c0 = t0 + rot * ra.local_center_of_mass();
+                let t = k as f64 * dt;
+                let exact = Vector3::new(
+                    wide(c0.x) + wide(v0.x) * t,
+                    wide(c0.y) + wide(v0.y) * t + 0.5 * g * t * t,
+                    wide(c0.z) + wide(v0.z) * t,
+                );
+                let com = rb.center_of_mass();
+                let com = Vector3::new(wide(com.x), wide(com.y), wide(com.z));
+                println!(
+                    "{label}, step {k}: centre {com:.6?}, exact {exact:.6?}, rapier alone {:?}",
+                    ra.center_of_mass()
+                );
+                if timing == TimingMode::Exact {
+                    assert!(
+                        (com - exact).norm() < 1e-5,
+                        "{label}, step {k}: {com:?} against {exact:?}"
+                    );
+                } else {
+                    assert_eq!(rb.translation(), ra.translation(), "{label}, step {k}");
                 }
             }
         }

@@ -25,7 +25,7 @@ use core::fmt;
 /// The layout of [`ImpactSnapshot`]: a snapshot of another layout is refused by
 /// [`ImpactPlugin::restore`] rather than misread: raised with every change of what the
 /// snapshot holds.
-const LAYOUT: u32 = 3;
+const LAYOUT: u32 = 4;
 
 /// The plugin's state between two steps, to resume a simulation bit for bit: save it beside
 /// rapier's world, and give both back ([`ImpactPlugin::restore`] and the world as it was
@@ -268,7 +268,9 @@ mod tests {
             com: Vector3::new(0.0, f64::INFINITY, 0.0),
             v: Vector3::zeros(),
             w: Vector3::zeros(),
+            local_com: Vector3::zeros(),
             written_translation: Vector::ZERO,
+            written_rotation: crate::rapier::math::Rotation::IDENTITY,
             written_linvel: Vector::ZERO,
             written_angvel: Vector::ZERO,
         };
@@ -333,7 +335,9 @@ mod tests {
             com: Vector3::new(1.0, 2.0, 3.0),
             v: Vector3::zeros(),
             w: Vector3::zeros(),
+            local_com: Vector3::zeros(),
             written_translation: Vector::ZERO,
+            written_rotation: crate::rapier::math::Rotation::IDENTITY,
             written_linvel: Vector::ZERO,
             written_angvel: Vector::ZERO,
         };

@@ -195,8 +195,8 @@ impl<'a> Commit<'a> {
             Origin::Correction => false,
         };
         if kept {
-            let written = (pose.translation, linvel, angvel);
-            self.shadows.insert(body, Shadow::of(s, written));
+            let written = (pose.translation, pose.rotation, linvel, angvel);
+            self.shadows.insert(body, Shadow::of(s, local_com, written));
         }
     }
 
@@ -236,8 +236,8 @@ impl<'a> Commit<'a> {
             translation
         };
         if self.exact {
-            self.shadows
-                .insert(body, Shadow::of(s, (translation, linvel, spin)));
+            let written = (translation, before.rotation(), linvel, spin);
+            self.shadows.insert(body, Shadow::of(s, local_com, written));
         }
     }
 
@@ -298,8 +298,8 @@ impl<'a> Commit<'a> {
             self.writes
                 .record(body, Write::Velocities { linvel, angvel });
         }
-        self.shadows
-            .insert(body, Shadow::of(s, (held, linvel, angvel)));
+        let written = (held, before.rotation(), linvel, angvel);
+        self.shadows.insert(body, Shadow::of(s, local_com, written));
     }
 
     /// Wakes a sleeping body the step must plan.

@@ -1,6 +1,7 @@
 //! What the plugin remembers from one step to the next.
 
 use crate::motion::State;
+use crate::plugin::bridge::convert::vec_to_na;
 use crate::plugin::events::Diagnostic;
 use crate::plugin::policy::Role;
 use crate::plugin::state::handles::{
@@ -9,7 +10,7 @@ use crate::plugin::state::handles::{
 };
 use crate::plugin::state::step::{Candidate, GroundPair, SteeredRoll, StepData};
 use crate::plugin::state::writes::Now;
-use crate::rapier::math::Vector;
+use crate::rapier::math::{Rotation, Vector};
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -26,17 +27,27 @@ pub(crate) struct Shadow {
     pub com: Vector3<f64>,
     pub v: Vector3<f64>,
     pub w: Vector3<f64>,
+    /// The centre of mass in the body's frame that `com` was placed with: the body's
+    /// translation is `com - rot * local_com`.
+    pub local_com: Vector3<f64>,
     pub written_translation: Vector,
+    pub written_rotation: Rotation,
     pub written_linvel: Vector,
     pub written_angvel: Vector,
 }
 
 impl Shadow {
-    /// Does rapier still hold what was written (its translation and linear velocity as
-    /// `now` reads them)? Then the `f64` state is the body's; else something (the user, a
-    /// contact) changed it since.
+    /// Does rapier still hold what was written (its translation, rotation and linear velocity
+    /// as `now` reads them, and the centre of mass in the body's frame `com` was placed
+    /// with)? Then the `f64` state is the body's; else something (the user, a contact)
+    /// changed it since. A rotation or a change of mass properties moves the centre of mass
+    /// without moving the translation (a body turned about its origin, a collider added):
+    /// `com` is then not the body's.
     pub fn held_by(&self, now: &Now) -> bool {
-        self.written_translation == now.translation() && self.written_linvel == now.linvel()
+        self.written_translation == now.translation()
+            && self.written_linvel == now.linvel()
+            && self.written_rotation == now.rotation()
+            && self.local_com == vec_to_na(now.rb().local_center_of_mass())
     }
 
     /// Every number finite (a snapshot's shadow is checked before it is restored).
@@ -46,22 +57,29 @@ impl Shadow {
             self.written_linvel,
             self.written_angvel,
         ];
-        [self.com, self.v, self.w]
+        [self.com, self.v, self.w, self.local_com]
             .iter()
             .all(|v| v.iter().all(|x| x.is_finite()))
             && written.iter().all(|v| v.is_finite())
+            && self.written_rotation.is_finite()
     }
 
-    /// The shadow of the state `s`, written into a dynamic body as `written` (its
-    /// translation, linear and angular velocities: what rapier holds of them once the write
-    /// is applied).
-    pub fn of(s: &State, written: (Vector, Vector, Vector)) -> Self {
-        let (written_translation, written_linvel, written_angvel) = written;
+    /// The shadow of the state `s` (placed with the centre of mass `local_com` in the body's
+    /// frame), written into a dynamic body as `written` (its translation, rotation, linear
+    /// and angular velocities: what rapier holds of them once the write is applied).
+    pub fn of(
+        s: &State,
+        local_com: &Vector3<f64>,
+        written: (Vector, Rotation, Vector, Vector),
+    ) -> Self {
+        let (written_translation, written_rotation, written_linvel, written_angvel) = written;
         Self {
             com: s.com,
             v: s.v,
             w: s.w,
+            local_com: *local_com,
             written_translation,
+            written_rotation,
             written_linvel,
             written_angvel,
         }
@@ -72,9 +90,9 @@ impl Shadow {
 /// and their shadows in the same order), and each entry's place by the body handle's arena
 /// slot, so that a write's insert and a plan's read are an index and a handle compare (every
 /// rolling ball's shadow is written and read each step). The bodies are kept apart from the
-/// shadows so that emptying the table, once a step, reads 8 bytes an entry rather than a
-/// cache line of each 112-byte shadow. The entries' order is their history's: a snapshot
-/// lists them in arena order ([`Self::sorted`]).
+/// shadows so that emptying the table, once a step, reads 8 bytes an entry rather than each
+/// 152-byte shadow (in `f32`). The entries' order is their history's: a snapshot lists them
+/// in arena order ([`Self::sorted`]).
 ///
 /// Invariant: `bodies` and `shadows` have one length; an entry's place is in `places` at its
 /// body's slot, or in `far` when that slot is at least `places.len()` (a restored shadow not
@@ -421,7 +439,7 @@ impl Memory {
 #[cfg(test)]
 mod tests {
     use super::{NearMarks, Shadow, Shadows};
-    use crate::rapier::math::Vector;
+    use crate::rapier::math::{Rotation, Vector};
     use crate::rapier::prelude::RigidBodyHandle;
     use nalgebra::Vector3;
 
@@ -431,7 +449,9 @@ mod tests {
             com: Vector3::new(x, 0.0, 0.0),
             v: Vector3::zeros(),
             w: Vector3::zeros(),
+            local_com: Vector3::zeros(),
             written_translation: Vector::ZERO,
+            written_rotation: Rotation::IDENTITY,
             written_linvel: Vector::ZERO,
             written_angvel: Vector::ZERO,
         }
