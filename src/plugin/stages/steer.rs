@@ -26,8 +26,10 @@
 //!   turns it onto the end's rotation, `(2N / dt) tan(theta / 2N)` about the axis of the
 //!   turn `theta`. Starting from rapier's pose, not the plan's, keeps rapier's rounding
 //!   from adding up over the steps. Not steered: a ball with more substeps of its own
-//!   (`additional_solver_iterations`), or whose spin rapier would cap (a quarter turn a
-//!   step, unless it allows fast rotation). The bodies stage writes the end's velocities,
+//!   (`additional_solver_iterations`). A ball whose spin rapier would cap (a quarter turn
+//!   a step, unless it allows fast rotation) keeps its spin and has only its centre
+//!   steered: with its ground's contact out of the solver it would otherwise fall through
+//!   the step, which rapier's CCD cuts short. The bodies stage writes the end's velocities,
 //!   and its pose only where rapier's drifted beyond a few roundings (`policy::carries`,
 //!   `policy::carries_turn`), and keeps the end's `f64` state as the ball's shadow in every
 //!   mode, from which its next step continues (`Commit::rolled`); a ball something else
@@ -119,15 +121,13 @@ fn steer_roll(
     now: &Now,
     (dt, substeps): (f64, f64),
 ) {
-    let Some((steering, (linvel, angvel))) = steered_roll(cand, now, (dt, substeps)) else {
+    let fast = rb.is_fast_rotation_allowed();
+    let Some((steering, (linvel, angvel))) = steered_roll(cand, now, (dt, substeps), fast) else {
         return;
     };
     let Ok(index) = u32::try_from(steered.len()) else {
         return;
     };
-    if !(rb.is_fast_rotation_allowed() || within_spin_cap(&angvel, dt)) {
-        return;
-    }
     let (linvel, angvel) = (vec_from_na(&linvel), vec_from_na(&angvel));
     if commit.velocities(cand.body, linvel, angvel) {
         steered.push(steering);
@@ -137,18 +137,42 @@ fn steer_roll(
 
 /// The steering of a closed-form roll (see the module's contract) for the ball as rapier holds
 /// it (`now`), in a step of `dt` seconds and `substeps` substeps, and the velocities rapier's
-/// step starts it with (m/s, rad/s); `None` without a roll or where the turn is a quarter
-/// turn a substep or more (one linear quaternion step cannot reach it). Pure.
+/// step starts it with (m/s, rad/s); `None` without a roll. Its spin is steered onto the
+/// roll's end rotation where rapier leaves that spin as it is (`steered_spin`); else it keeps
+/// its own and only its centre is steered: the bodies stage then writes the end's pose, but
+/// the ball does not fall through its step (its ground's contact is out of rapier's solver),
+/// which rapier's CCD, sweeping it against the ground, would cut short. Pure.
 fn steered_roll(
     cand: &Candidate,
     now: &Now,
     (dt, substeps): (f64, f64),
+    fast_rotation: bool,
 ) -> Option<(SteeredRoll, Velocities)> {
     let (_, motion) = cand.rolling.as_ref()?;
     let end: State = motion.advance(&cand.start, dt);
     let from = vec_to_na(now.center_of_mass());
     let linvel =
         (end.com - from) / dt - cand.flight.accel * dt * (substeps + 1.0) / (2.0 * substeps);
+    let angvel = steered_spin(&end, now, (dt, substeps), fast_rotation)
+        .unwrap_or_else(|| vec_to_na(now.angvel()));
+    let offsets = (
+        vec_to_na(now.linvel()) - linvel,
+        vec_to_na(now.angvel()) - angvel,
+    );
+    let steered = SteeredRoll { end, from, offsets };
+    Some((steered, (linvel, angvel)))
+}
+
+/// The spin that turns the ball from its rotation as rapier holds it (`now`) onto `end`'s in
+/// rapier's `substeps` linear quaternion steps of a step of `dt` seconds; `None` where the
+/// turn is a quarter turn a substep or more (one linear quaternion step cannot reach it), or
+/// rapier would cap that spin (`within_spin_cap`, unless the body allows fast rotation).
+fn steered_spin(
+    end: &State,
+    now: &Now,
+    (dt, substeps): (f64, f64),
+    fast_rotation: bool,
+) -> Option<Vector3<f64>> {
     let turn = (end.rot * rot_to_na(now.rotation()).inverse()).scaled_axis();
     let angle = turn.norm();
     let per_substep = angle / (2.0 * substeps);
@@ -160,18 +184,13 @@ fn steered_roll(
     } else {
         Vector3::zeros()
     };
-    let offsets = (
-        vec_to_na(now.linvel()) - linvel,
-        vec_to_na(now.angvel()) - angvel,
-    );
-    let steered = SteeredRoll { end, from, offsets };
-    Some((steered, (linvel, angvel)))
+    (fast_rotation || within_spin_cap(&angvel, dt)).then_some(angvel)
 }
 
 /// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at a
 /// quarter turn a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the
-/// body allows fast rotation; a faster roll is not steered, and the bodies stage writes its
-/// end.
+/// body allows fast rotation; a faster roll has only its centre steered, and the bodies stage
+/// writes its end.
 fn within_spin_cap(angvel: &Vector3<f64>, dt: f64) -> bool {
     let cap = to_real(std::f64::consts::FRAC_PI_4) * (1.0 / to_real(dt));
     vec_from_na(angvel).length() <= cap
