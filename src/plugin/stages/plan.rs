@@ -146,7 +146,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             self.plan_ground(reads, &mut plan, k, step);
         }
         if plan.touched {
-            self.redecide_resting(reads, &mut plan, step);
+            if !plan.resolved_at_start.is_empty() {
+                self.redecide_resting(reads, &mut plan, step);
+            }
             self.report_touched(&plan, body.local_com);
         }
         self.push_candidate(body, &mut plan, step);

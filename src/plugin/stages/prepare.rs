@@ -125,10 +125,10 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
                 to_f64(params.prediction_distance()),
             ),
             integrator_lag: match self.config.timing {
-                TimingMode::TimeOfImpact => {
+                TimingMode::TimeOfImpact | TimingMode::Step => {
                     dt * dt / (2.0 * params.num_solver_iterations.max(1) as f64)
                 }
-                TimingMode::Step | TimingMode::Exact => 0.0,
+                TimingMode::Exact => 0.0,
             },
             steering_lag: dt / (2.0 * params.num_solver_iterations.max(1) as f64),
             substeps: params.num_solver_iterations.max(1),

@@ -186,10 +186,10 @@ pub(crate) struct StepData {
     /// The world's gravity (m/s^2).
     pub gravity: Vector3<f64>,
     /// How much lower than the exact flight the end state that stands after a step clear
-    /// of impacts can be, per unit of acceleration (s^2): in `TimeOfImpact` mode rapier's
-    /// substepped integrator, which moves a body by `(N + 1) / 2N a dt^2` in `N` substeps
-    /// where the flight moves it `a dt^2 / 2`, so `dt^2 / 2N`; 0 in the other modes (`Exact`
-    /// flies exactly; `Step` does not search).
+    /// of impacts can be, per unit of acceleration (s^2): in `TimeOfImpact` and `Step` modes
+    /// rapier's substepped integrator, which moves a body by `(N + 1) / 2N a dt^2` in `N`
+    /// substeps where the flight moves it `a dt^2 / 2`, so `dt^2 / 2N`; 0 in `Exact` mode,
+    /// which flies exactly.
     pub integrator_lag: f64,
     /// How much lower than its own velocity rapier's step starts a flight that `Exact` mode
     /// steers, per unit of acceleration (s): rapier's substepped integrator moves a body by

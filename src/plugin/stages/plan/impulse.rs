@@ -96,7 +96,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// already resolved by its own impulse in the step keeps the role that impulse gave: one
     /// impulse a pair and step. Rounds until one makes no impulse, so at most one round a
     /// resting pair. A body rolling in closed form or held on a slope keeps its plan (its
-    /// pairs are the rolling's or rapier's). Out of line: only a `Step` impulse calls it.
+    /// pairs are the rolling's or rapier's). Out of line: only a `Step` impulse
+    /// (`plan.resolved_at_start`) calls it.
     #[cold]
     #[inline(never)]
     pub(super) fn redecide_resting(

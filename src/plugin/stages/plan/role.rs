@@ -535,8 +535,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     ///
     /// The contact closes when its gap, carried along the start normal, closes within the
     /// step (`closes_within`) and, for a gap still open, the search along the body's flight
-    /// finds the part touching the ground in the step (`first_impact`): a path that passes an
-    /// edge or a corner closes the first line without ever touching.
+    /// finds the part touching the ground in the step (`first_impact`), or rapier's
+    /// integrator, lagging behind that flight, would (`touches_in_step`): a path that passes
+    /// an edge or a corner closes the first line without ever touching.
     #[cold]
     #[inline(never)]
     fn step_mode_role(
@@ -549,7 +550,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     ) -> Role {
         let closes = closes_within(dist, un, n.dot(&(reads.body.flight.accel)), step.dt)
             && un < 0.0
-            && (dist <= 0.0 || touches_in_step(reads, plan, &pair, step.dt));
+            && (dist <= 0.0 || touches_in_step(reads, plan, &pair, (step.dt, step.integrator_lag)));
         if closes {
             let hit = Hit {
                 part: pair.part_index,
@@ -612,9 +613,11 @@ fn rolling_piece_role(
 }
 
 /// Does the pair's part touch its ground, approaching, within `[0, dt]` of the body's flight
-/// from `plan.state` (`first_impact` over that part and ground alone)? A search that gives up
+/// from `plan.state` (`first_impact` over that part and ground alone), or end the step closer
+/// to it than rapier's integrator lags behind that flight (`lag` per unit of acceleration:
+/// `StepData::integrator_lag`), so that rapier's own step closes it? A search that gives up
 /// counts as touching: the contact then closes as its start normal says.
-fn touches_in_step(reads: BodyReads, plan: &BodyPlan, pair: &Pair, dt: f64) -> bool {
+fn touches_in_step(reads: BodyReads, plan: &BodyPlan, pair: &Pair, (dt, lag): (f64, f64)) -> bool {
     let body = reads.body;
     let mut parts = SmallList::default();
     parts.push(*pair.part);
@@ -622,11 +625,18 @@ fn touches_in_step(reads: BodyReads, plan: &BodyPlan, pair: &Pair, dt: f64) -> b
         parts,
         radius: body.geom.radius,
     };
+    let flight = body.flight;
     let grounds = std::slice::from_ref(pair.gg);
-    !matches!(
-        first_impact(&part_alone, grounds, body.flight, &plan.state, 0.0, 0.0, dt),
+    if !matches!(
+        first_impact(&part_alone, grounds, flight, &plan.state, 0.0, 0.0, dt),
         Search::Clear
-    )
+    ) {
+        return true;
+    }
+    let end = flight.advance(&plan.state, dt);
+    let sink = lag * flight.accel.norm();
+    contact_checked(pair.part, pair.gg, &end, dt, sink)
+        .is_ok_and(|c| c.is_some_and(|(dist, n, _)| dist <= lag * (-n.dot(&flight.accel)).max(0.0)))
 }
 
 /// Is the contact within reach (found, and parry could query it)?
