@@ -116,6 +116,21 @@ pub(crate) fn capped_energy(
     })
 }
 
+/// The candidate's start state, moved out along the normal of its deepest point among the
+/// checked grounds where it already lay deeper than `gap` (the resting gap) in one at the
+/// step's start (`Checked::grounds`, at their start poses): the reference of the energy cap.
+/// A ground the user moved into the body, a body moved into it or made bigger: the lift out
+/// of that depth is not the step's gain. Reads only.
+fn out_of_start_grounds(checked: &Checked, cand: &Candidate, gap: f64) -> State {
+    let mut start = cand.start;
+    if let Some(hit) = closest(checked.geom, checked.grounds, &start, 0.0, 0.0) {
+        if hit.dist < -gap {
+            start.com -= hit.normal * hit.dist;
+        }
+    }
+    start
+}
+
 /// A body the settle stage checks, with what its checks need.
 #[derive(Clone, Copy)]
 pub(crate) struct Checked<'c> {
@@ -366,8 +381,11 @@ impl AfterStep<'_> {
     /// at the step rate. Invariant: a body whose energy can only have been lost
     /// (`may_cap_energy`, and no restitution above 1 among its events of the step from
     /// `Checked::events_from`) ends no higher in mechanical energy, in its constant force
-    /// field (`Flight::accel`), than it started (`capped_energy`); the cap is reported as an
-    /// `EnergyCap` event at the site of the body's last event.
+    /// field (`Flight::accel`), than it started, once out of any ground it already lay deeper
+    /// in than the resting gap at the step's start (`out_of_start_grounds`: the user moved
+    /// the ground or the body, or made the body bigger; that lift is not the step's)
+    /// (`capped_energy`); the cap is reported as an `EnergyCap` event at the site of the
+    /// body's last event.
     fn cap_if_gained(
         &mut self,
         rb: &RigidBody,
@@ -390,13 +408,8 @@ impl AfterStep<'_> {
             .rev()
             .find(|e| e.body == checked.body)
             .map(Site::of)?;
-        let capped = capped_energy(
-            &cand.start,
-            end,
-            &cand.flight,
-            checked.inertia,
-            &site.normal,
-        )?;
+        let start = out_of_start_grounds(checked, cand, step.policy.resting_gap);
+        let capped = capped_energy(&start, end, &cand.flight, checked.inertia, &site.normal)?;
         self.commit.event(correction(
             EventKind::EnergyCap,
             &site,
