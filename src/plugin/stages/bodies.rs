@@ -44,7 +44,7 @@ use crate::plugin::queries::observe::{
 };
 use crate::plugin::stages::commit::Origin;
 use crate::plugin::stages::reconstruct::{
-    self, FlownEnd, Subject, ccd_consistent, ccd_consistent_steered,
+    self, FlownEnd, Subject, ccd_consistent, ccd_consistent_far, ccd_consistent_steered,
 };
 use crate::plugin::stages::settle::Checked;
 use crate::plugin::stages::view::AfterStep;
@@ -237,7 +237,7 @@ impl AfterStep<'_> {
         if !has_grounds || clear {
             if mode == TimingMode::Exact
                 && free()
-                && (clear || ccd_consistent(&now, &flown, step.dt, step))
+                && (clear || ccd_consistent_far(&now, &flown, step))
             {
                 self.fly_exactly(&now, &flown);
             } else if let Some(steer) = cand.flight_steering(step.steering_lag) {

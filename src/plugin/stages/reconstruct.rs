@@ -399,7 +399,26 @@ pub(crate) fn ccd_consistent(body: &Now, flown: &FlownEnd, t_first: f64, step: &
         return true;
     }
     let path = (&cand.start.com, &flown.centre().0);
-    ccd_reached(body, path, t_first / dt, cand.flight.accel.norm(), step)
+    let accel = cand.flight.accel.norm();
+    ccd_reached(
+        body,
+        path,
+        (t_first / dt, accel, step.policy.prediction),
+        step,
+    )
+}
+
+/// [`ccd_consistent`] for a body with no ground in reach over the whole step: rapier's CCD had
+/// no ground to stop it a prediction distance before, so it must have carried the body the
+/// whole way, but for the integration difference. Any shorter is a collider that is not a
+/// ground (a table the body falls onto), whose contact rapier's end state keeps.
+pub(crate) fn ccd_consistent_far(body: &Now, flown: &FlownEnd, step: &StepData) -> bool {
+    let cand = flown.cand;
+    if !body.rb().is_ccd_active() {
+        return true;
+    }
+    let path = (&cand.start.com, &flown.centre().0);
+    ccd_reached(body, path, (1.0, cand.flight.accel.norm(), 0.0), step)
 }
 
 /// A steered roll's [`ccd_consistent`]: did rapier's CCD leave the ball where the steering
@@ -414,17 +433,18 @@ pub(crate) fn ccd_consistent_steered(
         return true;
     }
     let path = (&steered.from, &steered.end.com);
-    ccd_reached(body, path, 1.0, cand.flight.accel.norm(), step)
+    let accel = cand.flight.accel.norm();
+    ccd_reached(body, path, (1.0, accel, step.policy.prediction), step)
 }
 
 /// Did the body (`body`, at the step's end) get at least the fraction `reached` of the way
-/// from `from` to `to`, its path in the step, under an acceleration of magnitude `accel`? A
-/// path shorter than rounding always does.
+/// from `from` to `to`, its path in the step, under an acceleration of magnitude `accel`, but
+/// for stopping up to `before` (m) short of a contact (rapier's prediction distance, where a
+/// ground may have stopped it)? A path shorter than rounding always does.
 fn ccd_reached(
     body: &Now,
     (from, to): (&Vector3<f64>, &Vector3<f64>),
-    reached: f64,
-    accel: f64,
+    (reached, accel, before): (f64, f64, f64),
     step: &StepData,
 ) -> bool {
     let exact = to - from;
@@ -437,6 +457,6 @@ fn ccd_reached(
     let fraction = actual.dot(&exact) / len2;
     // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
     // body up to about a prediction distance before the contact.
-    let slack = (accel * dt * dt + step.policy.prediction) / len2.sqrt() + CCD_SLACK;
+    let slack = (accel * dt * dt + before) / len2.sqrt() + CCD_SLACK;
     fraction >= reached - slack
 }
