@@ -43,6 +43,7 @@ impl Shadow {
     /// changed it since. A rotation or a change of mass properties moves the centre of mass
     /// without moving the translation (a body turned about its origin, a collider added):
     /// `com` is then not the body's.
+    #[inline]
     pub fn held_by(&self, now: &Now) -> bool {
         self.written_translation == now.translation()
             && self.written_linvel == now.linvel()

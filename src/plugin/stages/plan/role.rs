@@ -473,7 +473,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// (`Policy::rests`, with hysteresis for a pair rapier held at rest last step), in `Step`
     /// mode the start impulse of a contact that closes in the step (`step_start_impulse`),
     /// else impact. May apply that impulse to `plan.state`; reads rapier's contact graph only
-    /// where the policy asks whether the body is pressed.
+    /// where the policy asks whether the body is pressed. Inlined into both its callers: the
+    /// per-pair plan, where it is hot, and `Step` mode's re-decision, which is cold.
+    #[inline(always)]
     pub(super) fn touching_role(
         &mut self,
         reads: BodyReads,
