@@ -1369,13 +1369,13 @@ fn a_steered_roll_pushed_by_a_third_ball_ends_as_an_unsteered_one() {
     }
 }
 
-/// A roll whose spin rapier would cap (a quarter turn a step unless the body allows fast
+/// A roll whose spin rapier would cap (an eighth of a turn a step unless the body allows fast
 /// rotation: 2.4 m/s for a 5 cm ball at 60 Hz) has only its centre steered (a velocity write
 /// before rapier's step, so that it does not fall through the step), and its pose written
 /// every step: rapier's capped spin misses the roll's end rotation. Allowed to turn fast, it
 /// is steered, spin too, and its pose is rarely written.
 #[test]
-fn a_roll_faster_than_rapiers_spin_cap_is_written_as_before() {
+fn a_roll_faster_than_rapiers_spin_cap_is_written_with_its_centre_steered() {
     for (v0, fast_rotation, steered) in [(3.0, false, false), (3.0, true, true)] {
         let (mut w, ground, ball, _) = scene(0.0, v0);
         if fast_rotation {

@@ -195,6 +195,11 @@ pub(crate) const STILL_TRAVEL_SQUARED: f64 = 1e-24;
 /// integration difference and prediction distance: its own time-of-impact rounding.
 pub(crate) const CCD_SLACK: f64 = 1e-3;
 
+/// How many of rapier's roundings of a position (its precision's epsilon, per m of the
+/// largest coordinate of the step's path) its end may stand short of the exact flight's
+/// besides [`CCD_SLACK`]: far from the origin a slow body's path is a few roundings long.
+pub(crate) const CCD_ROUNDINGS: f64 = 4.0;
+
 /// Steps in a row with no managed body near any ground and none asleep after which the
 /// grounds' hook flags come off (they go on the first step a body nears a ground, and are
 /// not put on before): no ground pair can then have a contact the plugin changes, and each

@@ -197,6 +197,9 @@ impl<'a> Commit<'a> {
         if kept {
             let written = (pose.translation, pose.rotation, linvel, angvel);
             self.shadows.insert(body, Shadow::of(s, local_com, written));
+        } else {
+            // A shadow from an earlier write of the step is not this state.
+            self.shadows.remove(&body);
         }
     }
 

@@ -14,14 +14,14 @@
 //! a body never left inside a ground) and commits it.
 
 use crate::motion::{Flight, Rolling, State};
-use crate::plugin::bridge::convert::{to_real, vec_from_na, vec_to_na};
+use crate::plugin::bridge::convert::{to_f64, to_real, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
 };
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::on_plane;
 use crate::plugin::policy::{
-    CCD_SLACK, GAP_BOUND_SLACK, MOVED_AS_FLOWN_ROUNDING, Role, STILL_TRAVEL_SQUARED,
+    CCD_ROUNDINGS, CCD_SLACK, GAP_BOUND_SLACK, MOVED_AS_FLOWN_ROUNDING, Role, STILL_TRAVEL_SQUARED,
 };
 use crate::plugin::queries::geometry::{
     BodyGeom, BodyPart, GroundGeom, Hit, Search, WayBound, closest, earliest_touch, first_impact,
@@ -32,6 +32,7 @@ use crate::plugin::stages::view::EndOfStep;
 use crate::plugin::state::step::StepData;
 use crate::plugin::state::step::{Candidate, SteeredRoll};
 use crate::plugin::state::writes::Now;
+use crate::rapier::math::Real;
 use crate::rapier::prelude::{ColliderHandle, ColliderSet, RigidBodySet};
 use nalgebra::Vector3;
 
@@ -408,10 +409,12 @@ pub(crate) fn ccd_consistent(body: &Now, flown: &FlownEnd, t_first: f64, step: &
     )
 }
 
-/// [`ccd_consistent`] for a body with no ground in reach over the whole step: rapier's CCD had
-/// no ground to stop it a prediction distance before, so it must have carried the body the
-/// whole way, but for the integration difference. Any shorter is a collider that is not a
-/// ground (a table the body falls onto), whose contact rapier's end state keeps.
+/// [`ccd_consistent`] for a body with no ground to search (no `Impact` pair: none in reach,
+/// or only pairs rapier's solver has, which a body that flew alone does not touch): rapier's
+/// CCD had no ground to stop it a prediction distance before, so it must have carried the
+/// body the whole way, but for the integration difference and rounding. Any shorter is a
+/// collider that is not a ground (a table the body falls onto), whose contact rapier's end
+/// state keeps.
 pub(crate) fn ccd_consistent_far(body: &Now, flown: &FlownEnd, step: &StepData) -> bool {
     let cand = flown.cand;
     if !body.rb().is_ccd_active() {
@@ -455,8 +458,10 @@ fn ccd_reached(
     let dt = step.dt;
     let actual = vec_to_na(body.center_of_mass()) - from;
     let fraction = actual.dot(&exact) / len2;
-    // rapier's flight differs from the exact one by about |a| dt^2 / 2, and its CCD stops a
-    // body up to about a prediction distance before the contact.
-    let slack = (accel * dt * dt + before) / len2.sqrt() + CCD_SLACK;
+    // rapier's flight differs from the exact one by about |a| dt^2 / 2, its CCD stops a
+    // body up to about a prediction distance before the contact, and it holds the end in its
+    // precision.
+    let rounding = CCD_ROUNDINGS * to_f64(Real::EPSILON) * (from.amax() + to.amax());
+    let slack = (accel * dt * dt + before + rounding) / len2.sqrt() + CCD_SLACK;
     fraction >= reached - slack
 }

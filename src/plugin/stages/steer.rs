@@ -26,8 +26,8 @@
 //!   turns it onto the end's rotation, `(2N / dt) tan(theta / 2N)` about the axis of the
 //!   turn `theta`. Starting from rapier's pose, not the plan's, keeps rapier's rounding
 //!   from adding up over the steps. Not steered: a ball with more substeps of its own
-//!   (`additional_solver_iterations`). A ball whose spin rapier would cap (a quarter turn
-//!   a step, unless it allows fast rotation) keeps its spin and has only its centre
+//!   (`additional_solver_iterations`). A ball whose spin rapier would cap (an eighth of a
+//!   turn a step, unless it allows fast rotation) keeps its spin and has only its centre
 //!   steered: with its ground's contact out of the solver it would otherwise fall through
 //!   the step, which rapier's CCD cuts short. The bodies stage writes the end's velocities,
 //!   and its pose only where rapier's drifted beyond a few roundings (`policy::carries`,
@@ -187,8 +187,8 @@ fn steered_spin(
     (fast_rotation || within_spin_cap(&angvel, dt)).then_some(angvel)
 }
 
-/// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at a
-/// quarter turn a step (`MAX_ROTATION` times the step's inverse, in its precision) unless the
+/// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at an
+/// eighth of a turn a step (`MAX_ROTATION`, pi/4 rad, times the step's inverse, in its precision) unless the
 /// body allows fast rotation; a faster roll has only its centre steered, and the bodies stage
 /// writes its end.
 fn within_spin_cap(angvel: &Vector3<f64>, dt: f64) -> bool {
