@@ -452,7 +452,8 @@ impl<H> ImpactPlugin<H> {
         self.registry.all_impact
     }
 
-    /// Does `body` take part in impacts between bodies (opted in, and managed)?
+    /// Does `body` take part in impacts between bodies (opted in, and managed; whether it is a
+    /// multibody's link, as rapier's sets held it at the last step's start)?
     pub fn is_impact_body(&self, bodies: &RigidBodySet, body: RigidBodyHandle) -> bool {
         bodies
             .get(body)

@@ -107,7 +107,7 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         // fixed body the user moved; the plugin's own writes were carried at the last step's
         // end): the same now, so that the plan meets every collider where rapier's step will.
         bodies.propagate_modified_body_positions_to_colliders(colliders);
-        let mut step = self.prepare(gravity, params, bodies, colliders);
+        let mut step = self.prepare(gravity, params, (bodies, colliders), sets.multibody_joints);
         self.stopwatch.lap(Stage::Prepare);
         if !step.active {
             self.step = step;

@@ -30,8 +30,8 @@ use crate::plugin::state::memory::LastStep;
 use crate::plugin::state::step::{Candidate, StepData};
 use crate::rapier::math::{Real, Vector};
 use crate::rapier::prelude::{
-    ColliderHandle, ColliderSet, IntegrationParameters, PhysicsHooks, RigidBody, RigidBodyHandle,
-    RigidBodySet,
+    ColliderHandle, ColliderSet, IntegrationParameters, MultibodyJointSet, PhysicsHooks, RigidBody,
+    RigidBodyHandle, RigidBodySet,
 };
 use nalgebra::Vector3;
 
@@ -105,13 +105,14 @@ impl<H: PhysicsHooks> ImpactPlugin<H> {
         &mut self,
         gravity: Vector,
         params: &IntegrationParameters,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
+        (bodies, colliders): (&RigidBodySet, &ColliderSet),
+        multibody_joints: &MultibodyJointSet,
     ) -> StepData {
         self.reports.clear();
         // The hooks' tables are rebuilt at the end of the plan.
         self.lookup = Lookup::default();
         self.registry.sync(bodies, colliders);
+        self.registry.sync_links(multibody_joints);
         let dt = to_f64(params.dt);
         let g = vec_to_na(gravity);
         let mut step = StepData {

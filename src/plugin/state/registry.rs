@@ -2,7 +2,8 @@
 //! manages.
 //!
 //! Contract: the only state here is what the user registered (grounds, the all-fixed mode,
-//! exclusions) and the ground index built from it; marking a ground changes nothing in the
+//! exclusions), the ground index built from it, and the multibody links read at each step's
+//! start; marking a ground changes nothing in the
 //! collider set (the plugin's hook flags are put on at each step, `hooks/flags.rs`). Every
 //! registration is validated at the call that makes it ([`ConfigError`]).
 
@@ -17,7 +18,8 @@ use crate::plugin::state::handles::{
     HandleMap, HandleSet, PairKey, sorted_entries, sorted_members,
 };
 use crate::rapier::prelude::{
-    Collider, ColliderHandle, ColliderSet, LockedAxes, RigidBody, RigidBodyHandle, RigidBodySet,
+    Collider, ColliderHandle, ColliderSet, LockedAxes, MultibodyJointSet, RigidBody,
+    RigidBodyHandle, RigidBodySet,
 };
 
 /// The grounds and the managed bodies (see the module's contract).
@@ -31,6 +33,10 @@ pub(crate) struct Registry {
     pub unmarked: HandleSet<ColliderHandle>,
     /// Bodies left to rapier entirely.
     pub excluded: HandleSet<RigidBodyHandle>,
+    /// The links of rapier's multibodies as of the step's start ([`Self::sync_links`]), left
+    /// to rapier: a multibody takes its links' velocities from its own generalized
+    /// velocities, so a velocity written to a link's body is dropped.
+    pub multibody_links: HandleSet<RigidBodyHandle>,
     /// Balls' own rolling resistance and spinning friction
     /// ([`crate::ImpactPlugin::set_body_rolling`]).
     pub body_rolling: HandleMap<RigidBodyHandle, (f64, f64)>,
@@ -256,7 +262,8 @@ impl Registry {
     }
 
     /// Is the body's ground contact resolved by the plugin? Dynamic, enabled, with a
-    /// positive finite mass, no locked translation, not a soft-body frame, not excluded.
+    /// positive finite mass, no locked translation, not a soft-body frame, not a multibody's
+    /// link, not excluded.
     pub fn manages(&self, handle: RigidBodyHandle, rb: &RigidBody) -> bool {
         let mass = to_f64(rb.mass());
         rb.is_dynamic()
@@ -266,6 +273,17 @@ impl Registry {
             && mass.is_finite()
             && !rb.locked_axes().intersects(LockedAxes::TRANSLATION_LOCKED)
             && (self.excluded.is_empty() || !self.excluded.contains(&handle))
+            && (self.multibody_links.is_empty() || !self.multibody_links.contains(&handle))
+    }
+
+    /// Reads the links of rapier's multibodies at the step's start (none in most worlds: an
+    /// empty set's walk).
+    pub fn sync_links(&mut self, multibody_joints: &MultibodyJointSet) {
+        self.multibody_links.clear();
+        for multibody in multibody_joints.multibodies() {
+            self.multibody_links
+                .extend(multibody.links().map(|link| link.rigid_body_handle()));
+        }
     }
 
     /// Does the body take part in impacts between bodies: managed, and opted in?
@@ -573,6 +591,8 @@ impl Registry {
             all_fixed: saved.all_fixed,
             unmarked: saved.unmarked.iter().copied().collect(),
             excluded: saved.excluded.iter().copied().collect(),
+            // Read again at the next step's start, as every step does.
+            multibody_links: HandleSet::default(),
             body_rolling: saved.body_rolling.iter().copied().collect(),
             ground_curves: saved.ground_curves.iter().cloned().collect(),
             body_bounce: saved.body_bounce.iter().cloned().collect(),
