@@ -25,7 +25,7 @@ use core::fmt;
 /// The layout of [`ImpactSnapshot`]: a snapshot of another layout is refused by
 /// [`ImpactPlugin::restore`] rather than misread: raised with every change of what the
 /// snapshot holds.
-const LAYOUT: u32 = 4;
+const LAYOUT: u32 = 5;
 
 /// The plugin's state between two steps, to resume a simulation bit for bit: save it beside
 /// rapier's world, and give both back ([`ImpactPlugin::restore`] and the world as it was
@@ -183,7 +183,7 @@ impl<H> ImpactPlugin<H> {
             .memory
             .mesh_sides
             .iter()
-            .all(|(_, n)| n.iter().all(|x| x.is_finite()));
+            .all(|(_, side)| side.is_finite());
         if !sides_finite || !snapshot.memory.shadows.iter().all(|(_, s)| s.is_finite()) {
             return Err(RestoreError::NotFinite);
         }

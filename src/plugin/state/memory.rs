@@ -8,7 +8,7 @@ use crate::plugin::state::handles::{
     ArenaOrder, HandleMap, HandleSet, PairKey, SlotTable, Slotted, restored_in_vector,
     sorted_entries, sorted_members, take_in_far,
 };
-use crate::plugin::state::step::{Candidate, GroundPair, SteeredRoll, StepData};
+use crate::plugin::state::step::{Candidate, GroundPair, MeshSide, SteeredRoll, StepData};
 use crate::plugin::state::writes::Now;
 use crate::rapier::math::{Rotation, Vector};
 use crate::rapier::prelude::{ColliderHandle, RigidBodyHandle};
@@ -273,7 +273,7 @@ pub(crate) struct Memory {
     pub reported: HandleSet<ColliderHandle>,
     /// The side of each mesh or heightfield ground its bodies were on at the last step's
     /// start (`StepData::mesh_sides`).
-    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
+    pub mesh_sides: HandleMap<PairKey, MeshSide>,
     /// Tables a step fills again, kept from the step before so that their allocations are.
     pub spare: Spare,
     /// The bodies the last step's plan found near a ground (`NearMarks`).
@@ -318,7 +318,7 @@ pub(crate) struct LastStep {
     pub shadows: Shadows,
     pub roles: HandleMap<PairKey, Role>,
     pub pair_roles: HandleMap<PairKey, Role>,
-    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
+    pub mesh_sides: HandleMap<PairKey, MeshSide>,
 }
 
 /// Tables a step fills again, kept from the step before.
@@ -406,7 +406,7 @@ pub(crate) struct SavedMemory {
     pub pair_roles: Vec<(PairKey, Role)>,
     pub holds: Vec<PairKey>,
     pub reported: Vec<ColliderHandle>,
-    pub mesh_sides: Vec<(PairKey, Vector3<f64>)>,
+    pub mesh_sides: Vec<(PairKey, MeshSide)>,
 }
 
 impl Memory {

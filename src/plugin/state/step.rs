@@ -175,6 +175,28 @@ impl Candidate {
     }
 }
 
+/// The face of a mesh or heightfield ground a body part touched at a step's start: the
+/// contact normal, from the ground into the body (world frame), and the contact's point on
+/// the ground in the ground's frame, so that a moving mesh carries it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde-serialize",
+    derive(serde::Serialize, serde::Deserialize)
+)]
+pub(crate) struct MeshSide {
+    pub normal: Vector3<f64>,
+    pub face_point: Vector3<f64>,
+}
+
+impl MeshSide {
+    pub fn is_finite(&self) -> bool {
+        self.normal
+            .iter()
+            .chain(self.face_point.iter())
+            .all(|x| x.is_finite())
+    }
+}
+
 #[derive(Default)]
 pub(crate) struct StepData {
     pub active: bool,
@@ -212,10 +234,10 @@ pub(crate) struct StepData {
     /// the slope's tilt (`Rolling::holding_tilt`). The hook moves rapier's contact points to
     /// where the normal force holds the ball (`hooks/mod.rs`).
     pub holds: HandleMap<PairKey, Vector3<f64>>,
-    /// The side (the contact normal at the step's start) of each pair of a body with a mesh
-    /// or heightfield ground: a mesh has no inside, and a body found on the other side at
-    /// the next step crossed it (`Planner::mesh_side`).
-    pub mesh_sides: HandleMap<PairKey, Vector3<f64>>,
+    /// The side of each pair of a body with a mesh or heightfield ground at the step's start:
+    /// a mesh has no inside, and a body found on the other side of that face at the next step
+    /// crossed it (`Planner::mesh_side`).
+    pub mesh_sides: HandleMap<PairKey, MeshSide>,
     /// The balls held at rest this step and not the last (`FirstHold`).
     pub first_holds: Vec<FirstHold>,
     /// The pairs of opted-in balls and their roles (`pair_plan.rs`).

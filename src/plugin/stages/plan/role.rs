@@ -19,7 +19,7 @@ use crate::plugin::queries::geometry::{
 use crate::plugin::queries::observe::{Scene, touched_besides_grounds};
 use crate::plugin::state::handles::PairKey;
 use crate::plugin::state::small_list::SmallList;
-use crate::plugin::state::step::{GroundPair, StepData};
+use crate::plugin::state::step::{GroundPair, MeshSide, StepData};
 use crate::rapier::prelude::{ActiveHooks, Collider, ColliderHandle, PhysicsHooks};
 use nalgebra::Vector3;
 
@@ -269,8 +269,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 
     /// A mesh or heightfield has no inside: a contact's normal is turned towards the body. A
-    /// body found on the other side than at the last step's start crossed the surface
-    /// (rapier's resting contact can let a thin body through a mesh's edge): while it is over
+    /// body whose contact faces the other way than at the last step's start, its part's
+    /// centre behind the face it touched then, crossed the surface (rapier's resting contact
+    /// can let a thin body through a mesh's edge): while it is over
     /// the face, it is put back on the side it was on, by its depth measured from that side,
     /// its speed into the ground removed (a `PushOut` at the step's start, written with the
     /// plan's state), and the contact found again; not where that puts it deeper than the
@@ -315,13 +316,17 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } = pair;
         let body = reads.body;
         let mut found = found;
-        if let Some(side) = reads
-            .last
-            .mesh_sides
-            .get(&key)
-            .filter(|side| side.dot(&n) < 0.0)
-        {
-            let centre = part_pose(part, &plan.state).translation.vector;
+        let centre = part_pose(part, &plan.state).translation.vector;
+        let pose_g = gg.pose_at(0.0);
+        // Crossed: the contact now faces the other way, and the part's centre lies behind
+        // the face it touched. A contact that turns between two faces of a crease (parry
+        // takes either when the body touches both) leaves the centre in front of each.
+        let crossed_from = reads.last.mesh_sides.get(&key).and_then(|last| {
+            let face_point = (pose_g * nalgebra::Point3::from(last.face_point)).coords;
+            (last.normal.dot(&n) < 0.0 && (centre - face_point).dot(&last.normal) < 0.0)
+                .then_some(last.normal)
+        });
+        if let Some(side) = crossed_from {
             let from = centre + side * (2.0 * body.geom.radius + dist.abs());
             let crossed = contact_from_side(part, gg, &plan.state, 0.0, from, true)
                 .filter(|(depth, ..)| *depth < 0.0)
@@ -383,8 +388,11 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 found = contact_checked(part, gg, &plan.state, 0.0, body.reach_to(gg));
             }
         }
-        if let Ok(Some((_, n, _))) = found {
-            step.mesh_sides.insert(key, n);
+        if let Ok(Some((dist, normal, point))) = found {
+            // The contact's point on the ground, in the ground's frame.
+            let on_ground = nalgebra::Point3::from(point - normal * dist);
+            let face_point = pose_g.inverse_transform_point(&on_ground).coords;
+            step.mesh_sides.insert(key, MeshSide { normal, face_point });
         }
         found
     }
