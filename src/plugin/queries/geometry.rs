@@ -12,7 +12,9 @@ mod plane;
 pub(crate) use impact_time::{
     Gap, Search, Sweep, cannot_close, earliest_touch, first_impact, touch_time,
 };
-pub(crate) use instant::{closest, contact, contact_checked, contact_from_side};
+pub(crate) use instant::{
+    closest, contact, contact_checked, contact_from_side, entry_face_contact,
+};
 pub(crate) use plane::{
     COPLANAR_TOLERANCE, PlaneNear, body_landing_point, flat_relative, landing_point,
     one_plane_under, plane_piece_of,

@@ -16,14 +16,14 @@
 //! than another's.
 
 use crate::motion::{Flight, State};
-use crate::plugin::bridge::convert::to_f64;
+use crate::plugin::bridge::convert::{to_f64, vec_to_na};
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, resolve,
 };
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, part_pose,
+    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, entry_face_contact, part_pose,
 };
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
@@ -623,20 +623,32 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// out there, the body would end under the ground (and, on a thin slab above a floor, be
 /// pushed through both). Where the body's part was at the step's start is outside the
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
-/// it (`contact_from_side`). A body with no start state (asleep at the start) keeps `hit`.
+/// it (`contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
+/// hit's own point of the body behind it at the start, that point then outside the ground,
+/// and the face taken is the entry face that point was in front of (`entry_face_contact`):
+/// a long body whose end went into a post while its centre stayed beside it (a hinged
+/// flap onto a stop, a door swung into a post) is out of the face its end came in by, not
+/// out of the face its centre lies beyond, across the whole body. A body with no start
+/// state (asleep at the start) keeps `hit`.
 fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let Some(cand) = checked.cand else {
         return hit;
     };
     let part = &checked.geom.parts[hit.part];
     let ground = &checked.grounds[hit.ground];
-    let from = start_point(cand, part, ground, dt);
     // The face's plane: the hit's point less its signed distance along the normal.
     let face = hit.point - hit.normal * hit.dist;
-    if hit.normal.dot(&(from - face)) >= 0.0 {
-        return hit;
-    }
-    match contact_from_side(part, ground, s, dt, from, false) {
+    let behind = |p: &Vector3<f64>| hit.normal.dot(&(p - face)) < 0.0;
+    let centre = start_point(cand, part, ground, dt);
+    let found = if behind(&centre) {
+        contact_from_side(part, ground, s, dt, centre, false)
+    } else {
+        match hit_point_start(cand, part, ground, s, &hit, dt) {
+            Some(point) if behind(&point) => entry_face_contact(part, ground, s, dt, point),
+            _ => return hit,
+        }
+    };
+    match found {
         Some(found) => Hit::at((hit.part, hit.ground), ground, s, dt, found),
         None => hit,
     }
@@ -644,11 +656,36 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
 
 /// Where a part of the body was at the step's start, carried with `ground` to `t`.
 fn start_point(cand: &Candidate, part: &BodyPart, ground: &GroundGeom, t: f64) -> Vector3<f64> {
-    let start = part_pose(part, &cand.start).translation.vector;
+    carried(ground, t, part_pose(part, &cand.start).translation.vector)
+}
+
+/// Where the point of the body at `hit` (at `s`, time `t`) was at the step's start, carried
+/// with `ground` to `t`, if that lay outside the ground, a cuboid; `None` for other grounds
+/// and inside.
+fn hit_point_start(
+    cand: &Candidate,
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    hit: &Hit,
+    t: f64,
+) -> Option<Vector3<f64>> {
+    let cuboid = ground.shape.as_cuboid()?;
+    let on_body = part_pose(part, s).inverse_transform_point(&nalgebra::Point3::from(hit.point));
+    let start = carried(ground, t, (part_pose(part, &cand.start) * on_body).coords);
+    let local = ground
+        .pose_at(t)
+        .inverse_transform_point(&nalgebra::Point3::from(start));
+    let half = vec_to_na(cuboid.half_extents);
+    (0..3).any(|i| local[i].abs() > half[i]).then_some(start)
+}
+
+/// A point `p` at the step's start, carried with `ground` to `t`.
+fn carried(ground: &GroundGeom, t: f64, p: Vector3<f64>) -> Vector3<f64> {
     if ground.motion.v == Vector3::zeros() && ground.motion.w == Vector3::zeros() {
-        return start;
+        return p;
     }
-    (ground.pose_at(t) * ground.pose_at(0.0).inverse() * nalgebra::Point3::from(start)).coords
+    (ground.pose_at(t) * ground.pose_at(0.0).inverse() * nalgebra::Point3::from(p)).coords
 }
 
 /// The contact of a body that went through a thin ground in the step and ends clear of it
