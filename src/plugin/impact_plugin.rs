@@ -453,7 +453,8 @@ impl<H> ImpactPlugin<H> {
     }
 
     /// Does `body` take part in impacts between bodies (opted in, and managed; whether it is a
-    /// multibody's link, as rapier's sets held it at the last step's start)?
+    /// multibody's link, as rapier's sets held it at the last step's start, none read yet
+    /// after a `restore`)?
     pub fn is_impact_body(&self, bodies: &RigidBodySet, body: RigidBodyHandle) -> bool {
         bodies
             .get(body)

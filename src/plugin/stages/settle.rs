@@ -625,11 +625,11 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
 /// it (`contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
 /// hit's own point of the body behind it at the start, that point then outside the ground,
-/// and the face taken is the entry face that point was in front of (`entry_face_contact`):
-/// a long body whose end went into a post while its centre stayed beside it (a hinged
-/// flap onto a stop, a door swung into a post) is out of the face its end came in by, not
-/// out of the face its centre lies beyond, across the whole body. A body with no start
-/// state (asleep at the start) keeps `hit`.
+/// where a face that point was in front of holds the body less deep
+/// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
+/// beside it (a hinged flap onto a stop, a door swung into a post) is out of the face its
+/// end came in by, not out of the face its centre lies beyond, across the whole body. A
+/// body with no start state (asleep at the start) keeps `hit`.
 fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let Some(cand) = checked.cand else {
         return hit;
@@ -643,8 +643,13 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let found = if behind(&centre) {
         contact_from_side(part, ground, s, dt, centre, false)
     } else {
+        // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
+        // past the side (its contact point then a rounding under the top, beyond the side)
+        // came in by the top, not by that side across its whole length.
         match hit_point_start(cand, part, ground, s, &hit, dt) {
-            Some(point) if behind(&point) => entry_face_contact(part, ground, s, dt, point),
+            Some(point) if behind(&point) => {
+                entry_face_contact(part, ground, s, dt, point).filter(|(dist, ..)| *dist > hit.dist)
+            }
             _ => return hit,
         }
     };

@@ -176,8 +176,8 @@ impl Candidate {
 }
 
 /// The face of a mesh or heightfield ground a body part touched at a step's start: the
-/// contact normal, from the ground into the body (world frame), and the contact's point on
-/// the ground in the ground's frame, so that a moving mesh carries it.
+/// contact normal, from the ground into the body, and the contact's point on the ground,
+/// both in the ground's frame, so that a moving mesh carries them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(
     feature = "serde-serialize",

@@ -322,9 +322,9 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // the face it touched. A contact that turns between two faces of a crease (parry
         // takes either when the body touches both) leaves the centre in front of each.
         let crossed_from = reads.last.mesh_sides.get(&key).and_then(|last| {
+            let normal = pose_g.rotation * last.normal;
             let face_point = (pose_g * nalgebra::Point3::from(last.face_point)).coords;
-            (last.normal.dot(&n) < 0.0 && (centre - face_point).dot(&last.normal) < 0.0)
-                .then_some(last.normal)
+            (normal.dot(&n) < 0.0 && (centre - face_point).dot(&normal) < 0.0).then_some(normal)
         });
         if let Some(side) = crossed_from {
             let from = centre + side * (2.0 * body.geom.radius + dist.abs());
@@ -389,9 +389,10 @@ impl<H: PhysicsHooks> Planner<'_, H> {
             }
         }
         if let Ok(Some((dist, normal, point))) = found {
-            // The contact's point on the ground, in the ground's frame.
+            // The contact's normal and its point on the ground, in the ground's frame.
             let on_ground = nalgebra::Point3::from(point - normal * dist);
             let face_point = pose_g.inverse_transform_point(&on_ground).coords;
+            let normal = pose_g.rotation.inverse() * normal;
             step.mesh_sides.insert(key, MeshSide { normal, face_point });
         }
         found
