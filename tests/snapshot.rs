@@ -1,7 +1,7 @@
 //! Save and resume: rapier's world and the plugin's snapshot saved at a step and given back
 //! to a new plugin go on bit for bit as the run they were taken from, in every timing mode,
-//! with impacts between bodies, rolling balls, a ball held on a slope, a moving ground and a
-//! body the plugin does not manage, tangential restitutions and restitution curves of the
+//! with impacts between bodies, rolling balls, a ball held on a slope, a moving ground, a cube
+//! bouncing in a mesh's crease and a body the plugin does not manage, tangential restitutions and restitution curves of the
 //! configuration, of bodies and of a ground; with the `serde-serialize` feature, through CBOR too.
 //! A new plugin that is not restored does not (so the scenes exercise what the snapshot
 //! carries), and the user's hook flags come back as they were set.
@@ -27,7 +27,8 @@ const MODES: [TimingMode; 3] = [
 
 /// The scene: a floor, a box of walls, a crowd of opted-in balls dropped into it, boxes,
 /// two rolling balls (one with its own rolling resistance), a ball at rest on a 10-degree
-/// slope, a kinematic platform moving under a ball, and a ball the plugin leaves to rapier.
+/// slope, a kinematic platform moving under a ball, a cube dropped into a trimesh crease, and
+/// a ball the plugin leaves to rapier.
 /// The last has user hook flags, as has the floor.
 fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
     let mut world = PhysicsWorld::default();
@@ -49,8 +50,9 @@ fn scene(timing: TimingMode) -> (PhysicsWorld, ImpactPlugin) {
     add_rolling_balls(&mut world, &mut plugin);
     let slope = add_slope_with_a_ball_at_rest(&mut world);
     let platform = add_moving_platform_with_a_ball_over_it(&mut world);
+    let crease = add_crease_with_a_cube_over_it(&mut world);
     add_ball_left_to_rapier(&mut world, &mut plugin);
-    for ground in [floor, slope] {
+    for ground in [floor, slope, crease] {
         plugin
             .add_ground(&world.bodies, &world.colliders, ground)
             .unwrap();
@@ -159,6 +161,37 @@ fn add_moving_platform_with_a_ball_over_it(world: &mut PhysicsWorld) -> Collider
         ColliderBuilder::ball(0.1).restitution(0.7),
     );
     platform
+}
+
+/// A trimesh crease of two 60-degree faces standing on the floor, with a tilted cube dropped
+/// into it: the crease, a ground to be. (The side of the mesh the cube touched is kept and
+/// saved, but matters only to a body that crosses the mesh, which this one does not: the
+/// run resumes the same without it.)
+fn add_crease_with_a_cube_over_it(world: &mut PhysicsWorld) -> ColliderHandle {
+    let h = real(0.5 * 60f64.to_radians().tan());
+    let vertices = vec![
+        Vector::new(-0.5, h, -0.5),
+        Vector::new(0.0, 0.0, -0.5),
+        Vector::new(0.5, h, -0.5),
+        Vector::new(-0.5, h, 0.5),
+        Vector::new(0.0, 0.0, 0.5),
+        Vector::new(0.5, h, 0.5),
+    ];
+    let triangles = vec![[0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2]];
+    let (_, crease) = world.insert(
+        RigidBodyBuilder::fixed().translation(Vector::new(-6.0, 0.0, -4.0)),
+        ColliderBuilder::trimesh(vertices, triangles)
+            .unwrap()
+            .restitution(0.6)
+            .friction(0.5),
+    );
+    world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(-5.97, 1.2, -4.0))
+            .rotation(Vector::new(0.0, 0.2, 0.3)),
+        ColliderBuilder::cuboid(0.08, 0.08, 0.08).restitution(0.6),
+    );
+    crease
 }
 
 /// A ball with user hook flags that the plugin excludes.
