@@ -316,17 +316,7 @@ fn a_body_resting_in_a_steep_crease_of_a_mesh_stays_in_it() {
         let over = |q: &Vector3<f64>| normals.map(|n| n.dot(q));
         for mesh in ["trimesh", "heightfield"] {
             let crease = if mesh == "trimesh" {
-                let h = real(2.0 * tan);
-                let vertices = vec![
-                    Vector::new(-2.0, h, -2.0),
-                    Vector::new(0.0, 0.0, -2.0),
-                    Vector::new(2.0, h, -2.0),
-                    Vector::new(-2.0, h, 2.0),
-                    Vector::new(0.0, 0.0, 2.0),
-                    Vector::new(2.0, h, 2.0),
-                ];
-                let triangles = vec![[0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2]];
-                ColliderBuilder::trimesh(vertices, triangles).unwrap()
+                crease_trimesh(2.0, tan)
             } else {
                 let n = 17;
                 let heights = (0..n * n)

@@ -13,7 +13,9 @@ use rapier_impact::{
     GroundMaterial, ImpactConfig, ImpactEvent, ImpactPlugin, ImpactSnapshot, RestitutionCurve,
     RollingSettings, TimingMode,
 };
-use scene_support::{events_hash, jitter, real, saved_world, state_hash, walled_box};
+use scene_support::{
+    crease_trimesh, events_hash, jitter, real, saved_world, state_hash, walled_box,
+};
 
 const STEPS: usize = 240;
 /// The steps after which the run is saved and resumed: the first, one in the thick of the
@@ -168,20 +170,9 @@ fn add_moving_platform_with_a_ball_over_it(world: &mut PhysicsWorld) -> Collider
 /// saved, but matters only to a body that crosses the mesh, which this one does not: the
 /// run resumes the same without it.)
 fn add_crease_with_a_cube_over_it(world: &mut PhysicsWorld) -> ColliderHandle {
-    let h = real(0.5 * 60f64.to_radians().tan());
-    let vertices = vec![
-        Vector::new(-0.5, h, -0.5),
-        Vector::new(0.0, 0.0, -0.5),
-        Vector::new(0.5, h, -0.5),
-        Vector::new(-0.5, h, 0.5),
-        Vector::new(0.0, 0.0, 0.5),
-        Vector::new(0.5, h, 0.5),
-    ];
-    let triangles = vec![[0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2]];
     let (_, crease) = world.insert(
         RigidBodyBuilder::fixed().translation(Vector::new(-6.0, 0.0, -4.0)),
-        ColliderBuilder::trimesh(vertices, triangles)
-            .unwrap()
+        crease_trimesh(0.5, 60f64.to_radians().tan())
             .restitution(0.6)
             .friction(0.5),
     );

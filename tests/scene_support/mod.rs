@@ -548,6 +548,22 @@ pub fn slab_ground(half: f64, thick: f64) -> ColliderBuilder {
     ))
 }
 
+/// A V-shaped crease along z of one trimesh: two faces `y = |x| tan` meeting at the origin,
+/// over `|x|, |z| <= half` (m).
+pub fn crease_trimesh(half: f64, tan: f64) -> ColliderBuilder {
+    let (w, h) = (real(half), real(half * tan));
+    let vertices = vec![
+        Vector::new(-w, h, -w),
+        Vector::new(0.0, 0.0, -w),
+        Vector::new(w, h, -w),
+        Vector::new(-w, h, w),
+        Vector::new(0.0, 0.0, w),
+        Vector::new(w, h, w),
+    ];
+    let triangles = vec![[0, 3, 4], [0, 4, 1], [1, 4, 5], [1, 5, 2]];
+    ColliderBuilder::trimesh(vertices, triangles).unwrap()
+}
+
 /// Four fixed walls, 10 cm thick and 2 m high, around the square `|x|, |z| < half` (m), of
 /// restitution 0.7 and friction 0.5: the box a pile is dropped into.
 pub fn walled_box(world: &mut PhysicsWorld, half: f64) {
