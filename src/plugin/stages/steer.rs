@@ -188,9 +188,9 @@ fn steered_spin(
 }
 
 /// Does rapier leave the steered spin `angvel` as it is? rapier caps a body's spin at an
-/// eighth of a turn a step (`MAX_ROTATION`, pi/4 rad, times the step's inverse, in its precision) unless the
-/// body allows fast rotation; a faster roll has only its centre steered, and the bodies stage
-/// writes its end.
+/// eighth of a turn a step (`MAX_ROTATION`, pi/4 rad, times the step's inverse, in its
+/// precision) unless the body allows fast rotation; a faster roll has only its centre
+/// steered, and the bodies stage writes its end.
 fn within_spin_cap(angvel: &Vector3<f64>, dt: f64) -> bool {
     let cap = to_real(std::f64::consts::FRAC_PI_4) * (1.0 / to_real(dt));
     vec_from_na(angvel).length() <= cap

@@ -3,9 +3,9 @@
 //!
 //! Contract: the only state here is what the user registered (grounds, the all-fixed mode,
 //! exclusions), the ground index built from it, and the multibody links read at each step's
-//! start; marking a ground changes nothing in the
-//! collider set (the plugin's hook flags are put on at each step, `hooks/flags.rs`). Every
-//! registration is validated at the call that makes it ([`ConfigError`]).
+//! start; marking a ground changes nothing in the collider set (the plugin's hook flags are
+//! put on at each step, `hooks/flags.rs`). Every registration is validated at the call that
+//! makes it ([`ConfigError`]).
 
 use crate::model::{Material, RestitutionCurve};
 use crate::plugin::bridge::convert::to_f64;

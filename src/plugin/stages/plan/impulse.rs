@@ -6,7 +6,7 @@
 
 use super::Planner;
 use super::body::{BodyPlan, BodyReads};
-use super::role::{Pair, set_role};
+use super::role::{Pair, decided_again};
 use crate::plugin::bridge::resolve::{GroundContactAt, ImpactInput, Inertia, resolve};
 use crate::plugin::events::ImpactTiming;
 use crate::plugin::policy::Role;
@@ -14,7 +14,7 @@ use crate::plugin::policy::rests_at;
 use crate::plugin::queries::geometry::{
     BodyPart, Hit, body_landing_point, body_velocity_at, contact_checked,
 };
-use crate::plugin::state::step::StepData;
+use crate::plugin::state::step::{GroundPair, StepData};
 use crate::rapier::prelude::PhysicsHooks;
 
 impl<H: PhysicsHooks> Planner<'_, H> {
@@ -122,7 +122,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     {
                         continue;
                     }
-                    let Some(planned) = step.ground_pairs.iter().rfind(|p| p.key == key) else {
+                    let Some(&planned) = step.ground_pairs.iter().rfind(|p| p.key == key) else {
                         continue;
                     };
                     let Ok(Some(contact)) =
@@ -143,7 +143,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                     if role == Role::Resting {
                         continue;
                     }
-                    set_role(step, key, role);
+                    step.roles.insert(key, role);
+                    decided_again(step, GroundPair { role, ..planned });
                     if role == Role::Impact && !plan.impact_grounds.contains(gi) {
                         plan.impact_grounds.push(*gi);
                         plan.closing = true;

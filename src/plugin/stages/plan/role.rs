@@ -578,22 +578,13 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     }
 }
 
-/// Gives the pair `key`, already decided in the step, the role `role` (in `step.roles`, and in
-/// its entry of `step.ground_pairs`, whose flags stay).
-pub(super) fn set_role(step: &mut StepData, key: PairKey, role: Role) {
-    step.roles.insert(key, role);
-    if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == key) {
-        held.role = role;
-    }
-}
-
 /// A pair decided again in the step (its key already in `step.roles`, which now holds
 /// `planned`'s role): its entry in `step.ground_pairs` takes `planned`, so that the list keeps
 /// one entry a key, with the role the map keeps. Out of line: a pair is most often decided
 /// once.
 #[cold]
 #[inline(never)]
-fn decided_again(step: &mut StepData, planned: GroundPair) {
+pub(super) fn decided_again(step: &mut StepData, planned: GroundPair) {
     if let Some(held) = step.ground_pairs.iter_mut().rfind(|p| p.key == planned.key) {
         *held = planned;
     }
