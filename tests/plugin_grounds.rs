@@ -2084,3 +2084,77 @@ fn a_plank_resting_across_a_tables_edge_stays_on_the_table() {
         }
     }
 }
+
+/// A long body past a ground cuboid's edge, every mode: a 1.2 m rod leaning 0.2 rad over a
+/// 2 cm slab's edge, its centre 5 mm and 2 cm below the slab's mid-plane, drifting into the
+/// edge at 0.3 m/s (60 and 240 Hz), and a plank shoved off a 1 m table's edge at 5 m/s (30
+/// and 60 Hz). The rod's far end lies over the slab and behind its underside's plane from
+/// the start: it went beside the slab, not through it. The plank's centre passes beyond
+/// both the side and the top, its near end a rounding under the top: it is in by the top,
+/// not by the side across its length. Before the fix the rod was moved 0.46 m down out of
+/// the underside and the plank 0.42-0.48 m out of the side in one step. No step moves
+/// either by more than 3 cm beyond what its velocity carries (rapier alone: 2.1 cm at
+/// most, the rod's bounces).
+#[test]
+fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
+    let run = |label: &str, hz: f64, timing, table: (f64, f64), body: ColliderBuilder, rb| {
+        let (half, top) = table;
+        let mut world = PhysicsWorld::default();
+        world.integration_parameters.dt = real(1.0 / hz);
+        let (_, ground) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(1.0, real(half), 1.0)
+                .translation(Vector::new(0.0, real(top - half), 0.0))
+                .restitution(0.3)
+                .friction(0.6),
+        );
+        let (b, _) = world.insert(rb, body);
+        let mut p = plugin_on(&world, ground, timing);
+        let dt = 1.0 / hz;
+        let mut worst: f64 = 0.0;
+        for _ in 0..(hz / 2.0) as usize {
+            let (at, v) = (world.bodies[b].translation(), world.bodies[b].linvel());
+            p.step(&mut world);
+            let moved = world.bodies[b].translation() - at - v * real(dt);
+            worst = worst.max(wide(moved.length()));
+        }
+        println!("{label}, {timing:?}: {worst:.4} m beyond its velocity's carry at most");
+        assert!(
+            worst < 0.03,
+            "{label}, {timing:?}: moved {worst} m in one step"
+        );
+    };
+    for timing in MODES {
+        for hz in [60.0, 240.0] {
+            for dy in [-0.005, -0.02] {
+                let tilt: f64 = 0.2;
+                let x = 1.001 + 0.6 * tilt.sin() + 0.02 * tilt.cos();
+                run(
+                    &format!("rod at {hz} Hz, {dy} m below the slab's middle"),
+                    hz,
+                    timing,
+                    (0.01, 1.01),
+                    ColliderBuilder::cuboid(0.02, 0.6, 0.02).restitution(0.5),
+                    RigidBodyBuilder::dynamic()
+                        .translation(Vector::new(real(x), real(1.0 + dy), 0.0))
+                        .rotation(Vector::new(0.0, 0.0, real(tilt)))
+                        .linvel(Vector::new(-0.3, 0.0, 0.0)),
+                );
+            }
+        }
+        for hz in [30.0, 60.0] {
+            run(
+                &format!("plank off a table at {hz} Hz"),
+                hz,
+                timing,
+                (0.5, 1.0),
+                ColliderBuilder::cuboid(0.6, 0.02, 0.05)
+                    .restitution(0.3)
+                    .friction(0.6),
+                RigidBodyBuilder::dynamic()
+                    .translation(Vector::new(0.3, 1.02, 0.0))
+                    .linvel(Vector::new(5.0, 0.0, 0.0)),
+            );
+        }
+    }
+}

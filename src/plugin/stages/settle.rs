@@ -623,7 +623,9 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// out there, the body would end under the ground (and, on a thin slab above a floor, be
 /// pushed through both). Where the body's part was at the step's start is outside the
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
-/// it (`contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
+/// it (on a cuboid, of the faces whose planes have it in front, the one the body is least
+/// deep behind, `entry_face_contact`: a centre past an edge is in front of two; else
+/// `contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
 /// hit's own point of the body behind it at the start, that point then outside the ground,
 /// where a face that point was in front of holds the body less deep
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
@@ -641,7 +643,10 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let behind = |p: &Vector3<f64>| hit.normal.dot(&(p - face)) < 0.0;
     let centre = start_point(cand, part, ground, dt);
     let found = if behind(&centre) {
-        contact_from_side(part, ground, s, dt, centre, false)
+        // On a cuboid, of the faces the centre was in front of, the one the body is least
+        // deep behind (a centre past an edge is in front of two).
+        entry_face_contact(part, ground, s, dt, centre)
+            .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
         // past the side (its contact point then a rounding under the top, beyond the side)
@@ -676,13 +681,26 @@ fn hit_point_start(
     t: f64,
 ) -> Option<Vector3<f64>> {
     let cuboid = ground.shape.as_cuboid()?;
-    let on_body = part_pose(part, s).inverse_transform_point(&nalgebra::Point3::from(hit.point));
-    let start = carried(ground, t, (part_pose(part, &cand.start) * on_body).coords);
+    let start = point_at_start(cand, part, ground, s, hit.point, t);
     let local = ground
         .pose_at(t)
         .inverse_transform_point(&nalgebra::Point3::from(start));
     let half = vec_to_na(cuboid.half_extents);
     (0..3).any(|i| local[i].abs() > half[i]).then_some(start)
+}
+
+/// Where the point `point` of the body's part at `s` (time `t`) was at the step's start,
+/// carried with `ground` to `t`.
+fn point_at_start(
+    cand: &Candidate,
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    point: Vector3<f64>,
+    t: f64,
+) -> Vector3<f64> {
+    let on_body = part_pose(part, s).inverse_transform_point(&nalgebra::Point3::from(point));
+    carried(ground, t, (part_pose(part, &cand.start) * on_body).coords)
 }
 
 /// A point `p` at the step's start, carried with `ground` to `t`.
@@ -712,13 +730,28 @@ fn passed_through(checked: &Checked, s: &State, dt: f64, gap: f64) -> Option<Hit
                 continue;
             };
             // In front of that face at the start, below it now, and through it on the way.
+            // On a cuboid, so was the body's deepest point within the resting gap: a long
+            // body leaning over a slab's edge has its far end over the face and behind the
+            // underside's plane from the start; it went beside the slab, not through it. (A
+            // mesh triangle's plane runs on past the triangle: a point over the other face
+            // of a crease lies behind it.)
             let (dist, normal, point) = found;
             let face = point - normal * dist;
             let was_in_front = normal.dot(&(from - face)) >= 0.0;
+            let deepest_was_in_front = || {
+                ground.shape.as_cuboid().is_none()
+                    || normal.dot(&(point_at_start(cand, part, ground, s, point, dt) - face))
+                        >= -gap
+            };
             let end = part_pose(part, s).translation.vector;
             let margin = checked.geom.radius;
             let through = || crosses_face(ground, dt, (from, end), (face, normal), margin);
-            if dist < -gap && was_in_front && deepest.is_none_or(|d| dist < d.dist) && through() {
+            if dist < -gap
+                && was_in_front
+                && deepest.is_none_or(|d| dist < d.dist)
+                && deepest_was_in_front()
+                && through()
+            {
                 deepest = Some(Hit::at((i, j), ground, s, dt, found));
             }
         }

@@ -127,14 +127,71 @@ fn direct_plane_contact(
     }
     let center = part_pose(part, s).translation.vector;
     match ground.shape.as_typed_shape() {
-        TypedShape::HalfSpace(_) | TypedShape::Cuboid(_) => {
+        TypedShape::Cuboid(cb) => {
+            let half = vec_to_na(cb.half_extents);
+            let local = ground
+                .pose_at(t)
+                .inverse_transform_point(&nalgebra::Point3::from(center))
+                .coords;
+            if (0..3).filter(|i| local[*i].abs() > half[*i]).count() >= 2 {
+                return edge_plane_contact(part, ground, s, t, (&local, &half));
+            }
             plane_contact_on(part, ground, s, t, center, None).ok()
         }
+        TypedShape::HalfSpace(_) => plane_contact_on(part, ground, s, t, center, None).ok(),
         TypedShape::TriMesh(_) | TypedShape::HeightField(_) => triangles_under(ground, t, &center)
             .into_iter()
             .find_map(|tri| plane_contact_on(part, ground, s, t, center, Some(tri)).ok()),
         _ => None,
     }
+}
+
+/// [`direct_plane_contact`] for a body whose centre (`local`, in the frame of a cuboid
+/// ground of half extents `half`) lies beyond the planes of two or three of its faces, past
+/// an edge or a corner. No one face is the body's there: a plank sliding off a table's edge
+/// has its centre beyond the side and above the top, its far end over neither. Each face
+/// whose plane has the centre in front stands only where the body's deepest point towards it
+/// lies over the face and, if behind it, within the cuboid's thickness and no nearer another
+/// such face than this one (a point a rounding under the top, half a metre in from the side,
+/// came in by the top: met on the side, the plank would be pushed out across its length).
+/// Of the faces that stand, the one the body is least deep behind; `None` if none stands
+/// (parry decides).
+fn edge_plane_contact(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    s: &State,
+    t: f64,
+    (local, half): (&Vector3<f64>, &Vector3<f64>),
+) -> Option<PairContact> {
+    let pose_g = ground.pose_at(t);
+    let tol = FACE_ROUNDING * (1.0 + local.norm());
+    let mut best: Option<PairContact> = None;
+    for axis in (0..3).filter(|i| local[*i].abs() > half[*i]) {
+        let mut out = Vector3::zeros();
+        out[axis] = 2.0 * half[axis].copysign(local[axis]);
+        let locator = (pose_g * nalgebra::Point3::from(out)).coords;
+        let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, true)
+        else {
+            continue;
+        };
+        // The deepest point (the contact's point, back out by the part's skin) in the
+        // cuboid's frame, and how deep it is behind this face.
+        let deepest = pose_g
+            .inverse_transform_point(&nalgebra::Point3::from(found.2 + found.1 * part.skin))
+            .coords;
+        let depth = half[axis] - deepest[axis] * local[axis].signum();
+        let stands = depth <= 0.0
+            || (depth <= 2.0 * half[axis] + tol
+                && (0..3).all(|i| {
+                    i == axis
+                        || local[i].abs() <= half[i]
+                        || half[i] - deepest[i].abs() >= depth - tol
+                }));
+        if stands && best.is_none_or(|b| found.0 > b.0) {
+            best = Some(found);
+        }
+    }
+    best
 }
 
 /// [`plane_contact_on`] for a ball on a half-space or a cuboid, with the ball's support
