@@ -1982,28 +1982,7 @@ fn a_hinged_body_striking_a_post_with_its_end_is_not_pushed_out_across_itself() 
         // The door, at 60 Hz and at 30 Hz, and at twice the spin.
         for (hz, spin) in [(60.0, 3.0), (30.0, 3.0), (60.0, 6.0)] {
             let label = format!("{timing:?}, door at {spin} rad/s, {hz} Hz");
-            let mut world = PhysicsWorld::default();
-            world.integration_parameters.dt = real(1.0 / hz);
-            let (_, post) = world.insert(
-                RigidBodyBuilder::fixed(),
-                ColliderBuilder::cuboid(0.05, 1.0, 0.05)
-                    .translation(Vector::new(0.8, 1.05, 0.5))
-                    .restitution(0.8),
-            );
-            let hinge = world
-                .insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 1.05, 0.0)));
-            let (door, _) = world.insert(
-                RigidBodyBuilder::dynamic()
-                    .translation(Vector::new(0.5, 1.05, 0.0))
-                    .linvel(Vector::new(0.0, 0.0, real(spin / 2.0)))
-                    .angvel(Vector::new(0.0, real(-spin), 0.0)),
-                ColliderBuilder::cuboid(0.5, 1.0, 0.02).restitution(0.8),
-            );
-            world.insert_impulse_joint(
-                hinge,
-                door,
-                RevoluteJointBuilder::new(Vector::Y).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
-            );
+            let (mut world, door, post) = door_swung_into_post(hz, spin, 0.05);
             let mut p = plugin_on(&world, post, timing);
             // The door's edge meets the post's corner (0.85, 0.45) at 26.5 degrees; the
             // corner itself stands at 27.9 degrees about the hinge.
@@ -2197,29 +2176,7 @@ fn a_body_on_a_joint_meets_a_ground_along_its_way_through_the_step() {
         for hz in [30.0, 60.0] {
             for spin in [3.0, 4.5, 6.0] {
                 let label = format!("{timing:?}, door at {spin} rad/s into a 1 cm post, {hz} Hz");
-                let mut world = PhysicsWorld::default();
-                world.integration_parameters.dt = real(1.0 / hz);
-                let (_, post) = world.insert(
-                    RigidBodyBuilder::fixed(),
-                    ColliderBuilder::cuboid(0.005, 1.0, 0.005)
-                        .translation(Vector::new(0.8, 1.05, 0.455))
-                        .restitution(0.8),
-                );
-                let hinge = world.insert_body(
-                    RigidBodyBuilder::fixed().translation(Vector::new(0.0, 1.05, 0.0)),
-                );
-                let (door, _) = world.insert(
-                    RigidBodyBuilder::dynamic()
-                        .translation(Vector::new(0.5, 1.05, 0.0))
-                        .linvel(Vector::new(0.0, 0.0, real(spin / 2.0)))
-                        .angvel(Vector::new(0.0, real(-spin), 0.0)),
-                    ColliderBuilder::cuboid(0.5, 1.0, 0.02).restitution(0.8),
-                );
-                world.insert_impulse_joint(
-                    hinge,
-                    door,
-                    RevoluteJointBuilder::new(Vector::Y).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
-                );
+                let (mut world, door, post) = door_swung_into_post(hz, spin, 0.005);
                 let mut p = plugin_on(&world, post, timing);
                 let corner = 0.45f64.atan2(0.795).to_degrees();
                 let (mut widest, mut impacts): (f64, usize) = (0.0, 0);
@@ -2308,4 +2265,38 @@ fn a_body_on_a_joint_meets_a_ground_along_its_way_through_the_step() {
             );
         }
     }
+}
+
+/// A door 1 m wide and 2 m tall on a vertical hinge at the origin (1.05 m up), swung at
+/// `spin` rad/s towards a fixed post 2 m tall of half thickness `half` (m) whose near face
+/// is 0.45 m along z and whose middle is 0.8 m along x, at `hz` steps a second: the world,
+/// the door, and the post's collider. `e = 0.8` both.
+fn door_swung_into_post(
+    hz: f64,
+    spin: f64,
+    half: f64,
+) -> (PhysicsWorld, RigidBodyHandle, ColliderHandle) {
+    let mut world = PhysicsWorld::default();
+    world.integration_parameters.dt = real(1.0 / hz);
+    let (_, post) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(real(half), 1.0, real(half))
+            .translation(Vector::new(0.8, 1.05, real(0.45 + half)))
+            .restitution(0.8),
+    );
+    let hinge =
+        world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 1.05, 0.0)));
+    let (door, _) = world.insert(
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(0.5, 1.05, 0.0))
+            .linvel(Vector::new(0.0, 0.0, real(spin / 2.0)))
+            .angvel(Vector::new(0.0, real(-spin), 0.0)),
+        ColliderBuilder::cuboid(0.5, 1.0, 0.02).restitution(0.8),
+    );
+    world.insert_impulse_joint(
+        hinge,
+        door,
+        RevoluteJointBuilder::new(Vector::Y).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
+    );
+    (world, door, post)
 }
