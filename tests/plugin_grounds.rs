@@ -2070,12 +2070,10 @@ fn a_plank_resting_across_a_tables_edge_stays_on_the_table() {
 /// and 60 Hz). The rod's far end lies over the slab and behind its underside's plane from
 /// the start: it went beside the slab, not through it. The plank's centre passes beyond
 /// both the side and the top, its near end a rounding under the top: it is in by the top,
-/// not by the side across its length. And a plank pivoting on the slab's edge, its far end
-/// below the top's plane past the edge (its depth there is no depth in the slab). Before the
-/// fix the rod was moved 0.46 m down out of the underside, the plank off the table 0.42-0.48
-/// m out of the side and the pivoting one 0.39 m up, in one step. No step moves any by more
-/// than 3 cm beyond what its velocity carries (rapier alone: 2.1 cm at most, the rod's
-/// bounces).
+/// not by the side across its length. Before the fix the rod was moved 0.46 m down out of
+/// the underside and the plank 0.42-0.48 m out of the side in one step. No step moves
+/// either by more than 3 cm beyond what its velocity carries (rapier alone: 2.1 cm at
+/// most, the rod's bounces).
 #[test]
 fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
     let run = |label: &str, hz: f64, timing, table: (f64, f64), body: ColliderBuilder, rb| {
@@ -2123,24 +2121,6 @@ fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
                 );
             }
         }
-        // A plank pivoting on the slab's edge, its centre over the top and its far end hanging
-        // 0.4 m below the top's plane past the edge (a state a sweep of random throws met):
-        // it was measured on the top's plane, unbounded, and put 0.39 m up, stopped dead.
-        let turned = Rotation::from_xyzw(-0.039531827, -0.08850568, -0.37544233, 0.921763);
-        run(
-            "plank pivoting on a slab's edge at 30 Hz",
-            30.0,
-            timing,
-            (0.01, 1.01),
-            ColliderBuilder::cuboid(0.6, 0.02, 0.05)
-                .restitution(0.5)
-                .friction(0.5),
-            RigidBodyBuilder::dynamic()
-                .translation(Vector::new(0.92630845, 1.1093149, -0.2800972))
-                .rotation(turned.to_scaled_axis())
-                .linvel(Vector::new(0.37520063, 0.3656202, 0.17896493))
-                .angvel(Vector::new(0.20915985, 2.2579212, -5.8273077)),
-        );
         for hz in [30.0, 60.0] {
             run(
                 &format!("plank off a table at {hz} Hz"),
@@ -2153,115 +2133,6 @@ fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
                 RigidBodyBuilder::dynamic()
                     .translation(Vector::new(0.3, 1.02, 0.0))
                     .linvel(Vector::new(5.0, 0.0, 0.0)),
-            );
-        }
-    }
-}
-
-/// Bodies on joints meet a ground along their way through the step, in the in-step modes
-/// (and `Step` mode for the door). rapier moves such a body with its joint, so no flight of
-/// its own reaches its end; its way is the chord from its start pose to rapier's end pose.
-/// A door (1 m wide, vertical hinge) swung at 3, 4.5 and 6 rad/s into a post 1 cm thick, at
-/// 30 and 60 Hz: the post is struck (an `Impact`), and the door never turns past its corner
-/// while it turns towards it (before, with the pair out of rapier's solver and nothing left
-/// at the step's end to push out of, it went through and swung on to 170-180 degrees;
-/// rapier alone stops it). A dumbbell of two 5 cm balls on a fixed joint, dropped level
-/// from 0.5 m onto the floor with `e = 0.8`, at 30, 60 and 240 Hz: its rebound never rises
-/// above `e^2 h` (it rose to 0.338 and 0.343 m against 0.320 at 30 and 60 Hz, met deep at
-/// the step's end) and stays within 5 % of it (the joint's own reaction is not in the
-/// model; measured 0.310, 0.315 and 0.319 m, rapier alone 0.305-0.313).
-#[test]
-fn a_body_on_a_joint_meets_a_ground_along_its_way_through_the_step() {
-    for timing in MODES {
-        for hz in [30.0, 60.0] {
-            for spin in [3.0, 4.5, 6.0] {
-                let label = format!("{timing:?}, door at {spin} rad/s into a 1 cm post, {hz} Hz");
-                let (mut world, door, post) = door_swung_into_post(hz, spin, 0.005);
-                let mut p = plugin_on(&world, post, timing);
-                let corner = 0.45f64.atan2(0.795).to_degrees();
-                let (mut widest, mut impacts): (f64, usize) = (0.0, 0);
-                for _ in 0..hz as usize {
-                    let towards = world.bodies[door].angvel().y < 0.0;
-                    p.step(&mut world);
-                    impacts += p
-                        .events()
-                        .iter()
-                        .filter(|e| e.kind == EventKind::Impact)
-                        .count();
-                    let at = world.bodies[door].translation();
-                    if towards {
-                        widest = widest.max(wide(at.z).atan2(wide(at.x)).to_degrees());
-                    }
-                }
-                println!(
-                    "{label}: turned to {widest:.1} degrees towards the post, {impacts} impacts"
-                );
-                assert!(impacts >= 1, "{label}: no impact");
-                assert!(
-                    widest < corner,
-                    "{label}: the door passed the post: {widest} degrees"
-                );
-            }
-        }
-    }
-    let (e, h) = (0.8, 0.5);
-    for timing in [TimingMode::TimeOfImpact, TimingMode::Exact] {
-        for hz in [30.0, 60.0, 240.0] {
-            let label = format!("{timing:?}, dumbbell on a fixed joint, {hz} Hz");
-            let mut world = PhysicsWorld::default();
-            world.integration_parameters.dt = real(1.0 / hz);
-            let (_, floor) = world.insert(
-                RigidBodyBuilder::fixed(),
-                ColliderBuilder::halfspace(up())
-                    .restitution(0.8)
-                    .friction(0.5),
-            );
-            let ball = |x: f64| {
-                (
-                    RigidBodyBuilder::dynamic().translation(Vector::new(
-                        real(x),
-                        real(h + 0.05),
-                        0.0,
-                    )),
-                    ColliderBuilder::ball(0.05).restitution(0.8).friction(0.5),
-                )
-            };
-            let (a, _) = {
-                let (rb, co) = ball(-0.15);
-                world.insert(rb, co)
-            };
-            let (b, _) = {
-                let (rb, co) = ball(0.15);
-                world.insert(rb, co)
-            };
-            world.insert_impulse_joint(
-                a,
-                b,
-                FixedJointBuilder::new()
-                    .local_anchor1(Vector::new(0.15, 0.0, 0.0))
-                    .local_anchor2(Vector::new(-0.15, 0.0, 0.0)),
-            );
-            let mut p = plugin_on(&world, floor, timing);
-            let (mut rising, mut apex, mut last_vy) = (false, 0.0f64, 0.0f64);
-            for _ in 0..(1.5 * hz) as usize {
-                p.step(&mut world);
-                let (y, vy) = (
-                    wide(world.bodies[a].translation().y) - 0.05,
-                    wide(world.bodies[a].linvel().y),
-                );
-                rising |= vy > 0.0 && last_vy < 0.0;
-                if rising {
-                    apex = apex.max(y);
-                    if vy < 0.0 {
-                        break;
-                    }
-                }
-                last_vy = vy;
-            }
-            println!("{label}: rebound to {apex:.5} m (e^2 h = {:.3})", e * e * h);
-            assert!(
-                apex <= e * e * h * (1.0 + 1e-3) && apex >= 0.95 * e * e * h,
-                "{label}: rebound to {apex} m"
             );
         }
     }

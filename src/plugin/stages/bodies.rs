@@ -21,9 +21,6 @@
 //!   integrator carried the translation), and a check of rapier's rotation for a body whose
 //!   turning moves its surface (`turned_end`); a steered body something else touched keeps
 //!   rapier's end state, its velocity given back the steering's offset;
-//! - a body on a joint with a closing ground, in the in-step modes, whose way as rapier moved
-//!   it (the chord from its start pose to rapier's end pose) meets a ground: the in-step
-//!   impacts along that chord (`jointed_through_impacts`), checked as a flown body's;
 //! - any other: rapier's end state, checked (`EndCheck::RapierEnd`); after impulses at the
 //!   step's start (`Step` mode's, a push-out), also against the grounds along the way they
 //!   sent it, beyond its plan's reach (`reconstruct::grounds_beyond_plan`).
@@ -32,7 +29,7 @@
 //! commit (`commit.rs`). Also here: the balls held at rest on a slope for their first step,
 //! put back (`put_back_held`).
 
-use crate::motion::{Flight, Rolling, State};
+use crate::motion::{Rolling, State};
 use crate::plugin::bridge::convert::{rot_to_na, to_f64, vec_from_na, vec_to_na};
 use crate::plugin::bridge::resolve::{
     GroundContactAt, ImpactInput, Inertia, Site, correction, released, resolve,
@@ -293,12 +290,6 @@ impl AfterStep<'_> {
                     ..Subject::new(cand, &geom, &checked, step)
                 };
                 self.settle_rapier_end(bodies, colliders, &subject, EndCheck::RapierEnd);
-                self.turning_resting_checked(step, cand, bodies, colliders);
-            }
-            None if mode != TimingMode::Step
-                && step.sets.jointed(cand.body)
-                && self.jointed_through_impacts(bodies, colliders, &subject, now, &inertia) =>
-            {
                 self.turning_resting_checked(step, cand, bodies, colliders);
             }
             None => {
@@ -578,57 +569,6 @@ impl AfterStep<'_> {
         let end = settled.unwrap_or(flown);
         self.commit
             .state(cand.body, &end, &cand.local_com, Origin::Model);
-    }
-
-    /// A body on a joint, in the in-step modes: rapier moved it with its joint, so no flight
-    /// of its own reaches rapier's end, and its end state alone is blind to a ground it went
-    /// through within the step (a door swung through a thin post: nothing at the end to push
-    /// out of, and the pair out of rapier's solver). Its way is taken as the chord from its
-    /// start pose to rapier's end pose under the flight's constant acceleration (constant
-    /// spin, no damping; exact at both ends) and searched; where that meets a ground, the
-    /// body goes through its impacts from the start along that way
-    /// ([`Self::fly_through_impacts`]), as a free body's does along its flight. Returns
-    /// whether it did; otherwise rapier's end state is the caller's to check. Out of line:
-    /// few bodies have joints.
-    #[cold]
-    #[inline(never)]
-    fn jointed_through_impacts(
-        &mut self,
-        bodies: &RigidBodySet,
-        colliders: &ColliderSet,
-        subject: &Subject,
-        now: &Now,
-        inertia: &Inertia,
-    ) -> bool {
-        let (cand, dt) = (subject.cand, subject.step.dt);
-        let end = now.state();
-        let flight = Flight {
-            accel: cand.flight.accel,
-            linear_damping: 0.0,
-            angular_damping: 0.0,
-            gyro: None,
-        };
-        let turn = end.rot * cand.start.rot.inverse();
-        let start = State {
-            v: (end.com - cand.start.com) / dt - flight.accel * (0.5 * dt),
-            w: turn.scaled_axis() / dt,
-            ..cand.start
-        };
-        let first = first_impact(subject.geom, subject.grounds, &flight, &start, 0.0, 0.0, dt);
-        if !matches!(first, Search::Hit(..)) {
-            return false;
-        }
-        let chord = Candidate {
-            start,
-            flight,
-            ..cand.clone()
-        };
-        let along_chord = Subject {
-            cand: &chord,
-            ..*subject
-        };
-        self.fly_through_impacts(bodies, colliders, &along_chord, inertia, first);
-        true
     }
 
     /// The settle stage's check of rapier's end state of a candidate against its grounds for

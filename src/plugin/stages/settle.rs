@@ -624,9 +624,8 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// pushed through both). Where the body's part was at the step's start is outside the
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
 /// it (on a cuboid, of the faces whose planes have it in front, the one the body is least
-/// deep behind with its deepest point over the face, `entry_face_contact`: a centre past an
-/// edge is in front of two; none such, `hit` stands; else `contact_from_side`). On a cuboid
-/// ground, so is one on a face whose plane had the
+/// deep behind, `entry_face_contact`: a centre past an edge is in front of two; else
+/// `contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
 /// hit's own point of the body behind it at the start, that point then outside the ground,
 /// where a face that point was in front of holds the body less deep
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
@@ -644,22 +643,18 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let behind = |p: &Vector3<f64>| hit.normal.dot(&(p - face)) < 0.0;
     let centre = start_point(cand, part, ground, dt);
     let found = if behind(&centre) {
-        // On a cuboid, of the faces the centre was in front of (two past an edge), the one
-        // the body is least deep behind, where its deepest point towards that face lies over
-        // it; none such: `hit` stands. A point beyond the face is outside the cuboid, and its
-        // depth behind the face's plane is no depth in it: a plank pivoting on a slab's edge
-        // has its far end hanging 0.4 m below the top's plane.
-        match ground.shape.as_cuboid() {
-            Some(_) => entry_face_contact(part, ground, s, dt, centre, true),
-            None => contact_from_side(part, ground, s, dt, centre, false),
-        }
+        // On a cuboid, of the faces the centre was in front of, the one the body is least
+        // deep behind (a centre past an edge is in front of two).
+        entry_face_contact(part, ground, s, dt, centre)
+            .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
         // past the side (its contact point then a rounding under the top, beyond the side)
         // came in by the top, not by that side across its whole length.
         match hit_point_start(cand, part, ground, s, &hit, dt) {
-            Some(point) if behind(&point) => entry_face_contact(part, ground, s, dt, point, false)
-                .filter(|(dist, ..)| *dist > hit.dist),
+            Some(point) if behind(&point) => {
+                entry_face_contact(part, ground, s, dt, point).filter(|(dist, ..)| *dist > hit.dist)
+            }
             _ => return hit,
         }
     };

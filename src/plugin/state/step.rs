@@ -44,7 +44,6 @@ pub(crate) struct GroundPair {
 }
 
 /// A managed body's start-of-step snapshot.
-#[derive(Clone)]
 pub(crate) struct Candidate {
     pub body: RigidBodyHandle,
     pub start: State,
