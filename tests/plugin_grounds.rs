@@ -1926,7 +1926,7 @@ fn a_ball_flying_past_a_box_edge_it_never_touches_flies_on() {
 
 /// Long bodies on a hinge whose end strikes a small ground cuboid, 60 Hz, every mode: a
 /// hinged flap (1 m x 4 cm, hinge 0.5 m from its centre) falling onto a stop under its end,
-/// and a door (1 m wide, vertical hinge) swung at 3 rad/s into a post. The joint keeps rapier
+/// and onto a stop 2 cm thick, and a door (1 m wide, vertical hinge) swung at 3 rad/s into a post. The joint keeps rapier
 /// moving the body, so the contact is met at the step's end, deep in the stop or post. That
 /// contact is out of the face the body's end came in by: the flap's out of the stop's top,
 /// the door's out of the post's side facing it. It was out of the face the body's centre lies
@@ -1977,6 +1977,45 @@ fn a_hinged_body_striking_a_post_with_its_end_is_not_pushed_out_across_itself() 
         assert!(
             most <= start * (1.0 + 1e-3),
             "{timing:?}: flap {start} -> {most} J"
+        );
+
+        // A flap swung at 3 rad/s onto a stop 2 cm thick, 60 Hz: its tip goes down through
+        // the stop's top within one step, and it is put back out by the top it came in by,
+        // not out by the stop's side, which is nearer but which its tip moved away from (it
+        // was then pulled under the stop and swung on round its hinge). It turns back before
+        // 28 degrees below its hinge, where it lies on the stop, as in rapier alone.
+        let mut world = PhysicsWorld::default();
+        let (_, thin) = world.insert(
+            RigidBodyBuilder::fixed(),
+            ColliderBuilder::cuboid(0.1, 0.01, 0.3)
+                .translation(Vector::new(0.9, 0.01, 0.0))
+                .restitution(0.8),
+        );
+        let post =
+            world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.5, 0.0)));
+        let (flap, _) = world.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.5, 0.5, 0.0))
+                .linvel(Vector::new(0.0, -1.5, 0.0))
+                .angvel(Vector::new(0.0, 0.0, -3.0)),
+            ColliderBuilder::cuboid(0.5, 0.02, 0.2).restitution(0.8),
+        );
+        world.insert_impulse_joint(
+            post,
+            flap,
+            RevoluteJointBuilder::new(Vector::Z).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
+        );
+        let mut p = plugin_on(&world, thin, timing);
+        let mut lowest: f64 = 0.0;
+        for _ in 0..60 {
+            p.step(&mut world);
+            let at = world.bodies[flap].translation();
+            lowest = lowest.min((wide(at.y) - 0.5).atan2(wide(at.x)).to_degrees());
+        }
+        println!("{timing:?}: flap onto a 2 cm stop down to {lowest:.1} degrees");
+        assert!(
+            lowest > -30.0,
+            "{timing:?}: the flap went through the stop: {lowest}"
         );
 
         // The door, at 60 Hz and at 30 Hz, and at twice the spin.

@@ -23,7 +23,8 @@ use crate::plugin::bridge::resolve::{
 use crate::plugin::events::{EventKind, ImpactEvent, ImpactTiming};
 use crate::plugin::policy::{EndAction, EndCheck, Role, Surroundings};
 use crate::plugin::queries::geometry::{
-    BodyGeom, BodyPart, GroundGeom, Hit, closest, contact_from_side, entry_face_contact, part_pose,
+    BodyGeom, BodyPart, GroundGeom, Hit, PairContact, closest, contact_from_side,
+    entry_face_contact, part_pose,
 };
 use crate::plugin::queries::ground_index::GroundMotion;
 use crate::plugin::queries::observe::{
@@ -623,9 +624,9 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// out there, the body would end under the ground (and, on a thin slab above a floor, be
 /// pushed through both). Where the body's part was at the step's start is outside the
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
-/// it (on a cuboid, of the faces whose planes have it in front, the one the body is least
-/// deep behind, `entry_face_contact`: a centre past an edge is in front of two; else
-/// `contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
+/// it (on a cuboid, of the faces whose planes have it in front and that the body's deepest
+/// point moved into, the one the body is least deep behind, `entry_face_contact`: a centre
+/// past an edge is in front of two; else `contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
 /// hit's own point of the body behind it at the start, that point then outside the ground,
 /// where a face that point was in front of holds the body less deep
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
@@ -643,9 +644,16 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
     let behind = |p: &Vector3<f64>| hit.normal.dot(&(p - face)) < 0.0;
     let centre = start_point(cand, part, ground, dt);
     let found = if behind(&centre) {
-        // On a cuboid, of the faces the centre was in front of, the one the body is least
-        // deep behind (a centre past an edge is in front of two).
-        entry_face_contact(part, ground, s, dt, centre)
+        // On a cuboid, of the faces the centre was in front of (two past an edge), the one
+        // the body is least deep behind, of those its deepest point moved into over the step
+        // (a body comes in through a face only moving into it): a hinged flap whose tip went
+        // down through a 2 cm stop is less deep behind the stop's side, which its tip moved
+        // away from, than behind the top it came in by. None moved into: of them all.
+        let entering = |(_, normal, point): &PairContact| {
+            normal.dot(&(point - point_at_start(cand, part, ground, s, *point, dt))) < 0.0
+        };
+        entry_face_contact(part, ground, s, dt, centre, entering)
+            .or_else(|| entry_face_contact(part, ground, s, dt, centre, |_| true))
             .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
@@ -653,7 +661,8 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
         // came in by the top, not by that side across its whole length.
         match hit_point_start(cand, part, ground, s, &hit, dt) {
             Some(point) if behind(&point) => {
-                entry_face_contact(part, ground, s, dt, point).filter(|(dist, ..)| *dist > hit.dist)
+                entry_face_contact(part, ground, s, dt, point, |_| true)
+                    .filter(|(dist, ..)| *dist > hit.dist)
             }
             _ => return hit,
         }

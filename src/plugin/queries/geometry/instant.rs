@@ -379,8 +379,8 @@ pub(crate) fn contact_from_side(
 
 /// The contact of a body part with a cuboid ground out of the face it came in by: of the
 /// faces whose plane has `from` (where the body was, outside the ground) in front, the one
-/// the part is least deep behind, each face's plane taken unbounded; `None` for other
-/// grounds. A long body whose end went into a small cuboid is out of its entry face, not
+/// the part is least deep behind, each face's plane taken unbounded, of those `keeps` keeps;
+/// `None` for other grounds. A long body whose end went into a small cuboid is out of its entry face, not
 /// out of whichever face its own centre lies beyond (the far side of a post, across the
 /// whole body).
 pub(crate) fn entry_face_contact(
@@ -389,6 +389,7 @@ pub(crate) fn entry_face_contact(
     s: &State,
     t: f64,
     from: Vector3<f64>,
+    keeps: impl Fn(&PairContact) -> bool,
 ) -> Option<PairContact> {
     let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
     let pose_g = ground.pose_at(t);
@@ -405,7 +406,7 @@ pub(crate) fn entry_face_contact(
         out[axis] = 2.0 * half[axis].copysign(p[axis]);
         let locator = (pose_g * nalgebra::Point3::from(out)).coords;
         if let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, false) {
-            if best.is_none_or(|b| found.0 > b.0) {
+            if keeps(&found) && best.is_none_or(|b| found.0 > b.0) {
                 best = Some(found);
             }
         }
