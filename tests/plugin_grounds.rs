@@ -1944,27 +1944,13 @@ fn a_hinged_body_striking_a_post_with_its_end_is_not_pushed_out_across_itself() 
     };
     for timing in MODES {
         // The flap, from just before its end lands on the stop.
-        let mut world = PhysicsWorld::default();
-        let (_, stop) = world.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::cuboid(0.1, 0.24, 0.3)
-                .translation(Vector::new(0.9, 0.24, 0.0))
-                .restitution(0.8),
-        );
-        let post =
-            world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.5, 0.0)));
-        let (flap, _) = world.insert(
+        let (mut world, flap, stop) = flap_over_stop(
+            0.24,
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(0.49974108, 0.5024977, 0.0))
                 .rotation(Vector::new(0.0, 0.0, 0.0050018))
                 .linvel(Vector::new(0.0029262938, -2.5301492, 0.0))
                 .angvel(Vector::new(0.0, 0.0, -5.0603013)),
-            ColliderBuilder::cuboid(0.5, 0.02, 0.2).restitution(0.8),
-        );
-        world.insert_impulse_joint(
-            post,
-            flap,
-            RevoluteJointBuilder::new(Vector::Z).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
         );
         let mut p = plugin_on(&world, stop, timing);
         let start = energy(&world, flap);
@@ -1984,26 +1970,12 @@ fn a_hinged_body_striking_a_post_with_its_end_is_not_pushed_out_across_itself() 
         // not out by the stop's side, which is nearer but which its tip moved away from (it
         // was then pulled under the stop and swung on round its hinge). It turns back before
         // 28 degrees below its hinge, where it lies on the stop, as in rapier alone.
-        let mut world = PhysicsWorld::default();
-        let (_, thin) = world.insert(
-            RigidBodyBuilder::fixed(),
-            ColliderBuilder::cuboid(0.1, 0.01, 0.3)
-                .translation(Vector::new(0.9, 0.01, 0.0))
-                .restitution(0.8),
-        );
-        let post =
-            world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.5, 0.0)));
-        let (flap, _) = world.insert(
+        let (mut world, flap, thin) = flap_over_stop(
+            0.01,
             RigidBodyBuilder::dynamic()
                 .translation(Vector::new(0.5, 0.5, 0.0))
                 .linvel(Vector::new(0.0, -1.5, 0.0))
                 .angvel(Vector::new(0.0, 0.0, -3.0)),
-            ColliderBuilder::cuboid(0.5, 0.02, 0.2).restitution(0.8),
-        );
-        world.insert_impulse_joint(
-            post,
-            flap,
-            RevoluteJointBuilder::new(Vector::Z).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
         );
         let mut p = plugin_on(&world, thin, timing);
         let mut lowest: f64 = 0.0;
@@ -2175,6 +2147,35 @@ fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
             );
         }
     }
+}
+
+/// A flap 1 m x 4 cm x 40 cm on a horizontal hinge (about z) at (0, 0.5, 0), 0.5 m from its
+/// centre, of the body `flap` (its pose and velocities), over a fixed stop 20 cm x 60 cm of
+/// half thickness `half` (m) standing on the plane y = 0, 0.9 m out under the flap's end:
+/// the world (60 Hz), the flap, and the stop's collider. `e = 0.8` both.
+fn flap_over_stop(
+    half: f64,
+    flap: RigidBodyBuilder,
+) -> (PhysicsWorld, RigidBodyHandle, ColliderHandle) {
+    let mut world = PhysicsWorld::default();
+    let (_, stop) = world.insert(
+        RigidBodyBuilder::fixed(),
+        ColliderBuilder::cuboid(0.1, real(half), 0.3)
+            .translation(Vector::new(0.9, real(half), 0.0))
+            .restitution(0.8),
+    );
+    let hinge =
+        world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.5, 0.0)));
+    let (flap, _) = world.insert(
+        flap,
+        ColliderBuilder::cuboid(0.5, 0.02, 0.2).restitution(0.8),
+    );
+    world.insert_impulse_joint(
+        hinge,
+        flap,
+        RevoluteJointBuilder::new(Vector::Z).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
+    );
+    (world, flap, stop)
 }
 
 /// A door 1 m wide and 2 m tall on a vertical hinge at the origin (1.05 m up), swung at
