@@ -1926,8 +1926,9 @@ fn a_ball_flying_past_a_box_edge_it_never_touches_flies_on() {
 
 /// Long bodies on a hinge whose end strikes a small ground cuboid, 60 Hz, every mode: a
 /// hinged flap (1 m x 4 cm, hinge 0.5 m from its centre) falling onto a stop under its end,
-/// and onto a stop 2 cm thick, and a door (1 m wide, vertical hinge) swung at 3 rad/s into a post. The joint keeps rapier
-/// moving the body, so the contact is met at the step's end, deep in the stop or post. That
+/// and onto a stop 2 cm thick, and a door (1 m wide, vertical hinge) swung at 3 rad/s into
+/// a post. The joint keeps rapier moving the body, so the contact is met at the step's end,
+/// deep in the stop or post. That
 /// contact is out of the face the body's end came in by: the flap's out of the stop's top,
 /// the door's out of the post's side facing it. It was out of the face the body's centre lies
 /// beyond, across the whole body: the flap was moved 0.2 m sideways off its hinge and the

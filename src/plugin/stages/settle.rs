@@ -626,9 +626,10 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// ground: a contact on a face whose plane has it behind is taken again on the face towards
 /// it (on a cuboid, of the faces whose planes have it in front and that the body's deepest
 /// point moved into, the one the body is least deep behind, `entry_face_contact`: a centre
-/// past an edge is in front of two; else `contact_from_side`). On a cuboid ground, so is one on a face whose plane had the
-/// hit's own point of the body behind it at the start, that point then outside the ground,
-/// where a face that point was in front of holds the body less deep
+/// past an edge is in front of two; else `contact_from_side`). On a cuboid ground, so is
+/// one on a face whose plane had the hit's own point of the body behind it at the start,
+/// that point then outside the ground, where a face that point was in front of holds the
+/// body less deep
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
 /// beside it (a hinged flap onto a stop, a door swung into a post) is out of the face its
 /// end came in by, not out of the face its centre lies beyond, across the whole body. A

@@ -380,9 +380,9 @@ pub(crate) fn contact_from_side(
 /// The contact of a body part with a cuboid ground out of the face it came in by: of the
 /// faces whose plane has `from` (where the body was, outside the ground) in front, the one
 /// the part is least deep behind, each face's plane taken unbounded, of those `keeps` keeps;
-/// `None` for other grounds. A long body whose end went into a small cuboid is out of its entry face, not
-/// out of whichever face its own centre lies beyond (the far side of a post, across the
-/// whole body).
+/// `None` for other grounds. A long body whose end went into a small cuboid is out of its
+/// entry face, not out of whichever face its own centre lies beyond (the far side of a
+/// post, across the whole body).
 pub(crate) fn entry_face_contact(
     part: &BodyPart,
     ground: &GroundGeom,
