@@ -654,7 +654,6 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
             normal.dot(&(point - point_at_start(cand, part, ground, s, *point, dt))) < 0.0
         };
         entry_face_contact(part, ground, s, dt, centre, entering)
-            .or_else(|| entry_face_contact(part, ground, s, dt, centre, |_| true))
             .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out

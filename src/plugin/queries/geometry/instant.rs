@@ -379,8 +379,8 @@ pub(crate) fn contact_from_side(
 
 /// The contact of a body part with a cuboid ground out of the face it came in by: of the
 /// faces whose plane has `from` (where the body was, outside the ground) in front, the one
-/// the part is least deep behind, each face's plane taken unbounded, of those `keeps` keeps;
-/// `None` for other grounds. A long body whose end went into a small cuboid is out of its
+/// the part is least deep behind, each face's plane taken unbounded: of those `prefers`
+/// holds for, where it holds for any; `None` for other grounds. A long body whose end went into a small cuboid is out of its
 /// entry face, not out of whichever face its own centre lies beyond (the far side of a
 /// post, across the whole body).
 pub(crate) fn entry_face_contact(
@@ -389,14 +389,15 @@ pub(crate) fn entry_face_contact(
     s: &State,
     t: f64,
     from: Vector3<f64>,
-    keeps: impl Fn(&PairContact) -> bool,
+    prefers: impl Fn(&PairContact) -> bool,
 ) -> Option<PairContact> {
     let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
     let pose_g = ground.pose_at(t);
     let p = pose_g
         .inverse_transform_point(&nalgebra::Point3::from(from))
         .coords;
-    let mut best: Option<PairContact> = None;
+    // The least deep face of all, and of those `prefers` holds for.
+    let (mut best, mut preferred): (Option<PairContact>, Option<PairContact>) = (None, None);
     for axis in 0..3 {
         if p[axis].abs() <= half[axis] {
             continue;
@@ -406,12 +407,15 @@ pub(crate) fn entry_face_contact(
         out[axis] = 2.0 * half[axis].copysign(p[axis]);
         let locator = (pose_g * nalgebra::Point3::from(out)).coords;
         if let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, false) {
-            if keeps(&found) && best.is_none_or(|b| found.0 > b.0) {
+            if best.is_none_or(|b| found.0 > b.0) {
                 best = Some(found);
+            }
+            if preferred.is_none_or(|b| found.0 > b.0) && prefers(&found) {
+                preferred = Some(found);
             }
         }
     }
-    best
+    preferred.or(best)
 }
 
 /// [`plane_contact_on`], the face chosen by `locator` and a mesh triangle's normal turned
