@@ -125,23 +125,31 @@ fn direct_plane_contact(
             return found;
         }
     }
-    let center = part_pose(part, s).translation.vector;
+    let poses = Poses::at(part, ground, s, t);
+    let center = poses.part.translation.vector;
     match ground.shape.as_typed_shape() {
         TypedShape::Cuboid(cb) => {
             let half = vec_to_na(cb.half_extents);
-            let local = ground
-                .pose_at(t)
+            let local = poses
+                .ground
                 .inverse_transform_point(&nalgebra::Point3::from(center))
                 .coords;
             if (0..3).filter(|i| local[*i].abs() > half[*i]).count() >= 2 {
-                return edge_plane_contact(part, ground, s, t, (&local, &half));
+                return edge_plane_contact(part, ground, &poses, (&local, &half));
             }
-            plane_contact_on(part, ground, s, t, center, None).ok()
+            let locator = Locator::known(center, local);
+            plane_contact_with(part, ground, &poses, locator, None, true).ok()
         }
-        TypedShape::HalfSpace(_) => plane_contact_on(part, ground, s, t, center, None).ok(),
+        TypedShape::HalfSpace(_) => {
+            let locator = Locator::facing(center, None);
+            plane_contact_with(part, ground, &poses, locator, None, true).ok()
+        }
         TypedShape::TriMesh(_) | TypedShape::HeightField(_) => triangles_under(ground, t, &center)
             .into_iter()
-            .find_map(|tri| plane_contact_on(part, ground, s, t, center, Some(tri)).ok()),
+            .find_map(|tri| {
+                let locator = Locator::facing(center, None);
+                plane_contact_with(part, ground, &poses, locator, Some(tri), true).ok()
+            }),
         _ => None,
     }
 }
@@ -159,19 +167,17 @@ fn direct_plane_contact(
 fn edge_plane_contact(
     part: &BodyPart,
     ground: &GroundGeom,
-    s: &State,
-    t: f64,
+    poses: &Poses,
     (local, half): (&Vector3<f64>, &Vector3<f64>),
 ) -> Option<PairContact> {
-    let pose_g = ground.pose_at(t);
+    let pose_g = &poses.ground;
     let tol = FACE_ROUNDING * (1.0 + local.norm());
     let mut best: Option<PairContact> = None;
     for axis in (0..3).filter(|i| local[*i].abs() > half[*i]) {
         let mut out = Vector3::zeros();
         out[axis] = 2.0 * half[axis].copysign(local[axis]);
-        let locator = (pose_g * nalgebra::Point3::from(out)).coords;
-        let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, true)
-        else {
+        let locator = Locator::known((pose_g * nalgebra::Point3::from(out)).coords, out);
+        let Ok(found) = plane_contact_with(part, ground, poses, locator, None, true) else {
             continue;
         };
         // The deepest point (the contact's point, back out by the part's skin) in the
@@ -430,11 +436,72 @@ fn plane_contact_facing(
     triangle: Option<Triangle>,
     bounded: bool,
 ) -> Result<PairContact, Option<Vector3<f64>>> {
+    let poses = Poses::at(part, ground, s, t);
+    let locator = Locator::facing(locator, side);
+    plane_contact_with(part, ground, &poses, locator, triangle, bounded)
+}
+
+/// The ground's and the part's poses at one instant, made once by a caller that asks
+/// [`plane_contact_with`] more than once or has read them already.
+struct Poses {
+    ground: nalgebra::Isometry3<f64>,
+    part: nalgebra::Isometry3<f64>,
+}
+
+impl Poses {
+    fn at(part: &BodyPart, ground: &GroundGeom, s: &State, t: f64) -> Self {
+        Poses {
+            ground: ground.pose_at(t),
+            part: part_pose(part, s),
+        }
+    }
+}
+
+/// The world point that chooses a cuboid's face (`world`), with its coordinates in the
+/// ground's frame where the caller has them (`local`: for a cuboid, what
+/// [`plane_contact_with`] would compute), and the side a mesh triangle's normal is turned
+/// towards (`side`; `None`: the part's centre).
+struct Locator {
+    world: Vector3<f64>,
+    local: Option<Vector3<f64>>,
+    side: Option<Vector3<f64>>,
+}
+
+impl Locator {
+    /// The world point `world`, with the side `side`.
+    fn facing(world: Vector3<f64>, side: Option<Vector3<f64>>) -> Self {
+        Locator {
+            world,
+            local: None,
+            side,
+        }
+    }
+
+    /// A point whose coordinates in the ground's frame are known, with no side.
+    fn known(world: Vector3<f64>, local: Vector3<f64>) -> Self {
+        Locator {
+            world,
+            local: Some(local),
+            side: None,
+        }
+    }
+}
+
+/// [`plane_contact_facing`] with the poses at the instant (`poses`) and the locator
+/// (`locator`) made by the caller.
+fn plane_contact_with(
+    part: &BodyPart,
+    ground: &GroundGeom,
+    poses: &Poses,
+    locator: Locator,
+    triangle: Option<Triangle>,
+    bounded: bool,
+) -> Result<PairContact, Option<Vector3<f64>>> {
     use crate::parry::shape::TypedShape;
-    let pose_g = ground.pose_at(t);
+    let pose_g = &poses.ground;
     let local = |v: Vector3<f64>| pose_g.rotation * v;
     let at = |v: Vector3<f64>| (pose_g * nalgebra::Point3::from(v)).coords;
-    let body_point = locator;
+    let (body_point, side) = (locator.world, locator.side);
     // The plane (world normal, world point) and the face's bounds.
     enum Face {
         Unbounded,
@@ -449,9 +516,11 @@ fn plane_contact_facing(
         ),
         TypedShape::Cuboid(cb) => {
             let half = vec_to_na(cb.half_extents);
-            let p = pose_g
-                .inverse_transform_point(&nalgebra::Point3::from(body_point))
-                .coords;
+            let p = locator.local.unwrap_or_else(|| {
+                pose_g
+                    .inverse_transform_point(&nalgebra::Point3::from(body_point))
+                    .coords
+            });
             let (axis, nl) = cuboid_face(&p, &half);
             (local(nl), at(nl * half[axis]), Face::Rect { axis, half })
         }
@@ -471,7 +540,7 @@ fn plane_contact_facing(
         return Err(None);
     }
     let mut n = n / len;
-    let pose_b = part_pose(part, s);
+    let pose_b = &poses.part;
     let toward = side.unwrap_or(pose_b.translation.vector);
     if matches!(face, Face::Tri(_)) && n.dot(&(toward - q)) < 0.0 {
         n = -n; // A mesh triangle has no outside: the body's side (or `side`) is.
