@@ -2083,9 +2083,11 @@ fn a_plank_resting_across_a_tables_edge_stays_on_the_table() {
 /// the start: it went beside the slab, not through it. The plank's centre passes beyond
 /// both the side and the top, its near end a rounding under the top: it is in by the top,
 /// not by the side across its length. Before the fix the rod was moved 0.46 m down out of
-/// the underside and the plank 0.42-0.48 m out of the side in one step. No step moves
-/// either by more than 3 cm beyond what its velocity carries (rapier alone: 2.1 cm at
-/// most, the rod's bounces).
+/// the underside and the plank 0.42-0.48 m out of the side in one step. And a plank
+/// pivoting over a 2 cm slab's edge at 5.8 rad/s (30 Hz), 4 mm into the edge, its far end
+/// beyond the edge and below the top's plane from the step's start: it was lifted 0.39 m
+/// onto the top's plane. No step moves any of them by more than 3 cm beyond what its
+/// velocity carries (rapier alone: 2.1 cm at most, the rod's bounces).
 #[test]
 fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
     let run = |label: &str, hz: f64, timing, table: (f64, f64), body: ColliderBuilder, rb| {
@@ -2133,6 +2135,20 @@ fn a_long_body_past_a_ground_cuboids_edge_is_not_moved_across_itself() {
                 );
             }
         }
+        run(
+            "plank pivoting over a slab's edge at 30 Hz",
+            30.0,
+            timing,
+            (0.01, 1.01),
+            ColliderBuilder::cuboid(0.6, 0.02, 0.05)
+                .restitution(0.5)
+                .friction(0.5),
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(0.926_308_45, 1.109_314_9, -0.280_097_2))
+                .rotation(Vector::new(-0.081_192_32, -0.181_777_12, -0.771_101_1))
+                .linvel(Vector::new(0.375_200_63, 0.365_620_2, 0.178_964_93))
+                .angvel(Vector::new(0.209_159_85, 2.257_921_2, -5.827_307_7)),
+        );
         for hz in [30.0, 60.0] {
             run(
                 &format!("plank off a table at {hz} Hz"),

@@ -614,7 +614,8 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
     let (gap, dt) = (step.policy.resting_gap, step.dt);
     let found = closest(checked.geom, checked.grounds, s, dt, 0.0);
     let hit = found.or_else(|| passed_through(checked, s, dt, gap))?;
-    let hit = on_entry_side(hit, checked, s, dt);
+    let jointed = step.sets.jointed(checked.body);
+    let hit = on_entry_side(hit, checked, s, (dt, gap), jointed);
     (hit.ground < joined || hit.dist < -gap).then_some(hit)
 }
 
@@ -633,8 +634,17 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
 /// beside it (a hinged flap onto a stop, a door swung into a post) is out of the face its
 /// end came in by, not out of the face its centre lies beyond, across the whole body. A
-/// body with no start state (asleep at the start) keeps `hit`.
-fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
+/// body without a joint whose hit on a cuboid is shallower than the cuboid's half thickness
+/// takes only a face whose measured point was in front of it at the start, and keeps `hit`
+/// if none was (`jointed`: the body has a joint). A body with no start state (asleep at the
+/// start) keeps `hit`.
+fn on_entry_side(
+    hit: Hit,
+    checked: &Checked,
+    s: &State,
+    (dt, gap): (f64, f64),
+    jointed: bool,
+) -> Hit {
     let Some(cand) = checked.cand else {
         return hit;
     };
@@ -653,15 +663,37 @@ fn on_entry_side(hit: Hit, checked: &Checked, s: &State, dt: f64) -> Hit {
         let entering = |(_, normal, point): &PairContact| {
             normal.dot(&(point - point_at_start(cand, part, ground, s, *point, dt))) < 0.0
         };
-        entry_face_contact(part, ground, s, dt, centre, entering)
-            .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
+        // Shallower than the cuboid's half thickness, the hit cannot be out of the far face;
+        // a face then needs the point it measures (the body's deepest behind its plane) to
+        // have been in front of it at the step's start: that point came in by it. A plank
+        // pivoting over a 2 cm slab's edge, 4 mm into the edge, has its far end beyond the
+        // edge and below the top's plane from the start: measured on the top's plane, it
+        // would be lifted 0.39 m. (Not for a body with a joint: the joint, which the impact
+        // does not see, pulls it back in; the unbounded face's larger push-out keeps a
+        // motorised door from a post it would otherwise pass.)
+        let shallow = !jointed
+            && ground
+                .shape
+                .as_cuboid()
+                .is_some_and(|c| -hit.dist < to_f64(c.half_extents.min_element()));
+        let came_in = |(dist, normal, point): &PairContact| {
+            let face = point - normal * *dist;
+            let start = point_at_start(cand, part, ground, s, *point, dt);
+            !shallow || normal.dot(&(start - face)) >= -gap
+        };
+        let entry = entry_face_contact(part, ground, s, dt, centre, came_in, entering);
+        if shallow {
+            entry
+        } else {
+            entry.or_else(|| contact_from_side(part, ground, s, dt, centre, false))
+        }
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
         // past the side (its contact point then a rounding under the top, beyond the side)
         // came in by the top, not by that side across its whole length.
         match hit_point_start(cand, part, ground, s, &hit, dt) {
             Some(point) if behind(&point) => {
-                entry_face_contact(part, ground, s, dt, point, |_| true)
+                entry_face_contact(part, ground, s, dt, point, |_| true, |_| true)
                     .filter(|(dist, ..)| *dist > hit.dist)
             }
             _ => return hit,

@@ -384,17 +384,19 @@ pub(crate) fn contact_from_side(
 }
 
 /// The contact of a body part with a cuboid ground out of the face it came in by: of the
-/// faces whose plane has `from` (where the body was, outside the ground) in front, the one
-/// the part is least deep behind, each face's plane taken unbounded: of those `prefers`
-/// holds for, where it holds for any; `None` for other grounds. A long body whose end went into a small cuboid is out of its
-/// entry face, not out of whichever face its own centre lies beyond (the far side of a
-/// post, across the whole body).
+/// faces whose plane has `from` (where the body was, outside the ground) in front and whose
+/// contact `admits` holds for, the one the part is least deep behind, each face's plane
+/// taken unbounded: of those `prefers` holds for, where it holds for any; `None` for other
+/// grounds, or if no face is admitted. A long body whose end went into a small cuboid is
+/// out of its entry face, not out of whichever face its own centre lies beyond (the far
+/// side of a post, across the whole body).
 pub(crate) fn entry_face_contact(
     part: &BodyPart,
     ground: &GroundGeom,
     s: &State,
     t: f64,
     from: Vector3<f64>,
+    admits: impl Fn(&PairContact) -> bool,
     prefers: impl Fn(&PairContact) -> bool,
 ) -> Option<PairContact> {
     let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
@@ -412,7 +414,9 @@ pub(crate) fn entry_face_contact(
         let mut out = Vector3::zeros();
         out[axis] = 2.0 * half[axis].copysign(p[axis]);
         let locator = (pose_g * nalgebra::Point3::from(out)).coords;
-        if let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, false) {
+        if let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, false)
+            && admits(&found)
+        {
             if best.is_none_or(|b| found.0 > b.0) {
                 best = Some(found);
             }
