@@ -634,10 +634,10 @@ fn deepest(checked: &Checked, joined: usize, s: &State, step: &EndOfStep) -> Opt
 /// (`entry_face_contact`): a long body whose end went into a post while its centre stayed
 /// beside it (a hinged flap onto a stop, a door swung into a post) is out of the face its
 /// end came in by, not out of the face its centre lies beyond, across the whole body. A
-/// body without a joint whose hit on a cuboid is shallower than the cuboid's half thickness
-/// takes only a face whose measured point was in front of it at the start, and keeps `hit`
-/// if none was (`jointed`: the body has a joint). A body with no start state (asleep at the
-/// start) keeps `hit`.
+/// body without a joint (`jointed`: it has one) whose hit on a cuboid is shallower than the
+/// cuboid's smallest half extent takes only a face whose measured point was in front of it
+/// at the start (within the resting gap `gap`), or keeps `hit` if none was and `hit`'s own
+/// point was. A body with no start state (asleep at the start) keeps `hit`.
 fn on_entry_side(
     hit: Hit,
     checked: &Checked,
@@ -663,14 +663,19 @@ fn on_entry_side(
         let entering = |(_, normal, point): &PairContact| {
             normal.dot(&(point - point_at_start(cand, part, ground, s, *point, dt))) < 0.0
         };
-        // Shallower than the cuboid's half thickness, the hit cannot be out of the far face;
-        // a face then needs the point it measures (the body's deepest behind its plane) to
-        // have been in front of it at the step's start: that point came in by it. A plank
-        // pivoting over a 2 cm slab's edge, 4 mm into the edge, has its far end beyond the
-        // edge and below the top's plane from the start: measured on the top's plane, it
-        // would be lifted 0.39 m. (Not for a body with a joint: the joint, which the impact
-        // does not see, pulls it back in; the unbounded face's larger push-out keeps a
-        // motorised door from a post it would otherwise pass.)
+        // The faces the centre was in front of are measured on their unbounded planes, which
+        // run on past the cuboid's edges: a plank pivoting over a 2 cm slab's edge, 4 mm into
+        // the edge, its far end past the edge and below the top's plane from the step's
+        // start, would be lifted 0.39 m onto that plane. So where the hit is shallower than
+        // the cuboid's smallest half extent, a face needs the point it measures (the body's
+        // deepest behind its plane) to have been in front of that plane at the start, within
+        // the resting gap: that point came in by it. Where none did, the hit stands if its own
+        // point came in by its face (the edge the plank pivots on); else (the face a centre
+        // that went nearly through a slab is nearest, a side face a body's centre lies beyond
+        // across its length) every such face is weighed as without the test. Not for a body
+        // with a joint: the joint, which the impact does not see, pulls it back in, and the
+        // unbounded face's larger push-out keeps a motorised door from a post it would
+        // otherwise pass.
         let shallow = !jointed
             && ground
                 .shape
@@ -679,13 +684,18 @@ fn on_entry_side(
         let came_in = |(dist, normal, point): &PairContact| {
             let face = point - normal * *dist;
             let start = point_at_start(cand, part, ground, s, *point, dt);
-            !shallow || normal.dot(&(start - face)) >= -gap
+            normal.dot(&(start - face)) >= -gap
         };
-        let entry = entry_face_contact(part, ground, s, dt, centre, came_in, entering);
-        if shallow {
-            entry
+        let admitted = shallow
+            .then(|| entry_face_contact(part, ground, s, dt, centre, came_in, entering))
+            .flatten();
+        if admitted.is_some() {
+            admitted
+        } else if shallow && came_in(&(hit.dist, hit.normal, hit.point)) {
+            return hit;
         } else {
-            entry.or_else(|| contact_from_side(part, ground, s, dt, centre, false))
+            entry_face_contact(part, ground, s, dt, centre, |_| true, entering)
+                .or_else(|| contact_from_side(part, ground, s, dt, centre, false))
         }
     } else {
         // Only ever shallower than `hit`: a body resting on a cuboid's top with its end out
