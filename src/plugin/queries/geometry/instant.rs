@@ -462,9 +462,9 @@ impl Poses {
 }
 
 /// The world point that chooses a cuboid's face (`world`), with its coordinates in the
-/// ground's frame where the caller has them (`local`: for a cuboid, what
-/// [`plane_contact_with`] would compute), and the side a mesh triangle's normal is turned
-/// towards (`side`; `None`: the part's centre).
+/// ground's frame where the caller has them (`local`, read only on a cuboid to choose the
+/// face: otherwise [`plane_contact_with`] takes `world` into that frame), and the side a
+/// mesh triangle's normal is turned towards (`side`; `None`: the part's centre).
 struct Locator {
     world: Vector3<f64>,
     local: Option<Vector3<f64>>,
