@@ -400,7 +400,8 @@ pub(crate) fn entry_face_contact(
     prefers: impl Fn(&PairContact) -> bool,
 ) -> Option<PairContact> {
     let half = vec_to_na(ground.shape.as_cuboid()?.half_extents);
-    let pose_g = ground.pose_at(t);
+    let poses = Poses::at(part, ground, s, t);
+    let pose_g = &poses.ground;
     let p = pose_g
         .inverse_transform_point(&nalgebra::Point3::from(from))
         .coords;
@@ -413,8 +414,8 @@ pub(crate) fn entry_face_contact(
         // A point out along the face's normal, which `cuboid_face` takes to that face.
         let mut out = Vector3::zeros();
         out[axis] = 2.0 * half[axis].copysign(p[axis]);
-        let locator = (pose_g * nalgebra::Point3::from(out)).coords;
-        if let Ok(found) = plane_contact_facing(part, ground, s, t, (locator, None), None, false)
+        let locator = Locator::known((pose_g * nalgebra::Point3::from(out)).coords, out);
+        if let Ok(found) = plane_contact_with(part, ground, &poses, locator, None, false)
             && admits(&found)
         {
             if best.is_none_or(|b| found.0 > b.0) {
@@ -491,6 +492,49 @@ impl Locator {
     }
 }
 
+/// The bounds of a flat ground's face in [`plane_contact_with`]: none (a half-space), a
+/// cuboid's face (the axis of its normal and the cuboid's half extents, in its frame), or a
+/// mesh triangle (its corners in the world).
+enum Face {
+    Unbounded,
+    Rect { axis: usize, half: Vector3<f64> },
+    Tri([Vector3<f64>; 3]),
+}
+
+impl Face {
+    /// Does the world point `over`, on the face's plane of unit normal `n`, lie on the face,
+    /// within `tol` of its edges (`pose_g` the ground's pose)?
+    fn holds(
+        &self,
+        over: &Vector3<f64>,
+        n: &Vector3<f64>,
+        pose_g: &nalgebra::Isometry3<f64>,
+        tol: f64,
+    ) -> bool {
+        match self {
+            Face::Unbounded => true,
+            Face::Rect { axis, half } => {
+                let p = pose_g
+                    .inverse_transform_point(&nalgebra::Point3::from(*over))
+                    .coords;
+                (0..3).all(|i| i == *axis || p[i].abs() <= half[i] + tol)
+            }
+            Face::Tri(v) => {
+                let inside_edge = |a: &Vector3<f64>, b: &Vector3<f64>| {
+                    n.dot(&(b - a).cross(&(over - a))) >= -tol * (b - a).norm()
+                };
+                let ccw = n.dot(&(v[1] - v[0]).cross(&(v[2] - v[0]))) > 0.0;
+                let (a, b, c3) = if ccw {
+                    (v[0], v[1], v[2])
+                } else {
+                    (v[0], v[2], v[1])
+                };
+                inside_edge(&a, &b) && inside_edge(&b, &c3) && inside_edge(&c3, &a)
+            }
+        }
+    }
+}
+
 /// [`plane_contact_facing`] with the poses at the instant (`poses`) and the locator
 /// (`locator`) made by the caller.
 fn plane_contact_with(
@@ -507,11 +551,6 @@ fn plane_contact_with(
     let at = |v: Vector3<f64>| (pose_g * nalgebra::Point3::from(v)).coords;
     let (body_point, side) = (locator.world, locator.side);
     // The plane (world normal, world point) and the face's bounds.
-    enum Face {
-        Unbounded,
-        Rect { axis: usize, half: Vector3<f64> },
-        Tri([Vector3<f64>; 3]),
-    }
     let (n, q, face) = match ground.shape.as_typed_shape() {
         TypedShape::HalfSpace(hs) => (
             local(vec_to_na(hs.normal)),
@@ -566,28 +605,7 @@ fn plane_contact_with(
     let height = n.dot(&(support - q));
     let over = support - n * height;
     let tol = FACE_ROUNDING * (1.0 + body_point.norm());
-    let inside = match face {
-        _ if !bounded => true,
-        Face::Unbounded => true,
-        Face::Rect { axis, half } => {
-            let p = pose_g
-                .inverse_transform_point(&nalgebra::Point3::from(over))
-                .coords;
-            (0..3).all(|i| i == axis || p[i].abs() <= half[i] + tol)
-        }
-        Face::Tri(v) => {
-            let inside_edge = |a: &Vector3<f64>, b: &Vector3<f64>| {
-                n.dot(&(b - a).cross(&(over - a))) >= -tol * (b - a).norm()
-            };
-            let ccw = n.dot(&(v[1] - v[0]).cross(&(v[2] - v[0]))) > 0.0;
-            let (a, b, c3) = if ccw {
-                (v[0], v[1], v[2])
-            } else {
-                (v[0], v[2], v[1])
-            };
-            inside_edge(&a, &b) && inside_edge(&b, &c3) && inside_edge(&c3, &a)
-        }
-    };
+    let inside = !bounded || face.holds(&over, &n, pose_g, tol);
     if !inside {
         return Err(Some(over).filter(|_| matches!(face, Face::Tri(_))));
     }
