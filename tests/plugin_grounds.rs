@@ -2260,18 +2260,31 @@ fn flap_over_stop(
             .translation(Vector::new(0.9, real(half), 0.0))
             .restitution(0.8),
     );
-    let hinge =
-        world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.5, 0.0)));
-    let (flap, _) = world.insert(
+    let flap = hinged(
+        &mut world,
+        (Vector::new(0.0, 0.5, 0.0), Vector::Z),
         flap,
         ColliderBuilder::cuboid(0.5, 0.02, 0.2).restitution(0.8),
     );
+    (world, flap, stop)
+}
+
+/// Inserts a body (`body`, `collider`) on a revolute joint about `axis` to a fixed hinge at
+/// `at`, the joint 0.5 m along the body's -x from its centre (a 1 m door's or flap's edge).
+fn hinged(
+    world: &mut PhysicsWorld,
+    (at, axis): (Vector, Vector),
+    body: RigidBodyBuilder,
+    collider: ColliderBuilder,
+) -> RigidBodyHandle {
+    let hinge = world.insert_body(RigidBodyBuilder::fixed().translation(at));
+    let (handle, _) = world.insert(body, collider);
     world.insert_impulse_joint(
         hinge,
-        flap,
-        RevoluteJointBuilder::new(Vector::Z).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
+        handle,
+        RevoluteJointBuilder::new(axis).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
     );
-    (world, flap, stop)
+    handle
 }
 
 /// A door 1 m wide and 2 m tall on a vertical hinge at the origin (1.05 m up), swung at
@@ -2291,19 +2304,14 @@ fn door_swung_into_post(
             .translation(Vector::new(0.8, 1.05, real(0.45 + half)))
             .restitution(0.8),
     );
-    let hinge =
-        world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 1.05, 0.0)));
-    let (door, _) = world.insert(
+    let door = hinged(
+        &mut world,
+        (Vector::new(0.0, 1.05, 0.0), Vector::Y),
         RigidBodyBuilder::dynamic()
             .translation(Vector::new(0.5, 1.05, 0.0))
             .linvel(Vector::new(0.0, 0.0, real(spin / 2.0)))
             .angvel(Vector::new(0.0, real(-spin), 0.0)),
         ColliderBuilder::cuboid(0.5, 1.0, 0.02).restitution(0.8),
-    );
-    world.insert_impulse_joint(
-        hinge,
-        door,
-        RevoluteJointBuilder::new(Vector::Y).local_anchor2(Vector::new(-0.5, 0.0, 0.0)),
     );
     (world, door, post)
 }
