@@ -82,6 +82,11 @@ impl<'q, 'c> BallOnGround<'q, 'c> {
         self.body.grounds.iter().all(|(other, _)| *other == self.gi)
     }
 
+    /// Did the closed form roll it on its ground last step (`Role::Rolling`)?
+    fn rolled(&self) -> bool {
+        self.last.roles.get(&(self.part.handle, self.gg.handle)) == Some(&Role::Rolling)
+    }
+
     /// Was its pair with its ground rapier's resting contact last step, and none of its pairs
     /// with the other grounds near it the closed form's rolling (a roll that ends on another
     /// piece of the plane is the closed form's to its stop)?
@@ -199,7 +204,7 @@ impl<H: PhysicsHooks> Planner<'_, H> {
                 }
             }
             // Rolled in closed form last step: the event says it is rapier's from here.
-            Some(OnPlane::Reached) if last.roles.get(&key) == Some(&Role::Rolling) => {
+            Some(OnPlane::Reached) if ball.rolled() => {
                 let site = Site {
                     body: body.handle,
                     collider: part.handle,
@@ -247,38 +252,21 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         } = *ball;
         let member = ball.body.member;
         let slide = self.slide_of(ball, step)?;
-        if self.reached(scene, &slide, member, step) {
-            return Some(OnPlane::Reached);
-        }
         let Slide {
             radius, level, v, ..
         } = slide;
-        // The ground's one flat face under the ball for the whole step (a half-space, or a
-        // cuboid's face the ball stays well inside of), or the faces in one plane under its
-        // contact point's whole path: a mesh's or heightfield's other triangles, or a
-        // cuboid's edge, could be met inside the step, out of rapier's solver. On a moving
-        // ground: its one flat face, in its frame.
-        let travel = (v.norm() + on_ground.w.norm() * radius) * step.dt;
-        let inside = ball.alone() && flat_relative(part, gg, on_ground, travel, radius);
-        let inertia_ratio = Inertia::of(ball.body.rb).ball_ratio(radius)?;
-        let motion = Rolling {
-            normal: n,
-            radius,
-            inertia_ratio,
-            friction: slide.friction,
-            rolling_resistance: slide.rolling_resistance,
-            spinning_friction: slide.spinning_friction,
-            accel: ball.body.flight.accel,
-            ground_velocity: slide.u,
-        };
-        // At rest on a slope that holds it (its closed-form stop, or placed there): rapier's
-        // contact holds it, nothing else touching it.
-        if !level && !member {
-            let at_rest = v.norm() <= HELD_SPEED && on_ground.w.norm() * radius <= HELD_SPEED;
-            if let Some(tilt) = motion.holding_tilt().filter(|_| at_rest) {
-                return self.held(scene, &slide, tilt, step);
-            }
-        }
+        let motion = Inertia::of(ball.body.rb)
+            .ball_ratio(radius)
+            .map(|inertia_ratio| Rolling {
+                normal: n,
+                radius,
+                inertia_ratio,
+                friction: slide.friction,
+                rolling_resistance: slide.rolling_resistance,
+                spinning_friction: slide.spinning_friction,
+                accel: ball.body.flight.accel,
+                ground_velocity: slide.u,
+            });
         // On level ground, at rest as the closed form holds it (moving by no more than its
         // rounding), or at rest in rapier's contact last step and now moving slower than the
         // held speed and than the closed form would brake away within this step (rapier's
@@ -286,18 +274,39 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         // Taken back, the ball would be stopped each other step and written, and never sleep.
         // rapier has no rolling resistance: it lets such a ball drift until it sleeps it, at
         // most the held speed for 0.5 s at its defaults. Only the rolling resistance and the
-        // spinning friction brake a ball on level ground.
+        // spinning friction brake a ball on level ground. Asked before the reach test: such a
+        // ball is rapier's whatever can reach it, and the test then only decides whether a
+        // ball the closed form rolled last step is released (its event). In a crowd with
+        // rolling resistance most balls come to rest beside others, and the test is the
+        // costlier of the two.
         let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
         let turning = (on_ground.w - n * on_ground.w.dot(&n)).norm() * radius;
         let held = v.norm() <= HELD_SPEED && turning <= HELD_SPEED;
-        if level
-            && !member
-            && brakes
-            && held
-            && (motion.at_rest(on_ground)
-                || ball.rested() && motion.comes_to_rest(on_ground, step.dt))
-        {
-            return None;
+        let at_rest = |motion: &Rolling| {
+            motion.at_rest(on_ground) || ball.rested() && motion.comes_to_rest(on_ground, step.dt)
+        };
+        if level && !member && brakes && held && motion.as_ref().is_some_and(at_rest) {
+            return (ball.rolled() && self.reached(scene, &slide, member, step))
+                .then_some(OnPlane::Reached);
+        }
+        if self.reached(scene, &slide, member, step) {
+            return Some(OnPlane::Reached);
+        }
+        let motion = motion?;
+        // The ground's one flat face under the ball for the whole step (a half-space, or a
+        // cuboid's face the ball stays well inside of), or the faces in one plane under its
+        // contact point's whole path: a mesh's or heightfield's other triangles, or a
+        // cuboid's edge, could be met inside the step, out of rapier's solver. On a moving
+        // ground: its one flat face, in its frame.
+        let travel = (v.norm() + on_ground.w.norm() * radius) * step.dt;
+        let inside = ball.alone() && flat_relative(part, gg, on_ground, travel, radius);
+        // At rest on a slope that holds it (its closed-form stop, or placed there): rapier's
+        // contact holds it, nothing else touching it.
+        if !level && !member {
+            let at_rest = v.norm() <= HELD_SPEED && on_ground.w.norm() * radius <= HELD_SPEED;
+            if let Some(tilt) = motion.holding_tilt().filter(|_| at_rest) {
+                return self.held(scene, &slide, tilt, step);
+            }
         }
         // On level ground the closed form reaches every state unless the rolling resistance
         // needs more friction than `mu N` (`mu_r / (1 + k) > mu`): then it is asked.
