@@ -39,8 +39,9 @@ pub(crate) enum OnPlane {
     /// writing the rest pose back after each step would move the collider, and rapier wakes
     /// the body of every collider moved by hand.)
     Held(Vector3<f64>, SmallList<ColliderHandle>),
-    /// It would move, but something besides its grounds can touch it within the step
-    /// (`reach::within_reach_of_other`): rapier's resting contact, as any resting pair.
+    /// Something besides its grounds can touch it within the step
+    /// (`reach::within_reach_of_other`): rapier's resting contact, as any resting pair. Told
+    /// apart from `None` only for a ball the closed form rolled last step (its release).
     Reached,
 }
 
@@ -232,7 +233,8 @@ impl<H: PhysicsHooks> Planner<'_, H> {
     /// touches one of the others (a crease, a wall: not touching it at the start), gravity
     /// (and any constant force) along `-n`, no damping, torque or contact modification by
     /// the user, isotropic inertia with no locked axis, nothing besides its grounds able to
-    /// touch it within the step (`reach::within_reach_of_other`; else `OnPlane::Reached`),
+    /// touch it within the step (`reach::within_reach_of_other`; else `OnPlane::Reached`,
+    /// asked of a ball at rest on level ground only if the closed form rolled it last step),
     /// and a ball that slips (faster than `ROLLING_MIN_SLIP`) or rolls faster than the
     /// resting speed (slower, it is rapier's, which brings it to rest and to sleep). Or, at
     /// rest on a still slope that holds it (`OnPlane::Held`), rapier's contact holding it.
@@ -282,12 +284,14 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
         let turning = (on_ground.w - n * on_ground.w.dot(&n)).norm() * radius;
         let held = v.norm() <= HELD_SPEED && turning <= HELD_SPEED;
-        let at_rest = |motion: &Rolling| {
+        let rests = |motion: &Rolling| {
             motion.at_rest(on_ground) || ball.rested() && motion.comes_to_rest(on_ground, step.dt)
         };
-        if level && !member && brakes && held && motion.as_ref().is_some_and(at_rest) {
-            return (ball.rolled() && self.reached(scene, &slide, member, step))
-                .then_some(OnPlane::Reached);
+        if level && !member && brakes && held && motion.as_ref().is_some_and(rests) {
+            if ball.rolled() && self.reached_by_other(scene, &slide, step) {
+                return Some(OnPlane::Reached);
+            }
+            return None;
         }
         if self.reached(scene, &slide, member, step) {
             return Some(OnPlane::Reached);
