@@ -125,6 +125,47 @@ struct Slide<'b, 'q, 'c> {
     to_plane: Vector3<f64>,
 }
 
+impl Slide<'_, '_, '_> {
+    /// The closed-form motion of the ball on its ground, `None` for an inertia the closed
+    /// form does not take (`Inertia::ball_ratio`).
+    fn motion(&self) -> Option<Rolling> {
+        let ball = self.ball;
+        let inertia_ratio = Inertia::of(ball.body.rb).ball_ratio(self.radius)?;
+        Some(Rolling {
+            normal: ball.n,
+            radius: self.radius,
+            inertia_ratio,
+            friction: self.friction,
+            rolling_resistance: self.rolling_resistance,
+            spinning_friction: self.spinning_friction,
+            accel: ball.body.flight.accel,
+            ground_velocity: self.u,
+        })
+    }
+
+    /// Is the ball rapier's at rest on level ground (`motion` its closed form, in a step of
+    /// `dt`)? At rest as the closed form holds it (moving by no more than its rounding), or
+    /// at rest in rapier's contact last step and now moving slower than the held speed and
+    /// than the closed form would brake away within this step (rapier's solver's rounding,
+    /// about 1e-7 m/s on a tile in `f32`): rapier sleeps it. Taken back, the ball would be
+    /// stopped each other step and written, and never sleep. rapier has no rolling
+    /// resistance: it lets such a ball drift until it sleeps it, at most the held speed for
+    /// 0.5 s at its defaults. Only the rolling resistance and the spinning friction brake a
+    /// ball on level ground. Not a ball of an impact between bodies (its cluster moves it).
+    fn rests_level(&self, motion: &Rolling, dt: f64) -> bool {
+        let ball = self.ball;
+        let (n, on_ground) = (ball.n, ball.on_ground);
+        let brakes = self.rolling_resistance > 0.0 || self.spinning_friction > 0.0;
+        let turning = (on_ground.w - n * on_ground.w.dot(&n)).norm() * self.radius;
+        let held = self.v.norm() <= HELD_SPEED && turning <= HELD_SPEED;
+        self.level
+            && !ball.body.member
+            && brakes
+            && held
+            && (motion.at_rest(on_ground) || ball.rested() && motion.comes_to_rest(on_ground, dt))
+    }
+}
+
 impl<H: PhysicsHooks> Planner<'_, H> {
     /// A pair rapier would hold at rest, of a ball alone on a ground within the resting gap
     /// (`(dist, n, point)` its contact): the closed form's role for it (`rolling_of`).
@@ -248,7 +289,6 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let BallOnGround {
             part,
             gg,
-            n,
             on_ground,
             ..
         } = *ball;
@@ -257,37 +297,15 @@ impl<H: PhysicsHooks> Planner<'_, H> {
         let Slide {
             radius, level, v, ..
         } = slide;
-        let motion = Inertia::of(ball.body.rb)
-            .ball_ratio(radius)
-            .map(|inertia_ratio| Rolling {
-                normal: n,
-                radius,
-                inertia_ratio,
-                friction: slide.friction,
-                rolling_resistance: slide.rolling_resistance,
-                spinning_friction: slide.spinning_friction,
-                accel: ball.body.flight.accel,
-                ground_velocity: slide.u,
-            });
-        // On level ground, at rest as the closed form holds it (moving by no more than its
-        // rounding), or at rest in rapier's contact last step and now moving slower than the
-        // held speed and than the closed form would brake away within this step (rapier's
-        // solver's rounding, about 1e-7 m/s on a tile in `f32`): rapier's, which sleeps it.
-        // Taken back, the ball would be stopped each other step and written, and never sleep.
-        // rapier has no rolling resistance: it lets such a ball drift until it sleeps it, at
-        // most the held speed for 0.5 s at its defaults. Only the rolling resistance and the
-        // spinning friction brake a ball on level ground. Asked before the reach test: such a
-        // ball is rapier's whatever can reach it, and the test then only decides whether a
-        // ball the closed form rolled last step is released (its event). In a crowd with
-        // rolling resistance most balls come to rest beside others, and the test is the
-        // costlier of the two.
-        let brakes = slide.rolling_resistance > 0.0 || slide.spinning_friction > 0.0;
-        let turning = (on_ground.w - n * on_ground.w.dot(&n)).norm() * radius;
-        let held = v.norm() <= HELD_SPEED && turning <= HELD_SPEED;
-        let rests = |motion: &Rolling| {
-            motion.at_rest(on_ground) || ball.rested() && motion.comes_to_rest(on_ground, step.dt)
-        };
-        if level && !member && brakes && held && motion.as_ref().is_some_and(rests) {
+        let motion = slide.motion();
+        // A ball at rest on level ground is rapier's whatever can reach it, so that is asked
+        // first: the reach test then only decides whether a ball the closed form rolled last
+        // step is released (its event). In a crowd with rolling resistance most balls come to
+        // rest beside others, and the reach test is the costlier of the two.
+        if motion
+            .as_ref()
+            .is_some_and(|m| slide.rests_level(m, step.dt))
+        {
             if ball.rolled() && self.reached_by_other(scene, &slide, step) {
                 return Some(OnPlane::Reached);
             }
