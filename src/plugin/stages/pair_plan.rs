@@ -7,8 +7,8 @@
 //! parry's contact, `body_contact.rs`; for those, a pair whose body rapier's solver held
 //! against anything else last step, or that lies within the resting gap of a ground by
 //! parry's distance, is rapier's), finds the pairs of a body faster than half the resting speed
-//! whose bounding spheres, swept over the step, overlap (a BVH over the swept spheres, refitted
-//! from step to step, [`PairIndex`]: the cost grows with the pairs that can meet, not with the
+//! whose bounding spheres, swept over the step, overlap (the swept spheres' boxes in rows of a
+//! grid, [`PairIndex`]: the cost grows with the bodies and the pairs that can meet, not with the
 //! square of the bodies), skips the pairs it would change (an impact, a zeroed restitution, a
 //! chain's) that rapier would not solve or the user's filter refuses (a resting pair left as
 //! it is, rapier's whatever they say, is not asked), and gives every other pair a role:
@@ -91,8 +91,9 @@ pub(crate) struct PairInputs<'a, H> {
 }
 
 /// The step's pairs (see the module's contract), and the sleeping members of their `Impact`
-/// pairs, which the step must wake to plan them as awake bodies. Updates the pair index's
-/// leaves (kept for the next step); writes nothing into rapier.
+/// pairs, which the step must wake to plan them as awake bodies. Replaces the pair index's
+/// boxes with the step's (kept for the clusters after rapier's step); writes nothing into
+/// rapier.
 pub(crate) fn plan_pairs<H: PhysicsHooks>(
     index: &mut PairIndex,
     bodies: &RigidBodySet,

@@ -681,8 +681,7 @@ impl<'c, 'a> Run<'c, 'a> {
                     may_pair: None,
                 }),
         );
-        // The lowest slot first: the tree's order depends on its history, which a restored
-        // plugin does not have.
+        // The lowest slot first, whatever order the index gives them in.
         way.near.sort_unstable_by_key(|leaf| leaf.slot);
         if !way.near.is_empty() {
             way.partners.extend(self.tables.pairs_of.of(k).map(|q| {
