@@ -442,44 +442,82 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
     }
 }
 
-/// The pairs of a step's balls by their first (smaller) ball: each ball's bucket holds the
-/// seconds of its pairs as they are found, so that the pairs come out in increasing order by
-/// walking the buckets in order, each (a ball's few neighbours) sorted by the second. The
-/// cost is O(pairs and balls), where comparing whole pairs costs a factor of log(pairs), and
-/// no pass counts the buckets first. The buckets are kept from step to step (`PairIndex`),
-/// so that a step's pairs allocate nothing once they have grown.
+/// The pairs of a step's balls as they are found, put in increasing order when drained: two
+/// stable counting passes, by the second ball and then by the first. The cost is O(pairs and
+/// balls), where comparing whole pairs costs a factor of log(pairs), and no branch depends on
+/// the pairs' values (sorting each ball's few pairs mispredicted the branches of its small
+/// sorts). The lists are kept from step to step (`PairIndex`), so that a step's pairs
+/// allocate nothing once they have grown.
 #[derive(Default)]
 struct PairBuckets {
-    /// By first ball: the second balls of its pairs (`u32`, as the step's balls are numbered
+    /// The pairs as found, the smaller ball first (`u32`, as the step's balls are numbered
     /// in `PairIndex::ball_of`).
-    seconds: Vec<Vec<u32>>,
+    found: Vec<(u32, u32)>,
+    /// The pairs by their second ball (the first pass's result).
+    by_second: Vec<(u32, u32)>,
+    /// Each ball's count, then where its pairs go.
+    starts: Vec<u32>,
 }
 
 impl PairBuckets {
-    /// Room for the pairs of `balls` balls (the buckets are empty).
+    /// Room for the pairs of `balls` balls (none are held).
     fn prepare(&mut self, balls: usize) {
-        if self.seconds.len() < balls {
-            self.seconds.resize_with(balls, Vec::new);
+        debug_assert!(self.found.is_empty());
+        if self.starts.len() < balls {
+            self.starts.resize(balls, 0);
         }
     }
 
     /// Adds the pair of balls `i` and `j` (either order, distinct).
     fn add(&mut self, i: usize, j: usize) {
-        self.seconds[i.min(j)].push(i.max(j) as u32);
+        self.found.push((i.min(j) as u32, i.max(j) as u32));
     }
 
-    /// Appends the pairs `(i, j)`, `i < j < balls`, in increasing order, and empties the
-    /// buckets.
+    /// Appends the pairs `(i, j)`, `i < j < balls`, in increasing order, and forgets them.
     fn drain_into(&mut self, balls: usize, out: &mut Vec<(usize, usize)>) {
-        for (i, seconds) in self.seconds[..balls].iter_mut().enumerate() {
-            // Most buckets hold one pair or none.
-            if seconds.len() > 1 {
-                seconds.sort_unstable();
-            }
-            out.extend(seconds.iter().map(|j| (i, *j as usize)));
-            seconds.clear();
-        }
+        let starts = &mut self.starts[..balls];
+        self.by_second.clear();
+        self.by_second.resize(self.found.len(), (0, 0));
+        let by_second = &mut self.by_second;
+        counting_pass(&self.found, |p| p.1, starts, |at, p| by_second[at] = p);
+        let base = out.len();
+        out.resize(base + self.found.len(), (0, 0));
+        let sorted = &mut out[base..];
+        counting_pass(
+            &self.by_second,
+            |p| p.0,
+            starts,
+            |at, (i, j)| {
+                sorted[at] = (i as usize, j as usize);
+            },
+        );
+        self.found.clear();
     }
+}
+
+/// One stable counting pass of `pairs` by `key` (below `starts.len()`): `put` is given each
+/// pair's place in the order, in the pairs' order. `starts` is left zeroed.
+fn counting_pass(
+    pairs: &[(u32, u32)],
+    key: impl Fn(&(u32, u32)) -> u32,
+    starts: &mut [u32],
+    mut put: impl FnMut(usize, (u32, u32)),
+) {
+    for p in pairs {
+        starts[key(p) as usize] += 1;
+    }
+    let mut sum = 0;
+    for at in starts.iter_mut() {
+        let count = *at;
+        *at = sum;
+        sum += count;
+    }
+    for p in pairs {
+        let at = &mut starts[key(p) as usize];
+        put(*at as usize, *p);
+        *at += 1;
+    }
+    starts.fill(0);
 }
 
 /// Each ball's neighbours in the index for the chains: from the whole search's pairs when
