@@ -107,7 +107,7 @@ pub struct ImpactPlugin<H = ()> {
     pub(crate) flags: HookFlags,
     /// What the last step left for the next (`state/memory.rs`).
     pub(crate) memory: Memory,
-    /// The opted-in balls' swept spheres, refitted each step (`stages/pair_plan/index.rs`).
+    /// The opted-in balls' swept boxes of the step (`stages/pair_plan/index.rs`).
     pub(crate) pair_index: PairIndex,
     /// The last step's events and diagnostics.
     pub(crate) reports: Reports,

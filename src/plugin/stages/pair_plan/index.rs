@@ -1,21 +1,28 @@
-//! The pair index: the opted-in bodies' swept boxes of the step, in rows of a grid, and the
-//! pairs of bodies whose boxes overlap (the pairs that may meet in the step).
+//! The pair index: the opted-in bodies' swept boxes of the step, by width in levels, each
+//! level in rows of a grid, and the pairs of bodies whose boxes overlap (the pairs that may
+//! meet in the step).
 //!
 //! Invariant: between [`PairIndex::update`] and [`PairIndex::clear_list`] every body of the
 //! step's list has its box, keyed by its body's slot, and `ball_of` maps that slot to its
 //! index in the list; outside that window `ball_of` maps no slot, and the boxes stay until the
 //! next update (the clusters after rapier's step read them).
 //!
-//! The rows: the boxes are cut into rows across the axis their low ends spread most along,
-//! each row at least as wide as the widest box along that axis, so that two boxes that meet
-//! lie in the same row or in neighbouring ones; within a row they are sorted by their low
-//! ends along the axis they spread second most along. A box then meets only boxes of its row
-//! after it whose low end is not past its high end, and boxes of the next row from the first
-//! whose row reaches its low end (a running maximum of the high ends) to the last whose low
-//! end is not past its high end. In a crowd on a floor each ball so compares its box with the
-//! few around it; the rows are counted out rather than sorted, and each row (a few dozen
-//! balls) is sorted on its own, so a step's cost follows the balls and the pairs, with no tree
-//! to keep from step to step. Two boxes meet as parry's `Aabb::intersects` has it (closed
+//! The rows: a level's boxes are cut into rows across the axis their low ends spread most
+//! along, each row at least as wide as the level's widest box along that axis, so that two
+//! boxes that meet lie in the same row or in neighbouring ones; within a row they are sorted
+//! by their low ends along the axis they spread second most along. A box then meets only
+//! boxes of its row after it whose low end is not past its high end, and boxes of the next
+//! row from the first whose row reaches its low end (a running maximum of the high ends) to
+//! the last whose low end is not past its high end. The levels: a box up to twice as wide as
+//! the narrowest box of positive width is in the first level (and so is a box of no width),
+//! and each level after holds boxes up to four times as wide as the bound of the one before
+//! (levels left empty are dropped), so that a few wide boxes (fast balls) do not widen every
+//! row; a box is compared with its own level's as above, and queried against each narrower
+//! level.
+//! In a crowd on a floor (one level) each ball so compares its box with the few around it;
+//! the levels and rows are counted out rather than sorted, and each row (a few dozen balls)
+//! is sorted on its own, so a step's cost follows the balls and the pairs, with no tree to
+//! keep from step to step. Two boxes meet as parry's `Aabb::intersects` has it (closed
 //! boxes: touching counts); a box with a coordinate that is not a number meets none and is
 //! left out.
 
@@ -26,28 +33,44 @@ use crate::rapier::math::Real;
 use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
 use crate::rapier::prelude::RigidBodyHandle;
 
-/// The opted-in balls' swept boxes of the step, in rows (see the module's doc). The lists are
-/// kept from step to step for their storage only.
+/// The opted-in balls' swept boxes of the step, by width in levels, each level in rows (see
+/// the module's doc). The lists are kept from step to step for their storage only.
 #[derive(Default)]
 pub(crate) struct PairIndex {
     /// The step's boxes and their bodies' slots, by ball (index in the step's list).
     boxes: Vec<(u32, Aabb)>,
-    /// The step's rows.
-    rows: Rows,
-    /// The balls whose boxes can meet others (every coordinate a number), row by row, each
-    /// row by its boxes' low ends along the sweep axis.
-    sorted: Vec<Sorted>,
-    /// Row `r` is `sorted[row_start[r]..row_start[r + 1]]`.
-    row_start: Vec<u32>,
-    /// Each ball's row, `u32::MAX` for a box that meets none (scratch of `update`).
-    row_of: Vec<u32>,
-    /// The step's pairs by their first ball, for the order of the list.
+    /// The step's levels, narrowest boxes first: `levels[..level_count]` (the others are kept
+    /// for their storage).
+    levels: Vec<Level>,
+    level_count: usize,
+    /// The balls whose boxes can meet others (every coordinate a number), level by level in
+    /// the list's order (scratch of `update`).
+    by_level: Vec<u32>,
+    /// Where each level's balls end in `by_level`.
+    level_end: Vec<u32>,
+    /// Each ball's box's width (m), not a number for a box that meets none, and its level,
+    /// `u32::MAX` for that box (scratch of `update`).
+    widths: Vec<f64>,
+    level_of: Vec<u32>,
+    /// The pairs found, put in order when drained.
     buckets: PairBuckets,
     /// How many pairs the last search found: the next one's list is sized for a few more,
     /// rather than grown (and copied) pair by pair.
     last_found: usize,
     /// This step's ball (index in its list) by body slot, `u32::MAX` for none.
     ball_of: Vec<u32>,
+}
+
+/// The boxes of one range of widths, in rows.
+#[derive(Default)]
+struct Level {
+    rows: Rows,
+    /// The level's balls, row by row, each row by its boxes' low ends along the sweep axis.
+    sorted: Vec<Sorted>,
+    /// Row `r` is `sorted[row_start[r]..row_start[r + 1]]`.
+    row_start: Vec<u32>,
+    /// Each of the level's balls' row, in the level's order (scratch of `build`).
+    row_of: Vec<u32>,
 }
 
 /// One ball of a row: what its row is sorted and swept by (its box is in `boxes`, read only
@@ -62,7 +85,7 @@ struct Sorted {
     ball: u32,
 }
 
-/// The step's rows: across which axis, from where, how wide, how many, and the axis each row
+/// A level's rows: across which axis, from where, how wide, how many, and the axis each row
 /// is sorted along.
 #[derive(Clone, Copy, Debug)]
 struct Rows {
@@ -72,7 +95,7 @@ struct Rows {
     sweep: usize,
     /// The lowest low end along `across` (m).
     origin: f64,
-    /// A row's width along `across` (m): above the widest box's along it.
+    /// A row's width along `across` (m): above the level's widest box's along it.
     width: f64,
     /// How many rows (1: every box in one).
     count: usize,
@@ -159,6 +182,37 @@ impl Rows {
     }
 }
 
+/// The base 2 logarithm of how many times the widths a level holds reach past the bound of
+/// the level before (4 times).
+const LEVEL_RATIO_LOG2: f64 = 2.0;
+
+/// The last level: it holds every box wider than the levels below hold (an unbounded one
+/// included).
+const MAX_LEVEL: usize = 32;
+
+/// The width (m) of a box whose coordinates are numbers: its largest extent along an axis
+/// (below zero for a box inverted along every axis). The members' boxes are cubes, as wide
+/// along every axis, so whichever axes a level's rows are cut across and swept along, this is
+/// their width along them.
+fn width(aabb: &Aabb) -> f64 {
+    (0..3)
+        .map(|k| to_f64(aabb.maxs[k]) - to_f64(aabb.mins[k]))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The level of a box `width` wide, `base` the narrowest positive width of the step's boxes:
+/// 0 up to twice `base`, then one more each time the width grows `2^LEVEL_RATIO_LOG2` times,
+/// up to `MAX_LEVEL`. Only the cost depends on it: each level's rows are as wide as its own
+/// widest box.
+fn level_of_width(width: f64, base: f64) -> usize {
+    if width <= 2.0 * base {
+        return 0;
+    }
+    // Above 1, and infinite for an unbounded box, whose level `as` saturates to the last.
+    let levels = ((width / (2.0 * base)).log2() / LEVEL_RATIO_LOG2).ceil();
+    (levels as usize).min(MAX_LEVEL)
+}
+
 impl PairIndex {
     /// The index over these leaves (body slot, swept box), by ball: they replace the last
     /// step's.
@@ -176,102 +230,96 @@ impl PairIndex {
         }
         self.boxes.clear();
         self.boxes.extend_from_slice(leaves);
-        self.rows = Rows::of(leaves.iter().map(|(_, b)| b).filter(|b| comparable(b)));
-        self.place(leaves);
-        self.sort_rows();
+        self.sort_into_levels();
+        let mut from = 0;
+        for l in 0..self.level_count {
+            let to = self.level_end[l] as usize;
+            self.levels[l].build(&self.by_level[from..to], &self.boxes);
+            from = to;
+        }
     }
 
-    /// Puts the balls of these leaves (those that can meet others) in their rows, in the
-    /// leaves' order within each: counted out, each row's size, then where each ends, then
-    /// the balls put in place from each row's end back (so that `row_start` ends up at each
-    /// row's start).
-    fn place(&mut self, leaves: &[(u32, Aabb)]) {
-        let rows = self.rows;
-        self.row_of.clear();
-        self.row_start.clear();
-        self.row_start.resize(rows.count + 1, 0);
-        for (_, aabb) in leaves {
-            let row = if comparable(aabb) {
-                let r = rows.index(rows.at(aabb.mins[rows.across]));
-                self.row_start[r] += 1;
-                r as u32
-            } else {
+    /// Sorts the balls that can meet others into their levels (`by_level`, each level's
+    /// balls in the list's order), counted out, and sets `level_count`.
+    fn sort_into_levels(&mut self) {
+        // Each box's width (not a number for one that meets none), and the narrowest positive.
+        self.widths.clear();
+        let mut base = f64::INFINITY;
+        for (_, b) in &self.boxes {
+            let w = if comparable(b) { width(b) } else { f64::NAN };
+            if w > 0.0 {
+                base = base.min(w);
+            }
+            self.widths.push(w);
+        }
+        self.level_of.clear();
+        self.level_count = 0;
+        for w in &self.widths {
+            let level = if w.is_nan() {
                 u32::MAX
+            } else {
+                let l = level_of_width(*w, base);
+                self.level_count = self.level_count.max(l + 1);
+                l as u32
             };
-            self.row_of.push(row);
+            self.level_of.push(level);
         }
-        let mut end = 0;
-        for at in &mut self.row_start[..rows.count] {
-            end += *at;
-            *at = end;
+        // Each level's count; the empty levels are dropped (a query would visit them).
+        let ends = &mut self.level_end;
+        ends.clear();
+        ends.resize(self.level_count, 0);
+        for l in self.level_of.iter().filter(|l| **l != u32::MAX) {
+            ends[*l as usize] += 1;
         }
-        self.row_start[rows.count] = end;
-        let unplaced = Sorted {
-            low: Real::NAN,
-            reach: Real::NAN,
-            ball: u32::MAX,
-        };
-        self.sorted.clear();
-        self.sorted.resize(end as usize, unplaced);
-        for (k, (_, aabb)) in leaves.iter().enumerate().rev() {
-            let row = self.row_of[k];
-            if row == u32::MAX {
-                continue;
+        if ends.contains(&0) {
+            let mut kept = [u32::MAX; MAX_LEVEL + 1];
+            let mut next = 0;
+            for (l, count) in ends.iter().enumerate() {
+                if *count > 0 {
+                    kept[l] = next;
+                    next += 1;
+                }
             }
-            let at = &mut self.row_start[row as usize];
-            *at -= 1;
-            self.sorted[*at as usize] = Sorted {
-                low: aabb.mins[rows.sweep],
-                reach: aabb.maxs[rows.sweep],
-                ball: k as u32,
-            };
-        }
-    }
-
-    /// Sorts each row by its boxes' low ends along the sweep axis, and draws its running
-    /// maximum of their high ends.
-    fn sort_rows(&mut self) {
-        for r in 0..self.rows.count {
-            let row = &mut self.sorted[self.row_start[r] as usize..self.row_start[r + 1] as usize];
-            row.sort_unstable_by(|a, b| a.low.total_cmp(&b.low));
-            // Each entry's `reach` is placed as its own high end.
-            let mut reach = Real::NEG_INFINITY;
-            for entry in row {
-                reach = reach.max(entry.reach);
-                entry.reach = reach;
+            ends.retain(|count| *count > 0);
+            for l in self.level_of.iter_mut().filter(|l| **l != u32::MAX) {
+                *l = kept[*l as usize];
             }
+            self.level_count = next as usize;
         }
-    }
-
-    /// Row `r`'s balls (empty past the last row).
-    fn row(&self, r: usize) -> &[Sorted] {
-        match (self.row_start.get(r), self.row_start.get(r + 1)) {
-            (Some(from), Some(to)) => &self.sorted[*from as usize..*to as usize],
-            _ => &[],
+        if self.levels.len() < self.level_count {
+            self.levels.resize_with(self.level_count, Level::default);
+        }
+        // Where each level's balls go, then (once they are put in place, in the list's order)
+        // where each level ends.
+        let mut sum = 0;
+        for at in ends.iter_mut() {
+            (*at, sum) = (sum, sum + *at);
+        }
+        self.by_level.clear();
+        self.by_level.resize(sum as usize, u32::MAX);
+        for (k, l) in self.level_of.iter().enumerate() {
+            if let Some(at) = ends.get_mut(*l as usize) {
+                self.by_level[*at as usize] = k as u32;
+                *at += 1;
+            }
         }
     }
 
     /// Every pair of the `balls` balls (indices in this step's list, the smaller first) whose
-    /// boxes meet, in increasing order: each box against those after it in its row and those
-    /// of the next row that reach it.
+    /// boxes meet, in increasing order: in each level, each box against those after it in its
+    /// row and those of the next row that reach it; and each box against the narrower levels
+    /// (queried with its box).
     fn overlapping(&mut self, balls: usize) -> Vec<(usize, usize)> {
         let mut buckets = std::mem::take(&mut self.buckets);
         buckets.prepare(balls);
-        let sweep = self.rows.sweep;
-        for r in 0..self.rows.count {
-            let (row, next) = (self.row(r), self.row(r + 1));
-            for (i, a) in row.iter().enumerate() {
-                let a_box = &self.boxes[a.ball as usize].1;
-                let high = a_box.maxs[sweep];
-                let from = next.partition_point(|e| e.reach < a.low);
-                // Each part is sorted by low end: its scan ends at the first past `high`.
-                for b in row[i + 1..]
-                    .iter()
-                    .take_while(|b| b.low <= high)
-                    .chain(next[from..].iter().take_while(|b| b.low <= high))
-                {
-                    if a_box.intersects(&self.boxes[b.ball as usize].1) {
-                        buckets.add(a.ball as usize, b.ball as usize);
+        let (levels, boxes) = (&self.levels[..self.level_count], &self.boxes);
+        for (l, level) in levels.iter().enumerate() {
+            level.pairs_within(boxes, &mut buckets);
+            for a in &level.sorted {
+                let a_box = &boxes[a.ball as usize].1;
+                for narrower in &levels[..l] {
+                    for b in narrower.meeting(a_box, boxes) {
+                        buckets.add(a.ball as usize, b);
                     }
                 }
             }
@@ -280,7 +328,7 @@ impl PairIndex {
         self.drain_pairs(balls)
     }
 
-    /// The bucketed pairs of `balls` balls, in increasing order (the buckets left empty).
+    /// The pairs found, in increasing order (the buckets left empty).
     fn drain_pairs(&mut self, balls: usize) -> Vec<(usize, usize)> {
         let mut out = Vec::with_capacity(self.last_found + self.last_found / 4 + 16);
         self.buckets.drain_into(balls, &mut out);
@@ -293,29 +341,11 @@ impl PairIndex {
         self.ball_of[body.slot()] as usize
     }
 
-    /// The balls (indices in this step's list) whose boxes meet `aabb`: in each row that can
-    /// hold one (from the row before its low end's to its high end's), from the first whose
-    /// row so far reaches its low end to the last whose low end is not past its high end.
-    /// Row by row, each in its order.
+    /// The balls (indices in this step's list) whose boxes meet `aabb`, level by level.
     fn meeting<'a>(&'a self, aabb: &'a Aabb) -> impl Iterator<Item = usize> + 'a {
-        let rows = &self.rows;
-        let rows_met = if comparable(aabb) {
-            let first = rows.index(rows.at(aabb.mins[rows.across]) - 1.0);
-            let last = rows.index(rows.at(aabb.maxs[rows.across]));
-            first..last + 1
-        } else {
-            0..0
-        };
-        let sweep = rows.sweep;
-        rows_met.flat_map(move |r| {
-            let row = self.row(r);
-            let from = row.partition_point(|e| e.reach < aabb.mins[sweep]);
-            row[from..]
-                .iter()
-                .take_while(move |e| e.low <= aabb.maxs[sweep])
-                .map(|e| e.ball as usize)
-                .filter(move |k| self.boxes[*k].1.intersects(aabb))
-        })
+        self.levels[..self.level_count]
+            .iter()
+            .flat_map(move |level| level.meeting(aabb, &self.boxes))
     }
 
     /// The body slots and swept boxes of this step's members whose boxes meet `aabb`, read
@@ -334,6 +364,120 @@ impl PairIndex {
         for (slot, _) in leaves {
             self.ball_of[*slot as usize] = u32::MAX;
         }
+    }
+}
+
+impl Level {
+    /// The level of these balls (indices in the step's list) of `boxes`: each put in its row,
+    /// in the balls' order within each (counted out: each row's size, then where each ends,
+    /// then the balls put in place from each row's end back, so that `row_start` ends up at
+    /// each row's start); then each row sorted by its boxes' low ends along the sweep axis,
+    /// with its running maximum of their high ends.
+    fn build(&mut self, balls: &[u32], boxes: &[(u32, Aabb)]) {
+        let rows = Rows::of(balls.iter().map(|k| &boxes[*k as usize].1));
+        self.rows = rows;
+        self.row_of.clear();
+        self.row_start.clear();
+        self.row_start.resize(rows.count + 1, 0);
+        for k in balls {
+            let r = rows.index(rows.at(boxes[*k as usize].1.mins[rows.across]));
+            self.row_start[r] += 1;
+            self.row_of.push(r as u32);
+        }
+        let mut end = 0;
+        for at in &mut self.row_start[..rows.count] {
+            end += *at;
+            *at = end;
+        }
+        self.row_start[rows.count] = end;
+        let unplaced = Sorted {
+            low: Real::NAN,
+            reach: Real::NAN,
+            ball: u32::MAX,
+        };
+        self.sorted.clear();
+        self.sorted.resize(end as usize, unplaced);
+        for (i, k) in balls.iter().enumerate().rev() {
+            let aabb = &boxes[*k as usize].1;
+            let at = &mut self.row_start[self.row_of[i] as usize];
+            *at -= 1;
+            self.sorted[*at as usize] = Sorted {
+                low: aabb.mins[rows.sweep],
+                reach: aabb.maxs[rows.sweep],
+                ball: *k,
+            };
+        }
+        for r in 0..rows.count {
+            let row = &mut self.sorted[self.row_start[r] as usize..self.row_start[r + 1] as usize];
+            row.sort_unstable_by(|a, b| a.low.total_cmp(&b.low));
+            // Each entry's `reach` was placed as its own high end.
+            let mut reach = Real::NEG_INFINITY;
+            for entry in row {
+                reach = reach.max(entry.reach);
+                entry.reach = reach;
+            }
+        }
+    }
+
+    /// Row `r`'s balls (empty past the last row).
+    fn row(&self, r: usize) -> &[Sorted] {
+        match (self.row_start.get(r), self.row_start.get(r + 1)) {
+            (Some(from), Some(to)) => &self.sorted[*from as usize..*to as usize],
+            _ => &[],
+        }
+    }
+
+    /// Adds to `buckets` every pair of the level's balls whose `boxes` meet: each box against
+    /// those after it in its row and those of the next row that reach it.
+    fn pairs_within(&self, boxes: &[(u32, Aabb)], buckets: &mut PairBuckets) {
+        let sweep = self.rows.sweep;
+        for r in 0..self.rows.count {
+            let (row, next) = (self.row(r), self.row(r + 1));
+            for (i, a) in row.iter().enumerate() {
+                let a_box = &boxes[a.ball as usize].1;
+                let high = a_box.maxs[sweep];
+                let from = next.partition_point(|e| e.reach < a.low);
+                // Each part is sorted by low end: its scan ends at the first past `high`.
+                for b in row[i + 1..]
+                    .iter()
+                    .take_while(|b| b.low <= high)
+                    .chain(next[from..].iter().take_while(|b| b.low <= high))
+                {
+                    if a_box.intersects(&boxes[b.ball as usize].1) {
+                        buckets.add(a.ball as usize, b.ball as usize);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The level's balls whose `boxes` meet `aabb`: in each row that can hold one (from the
+    /// row before its low end's to its high end's), from the first whose row so far reaches
+    /// its low end to the last whose low end is not past its high end. Row by row, each in
+    /// its order.
+    fn meeting<'a>(
+        &'a self,
+        aabb: &'a Aabb,
+        boxes: &'a [(u32, Aabb)],
+    ) -> impl Iterator<Item = usize> + 'a {
+        let rows = &self.rows;
+        let rows_met = if comparable(aabb) {
+            let first = rows.index(rows.at(aabb.mins[rows.across]) - 1.0);
+            let last = rows.index(rows.at(aabb.maxs[rows.across]));
+            first..last + 1
+        } else {
+            0..0
+        };
+        let sweep = rows.sweep;
+        rows_met.flat_map(move |r| {
+            let row = self.row(r);
+            let from = row.partition_point(|e| e.reach < aabb.mins[sweep]);
+            row[from..]
+                .iter()
+                .take_while(move |e| e.low <= aabb.maxs[sweep])
+                .map(|e| e.ball as usize)
+                .filter(move |k| boxes[*k].1.intersects(aabb))
+        })
     }
 }
 
@@ -411,11 +555,12 @@ impl Candidates {
 }
 
 /// The step's candidate pairs. Reads the index (its list must be the members') and the
-/// members' movers; mutates only the index's buckets. The whole index is searched when more
-/// than a third of the balls move or a restitution can reach 1 (its pairs then also give the
-/// chains each carrier's neighbours, which would otherwise query the index again; searched
-/// only from two thirds, the 500-ball crowd's pair plan cost 4 % more); otherwise each
-/// mover's box is queried, and a pair of two movers is listed once, from the first.
+/// members' movers; mutates only the index's found pairs and their count. The whole index is
+/// searched when more than a third of the balls move or a restitution can reach 1 (its pairs
+/// then also give the chains each carrier's neighbours, which would otherwise query the index
+/// again; searched only from two thirds, the pair plan of `many_balls --pairs --count 500
+/// --mode exact` ran 4 % more instructions); otherwise each mover's box is queried, and a
+/// pair of two movers is listed once, from the first.
 pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates {
     let mover = |k: usize| members.is_mover[k];
     let balls = members.balls.len();
@@ -556,7 +701,7 @@ impl<'p> Around<'p> {
 
 #[cfg(test)]
 mod tests {
-    use super::{PairBuckets, PairIndex};
+    use super::{PairBuckets, PairIndex, ROW_ROOM};
     use crate::rapier::math::{Real, Vector};
     use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
     use proptest::prelude::*;
@@ -588,15 +733,32 @@ mod tests {
     }
 
     /// Lists of boxes: small ones spread over many rows (a crowd), or boxes of every size
-    /// (few rows; an unbounded box makes one), some of them flat.
+    /// (several levels, an unbounded box in the last); some of them flat or inverted along an
+    /// axis.
     fn boxes(len: std::ops::Range<usize>) -> impl Strategy<Value = Vec<Aabb>> {
         prop_oneof![
-            prop::collection::vec(grid_box(0.25, vec![0.0, 0.125, 0.25, 0.375]), len.clone()),
             prop::collection::vec(
-                grid_box(0.25, vec![0.0, 0.25, 0.5, 1.0, 3.0, Real::INFINITY]),
+                grid_box(0.25, vec![-0.125, 0.0, 0.125, 0.25, 0.375]),
+                len.clone()
+            ),
+            prop::collection::vec(
+                grid_box(0.25, vec![-0.125, 0.0, 0.25, 0.5, 1.0, 3.0, Real::INFINITY]),
                 len
             ),
         ]
+    }
+
+    /// Every pair of `boxes` that meet, by comparing each with each.
+    fn every_pair(boxes: &[Aabb]) -> Vec<(usize, usize)> {
+        let mut pairs = Vec::new();
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                if boxes[i].intersects(&boxes[j]) {
+                    pairs.push((i, j));
+                }
+            }
+        }
+        pairs
     }
 
     /// Leaves of distinct slots (in a scrambled order) with these boxes.
@@ -626,23 +788,19 @@ mod tests {
         fn the_rows_find_what_comparing_every_pair_finds(
             first in boxes(0..20),
             boxes in boxes(0..80),
-            queries in prop::collection::vec(grid_box(0.5, vec![0.0, 0.5, 2.0, Real::INFINITY]), 1..6),
+            queries in prop::collection::vec(
+                grid_box(0.5, vec![-0.5, 0.0, 0.5, 2.0, Real::INFINITY]),
+                1..6,
+            ),
         ) {
             let mut index = PairIndex::default();
             let old = leaves(&first);
             index.update(&old);
+            prop_assert_eq!(index.overlapping(first.len()), every_pair(&first));
             index.clear_list(&old);
             let leaves = leaves(&boxes);
             index.update(&leaves);
-            let mut expected = Vec::new();
-            for i in 0..boxes.len() {
-                for j in i + 1..boxes.len() {
-                    if boxes[i].intersects(&boxes[j]) {
-                        expected.push((i, j));
-                    }
-                }
-            }
-            prop_assert_eq!(index.overlapping(boxes.len()), expected);
+            prop_assert_eq!(index.overlapping(boxes.len()), every_pair(&boxes));
             // Besides the drawn queries, one touching each box at its high corner, and one
             // at its low corner.
             let corners = boxes.iter().flat_map(|b| {
@@ -672,32 +830,77 @@ mod tests {
 
     /// A crowd of small boxes far from the origin is cut into many rows, and the whole search
     /// still finds each overlapping pair, across rows too: the rows are what the search
-    /// relies on, so this checks they are there.
+    /// relies on, so this checks they are there. A few boxes 40 times as wide (fast balls)
+    /// are put in levels of their own rather than widening every row, and meet the crowd
+    /// there.
     #[test]
     fn a_crowd_far_out_lies_in_many_rows_and_every_overlapping_pair_is_found() {
         let (n, half, gap): (usize, Real, Real) = (400, 0.06, 0.1);
-        let boxes: Vec<Aabb> = (0..n)
+        let mut boxes: Vec<Aabb> = (0..n)
             .map(|k| {
                 let (i, j) = ((k % 20) as Real, (k / 20) as Real);
                 let c = Vector::new(1.0e4 + i * gap, 0.5, -3.0e3 + j * gap);
                 Aabb::from_half_extents(c, Vector::splat(half))
             })
             .collect();
-        let leaves = leaves(&boxes);
-        let mut index = PairIndex::default();
-        index.update(&leaves);
-        assert!(index.rows.count >= 10, "rows: {:?}", index.rows);
-        let mut expected = Vec::new();
-        for i in 0..n {
-            for j in i + 1..n {
-                if boxes[i].intersects(&boxes[j]) {
-                    expected.push((i, j));
-                }
-            }
-        }
         // Each box overlaps its neighbours along the grid and along its diagonals.
-        assert_eq!(expected.len(), 2 * 20 * 19 + 2 * 19 * 19);
-        assert_eq!(index.overlapping(n), expected);
+        assert_eq!(every_pair(&boxes).len(), 2 * 20 * 19 + 2 * 19 * 19);
+        let mut index = PairIndex::default();
+        index.update(&leaves(&boxes));
+        assert_eq!(index.level_count, 1);
+        assert!(
+            index.levels[0].rows.count >= 10,
+            "{:?}",
+            index.levels[0].rows
+        );
+        assert_eq!(index.overlapping(n), every_pair(&boxes));
+        for k in [3, 171, 398] {
+            let c = boxes[k].center();
+            boxes.push(Aabb::from_half_extents(c, Vector::splat(40.0 * half)));
+        }
+        index.update(&leaves(&boxes));
+        // The crowd, and the wide boxes three levels up (the two between, empty, dropped).
+        assert_eq!(index.level_count, 2);
+        assert_eq!(index.levels[1].sorted.len(), 3);
+        assert!(
+            index.levels[0].rows.count >= 10,
+            "{:?}",
+            index.levels[0].rows
+        );
+        assert_eq!(index.overlapping(boxes.len()), every_pair(&boxes));
+    }
+
+    /// Boxes far apart along the axis they spread along make more rows than boxes, most of
+    /// them empty, each wider than the widest box: the pairs and queries are still found.
+    #[test]
+    fn rows_wider_than_the_boxes_with_empty_rows_between_find_every_pair() {
+        let point = |x: Real| Aabb::new(Vector::new(x, 0.0, 0.0), Vector::new(x, 0.0, 0.0));
+        let small =
+            |x: Real| Aabb::from_half_extents(Vector::new(x, 0.0, 0.0), Vector::splat(1.0 / 128.0));
+        let boxes = vec![
+            point(0.0),
+            small(0.0),
+            point(100.0),
+            small(100.0 + 1.0 / 128.0),
+            small(37.5),
+        ];
+        let mut index = PairIndex::default();
+        index.update(&leaves(&boxes));
+        let rows = index.levels[0].rows;
+        assert!(rows.count > boxes.len(), "{rows:?}");
+        assert!(rows.width > (1.0 / 64.0) * (1.0 + ROW_ROOM), "{rows:?}");
+        assert_eq!(index.overlapping(boxes.len()), every_pair(&boxes));
+        let query = Aabb::new(Vector::new(99.0, -1.0, -1.0), Vector::new(100.0, 1.0, 1.0));
+        let mut found: Vec<u32> = index.leaves_meeting(&query).map(|(s, _)| s).collect();
+        found.sort_unstable();
+        let mut expected: Vec<u32> = leaves(&boxes)
+            .iter()
+            .filter(|(_, b)| b.intersects(&query))
+            .map(|(s, _)| *s)
+            .collect();
+        expected.sort_unstable();
+        assert_eq!(found.len(), 2);
+        assert_eq!(found, expected);
     }
 
     /// The buckets give pairs in the order a comparison sort of the tuples does, empty
