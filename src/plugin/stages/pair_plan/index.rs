@@ -18,11 +18,10 @@
 //! and each level after holds boxes up to four times as wide as the bound of the one before
 //! (levels left empty are dropped), so that a few wide boxes (fast balls) do not widen every
 //! row; a box is compared with its own level's as above, and queried against each narrower
-//! level.
-//! In a crowd on a floor (one level) each ball so compares its box with the few around it;
-//! the levels and rows are counted out rather than sorted, and each row (a few dozen balls)
-//! is sorted on its own, so a step's cost follows the balls and the pairs, with no tree to
-//! keep from step to step. Two boxes meet as parry's `Aabb::intersects` has it (closed
+//! level. In a crowd on a floor (one level) each ball so compares its box with the few around
+//! it; the levels and rows are counted out rather than sorted, and each row (a few dozen
+//! balls) is sorted on its own, so a step's cost follows the balls and the pairs, with no tree
+//! to keep from step to step. Two boxes meet as parry's `Aabb::intersects` has it (closed
 //! boxes: touching counts); a box with a coordinate that is not a number meets none and is
 //! left out.
 
@@ -53,7 +52,7 @@ pub(crate) struct PairIndex {
     widths: Vec<f64>,
     level_of: Vec<u32>,
     /// The pairs found, put in order when drained.
-    buckets: PairBuckets,
+    found: FoundPairs,
     /// How many pairs the last search found: the next one's list is sized for a few more,
     /// rather than grown (and copied) pair by pair.
     last_found: usize,
@@ -310,28 +309,28 @@ impl PairIndex {
     /// row and those of the next row that reach it; and each box against the narrower levels
     /// (queried with its box).
     fn overlapping(&mut self, balls: usize) -> Vec<(usize, usize)> {
-        let mut buckets = std::mem::take(&mut self.buckets);
-        buckets.prepare(balls);
+        let mut found = std::mem::take(&mut self.found);
+        found.prepare(balls);
         let (levels, boxes) = (&self.levels[..self.level_count], &self.boxes);
         for (l, level) in levels.iter().enumerate() {
-            level.pairs_within(boxes, &mut buckets);
+            level.pairs_within(boxes, &mut found);
             for a in &level.sorted {
                 let a_box = &boxes[a.ball as usize].1;
                 for narrower in &levels[..l] {
                     for b in narrower.meeting(a_box, boxes) {
-                        buckets.add(a.ball as usize, b);
+                        found.add(a.ball as usize, b);
                     }
                 }
             }
         }
-        self.buckets = buckets;
+        self.found = found;
         self.drain_pairs(balls)
     }
 
-    /// The pairs found, in increasing order (the buckets left empty).
+    /// The pairs found, in increasing order (none are held after).
     fn drain_pairs(&mut self, balls: usize) -> Vec<(usize, usize)> {
         let mut out = Vec::with_capacity(self.last_found + self.last_found / 4 + 16);
-        self.buckets.drain_into(balls, &mut out);
+        self.found.drain_into(balls, &mut out);
         self.last_found = out.len();
         out
     }
@@ -427,9 +426,9 @@ impl Level {
         }
     }
 
-    /// Adds to `buckets` every pair of the level's balls whose `boxes` meet: each box against
+    /// Adds to `found` every pair of the level's balls whose `boxes` meet: each box against
     /// those after it in its row and those of the next row that reach it.
-    fn pairs_within(&self, boxes: &[(u32, Aabb)], buckets: &mut PairBuckets) {
+    fn pairs_within(&self, boxes: &[(u32, Aabb)], found: &mut FoundPairs) {
         let sweep = self.rows.sweep;
         for r in 0..self.rows.count {
             let (row, next) = (self.row(r), self.row(r + 1));
@@ -444,7 +443,7 @@ impl Level {
                     .chain(next[from..].iter().take_while(|b| b.low <= high))
                 {
                     if a_box.intersects(&boxes[b.ball as usize].1) {
-                        buckets.add(a.ball as usize, b.ball as usize);
+                        found.add(a.ball as usize, b.ball as usize);
                     }
                 }
             }
@@ -570,16 +569,16 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
             traversed: true,
         };
     }
-    let mut buckets = std::mem::take(&mut index.buckets);
-    buckets.prepare(balls);
+    let mut found = std::mem::take(&mut index.found);
+    found.prepare(balls);
     for m in (0..balls).filter(|m| mover(*m)) {
         for j in index.meeting(&members.leaves[m].1) {
             if j != m && (j > m || !mover(j)) {
-                buckets.add(m, j);
+                found.add(m, j);
             }
         }
     }
-    index.buckets = buckets;
+    index.found = found;
     // In increasing order, as the whole search's.
     Candidates {
         pairs: index.drain_pairs(balls),
@@ -590,24 +589,24 @@ pub(super) fn candidates(index: &mut PairIndex, members: &Members) -> Candidates
 /// The pairs of a step's balls as they are found, put in increasing order when drained: two
 /// stable counting passes, by the second ball and then by the first. The cost is O(pairs and
 /// balls), where comparing whole pairs costs a factor of log(pairs), and no branch depends on
-/// the pairs' values (sorting each ball's few pairs mispredicted the branches of its small
-/// sorts). The lists are kept from step to step (`PairIndex`), so that a step's pairs
+/// the pairs' values (sorting each ball's few pairs instead mispredicts the branches of its
+/// small sorts). The lists are kept from step to step (`PairIndex`), so that a step's pairs
 /// allocate nothing once they have grown.
 #[derive(Default)]
-struct PairBuckets {
+struct FoundPairs {
     /// The pairs as found, the smaller ball first (`u32`, as the step's balls are numbered
     /// in `PairIndex::ball_of`).
-    found: Vec<(u32, u32)>,
+    pairs: Vec<(u32, u32)>,
     /// The pairs by their second ball (the first pass's result).
     by_second: Vec<(u32, u32)>,
     /// Each ball's count, then where its pairs go.
     starts: Vec<u32>,
 }
 
-impl PairBuckets {
+impl FoundPairs {
     /// Room for the pairs of `balls` balls (none are held).
     fn prepare(&mut self, balls: usize) {
-        debug_assert!(self.found.is_empty());
+        debug_assert!(self.pairs.is_empty());
         if self.starts.len() < balls {
             self.starts.resize(balls, 0);
         }
@@ -615,18 +614,18 @@ impl PairBuckets {
 
     /// Adds the pair of balls `i` and `j` (either order, distinct).
     fn add(&mut self, i: usize, j: usize) {
-        self.found.push((i.min(j) as u32, i.max(j) as u32));
+        self.pairs.push((i.min(j) as u32, i.max(j) as u32));
     }
 
     /// Appends the pairs `(i, j)`, `i < j < balls`, in increasing order, and forgets them.
     fn drain_into(&mut self, balls: usize, out: &mut Vec<(usize, usize)>) {
         let starts = &mut self.starts[..balls];
         self.by_second.clear();
-        self.by_second.resize(self.found.len(), (0, 0));
+        self.by_second.resize(self.pairs.len(), (0, 0));
         let by_second = &mut self.by_second;
-        counting_pass(&self.found, |p| p.1, starts, |at, p| by_second[at] = p);
+        counting_pass(&self.pairs, |p| p.1, starts, |at, p| by_second[at] = p);
         let base = out.len();
-        out.resize(base + self.found.len(), (0, 0));
+        out.resize(base + self.pairs.len(), (0, 0));
         let sorted = &mut out[base..];
         counting_pass(
             &self.by_second,
@@ -636,7 +635,7 @@ impl PairBuckets {
                 sorted[at] = (i as usize, j as usize);
             },
         );
-        self.found.clear();
+        self.pairs.clear();
     }
 }
 
@@ -701,7 +700,7 @@ impl<'p> Around<'p> {
 
 #[cfg(test)]
 mod tests {
-    use super::{PairBuckets, PairIndex, ROW_ROOM};
+    use super::{FoundPairs, PairIndex, ROW_ROOM};
     use crate::rapier::math::{Real, Vector};
     use crate::rapier::parry::bounding_volume::{Aabb, BoundingVolume};
     use proptest::prelude::*;
@@ -903,10 +902,10 @@ mod tests {
         assert_eq!(found, expected);
     }
 
-    /// The buckets give pairs in the order a comparison sort of the tuples does, empty
-    /// buckets, pairs given either way round and a last ball without pairs included.
+    /// The found pairs drain in the order a comparison sort of the tuples gives, balls
+    /// without pairs, pairs given either way round and a last ball without pairs included.
     #[test]
-    fn bucketed_pairs_order_as_tuples() {
+    fn found_pairs_drain_in_the_order_of_tuples() {
         let balls = 40;
         // A fixed scramble of every pair of a few balls, and some of the others.
         let mut pairs: Vec<(usize, usize)> = (0..balls)
@@ -918,20 +917,20 @@ mod tests {
         pairs.rotate_left(third);
         let mut expected = pairs.clone();
         expected.sort_unstable();
-        let mut buckets = PairBuckets::default();
-        buckets.prepare(balls);
+        let mut found = FoundPairs::default();
+        found.prepare(balls);
         for (k, (i, j)) in pairs.iter().enumerate() {
             if k % 2 == 0 {
-                buckets.add(*i, *j);
+                found.add(*i, *j);
             } else {
-                buckets.add(*j, *i);
+                found.add(*j, *i);
             }
         }
         let mut out = Vec::new();
-        buckets.drain_into(balls, &mut out);
+        found.drain_into(balls, &mut out);
         assert_eq!(out, expected);
         let mut none = Vec::new();
-        buckets.drain_into(balls, &mut none);
+        found.drain_into(balls, &mut none);
         assert!(none.is_empty());
     }
 }
