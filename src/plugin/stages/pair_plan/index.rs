@@ -241,15 +241,33 @@ impl PairIndex {
     /// Sorts the balls that can meet others into their levels (`by_level`, each level's
     /// balls in the list's order), counted out, and sets `level_count`.
     fn sort_into_levels(&mut self) {
-        // Each box's width (not a number for one that meets none), and the narrowest positive.
+        // Each box's width (not a number for one that meets none), the narrowest positive and
+        // the widest.
         self.widths.clear();
-        let mut base = f64::INFINITY;
+        let (mut base, mut widest) = (f64::INFINITY, f64::NEG_INFINITY);
         for (_, b) in &self.boxes {
             let w = if comparable(b) { width(b) } else { f64::NAN };
             if w > 0.0 {
                 base = base.min(w);
             }
+            widest = widest.max(w);
             self.widths.push(w);
+        }
+        if widest <= 2.0 * base {
+            // Every box in the first level (a crowd of balls alike): no need to count them out.
+            self.by_level.clear();
+            let balls = self.widths.iter().enumerate().filter(|(_, w)| !w.is_nan());
+            self.by_level.extend(balls.map(|(k, _)| k as u32));
+            self.level_end.clear();
+            self.level_count = 0;
+            if !self.by_level.is_empty() {
+                self.level_end.push(self.by_level.len() as u32);
+                self.level_count = 1;
+            }
+            if self.levels.is_empty() {
+                self.levels.push(Level::default());
+            }
+            return;
         }
         self.level_of.clear();
         self.level_count = 0;
