@@ -332,6 +332,10 @@ impl PairIndex {
         let (levels, boxes) = (&self.levels[..self.level_count], &self.boxes);
         for (l, level) in levels.iter().enumerate() {
             level.pairs_within(boxes, &mut found);
+            // The first level has none narrower (a crowd of balls alike has only it).
+            if l == 0 {
+                continue;
+            }
             for a in &level.sorted {
                 let a_box = &boxes[a.ball as usize].1;
                 for narrower in &levels[..l] {
